@@ -1,0 +1,458 @@
+"""Forward kinematics of the four feet: positions, Jacobians, foot velocities, limits and reach.
+
+Everything expensive happens once, in :func:`compile_leg`: the chain's fixed transforms are
+folded into three *stages*, one per movable joint, each mapping a point ``p`` in the joint's
+child frame to its parent side as ``p -> o + M Rot(a, q) p``. Writing
+``M Rot(a, q) = C0 + cos(q) C1 + sin(q) C2`` (Rodrigues, with ``C0 = M a a^T``,
+``C1 = M (I - a a^T)``, ``C2 = M [a]x``) turns the whole leg into straight-line arithmetic,
+which is generated once as Python source with every zero coefficient dropped and every unit
+coefficient simplified. The same source runs on floats (``math``, the per-message path) and on
+numpy arrays (the batch path), so both compute exactly the same expression.
+
+Frames and units: joint angles in rad, joint velocities in rad/s, positions in m and foot
+velocities in m/s, all in the root link's frame (the base frame), relative to the base.
+Configurations are 12 angles in :data:`a1_leg_fk.legs.LEG_NAMES` order, three per leg, root
+side first (hip roll, hip pitch, knee for the A1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index
+from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
+
+JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
+BATCH_CHUNK_ROWS = 4096
+"""Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
+
+Matrix3 = tuple[tuple[float, float, float], ...]
+Vector3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One movable joint, with the fixed transforms before it folded in: ``p -> o + M Rot(axis, q) p``."""
+
+    joint: Joint
+    rotation: np.ndarray  # M, 3x3
+    offset: np.ndarray  # o [m], 3
+    axis: np.ndarray  # unit, in the joint frame
+
+    @cached_property
+    def rodrigues_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(C0, C1, C2) with ``M Rot(axis, q) = C0 + cos(q) C1 + sin(q) C2``."""
+        outer = np.outer(self.axis, self.axis)
+        x, y, z = self.axis
+        cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        return self.rotation @ outer, self.rotation @ (np.eye(3) - outer), self.rotation @ cross
+
+
+@dataclass(frozen=True)
+class Reach:
+    """Distance [m] from a leg's hip-pitch axis to its foot over the knee's range [rad]."""
+
+    leg: str
+    min_m: float
+    knee_at_min: float
+    max_m: float
+    knee_at_max: float
+    max_unlimited_m: float  # over all knee angles, limits ignored (the straight leg)
+    knee_at_max_unlimited: float
+
+
+@dataclass(frozen=True)
+class LimitViolation:
+    """A joint angle [rad] outside the URDF's ``[lower, upper]``."""
+
+    joint: str
+    value: float
+    lower: float
+    upper: float
+
+
+class CompiledLeg:
+    """One leg's generated FK functions and the stages they were made from.
+
+    ``position(q0, q1, q2) -> (x, y, z)`` and ``position_velocity(q0, q1, q2, dq0, dq1, dq2) ->
+    (x, y, z, vx, vy, vz)`` take floats; the ``*_from_trig`` variants take ``(c0, s0, c1, s1, c2,
+    s2)``, the cosines and sines of the angles, as floats or numpy arrays.
+    """
+
+    def __init__(self, chain: LegChain) -> None:
+        self.chain = chain
+        self.stages, self.foot_offset = _fold_chain(chain)
+        self.position: Callable[..., tuple[float, ...]]
+        self.position_velocity: Callable[..., tuple[float, ...]]
+        self.position_from_trig: Callable[..., tuple]
+        self.jacobian_from_trig: Callable[..., tuple]
+        self.source = _leg_source(self.stages, self.foot_offset)
+        namespace: dict[str, object] = {"_cos": math.cos, "_sin": math.sin}
+        exec(compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace)
+        self.position = namespace["position"]  # type: ignore[assignment]
+        self.position_velocity = namespace["position_velocity"]  # type: ignore[assignment]
+        self.position_from_trig = namespace["position_from_trig"]  # type: ignore[assignment]
+        self.jacobian_from_trig = namespace["jacobian_from_trig"]  # type: ignore[assignment]
+
+    def joint_points(self, angles: Sequence[float]) -> np.ndarray:
+        """(4, 3): the three movable joints' origins and the foot [m], root frame, root side first."""
+        rotation, origin = np.eye(3), np.zeros(3)
+        points = []
+        for stage, angle in zip(self.stages, angles):
+            origin = origin + rotation @ stage.offset
+            points.append(origin)
+            c0, c1, c2 = stage.rodrigues_terms
+            rotation = rotation @ (c0 + math.cos(angle) * c1 + math.sin(angle) * c2)
+        points.append(origin + rotation @ self.foot_offset)
+        return np.array(points)
+
+
+class Quadruped:
+    """A quadruped's four legs, compiled from a URDF, with joint naming and limits.
+
+    Build it with :meth:`from_urdf`; then :meth:`fk`, :meth:`fk_batch`, :meth:`jacobians`,
+    :meth:`foot_velocities` and friends compute in the base frame (:attr:`base_frame`).
+    """
+
+    def __init__(
+        self,
+        model: RobotModel,
+        foot_links: Mapping[str, str] | None = None,
+        joint_aliases: Mapping[str, str] | None = None,
+    ) -> None:
+        self.model = model
+        self.base_frame = model.root
+        self.legs = tuple(CompiledLeg(chain) for chain in find_legs(model, foot_links))
+        self.joints: tuple[Joint, ...] = tuple(j for leg in self.legs for j in leg.chain.movable)
+        self.joint_names = tuple(joint.name for joint in self.joints)
+        self.name_to_slot: Mapping[str, int] = joint_name_index(tuple(leg.chain for leg in self.legs), joint_aliases)
+
+    @classmethod
+    def from_urdf(
+        cls,
+        source: str | None = None,
+        foot_links: Mapping[str, str] | None = None,
+        joint_aliases: Mapping[str, str] | None = None,
+    ) -> "Quadruped":
+        """Load a URDF (path, XML string, or ``None`` for the embedded A1) and compile its legs."""
+        return cls(load_urdf(source), foot_links, joint_aliases)
+
+    def fk(self, angles: Sequence[float]) -> np.ndarray:
+        """(4, 3) foot positions [m] in the base frame for 12 joint angles [rad]."""
+        q = _checked_configuration(angles)
+        out = []
+        for leg_slot, leg in enumerate(self.legs):
+            first = leg_slot * JOINTS_PER_LEG
+            out.extend(leg.position(q[first], q[first + 1], q[first + 2]))
+        return np.array(out).reshape(len(LEG_NAMES), 3)
+
+    def fk_batch(self, angles: np.ndarray) -> np.ndarray:
+        """(N, 4, 3) foot positions [m] for an (N, 12) array of joint angles [rad]."""
+        q = _checked_batch(angles, "angles")
+        out = np.empty((q.shape[0], len(LEG_NAMES), 3))
+        for rows in _row_blocks(q.shape[0]):
+            cos, sin = np.cos(q[rows]), np.sin(q[rows])
+            for leg_slot, leg in enumerate(self.legs):
+                trig = _leg_trig(cos, sin, leg_slot)
+                x, y, z = leg.position_from_trig(*trig)
+                out[rows, leg_slot, 0], out[rows, leg_slot, 1], out[rows, leg_slot, 2] = x, y, z
+        return out
+
+    def foot_velocities(self, angles: Sequence[float], rates: Sequence[float]) -> np.ndarray:
+        """(4, 3) foot velocities [m/s], base frame, relative to the base: ``J(q) q_dot``."""
+        q = _checked_configuration(angles)
+        dq = _checked_configuration(rates, "joint velocities")
+        out = []
+        for leg_slot, leg in enumerate(self.legs):
+            first = leg_slot * JOINTS_PER_LEG
+            out.extend(leg.position_velocity(*q[first : first + 3], *dq[first : first + 3])[3:])
+        return np.array(out).reshape(len(LEG_NAMES), 3)
+
+    def foot_velocities_batch(self, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+        """(N, 4, 3) foot velocities [m/s] for (N, 12) angles [rad] and rates [rad/s]."""
+        q = _checked_batch(angles, "angles")
+        dq = _checked_batch(rates, "joint velocities")
+        if dq.shape != q.shape:
+            raise LegFkError(f"joint velocities have shape {dq.shape}, angles {q.shape}")
+        jacobians = self.jacobians_batch(q)
+        return np.einsum("nlij,nlj->nli", jacobians, dq.reshape(q.shape[0], len(LEG_NAMES), JOINTS_PER_LEG))
+
+    def jacobians(self, angles: Sequence[float]) -> np.ndarray:
+        """(4, 3, 3): per leg, d(foot position [m]) / d(its three angles [rad]), base frame."""
+        return self.jacobians_batch(np.asarray(_checked_configuration(angles))[np.newaxis])[0]
+
+    def jacobians_batch(self, angles: np.ndarray) -> np.ndarray:
+        """(N, 4, 3, 3) Jacobians for an (N, 12) array of angles [rad]."""
+        q = _checked_batch(angles, "angles")
+        out = np.empty((q.shape[0], len(LEG_NAMES), 3, JOINTS_PER_LEG))
+        for rows in _row_blocks(q.shape[0]):
+            cos, sin = np.cos(q[rows]), np.sin(q[rows])
+            for leg_slot, leg in enumerate(self.legs):
+                columns = leg.jacobian_from_trig(*_leg_trig(cos, sin, leg_slot))
+                for joint_slot in range(JOINTS_PER_LEG):
+                    for axis in range(3):
+                        out[rows, leg_slot, axis, joint_slot] = columns[3 * joint_slot + axis]
+        return out
+
+    def angles_from_names(self, positions: Mapping[str, float]) -> list[float]:
+        """The 12 angles [rad] in slot order from a ``{joint name: angle}`` dict naming all of them."""
+        angles: list[float | None] = [None] * JOINT_COUNT
+        for name, value in positions.items():
+            slot = self.name_to_slot.get(name)
+            if slot is None:
+                raise LegFkError(f"unknown joint name '{name}': not a leg joint of {self.model.source}")
+            angles[slot] = value
+        missing = [self.joint_names[slot] for slot, value in enumerate(angles) if value is None]
+        if missing:
+            raise LegFkError(f"joint angles missing for {missing}")
+        return _checked_configuration(angles)  # type: ignore[arg-type]
+
+    def joints_outside_limits(self, angles: Sequence[float]) -> list[LimitViolation]:
+        """The joints whose angle [rad] lies outside their URDF limits (continuous joints have none)."""
+        q = _checked_configuration(angles)
+        return [
+            LimitViolation(joint.name, value, joint.lower, joint.upper)
+            for joint, value in zip(self.joints, q)
+            if joint.lower is not None and joint.upper is not None and not joint.lower <= value <= joint.upper
+        ]
+
+    def reach(self, leg: str) -> Reach:
+        """Distance from the leg's hip-pitch axis to its foot, over the knee's range.
+
+        Defined for legs of the A1 topology, whose knee axis is parallel to the hip-pitch axis.
+        """
+        compiled = self.legs[_leg_slot(leg)]
+        pitch, knee = compiled.stages[1], compiled.stages[2]
+        if abs(abs(float(pitch.axis @ knee.rotation @ knee.axis)) - 1.0) > 1e-9:
+            raise LegFkError(f"leg {leg}: knee axis is not parallel to the hip-pitch axis; reach is not defined")
+        # Foot in the pitch joint's frame: u + cos(q) v + sin(q) w; its distance to the pitch axis
+        # squared is alpha + beta cos(q) + gamma sin(q) (the cos^2, sin^2, cos*sin terms cancel).
+        project = np.eye(3) - np.outer(pitch.axis, pitch.axis)
+        c0, c1, c2 = knee.rodrigues_terms
+        u = project @ (knee.offset + c0 @ compiled.foot_offset)
+        v, w = project @ (c1 @ compiled.foot_offset), project @ (c2 @ compiled.foot_offset)
+        alpha, beta, gamma = u @ u + v @ v, 2.0 * (u @ v), 2.0 * (u @ w)
+
+        def distance(angle: float) -> float:
+            return math.sqrt(max(alpha + beta * math.cos(angle) + gamma * math.sin(angle), 0.0))
+
+        lower, upper = knee.joint.lower, knee.joint.upper
+        if lower is None or upper is None:
+            lower, upper = -math.pi, math.pi
+        peak = math.atan2(gamma, beta)
+        candidates = [lower, upper] + [
+            angle
+            for base in (peak, peak + math.pi)
+            for turn in range(-2, 3)
+            if lower <= (angle := base + 2.0 * math.pi * turn) <= upper
+        ]
+        knee_at_min = min(candidates, key=distance)
+        knee_at_max = max(candidates, key=distance)
+        return Reach(leg, distance(knee_at_min), knee_at_min, distance(knee_at_max), knee_at_max, distance(peak), peak)
+
+
+def _leg_slot(leg: str) -> int:
+    try:
+        return LEG_NAMES.index(leg)
+    except ValueError:
+        raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}") from None
+
+
+def _checked_configuration(angles: Sequence[float], what: str = "joint angles") -> list[float]:
+    """12 finite floats, or a LegFkError naming the problem."""
+    try:
+        q = [float(value) for value in angles]
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers: {error}") from error
+    if len(q) != JOINT_COUNT:
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers (3 per leg, {'/'.join(LEG_NAMES)}), got {len(q)}")
+    for slot, value in enumerate(q):
+        if not math.isfinite(value):
+            leg = LEG_NAMES[slot // JOINTS_PER_LEG]
+            raise LegFkError(f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}")
+    return q
+
+
+def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:
+    q = np.asarray(angles, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != JOINT_COUNT:
+        raise LegFkError(f"{what} must have shape (N, {JOINT_COUNT}), got {q.shape}")
+    bad_rows = np.flatnonzero(~np.isfinite(q).all(axis=1))
+    if bad_rows.size:
+        raise LegFkError(f"{what}: rows {bad_rows[:10].tolist()} hold NaN or infinite values")
+    return q
+
+
+def _row_blocks(rows: int) -> list[slice]:
+    return [slice(start, min(start + BATCH_CHUNK_ROWS, rows)) for start in range(0, rows, BATCH_CHUNK_ROWS)]
+
+
+def _leg_trig(cos: np.ndarray, sin: np.ndarray, leg_slot: int) -> list[np.ndarray]:
+    first = leg_slot * JOINTS_PER_LEG
+    return [array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)]
+
+
+# --- folding a chain into stages -----------------------------------------------------------
+
+
+def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
+    """URDF ``rpy`` [rad] -> rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    roll, pitch, yaw = rpy
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw), math.sin(yaw))
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _fold_chain(chain: LegChain) -> tuple[tuple[Stage, ...], np.ndarray]:
+    """Stages for the three movable joints, and the foot's offset [m] in the last one's child frame."""
+    stages = []
+    rotation, offset = np.eye(3), np.zeros(3)
+    for joint in chain.joints:
+        offset = offset + rotation @ np.array(joint.origin_xyz)
+        rotation = rotation @ rpy_matrix(joint.origin_rpy)
+        if joint.movable:
+            stages.append(Stage(joint, rotation, offset, np.array(joint.axis)))
+            rotation, offset = np.eye(3), np.zeros(3)
+    return tuple(stages), offset
+
+
+# --- generating the leg's straight-line code ------------------------------------------------
+
+
+Term = float | str  # a constant, or the name of a variable in the generated code
+
+
+class _Code:
+    """Generated statements, with fresh variable names and zero-free linear expressions."""
+
+    def __init__(self, prefix: str) -> None:
+        self.lines: list[str] = []
+        self._prefix = prefix
+        self._count = 0
+
+    def assign(self, expressions: Sequence[Term]) -> tuple[Term, ...]:
+        """Bind each non-constant expression to a fresh variable; constants stay constants."""
+        names: list[Term] = []
+        for expression in expressions:
+            if isinstance(expression, float):
+                names.append(expression)
+            else:
+                self._count += 1
+                name = f"{self._prefix}{self._count}"
+                names.append(name)
+                self.lines.append(f"{name} = {expression}")
+        return tuple(names)
+
+
+def _linear(row: Sequence[float], vector: Sequence[Term]) -> Term:
+    """``row . vector`` as a constant or an expression string, zero terms dropped."""
+    constant = 0.0
+    terms = []
+    for coefficient, value in zip(row, vector):
+        coefficient = float(coefficient)
+        if coefficient == 0.0:
+            continue
+        if isinstance(value, float):
+            constant += coefficient * value
+        elif coefficient == 1.0:
+            terms.append(value)
+        elif coefficient == -1.0:
+            terms.append(f"-{value}")
+        else:
+            terms.append(f"{coefficient!r}*{value}")
+    if not terms:
+        return constant
+    if constant != 0.0:
+        terms.insert(0, repr(constant))
+    return terms[0] if len(terms) == 1 else "(" + " + ".join(terms) + ")"
+
+
+def _sum(parts: Sequence[tuple[str, Term]]) -> Term:
+    """Sum of ``factor * term`` pairs (factor '' for none), zero terms dropped."""
+    constant = 0.0
+    terms = []
+    for factor, term in parts:
+        if isinstance(term, float) and not factor:
+            constant += term
+        elif isinstance(term, float):
+            if term != 0.0:
+                terms.append(f"{term!r}*{factor}")
+        else:
+            terms.append(f"{factor}*{term}" if factor else term)
+    if not terms:
+        return constant
+    if constant != 0.0:
+        terms.insert(0, repr(constant))
+    return terms[0] if len(terms) == 1 else "(" + " + ".join(terms) + ")"
+
+
+def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
+    """Python source of the leg's four functions (see :class:`CompiledLeg`)."""
+    position_code, velocity_code, jacobian_code = _Code("p"), _Code("v"), _Code("j")
+    point: tuple[Term, ...] = tuple(float(v) for v in foot)
+    velocity: tuple[Term, ...] = (0.0, 0.0, 0.0)
+    tangents: list[tuple[Term, ...]] = []
+    jacobian_point = point
+    for slot in reversed(range(len(stages))):
+        terms = stages[slot].rodrigues_terms
+        offset = stages[slot].offset
+        cos, sin, rate = f"c{slot}", f"s{slot}", f"dq{slot}"
+        # Velocity first: it needs the point before this stage moves it.
+        velocity = velocity_code.assign(
+            [
+                _sum(
+                    [("", _rotate_row(terms, axis, velocity, cos, sin)), (rate, _derivative_row(terms, axis, point, cos, sin))]
+                )
+                for axis in range(3)
+            ]
+        )
+        tangents = [jacobian_code.assign([_rotate_row(terms, axis, t, cos, sin) for axis in range(3)]) for t in tangents]
+        tangents.insert(0, jacobian_code.assign([_derivative_row(terms, axis, jacobian_point, cos, sin) for axis in range(3)]))
+        new_point = [_sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, point, cos, sin))]) for axis in range(3)]
+        point = position_code.assign(new_point)
+        velocity_code.lines.extend(f"{name} = {expr}" for name, expr in zip(point, new_point) if isinstance(name, str))
+        if slot > 0:  # the root-side stage's point is not needed by any column
+            jacobian_point = jacobian_code.assign(
+                [_sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, jacobian_point, cos, sin))]) for axis in range(3)]
+            )
+    trig = "c0, s0, c1, s1, c2, s2"
+    from_angles = [f"c{i} = _cos(q{i})\n    s{i} = _sin(q{i})" for i in range(len(stages))]
+    body = "\n    ".join(position_code.lines)
+    return "\n".join(
+        [
+            f"def position_from_trig({trig}):\n    {body}\n    return ({_tuple(point)})\n",
+            f"def position(q0, q1, q2):\n    " + "\n    ".join(from_angles) + f"\n    {body}\n    return ({_tuple(point)})\n",
+            "def position_velocity(q0, q1, q2, dq0, dq1, dq2):\n    "
+            + "\n    ".join(from_angles + velocity_code.lines)
+            + f"\n    return ({_tuple(point)}, {_tuple(velocity)})\n",
+            f"def jacobian_from_trig({trig}):\n    "
+            + "\n    ".join(jacobian_code.lines or ["pass"])
+            + f"\n    return ({', '.join(_tuple(t) for t in tangents)})\n",
+        ]
+    )
+
+
+def _rotate_row(terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str) -> Term:
+    """Row ``axis`` of ``(C0 + cos C1 + sin C2) vector``."""
+    c0, c1, c2 = terms
+    return _sum([("", _linear(c0[axis], vector)), (cos, _linear(c1[axis], vector)), (sin, _linear(c2[axis], vector))])
+
+
+def _derivative_row(terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str) -> Term:
+    """Row ``axis`` of ``d/dq (C0 + cos C1 + sin C2) vector = (cos C2 - sin C1) vector``."""
+    _, c1, c2 = terms
+    return _sum([(f"-{sin}", _linear(c1[axis], vector)), (cos, _linear(c2[axis], vector))])
+
+
+def _tuple(terms: Sequence[Term]) -> str:
+    return ", ".join(repr(t) if isinstance(t, float) else t for t in terms)

@@ -1,0 +1,477 @@
+"""``foot_fk_node``: sensor_msgs/JointState in, one geometry_msgs/PointStamped per foot out.
+
+Thin ROS glue over :mod:`a1_leg_fk.joint_state` (merging, rejection, FK per message) and
+:mod:`a1_leg_fk.pybullet_check` (the ``verify_fk`` service). All topic and service names are
+relative, so ``__ns`` and remaps work; every parameter is declared with a description.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
+from rclpy.exceptions import ParameterUninitializedException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
+
+from a1_leg_fk.joint_state import REJECTIONS, FootTracker
+from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.pybullet_check import PyBulletFeet
+from a1_leg_fk.urdf import LegFkError, default_urdf_path, load_urdf
+
+NODE_NAME = "a1_leg_fk"
+MAX_URDF_CHARS = 16 * 1024 * 1024  # far above any real robot description; bounds memory
+DIAGNOSTICS_PERIOD_S = 1.0
+SUBSCRIBER_CHECK_PERIOD_S = 0.5
+OUTPUT_QOS = QoSProfile(depth=10)  # reliable: heard by reliable and best-effort subscribers
+JOINT_STATES_QOS = QoSProfile(
+    # The sensor-data profile (best effort: hears reliable and best-effort publishers alike), with a
+    # deeper queue than its 5, so that a burst of a 1 kHz stream is not overwritten while we work.
+    history=qos_profile_sensor_data.history,
+    depth=100,
+    reliability=ReliabilityPolicy.BEST_EFFORT,
+    durability=qos_profile_sensor_data.durability,
+)
+WARNING_INTERVAL_S = 1.0  # at most one warning per second for each kind of rejection
+
+
+@dataclass(frozen=True)
+class _ParameterSpec:
+    name: str
+    default: object  # None: a string array with no value until one is given (ROS can't type [])
+    type: int
+    description: str
+
+    def declare(self, node: Node) -> None:
+        descriptor = ParameterDescriptor(description=self.description)
+        if self.default is None:
+            node.declare_parameter(self.name, Parameter.Type.STRING_ARRAY, descriptor)
+        else:
+            descriptor.type = self.type
+            node.declare_parameter(self.name, self.default, descriptor)
+
+
+PARAMETERS = (
+    _ParameterSpec("robot_description", "", ParameterType.PARAMETER_STRING,
+                   "URDF XML of the robot; empty = urdf_file, or the embedded Unitree A1 (pybullet_data a1/a1.urdf)"),
+    _ParameterSpec("urdf_file", "", ParameterType.PARAMETER_STRING,
+                   "Path of a URDF file, used when robot_description is empty"),
+    _ParameterSpec("foot_links", None, ParameterType.PARAMETER_STRING_ARRAY,
+                   "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = leaf links FR..., FL..., RR..., RL..."),
+    _ParameterSpec("joint_aliases", None, ParameterType.PARAMETER_STRING_ARRAY,
+                   "Extra incoming joint names as incoming=urdf_joint_name"),
+    _ParameterSpec("base_frame", "", ParameterType.PARAMETER_STRING,
+                   "frame_id of the published feet; empty = the URDF's root link (trunk for the A1)"),
+    _ParameterSpec("publish_velocities", True, ParameterType.PARAMETER_BOOL,
+                   "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities"),
+    _ParameterSpec("publish_markers", True, ParameterType.PARAMETER_BOOL,
+                   "Publish foot_markers (MarkerArray) while someone subscribes"),
+    _ParameterSpec("marker_rate_hz", 30.0, ParameterType.PARAMETER_DOUBLE,
+                   "Highest rate of foot_markers [Hz], > 0"),
+    _ParameterSpec("max_publish_rate_hz", 0.0, ParameterType.PARAMETER_DOUBLE,
+                   "Highest rate of foot positions/velocities [Hz]; 0 = one set per joint state (no throttling)"),
+    _ParameterSpec("enable_verify", True, ParameterType.PARAMETER_BOOL,
+                   "Offer the verify_fk service (compares the FK with PyBullet's)"),
+    _ParameterSpec("verify_tolerance_m", 1e-6, ParameterType.PARAMETER_DOUBLE,
+                   "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, > 0"),
+)
+MODEL_PARAMETERS = ("robot_description", "urdf_file", "foot_links", "joint_aliases")
+
+
+@dataclass(frozen=True)
+class _Model:
+    quadruped: Quadruped
+    urdf_xml: str
+    source: str
+
+
+class FootFkNode(Node):
+    """Publishes the four feet of the robot for every JointState; offers ``verify_fk``."""
+
+    def __init__(self, **node_options: object) -> None:
+        super().__init__(NODE_NAME, **node_options)
+        for spec in PARAMETERS:
+            spec.declare(self)
+        self._model = _build_model(self._model_parameter_values({}))
+        self._tracker = FootTracker(self._model.quadruped)
+        self._verifier: PyBulletFeet | None = None
+        self._verifier_error = ""
+        self._last_verify = "not called"
+        self._verify_service = None
+        self._stamp_jumps_back = 0
+        self._last_stamp_ns = 0
+        self._last_publish = -math.inf
+        self._last_markers = -math.inf
+        self._markers_wanted = False
+        self._diagnostics_wanted = False
+        self._previous_counts = (0, 0)
+        self._pending_model: _Model | None = None
+        self._last_warnings: dict[str, float] = {}  # rejection outcome -> time.monotonic() of its last warning
+        self._apply_settings()
+        self._position_msgs = [PointStamped() for _ in LEG_NAMES]
+        self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
+        self._set_frame_ids()
+        self._position_pubs = [self.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS) for leg in LEG_NAMES]
+        self._velocity_pubs = [self.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS) for leg in LEG_NAMES]
+        self._marker_pub = self.create_publisher(MarkerArray, "foot_markers", OUTPUT_QOS)
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        self._load_verifier()
+        self._update_verify_service()
+        self.create_subscription(
+            JointState,
+            "joint_states",
+            self._on_joint_state,
+            JOINT_STATES_QOS,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        )
+        self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self.create_timer(SUBSCRIBER_CHECK_PERIOD_S, self._check_subscribers)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self.get_logger().info(
+            f"feet of {self._model.source} in frame '{self._base_frame}' from "
+            f"{self.resolve_topic_name('joint_states')} to {self.resolve_topic_name('foot_positions')}/<leg>"
+        )
+
+    # --- per message ---------------------------------------------------------------------
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        feet = self._tracker.update(msg.name, msg.position, msg.velocity)
+        if self._tracker.new_unknown_names:
+            self._warn_unknown_names()
+        if not feet:
+            self._report_rejection()
+            return
+        now = time.monotonic()
+        if now - self._last_publish < self._min_publish_interval_s:
+            return
+        self._last_publish = now
+        stamp = self._stamp_of(msg)
+        for foot in feet:
+            position_msg = self._position_msgs[foot.leg_slot]
+            position_msg.header.stamp = stamp
+            point = position_msg.point
+            point.x, point.y, point.z = foot.position
+            self._position_pubs[foot.leg_slot].publish(position_msg)
+            if foot.velocity is not None and self._publish_velocities:
+                velocity_msg = self._velocity_msgs[foot.leg_slot]
+                velocity_msg.header.stamp = stamp
+                vector = velocity_msg.vector
+                vector.x, vector.y, vector.z = foot.velocity
+                self._velocity_pubs[foot.leg_slot].publish(velocity_msg)
+        if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
+            self._last_markers = now
+            self._publish_markers(stamp)
+
+    def _stamp_of(self, msg: JointState):  # noqa: ANN202 (builtin_interfaces/Time)
+        """The message's stamp, or the node clock's now where the stamp is zero."""
+        stamp = msg.header.stamp
+        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        if stamp_ns == 0:
+            return self.get_clock().now().to_msg()
+        if stamp_ns < self._last_stamp_ns:
+            self._stamp_jumps_back += 1
+            self.get_logger().warn(
+                f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} s "
+                "(bag replay loop or clock reset?); publishing with the new stamps",
+                once=True,
+            )
+        self._last_stamp_ns = stamp_ns
+        return stamp
+
+    def _report_rejection(self) -> None:
+        outcome = self._tracker.last_outcome
+        now = time.monotonic()
+        if outcome in REJECTIONS and now - self._last_warnings.get(outcome, -math.inf) >= WARNING_INTERVAL_S:
+            self._last_warnings[outcome] = now
+            self.get_logger().warn(
+                f"rejected a joint_states message: {outcome.replace('_', ' ')} "
+                f"({self._tracker.counts.outcomes[outcome]} so far)"
+            )
+
+    def _warn_unknown_names(self) -> None:
+        names = self._tracker.take_new_unknown_names()
+        self.get_logger().warn(f"ignoring joint names not in the model (warned once per name): {names[:20]}")
+
+    # --- markers and diagnostics ----------------------------------------------------------
+
+    def _check_subscribers(self) -> None:
+        self._markers_wanted = self._publish_markers_enabled and self._marker_pub.get_subscription_count() > 0
+
+    def _publish_markers(self, stamp) -> None:  # noqa: ANN001
+        markers = MarkerArray()
+        angles = self._tracker.angles
+        for slot, leg in enumerate(self._model.quadruped.legs):
+            leg_angles = angles[3 * slot : 3 * slot + 3]
+            if any(math.isnan(a) for a in leg_angles):
+                continue
+            points = [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in leg.joint_points(leg_angles)]
+            markers.markers.append(self._marker(stamp, 2 * slot, Marker.SPHERE, points[-1:], leg.chain.leg))
+            markers.markers.append(self._marker(stamp, 2 * slot + 1, Marker.LINE_STRIP, points, leg.chain.leg))
+        self._marker_pub.publish(markers)
+
+    def _marker(self, stamp, marker_id: int, kind: int, points: list[Point], leg: str) -> Marker:  # noqa: ANN001
+        marker = Marker(ns=f"feet/{leg}", id=marker_id, type=kind, action=Marker.ADD)
+        marker.header.frame_id = self._base_frame
+        marker.header.stamp = stamp
+        marker.pose.orientation.w = 1.0
+        if kind == Marker.SPHERE:
+            marker.pose.position = points[0]
+            marker.scale.x = marker.scale.y = marker.scale.z = 0.04
+        else:
+            marker.points = points
+            marker.scale.x = 0.015
+        marker.color.r, marker.color.g, marker.color.b, marker.color.a = (0.1, 0.6, 1.0, 1.0)
+        return marker
+
+    def _publish_diagnostics(self) -> None:
+        counts = self._tracker.counts
+        received, feet = counts.messages, counts.feet
+        rate_hz = (received - self._previous_counts[0]) / DIAGNOSTICS_PERIOD_S
+        rejected_now = sum(counts.outcomes[r] for r in REJECTIONS) - self._previous_counts[1]
+        self._previous_counts = (received, sum(counts.outcomes[r] for r in REJECTIONS))
+        if self._diagnostics_pub.get_subscription_count() == 0:
+            return
+        outside = self._tracker.joints_outside_limits()
+        level, summary = DiagnosticStatus.OK, "feet published"
+        if not received:
+            level, summary = DiagnosticStatus.WARN, "no joint_states received yet"
+        elif rejected_now or outside or counts.non_finite_joints:
+            level, summary = DiagnosticStatus.WARN, "some joint_states rejected or joints outside limits"
+        if self._last_verify.startswith("failed"):
+            level, summary = DiagnosticStatus.ERROR, "verify_fk failed: FK disagrees with PyBullet"
+        values = {
+            "messages_received": received,
+            **{f"messages_{outcome}": n for outcome, n in sorted(counts.outcomes.items())},
+            "non_finite_joint_values": counts.non_finite_joints,
+            "feet_published": feet,
+            "input_rate_hz": f"{rate_hz:.1f}",
+            "joints_outside_limits": ",".join(outside) or "none",
+            "messages_out_of_limits": counts.out_of_limit_messages,
+            "unknown_joint_names": ",".join(sorted(counts.unknown_names)[:20]) or "none",
+            "stamp_jumps_back": self._stamp_jumps_back,
+            "last_verify": self._last_verify,
+            "model": self._model.source,
+        }
+        status = DiagnosticStatus(
+            level=level,
+            name=f"{self.get_name()}: foot kinematics",
+            message=summary,
+            hardware_id=self._model.quadruped.model.name,
+            values=[KeyValue(key=key, value=str(value)) for key, value in values.items()],
+        )
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diagnostics_pub.publish(array)
+
+    # --- verify_fk -------------------------------------------------------------------------
+
+    def _load_verifier(self) -> None:
+        """(Re)load the PyBullet twin of the current model, once per model; never raises."""
+        if self._verifier is not None:
+            self._verifier.close()
+        self._verifier = None
+        if not self._enable_verify:
+            return
+        try:
+            self._verifier = PyBulletFeet(self._model.quadruped, self._model.urdf_xml)
+            self._verifier_error = ""
+        except LegFkError as error:
+            self._verifier_error = str(error)
+            self.get_logger().warn(f"verify_fk will fail: {error}")
+
+    def _update_verify_service(self) -> None:
+        if self._enable_verify and self._verify_service is None:
+            self._verify_service = self.create_service(Trigger, "verify_fk", self._on_verify)
+        elif not self._enable_verify and self._verify_service is not None:
+            self.destroy_service(self._verify_service)
+            self._verify_service = None
+
+    def _on_verify(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        response.success, response.message = self._verify()
+        self._last_verify = ("passed " if response.success else "failed ") + response.message
+        return response
+
+    def _verify(self) -> tuple[bool, str]:
+        if not self._tracker.complete:
+            missing = [name for name, a in zip(self._model.quadruped.joint_names, self._tracker.angles) if math.isnan(a)]
+            return False, f"no complete joint state yet: missing {','.join(missing)}"
+        if self._verifier is None:
+            if not self._verifier_error:  # enabled after a failure or first use
+                self._load_verifier()
+            if self._verifier is None:
+                return False, f"error={self._verifier_error.replace(' ', '_')} message=\"{self._verifier_error}\""
+        angles = list(self._tracker.angles)
+        result = self._verifier.verify(angles, self._verify_tolerance_m)
+        stamp_ns = self._last_stamp_ns
+        outside = self._tracker.joints_outside_limits()
+        tokens = [f"max_error_m={result.max_error_m:.3g}"]
+        tokens += [f"{leg}={error:.3g}" for leg, error in result.errors_m.items()]
+        tokens += [
+            f"tolerance_m={self._verify_tolerance_m:g}",
+            f"stamp={stamp_ns // 1_000_000_000}.{stamp_ns % 1_000_000_000:09d}",
+            f"outside_limits={','.join(outside) or 'none'}",
+        ]
+        return result.success, " ".join(tokens)
+
+    # --- parameters ------------------------------------------------------------------------
+
+    def _model_parameter_values(self, changes: dict[str, object]) -> dict[str, object]:
+        return {name: changes.get(name, self._value(name)) for name in MODEL_PARAMETERS}
+
+    def _value(self, name: str) -> object:
+        """A parameter's value; ``[]`` for a string array that was never given one."""
+        try:
+            return self.get_parameter(name).value
+        except ParameterUninitializedException:
+            return []
+
+    def _apply_settings(self) -> None:
+        value = self._value
+        self._base_frame = value("base_frame") or self._model.quadruped.base_frame
+        self._publish_velocities = bool(value("publish_velocities"))
+        self._publish_markers_enabled = bool(value("publish_markers"))
+        self._marker_interval_s = 1.0 / value("marker_rate_hz")
+        rate = value("max_publish_rate_hz")
+        self._min_publish_interval_s = 1.0 / rate if rate > 0 else 0.0
+        self._enable_verify = bool(value("enable_verify"))
+        self._verify_tolerance_m = float(value("verify_tolerance_m"))
+
+    def _set_frame_ids(self) -> None:
+        for msg in (*self._position_msgs, *self._velocity_msgs):
+            msg.header.frame_id = self._base_frame
+
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        changes = {p.name: p.value for p in parameters}
+        problem = _invalid_setting(changes)
+        if problem:
+            return SetParametersResult(successful=False, reason=problem)
+        new_model = None
+        if any(name in changes for name in MODEL_PARAMETERS):
+            try:
+                new_model = _build_model(self._model_parameter_values(changes))
+            except LegFkError as error:
+                self.get_logger().warn(f"parameter change rejected, keeping {self._model.source}: {error}")
+                return SetParametersResult(successful=False, reason=str(error))
+        self._pending_model = new_model  # applied by _after_set_parameters, once rclpy stored the values
+        return SetParametersResult(successful=True)
+
+    def _after_set_parameters(self, parameters: list[Parameter]) -> None:
+        if self._pending_model is not None:
+            self._model, self._pending_model = self._pending_model, None
+            self._tracker = FootTracker(self._model.quadruped)
+            self.get_logger().info(f"loaded {self._model.source}")
+        self._apply_settings()
+        self._set_frame_ids()
+        if any(p.name in (*MODEL_PARAMETERS, "enable_verify") for p in parameters):
+            self._load_verifier()
+        self._update_verify_service()
+
+
+def _invalid_setting(changes: dict[str, object]) -> str:
+    """Why a parameter change is unacceptable, or '' when it is fine."""
+    for name in ("marker_rate_hz", "verify_tolerance_m"):
+        if name in changes and not (isinstance(changes[name], float) and math.isfinite(changes[name]) and changes[name] > 0):
+            return f"{name} must be a finite number > 0, got {changes[name]!r}"
+    rate = changes.get("max_publish_rate_hz", 0.0)
+    if not (isinstance(rate, float) and math.isfinite(rate) and rate >= 0):
+        return f"max_publish_rate_hz must be a finite number >= 0, got {rate!r}"
+    description = changes.get("robot_description", "")
+    if isinstance(description, str) and len(description) > MAX_URDF_CHARS:
+        return f"robot_description is {len(description)} characters, more than the {MAX_URDF_CHARS} accepted"
+    return ""
+
+
+def _key_values(entries: Sequence[str], parameter: str) -> dict[str, str]:
+    """``["A=b", ...]`` -> ``{"A": "b"}``; empty strings are skipped."""
+    pairs = {}
+    for entry in entries:
+        if not entry:
+            continue
+        key, separator, value = entry.partition("=")
+        if not separator or not key.strip() or not value.strip():
+            raise LegFkError(f"{parameter}: entry '{entry}' is not of the form key=value")
+        pairs[key.strip()] = value.strip()
+    return pairs
+
+
+def _build_model(values: dict[str, object]) -> _Model:
+    """The compiled robot for the model parameters' values; LegFkError names what is wrong."""
+    description = str(values["robot_description"] or "")
+    urdf_file = str(values["urdf_file"] or "")
+    if len(description) > MAX_URDF_CHARS:
+        raise LegFkError(f"robot_description is {len(description)} characters, more than the {MAX_URDF_CHARS} accepted")
+    if description:
+        source, xml = "robot_description", description
+    else:
+        path = urdf_file or str(default_urdf_path())
+        source = path
+        try:
+            with open(path, encoding="utf-8") as file:
+                xml = file.read(MAX_URDF_CHARS + 1)
+        except (OSError, UnicodeDecodeError) as error:
+            raise LegFkError(f"urdf_file '{path}': {error}") from error
+    model = load_urdf(xml) if xml.lstrip().startswith("<") else None
+    if model is None:
+        raise LegFkError(f"{source}: not URDF XML")
+    quadruped = Quadruped(
+        model,
+        _key_values(values["foot_links"], "foot_links") or None,  # type: ignore[arg-type]
+        _key_values(values["joint_aliases"], "joint_aliases"),  # type: ignore[arg-type]
+    )
+    return _Model(quadruped, xml, source)
+
+
+def _make_executor() -> rclpy.executors.Executor:
+    """rclpy's EventsExecutor where available (the fastest here), else the single-threaded one."""
+    try:
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor()
+    except ImportError:
+        return SingleThreadedExecutor()
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    """Entry point of ``ros2 run a1_leg_fk foot_fk_node``; exits 0 on Ctrl-C/SIGTERM."""
+    try:
+        rclpy.init(args=args)
+    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
+        print(f"foot_fk_node: cannot start: {error}", file=sys.stderr)
+        return 2
+    node = None
+    try:
+        node = FootFkNode()
+        executor = _make_executor()
+        executor.add_node(node)
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
+    except LegFkError as error:
+        rclpy.logging.get_logger(NODE_NAME).fatal(f"cannot start: {error}")
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

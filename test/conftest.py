@@ -1,0 +1,151 @@
+"""Shared test fixtures: an isolated ROS domain per test run, processes that always stop, and an
+in-test rclpy node that spins until a condition holds or a bounded wait runs out."""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable, Iterator
+
+import pytest
+
+DOMAIN_IDS = range(1, 102)  # 0..101 are safe; higher values clash with port ranges
+
+
+def _claim_domain_id() -> tuple[int, object]:
+    """The first domain id no other test run on this machine holds, with its lock file open."""
+    lock_folder = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
+    lock_folder.mkdir(exist_ok=True)
+    for domain_id in DOMAIN_IDS:
+        lock = open(lock_folder / f"{domain_id}.lock", "w")  # noqa: SIM115 (held for the whole run)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        return domain_id, lock
+    raise RuntimeError("every ROS domain id 1..101 is held by another test run")
+
+
+# Set before rclpy is imported anywhere, so the in-test nodes and every child share the domain.
+DOMAIN_ID, _DOMAIN_LOCK = _claim_domain_id()
+os.environ["ROS_DOMAIN_ID"] = str(DOMAIN_ID)
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.pop("ROS_LOCALHOST_ONLY", None)
+os.environ["PYTHONUNBUFFERED"] = "1"
+
+BIN = Path(sys.executable).parent
+DEFAULT_WAIT_S = 20.0
+
+
+def executable(name: str) -> str:
+    """Path of a console script installed beside the test's Python (the package's executables)."""
+    path = BIN / name
+    if not path.exists():
+        pytest.fail(f"{path} is not installed: run `make test` (it installs the package)")
+    return str(path)
+
+
+class Processes:
+    """Starts child processes with output in files, and stops every one of them at teardown."""
+
+    def __init__(self, folder: Path) -> None:
+        self._folder = folder
+        self._started: list[tuple[subprocess.Popen, Path]] = []
+
+    def start(self, command: list[str], env: dict[str, str] | None = None) -> subprocess.Popen:
+        log = self._folder / f"process{len(self._started)}.log"
+        process = subprocess.Popen(
+            command,
+            stdout=open(log, "w"),  # noqa: SIM115 (closed with the process)
+            stderr=subprocess.STDOUT,
+            env={**os.environ, **(env or {})},
+            start_new_session=True,
+        )
+        self._started.append((process, log))
+        return process
+
+    def output(self, process: subprocess.Popen) -> str:
+        """Everything the process printed so far (stdout and stderr)."""
+        for started, log in self._started:
+            if started is process:
+                return log.read_text(errors="replace")
+        raise KeyError(process)
+
+    def interrupt(self, process: subprocess.Popen, timeout_s: float = 5.0) -> int:
+        """Send SIGINT (as Ctrl-C does) and return the exit code, killing it after ``timeout_s``."""
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+        try:
+            return process.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(5)
+            raise
+
+    def stop_all(self) -> None:
+        for process, _ in self._started:
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + 5.0
+        for process, _ in self._started:
+            try:
+                process.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait(5)
+
+
+@pytest.fixture
+def processes(tmp_path: Path) -> Iterator[Processes]:
+    started = Processes(tmp_path)
+    yield started
+    started.stop_all()
+
+
+class RosProbe:
+    """An rclpy node of the test's own, in its own context, spun only while waiting."""
+
+    def __init__(self) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self._rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(f"test_probe_{os.getpid()}", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, condition: Callable[[], bool], timeout_s: float = DEFAULT_WAIT_S) -> bool:
+        """Spin until ``condition()`` is true (returns True) or ``timeout_s`` passes (False)."""
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            if time.monotonic() > deadline:
+                return False
+            self.executor.spin_once(timeout_sec=0.02)
+        return True
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin for a fixed time (to collect messages that should, or should not, arrive)."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self._rclpy.shutdown(context=self.context)
+
+
+@pytest.fixture
+def ros() -> Iterator[RosProbe]:
+    probe = RosProbe()
+    yield probe
+    probe.close()

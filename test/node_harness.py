@@ -1,0 +1,116 @@
+"""Talking to a running ``foot_fk_node`` from a test: publish joint states, collect feet, call services."""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+from conftest import BIN, RosProbe
+from geometry_msgs.msg import PointStamped, Vector3Stamped
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParameters
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+
+LEGS = ("FR", "FL", "RR", "RL")
+PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
+UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
+STANDING = [0.0, 0.8, -1.5] * 4
+
+
+def node_command(*ros_args: str) -> list[str]:
+    """The installed node executable (as ``ros2 run`` would start it), with ``--ros-args``."""
+    installed = BIN / "foot_fk_node"
+    command = [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.node"]
+    return command + (["--ros-args", *ros_args] if ros_args else [])
+
+
+class NodeClient:
+    """Publisher of joint_states and collector of the node's feet, under a namespace prefix."""
+
+    def __init__(self, probe: RosProbe, prefix: str = "", joint_states_topic: str = "") -> None:
+        self.probe = probe
+        node = probe.node
+        self.prefix = prefix
+        self.positions: dict[str, list[PointStamped]] = defaultdict(list)
+        self.velocities: dict[str, list[Vector3Stamped]] = defaultdict(list)
+        for leg in LEGS:
+            node.create_subscription(
+                PointStamped, f"{prefix}foot_positions/{leg}", self.positions[leg].append, QoSProfile(depth=1000)
+            )
+            node.create_subscription(
+                Vector3Stamped, f"{prefix}foot_velocities/{leg}", self.velocities[leg].append, QoSProfile(depth=1000)
+            )
+        self.publisher = node.create_publisher(
+            JointState, joint_states_topic or f"{prefix}joint_states", QoSProfile(depth=1000)
+        )
+        self.verify_client = node.create_client(Trigger, f"{prefix}verify_fk")
+        self.parameters_client = node.create_client(SetParameters, f"{prefix}a1_leg_fk/set_parameters")
+
+    def joint_state(self, names, positions, velocities=(), stamp_ns: int | None = None) -> JointState:
+        msg = JointState(name=list(names), position=[float(v) for v in positions], velocity=[float(v) for v in velocities])
+        stamp_ns = self.probe.node.get_clock().now().nanoseconds if stamp_ns is None else stamp_ns
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+        return msg
+
+    def wait_until_connected(self, timeout_s: float = 20.0) -> bool:
+        """Publish the standing pose until the node's first FR foot comes back (discovery done)."""
+
+        def answered() -> bool:
+            if self.positions["FR"]:
+                return True
+            self.publisher.publish(self.joint_state(PYBULLET_NAMES, STANDING))
+            return False
+
+        ok = self.probe.spin_until(answered, timeout_s)
+        self.probe.spin_for(0.3)
+        self.clear()
+        return ok
+
+    def send(self, msg: JointState) -> None:
+        self.publisher.publish(msg)
+
+    def clear(self) -> None:
+        for lists in (self.positions, self.velocities):
+            for received in lists.values():
+                received.clear()
+
+    def wait_for_feet(self, count_per_leg: int = 1, legs=LEGS, timeout_s: float = 10.0) -> bool:
+        return self.probe.spin_until(lambda: all(len(self.positions[leg]) >= count_per_leg for leg in legs), timeout_s)
+
+    def verify(self, timeout_s: float = 10.0) -> Trigger.Response:
+        assert self.verify_client.wait_for_service(timeout_sec=timeout_s), "verify_fk not offered"
+        future = self.verify_client.call_async(Trigger.Request())
+        assert self.probe.spin_until(future.done, timeout_s), "verify_fk did not answer"
+        return future.result()
+
+    def set_string_parameter(self, name: str, value: str, timeout_s: float = 20.0):
+        return self.set_parameter(name, ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value), timeout_s)
+
+    def set_parameter(self, name: str, value: ParameterValue, timeout_s: float = 20.0):
+        """SetParameters on the node; returns the SetParametersResult."""
+        assert self.parameters_client.wait_for_service(timeout_sec=timeout_s), "set_parameters not offered"
+        future = self.parameters_client.call_async(SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)]))
+        assert self.probe.spin_until(future.done, timeout_s), "set_parameters did not answer"
+        return future.result().results[0]
+
+
+def parse_tokens(message: str) -> dict[str, str]:
+    """``"a=1 b=2"`` -> ``{"a": "1", "b": "2"}``."""
+    return dict(token.split("=", 1) for token in message.split() if "=" in token)
+
+
+def stamp_ns(msg) -> int:  # noqa: ANN001
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+def distance(point, xyz) -> float:  # noqa: ANN001
+    return math.dist((point.x, point.y, point.z), tuple(xyz))
+
+
+def package_root() -> Path:
+    return Path(__file__).resolve().parent.parent

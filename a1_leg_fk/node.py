@@ -31,7 +31,7 @@ from a1_leg_fk.joint_state import REJECTIONS, FootTracker
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
-from a1_leg_fk.urdf import LegFkError, default_urdf_path, load_urdf
+from a1_leg_fk.urdf import LegFkError, default_urdf_path, parse_urdf
 
 NODE_NAME = "a1_leg_fk"
 MAX_URDF_CHARS = 16 * 1024 * 1024  # far above any real robot description; bounds memory
@@ -425,9 +425,10 @@ def _build_model(values: dict[str, object]) -> _Model:
                 xml = file.read(MAX_URDF_CHARS + 1)
         except (OSError, UnicodeDecodeError) as error:
             raise LegFkError(f"urdf_file '{path}': {error}") from error
-    model = load_urdf(xml) if xml.lstrip().startswith("<") else None
-    if model is None:
+    xml = xml.lstrip()  # an XML declaration must come first; launch files often indent the text
+    if not xml.startswith("<"):
         raise LegFkError(f"{source}: not URDF XML")
+    model = parse_urdf(xml, source)
     quadruped = Quadruped(
         model,
         _key_values(values["foot_links"], "foot_links") or None,  # type: ignore[arg-type]

@@ -107,7 +107,9 @@ def load_urdf(source: str | Path | None = None) -> RobotModel:
     if source is None:
         source = default_urdf_path()
     if isinstance(source, str) and source.lstrip().startswith("<"):
-        return parse_urdf(source, "<robot_description>")
+        # Leading whitespace (a triple-quoted string in a launch file) would put the XML
+        # declaration "not at start of entity", which expat refuses.
+        return parse_urdf(source.lstrip(), "<robot_description>")
     path = Path(source)
     try:
         text = path.read_text(encoding="utf-8")

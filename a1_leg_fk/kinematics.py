@@ -128,6 +128,7 @@ class Quadruped:
         self.model = model
         self.base_frame = model.root
         self.legs = tuple(CompiledLeg(chain) for chain in find_legs(model, foot_links))
+        self._leg_positions = tuple(leg.position for leg in self.legs)
         self.joints: tuple[Joint, ...] = tuple(j for leg in self.legs for j in leg.chain.movable)
         self.joint_names = tuple(joint.name for joint in self.joints)
         self.name_to_slot: Mapping[str, int] = joint_name_index(tuple(leg.chain for leg in self.legs), joint_aliases)
@@ -144,12 +145,9 @@ class Quadruped:
 
     def fk(self, angles: Sequence[float]) -> np.ndarray:
         """(4, 3) foot positions [m] in the base frame for 12 joint angles [rad]."""
-        q = _checked_configuration(angles)
-        out = []
-        for leg_slot, leg in enumerate(self.legs):
-            first = leg_slot * JOINTS_PER_LEG
-            out.extend(leg.position(q[first], q[first + 1], q[first + 2]))
-        return np.array(out).reshape(len(LEG_NAMES), 3)
+        q = _quickly_checked_configuration(angles)
+        fr, fl, rr, rl = self._leg_positions
+        return np.array((fr(q[0], q[1], q[2]), fl(q[3], q[4], q[5]), rr(q[6], q[7], q[8]), rl(q[9], q[10], q[11])))
 
     def fk_batch(self, angles: np.ndarray) -> np.ndarray:
         """(N, 4, 3) foot positions [m] for an (N, 12) array of joint angles [rad]."""
@@ -276,6 +274,19 @@ def _checked_configuration(angles: Sequence[float], what: str = "joint angles") 
             leg = LEG_NAMES[slot // JOINTS_PER_LEG]
             raise LegFkError(f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}")
     return q
+
+
+def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
+    """As :func:`_checked_configuration`, but the common case (12 finite numbers) costs a list copy
+    and a sum: a NaN or infinity makes the sum non-finite, and only then is each value examined."""
+    try:
+        q = angles.tolist() if isinstance(angles, np.ndarray) else list(angles)
+        total = sum(q)
+    except TypeError:
+        return _checked_configuration(angles)
+    if len(q) == JOINT_COUNT and isinstance(total, (float, int)) and total - total == 0.0:
+        return q
+    return _checked_configuration(angles)
 
 
 def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:

@@ -1,0 +1,181 @@
+"""Legs (a1_leg_fk.legs): foot discovery, leg order, joint naming, and refusals of odd legs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pybullet_data
+import pytest
+
+from a1_leg_fk.legs import LEG_NAMES, find_legs, joint_name_index
+from a1_leg_fk.urdf import LegFkError, load_urdf, parse_urdf
+
+DATA = Path(pybullet_data.getDataPath())
+A1_PATH = DATA / "a1" / "a1.urdf"
+MINI_CHEETAH_PATH = DATA / "mini_cheetah" / "mini_cheetah.urdf"
+MINI_CHEETAH_FEET = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_hl"}
+
+
+def leg_urdf(leg: str, knee_type: str = "revolute", extra_joint: bool = False, foot: str | None = None) -> str:
+    """One synthetic leg under link ``base``: hip roll, hip pitch, knee, fixed foot."""
+    limit = '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
+    shank_parent = f"{leg}_thigh"
+    extra = ""
+    if extra_joint:  # a fourth movable joint between thigh and knee
+        extra = f"""<link name="{leg}_extra"/>
+  <joint name="{leg}_extra_joint" type="revolute"><parent link="{leg}_thigh"/><child link="{leg}_extra"/>
+    <axis xyz="0 0 1"/>{limit}</joint>"""
+        shank_parent = f"{leg}_extra"
+    return f"""
+  <link name="{leg}_hip"/><link name="{leg}_thigh"/><link name="{leg}_shank"/><link name="{foot or leg + '_foot'}"/>
+  <joint name="{leg}_hip_joint" type="revolute"><parent link="base"/><child link="{leg}_hip"/>
+    <origin xyz="0.2 0.05 0"/><axis xyz="1 0 0"/>{limit}</joint>
+  <joint name="{leg}_thigh_joint" type="revolute"><parent link="{leg}_hip"/><child link="{leg}_thigh"/>
+    <origin xyz="0 0.08 0"/><axis xyz="0 1 0"/>{limit}</joint>
+  {extra}
+  <joint name="{leg}_calf_joint" type="{knee_type}"><parent link="{shank_parent}"/><child link="{leg}_shank"/>
+    <origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>{limit}</joint>
+  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/><child link="{foot or leg + '_foot'}"/>
+    <origin xyz="0 0 -0.2"/></joint>"""
+
+
+def quadruped_urdf(**per_leg: dict) -> str:
+    """Four synthetic legs; ``per_leg={'FR': {'knee_type': 'prismatic'}}`` changes one leg."""
+    legs = "".join(leg_urdf(leg, **per_leg.get(leg, {})) for leg in LEG_NAMES)
+    return f'<robot name="synthetic"><link name="base"/>{legs}\n</robot>'
+
+
+def assert_leg_fk_error(error: pytest.ExceptionInfo, *culprits: str) -> None:
+    assert isinstance(error.value, ValueError)
+    for culprit in culprits:
+        assert culprit in str(error.value), f"{culprit!r} not named in: {error.value}"
+
+
+# --- the A1 -------------------------------------------------------------------------------
+
+
+def test_a1_legs_in_order_with_their_feet_and_joints() -> None:
+    legs = find_legs(load_urdf(A1_PATH))
+    assert LEG_NAMES == ("FR", "FL", "RR", "RL")
+    assert [leg.leg for leg in legs] == ["FR", "FL", "RR", "RL"]
+    assert [leg.foot_link for leg in legs] == ["FR_toe", "FL_toe", "RR_toe", "RL_toe"]
+    for leg in legs:
+        assert [j.name for j in leg.movable] == [f"{leg.leg}_hip_joint", f"{leg.leg}_upper_joint", f"{leg.leg}_lower_joint"]
+        assert [j.name for j in leg.joints] == [j.name for j in leg.movable] + [f"{leg.leg}_toe_fixed"]
+
+
+def test_a1_explicit_feet_equal_discovered_feet() -> None:
+    model = load_urdf(A1_PATH)
+    explicit = find_legs(model, {leg: f"{leg}_toe" for leg in LEG_NAMES})
+    assert explicit == find_legs(model)
+
+
+def test_a1_lower_link_as_foot_gives_the_same_three_joints() -> None:
+    legs = find_legs(load_urdf(A1_PATH), {leg: f"{leg}_lower" for leg in LEG_NAMES})
+    assert [j.name for j in legs[0].joints] == ["FR_hip_joint", "FR_upper_joint", "FR_lower_joint"]
+
+
+def test_mini_cheetah_needs_foot_links_and_works_with_them() -> None:
+    model = load_urdf(MINI_CHEETAH_PATH)
+    with pytest.raises(LegFkError) as error:
+        find_legs(model)
+    assert_leg_fk_error(error, "FR", "foot_links")
+    legs = find_legs(model, MINI_CHEETAH_FEET)
+    assert [leg.foot_link for leg in legs] == ["toe_fr", "toe_fl", "toe_hr", "toe_hl"]
+    assert [j.name for j in legs[2].movable] == ["torso_to_abduct_hr_j", "abduct_hr_to_thigh_hr_j", "thigh_hr_to_knee_hr_j"]
+
+
+# --- joint naming -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("leg_slot, leg", list(enumerate(LEG_NAMES)))
+def test_unitree_names_map_to_the_pybullet_data_slots(leg_slot: int, leg: str) -> None:
+    index = joint_name_index(find_legs(load_urdf(A1_PATH)))
+    first = 3 * leg_slot
+    assert index[f"{leg}_hip_joint"] == first
+    assert index[f"{leg}_upper_joint"] == index[f"{leg}_thigh_joint"] == first + 1
+    assert index[f"{leg}_lower_joint"] == index[f"{leg}_calf_joint"] == first + 2
+
+
+def test_pybullet_data_names_map_to_a_unitree_named_model() -> None:
+    text = A1_PATH.read_text(encoding="utf-8").replace("_upper_joint", "_thigh_joint").replace("_lower_joint", "_calf_joint")
+    index = joint_name_index(find_legs(load_urdf(text)))
+    assert index["RL_thigh_joint"] == index["RL_upper_joint"] == 10
+    assert index["RL_calf_joint"] == index["RL_lower_joint"] == 11
+
+
+def test_user_aliases_map_to_their_joint_and_override() -> None:
+    legs = find_legs(load_urdf(A1_PATH))
+    index = joint_name_index(legs, {"fr_abduction": "FR_hip_joint", "rl_knee": "RL_lower_joint", "FR_thigh_joint": "FL_upper_joint"})
+    assert index["fr_abduction"] == 0
+    assert index["rl_knee"] == 11
+    assert index["FR_thigh_joint"] == 4  # the caller's alias wins over the built-in equivalent
+
+
+def test_alias_to_an_unknown_joint_names_both() -> None:
+    with pytest.raises(LegFkError) as error:
+        joint_name_index(find_legs(load_urdf(A1_PATH)), {"knee": "FR_knee_joint"})
+    assert_leg_fk_error(error, "'knee", "'FR_knee_joint'")
+
+
+def test_alias_to_a_fixed_joint_is_refused() -> None:
+    with pytest.raises(LegFkError) as error:
+        joint_name_index(find_legs(load_urdf(A1_PATH)), {"toe": "FR_toe_fixed"})
+    assert_leg_fk_error(error, "'FR_toe_fixed'")
+
+
+# --- refusals -----------------------------------------------------------------------------
+
+
+def test_synthetic_quadruped_is_accepted() -> None:
+    legs = find_legs(parse_urdf(quadruped_urdf()))
+    assert [leg.foot_link for leg in legs] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
+
+
+def test_foot_link_that_does_not_exist() -> None:
+    feet = {leg: f"{leg}_toe" for leg in LEG_NAMES} | {"RL": "RL_tow"}
+    with pytest.raises(LegFkError) as error:
+        find_legs(load_urdf(A1_PATH), feet)
+    assert_leg_fk_error(error, "RL", "'RL_tow'")
+
+
+def test_foot_links_with_an_unknown_or_missing_leg() -> None:
+    feet = {"FR": "FR_toe", "FL": "FL_toe", "RR": "RR_toe", "LH": "RL_toe"}
+    with pytest.raises(LegFkError) as error:
+        find_legs(load_urdf(A1_PATH), feet)
+    assert_leg_fk_error(error, "'LH'", "'RL'")
+
+
+def test_prismatic_knee_names_the_joint_and_leg() -> None:
+    model = parse_urdf(quadruped_urdf(RR={"knee_type": "prismatic"}))
+    with pytest.raises(LegFkError) as error:
+        find_legs(model, {leg: f"{leg}_foot" for leg in LEG_NAMES})
+    assert_leg_fk_error(error, "leg RR", "'RR_calf_joint'", "prismatic")
+
+
+def test_prismatic_knee_without_foot_links_is_not_discovered_as_a_leg() -> None:
+    with pytest.raises(LegFkError) as error:
+        find_legs(parse_urdf(quadruped_urdf(FL={"knee_type": "prismatic"})))
+    assert_leg_fk_error(error, "FL")
+
+
+def test_four_movable_joints_in_a_leg() -> None:
+    model = parse_urdf(quadruped_urdf(FL={"extra_joint": True}))
+    with pytest.raises(LegFkError) as error:
+        find_legs(model, {leg: f"{leg}_foot" for leg in LEG_NAMES})
+    assert_leg_fk_error(error, "leg FL", "'FL_foot'", "4 movable", "FL_extra_joint")
+
+
+def test_two_movable_joints_in_a_leg() -> None:
+    """Taking the shank as the foot leaves the hip roll and hip pitch only."""
+    feet = {leg: f"{leg}_foot" for leg in LEG_NAMES} | {"FR": "FR_thigh"}
+    with pytest.raises(LegFkError) as error:
+        find_legs(parse_urdf(quadruped_urdf()), feet)
+    assert_leg_fk_error(error, "leg FR", "'FR_thigh'", "2 movable")
+
+
+def test_ambiguous_discovery_asks_for_foot_links() -> None:
+    model = parse_urdf(quadruped_urdf().replace("RL_foot", "FR_foot2"))
+    with pytest.raises(LegFkError) as error:
+        find_legs(model)
+    assert_leg_fk_error(error, "FR", "FR_foot2", "foot_links")

@@ -1,0 +1,234 @@
+"""Foot FK speed of a1_leg_fk against two references, measured in one process, in one run.
+
+Run: ``.venv/bin/python bench/fk_speed.py`` (about 20 s). Prints a table:
+
+- one configuration, four feet, median time per call of
+  ``Quadruped.fk``, of the four raw generated per-leg functions, of the reference write-up's
+  per-leg numpy code (3x3 rotation matrices built with numpy on every call and chained; shown
+  with ``np.cos``/``np.sin`` as (a) and with ``math.cos``/``math.sin`` as (a')), and of
+  PyBullet (``resetJointState`` x 12 + ``getLinkState`` x 4); targets: <= 5 us per call and
+  >= 20x faster than the numpy reference;
+- a batch of 10^6 configurations: ``fk_batch`` throughput (target >= 1.3 M configs/s) beside the
+  time of ``np.sin`` + ``np.cos`` alone on the same (10^6, 12) array, the floor of any method
+  that needs the trigonometry.
+
+Every reference is first checked against ``Quadruped.fk`` on the configuration it is timed on.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import statistics
+import sys
+import timeit
+from importlib import metadata
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+try:
+    from a1_leg_fk.kinematics import Quadruped
+except ImportError:  # run from a source checkout without installing the package
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+    from a1_leg_fk.kinematics import Quadruped
+
+LEGS = ("FR", "FL", "RR", "RL")
+STANDING = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
+REPEATS = 15
+BATCH_ROWS = 1_000_000
+BATCH_REPEATS = 5
+
+
+def median_seconds_per_call(functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05) -> dict[str, float]:
+    """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
+
+    The runs are interleaved (one run of every function per round), so a slow spell of the
+    machine hits all of them alike and the ratios stay fair.
+    """
+    timers = {name: timeit.Timer(function) for name, function in functions.items()}
+    numbers = {}
+    for name, timer in timers.items():
+        number, elapsed = timer.autorange()
+        numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
+    runs: dict[str, list[float]] = {name: [] for name in functions}
+    for _ in range(repeats):
+        for name, timer in timers.items():
+            runs[name].append(timer.timeit(numbers[name]) / numbers[name])
+    return {name: statistics.median(times) for name, times in runs.items()}
+
+
+# --- reference (a): the write-up's per-leg numpy code ----------------------------------------
+
+
+def rx(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def ry(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rx_math(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def ry_math(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[float]], np.ndarray]:
+    """Per-leg numpy FK with the URDF numbers read from the model (A1 joint names)."""
+    joints = quadruped.model.joints
+    legs = []
+    for leg in LEGS:
+        hip = np.array(joints[f"{leg}_hip_joint"].origin_xyz)  # trunk -> hip roll joint
+        thigh = np.array(joints[f"{leg}_upper_joint"].origin_xyz)  # hip link -> hip pitch joint
+        knee = np.array(joints[f"{leg}_lower_joint"].origin_xyz)  # thigh link -> knee joint
+        foot = np.array(joints[f"{leg}_toe_fixed"].origin_xyz)  # calf link -> toe
+        legs.append((hip, thigh, knee, foot))
+
+    def fk(q: list[float]) -> np.ndarray:
+        feet = np.empty((4, 3))
+        for slot, (hip, thigh, knee, foot) in enumerate(legs):
+            q0, q1, q2 = q[3 * slot], q[3 * slot + 1], q[3 * slot + 2]
+            hip_rotation = rot_x(q0)
+            thigh_rotation = hip_rotation @ rot_y(q1)
+            calf_rotation = thigh_rotation @ rot_y(q2)
+            feet[slot] = hip + hip_rotation @ thigh + thigh_rotation @ knee + calf_rotation @ foot
+        return feet
+
+    return fk
+
+
+# --- reference (b): PyBullet ------------------------------------------------------------------
+
+
+class PyBulletFk:
+    """A1 in a DIRECT client, fixed base at the origin; ``fk(q)`` = resetJointState x 12 + getLinkState x 4."""
+
+    def __init__(self, quadruped: Quadruped) -> None:
+        import pybullet
+        import pybullet_data
+
+        self.p = pybullet
+        self.client = pybullet.connect(pybullet.DIRECT)
+        self.body = pybullet.loadURDF(
+            os.path.join(pybullet_data.getDataPath(), "a1", "a1.urdf"), [0, 0, 0], [0, 0, 0, 1], useFixedBase=True,
+            physicsClientId=self.client,
+        )
+        infos = [pybullet.getJointInfo(self.body, j, physicsClientId=self.client) for j in range(pybullet.getNumJoints(self.body, physicsClientId=self.client))]
+        by_joint = {info[1].decode(): info[0] for info in infos}
+        by_link = {info[12].decode(): info[0] for info in infos}
+        self.joints = [by_joint[name] for name in quadruped.joint_names]
+        self.feet = [by_link[f"{leg}_toe"] for leg in LEGS]
+
+    def fk(self, q: list[float]) -> list:
+        p, body, client = self.p, self.body, self.client
+        for index, angle in zip(self.joints, q):
+            p.resetJointState(body, index, angle, physicsClientId=client)
+        return [p.getLinkState(body, foot, computeForwardKinematics=True, physicsClientId=client)[4] for foot in self.feet]
+
+    def close(self) -> None:
+        self.p.disconnect(self.client)
+
+
+# --- the run ------------------------------------------------------------------------------------
+
+
+def machine() -> str:
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except AttributeError:
+        usable = os.cpu_count()
+    try:
+        pybullet_version = metadata.version("pybullet")
+    except metadata.PackageNotFoundError:
+        pybullet_version = "absent"
+    return (
+        f"machine: nproc={usable} (cpu_count={os.cpu_count()}), {platform.platform()}, {platform.processor() or platform.machine()}\n"
+        f"python {platform.python_version()}, numpy {np.__version__}, pybullet {pybullet_version}"
+    )
+
+
+def main() -> None:
+    print(machine())
+    quadruped = Quadruped.from_urdf()
+    q = [float(v) for v in STANDING]
+    expected = quadruped.fk(q)
+
+    legs = quadruped.legs
+    f0, f1, f2, f3 = (leg.position for leg in legs)
+    q0, q1, q2, q3, q4, q5, q6, q7, q8, q9, q10, q11 = q
+
+    def raw() -> tuple:
+        return f0(q0, q1, q2), f1(q3, q4, q5), f2(q6, q7, q8), f3(q9, q10, q11)
+
+    reference = numpy_reference(quadruped)
+    reference_math = numpy_reference(quadruped, rx_math, ry_math)
+    assert np.abs(np.array(raw()) - expected).max() <= 1e-12
+    assert np.abs(reference(q) - expected).max() <= 1e-12, "numpy reference disagrees with fk"
+    assert np.abs(reference_math(q) - expected).max() <= 1e-12, "numpy reference disagrees with fk"
+
+    pybullet_fk = None
+    try:
+        pybullet_fk = PyBulletFk(quadruped)
+        assert np.abs(np.array(pybullet_fk.fk(q)) - expected).max() <= 1e-7, "PyBullet disagrees with fk"
+    except ImportError:
+        pass
+
+    functions: dict[str, Callable[[], object]] = {
+        "Quadruped.fk(q)  [12 floats -> (4, 3) array]": lambda: quadruped.fk(q),
+        "generated per-leg functions x 4  [tuples]": raw,
+        "(a) write-up per-leg numpy 3x3 chain, np.cos/sin": lambda: reference(q),
+        "(a') the same with math.cos/sin": lambda: reference_math(q),
+    }
+    if pybullet_fk is not None:
+        functions["(b) PyBullet reset x 12 + getLinkState x 4"] = lambda: pybullet_fk.fk(q)
+    rows = list(median_seconds_per_call(functions).items())
+    if pybullet_fk is not None:
+        pybullet_fk.close()
+
+    fk_seconds, numpy_seconds, numpy_math_seconds = rows[0][1], rows[2][1], rows[3][1]
+    print(f"\none configuration, four feet (median of {REPEATS} interleaved runs)")
+    print(f"  {'method':<52} {'us/call':>9} {'vs Quadruped.fk':>16}")
+    for name, seconds in rows:
+        print(f"  {name:<52} {seconds * 1e6:9.2f} {seconds / fk_seconds:15.1f}x")
+    print(
+        f"  Quadruped.fk: {fk_seconds * 1e6:.2f} us/call (target <= 5 us: {'met' if fk_seconds <= 5e-6 else 'NOT met'}); "
+        f"{numpy_seconds / fk_seconds:.1f}x faster than (a) (target >= 20x: {'met' if numpy_seconds / fk_seconds >= 20 else 'NOT met'}), "
+        f"{numpy_math_seconds / fk_seconds:.1f}x faster than (a')"
+    )
+
+    batch = np.random.default_rng(0).uniform(-math.pi, math.pi, size=(BATCH_ROWS, 12))
+    sample = slice(0, BATCH_ROWS, 9973)
+    np.testing.assert_allclose(quadruped.fk_batch(batch[sample]), [quadruped.fk(row) for row in batch[sample]], rtol=0, atol=1e-12)
+
+    def trig_only() -> None:
+        np.sin(batch)
+        np.cos(batch)
+
+    batch_runs, trig_runs = [], []
+    for _ in range(BATCH_REPEATS):  # interleaved, as above
+        batch_runs.append(timeit.timeit(lambda: quadruped.fk_batch(batch), number=1))
+        trig_runs.append(timeit.timeit(trig_only, number=1))
+    batch_seconds, trig_seconds = statistics.median(batch_runs), statistics.median(trig_runs)
+    throughput = BATCH_ROWS / batch_seconds / 1e6
+    print(f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} interleaved runs)")
+    print(f"  {'method':<52} {'s':>9} {'M configs/s':>12}")
+    print(f"  {'Quadruped.fk_batch':<52} {batch_seconds:9.3f} {throughput:12.2f}")
+    print(f"  {'np.sin + np.cos alone (the floor)':<52} {trig_seconds:9.3f} {BATCH_ROWS / trig_seconds / 1e6:12.2f}")
+    print(
+        f"  fk_batch / trig floor = {batch_seconds / trig_seconds:.2f}x; "
+        f"throughput {throughput:.2f} M/s (target >= 1.3 M/s: {'met' if throughput >= 1.3 else 'NOT met'})"
+    )
+
+
+if __name__ == "__main__":
+    main()

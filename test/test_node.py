@@ -13,6 +13,8 @@ import numpy as np
 import pybullet
 import pybullet_data
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+from visualization_msgs.msg import Marker, MarkerArray
 from node_harness import (
     LEGS,
     PYBULLET_NAMES,
@@ -299,3 +301,35 @@ def test_signal_exits_zero_quickly_without_traceback(a1_node, sig):
     assert a1_node.process.wait(5) == 0
     assert time.monotonic() - started < 2.0
     assert "Traceback" not in a1_node.log()
+
+
+def test_diagnostics_and_markers_reach_subscribers(a1_node):
+    client = a1_node.client
+    node = client.probe.node
+    diagnostics, markers = [], []
+    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
+    node.create_subscription(MarkerArray, "foot_markers", markers.append, 10)
+    client.send(client.joint_state(PYBULLET_NAMES, STANDING[:11]))  # rejected
+    client.probe.spin_for(0.1)
+
+    def fed() -> bool:  # keep feeding good joint states until a marker array and a diagnostics report came
+        client.send(client.joint_state(PYBULLET_NAMES, STANDING))
+        return bool(markers) and any(_diagnostic_values(d).get("feet_published", "0") != "0" for d in diagnostics)
+
+    assert client.probe.spin_until(fed, 10.0)
+    values = _diagnostic_values(diagnostics[-1])
+    assert int(values["messages_received"]) >= int(values["messages_accepted"]) >= 1
+    assert values["messages_position_length_mismatch"] == "1"
+    assert values["joints_outside_limits"] == "none"
+    spheres = [m for m in markers[-1].markers if m.type == Marker.SPHERE]
+    strips = [m for m in markers[-1].markers if m.type == Marker.LINE_STRIP]
+    assert len(spheres) == 4 and len(strips) == 4
+    fr_sphere = next(m for m in spheres if m.ns.endswith("FR"))
+    assert distance(fr_sphere.pose.position, STANDING_FR) < 1e-4 and fr_sphere.header.frame_id == "trunk"
+    fr_strip = next(m for m in strips if m.ns.endswith("FR"))
+    assert distance(fr_strip.points[0], (0.183, -0.047, 0.0)) < 1e-9  # the hip joint's URDF origin
+    assert distance(fr_strip.points[-1], STANDING_FR) < 1e-4
+
+
+def _diagnostic_values(array: DiagnosticArray) -> dict[str, str]:
+    return {kv.key: kv.value for status in array.status for kv in status.values}

@@ -1,0 +1,183 @@
+"""PNG plots of the kinematics: one leg's reach envelope, and the feet over the demo gait.
+
+matplotlib is optional: it is imported only when a plot is drawn (with the non-interactive Agg
+backend), and its absence raises :class:`MissingMatplotlib`, whose message says how to install it.
+Sampling (:func:`reach_samples`, :func:`gait_feet`) needs numpy only.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from a1_leg_fk.gait import Gait, limits_of
+from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.urdf import LegFkError
+
+INSTALL_HINT = "matplotlib is not installed: pip install matplotlib (or: sudo apt install python3-matplotlib)"
+REGION_COLOUR = "#c6dbef"
+LEG_COLOURS = {leg: f"C{slot}" for slot, leg in enumerate(LEG_NAMES)}
+STAND_POSE = (0.0, 0.8, -1.5)  # drawn in the reach plot for scale
+
+
+class MissingMatplotlib(LegFkError):
+    """matplotlib cannot be imported; the message says how to install it."""
+
+
+def pyplot():  # noqa: ANN201 (matplotlib.pyplot, untyped here)
+    """``matplotlib.pyplot`` on the Agg backend, or :class:`MissingMatplotlib`."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as error:
+        raise MissingMatplotlib(INSTALL_HINT) from error
+    return plt
+
+
+def _leg_slot(leg: str) -> int:
+    if leg not in LEG_NAMES:
+        raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}")
+    return LEG_NAMES.index(leg)
+
+
+def _limits(joint, fallback: tuple[float, float] = (-math.pi, math.pi)) -> tuple[float, float]:  # noqa: ANN001
+    if joint.lower is None or joint.upper is None:
+        return fallback
+    return joint.lower, joint.upper
+
+
+def reach_samples(quadruped: Quadruped, leg: str, samples: int = 250) -> tuple[np.ndarray, np.ndarray]:
+    """The leg's foot over a ``samples`` x ``samples`` grid of hip pitch x knee within their limits.
+
+    Hip roll is 0. Returns ``(points, edge)`` in the hip's sagittal plane, ``[x, z]`` [m] relative
+    to the hip-pitch joint: ``points`` (samples**2, 2) fill the reachable region and ``edge`` (M, 2)
+    traces its outline (the images of the four edges of the angle rectangle, in order).
+    """
+    slot = _leg_slot(leg)
+    first = slot * JOINTS_PER_LEG
+    pitch_range = _limits(quadruped.joints[first + 1])
+    knee_range = _limits(quadruped.joints[first + 2])
+    pitch, knee = np.meshgrid(np.linspace(*pitch_range, samples), np.linspace(*knee_range, samples), indexing="ij")
+    sweep = np.linspace(0.0, 1.0, 4 * samples)
+    lo_p, hi_p = pitch_range
+    lo_k, hi_k = knee_range
+    edge_pitch = np.concatenate([lo_p + sweep * (hi_p - lo_p), np.full_like(sweep, hi_p), hi_p - sweep * (hi_p - lo_p), np.full_like(sweep, lo_p)])
+    edge_knee = np.concatenate([np.full_like(sweep, lo_k), lo_k + sweep * (hi_k - lo_k), np.full_like(sweep, hi_k), hi_k - sweep * (hi_k - lo_k)])
+    return _plane_points(quadruped, slot, pitch.ravel(), knee.ravel()), _plane_points(quadruped, slot, edge_pitch, edge_knee)
+
+
+def _plane_points(quadruped: Quadruped, slot: int, pitch: np.ndarray, knee: np.ndarray) -> np.ndarray:
+    first = slot * JOINTS_PER_LEG
+    angles = np.zeros((pitch.size, len(LEG_NAMES) * JOINTS_PER_LEG))
+    angles[:, first + 1], angles[:, first + 2] = pitch, knee
+    feet = quadruped.fk_batch(angles)[:, slot]
+    pitch_origin = quadruped.legs[slot].joint_points((0.0, 0.0, 0.0))[1]
+    if np.abs(feet[:, 1] - pitch_origin[1]).max() > 1e-9:
+        raise LegFkError(f"leg {LEG_NAMES[slot]}: with hip roll 0 the foot leaves the hip's sagittal plane")
+    return feet[:, [0, 2]] - pitch_origin[[0, 2]]
+
+
+def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 250) -> Path:
+    """Write ``path`` (PNG): where the leg's foot can be in its hip's sagittal plane (hip roll 0)."""
+    plt = pyplot()
+    slot = _leg_slot(leg)
+    points, edge = reach_samples(quadruped, leg, samples)
+    reach = quadruped.reach(leg)
+    first = slot * JOINTS_PER_LEG
+    (lo_p, hi_p), (lo_k, hi_k) = _limits(quadruped.joints[first + 1]), _limits(quadruped.joints[first + 2])
+    figure, axes = plt.subplots(figsize=(7.5, 7.5))
+    from matplotlib.patches import Patch
+
+    # The region: its outline filled with the non-zero winding rule (the map (pitch, knee) -> foot keeps
+    # its orientation away from the straight knee, so every covered point winds at least once),
+    # and over it a sparse subset of the sampled feet.
+    axes.fill(edge[:, 0], edge[:, 1], color=REGION_COLOUR, linewidth=0, zorder=0)
+    region = Patch(color=REGION_COLOUR, label=f"reachable: hip pitch {lo_p:.2f}..{hi_p:.2f} rad x knee {lo_k:.2f}..{hi_k:.2f} rad")
+    step = max(1, samples // 25)
+    sparse = points.reshape(samples, samples, 2)[::step, ::step].reshape(-1, 2)
+    axes.scatter(sparse[:, 0], sparse[:, 1], s=2.0, color="#6baed6", linewidths=0, zorder=1,
+                 label="sampled feet (hip pitch x knee grid, FK)")
+    axes.plot(edge[:, 0], edge[:, 1], color="#3182bd", linewidth=1.0, label="edge of the reachable region")
+    circle = np.linspace(0.0, 2.0 * math.pi, 721)
+    for radius, style, colour, text in (
+        (reach.min_m, "-", "C3", f"inner radius {reach.min_m:.3f} m (knee at {reach.knee_at_min:.2f} rad)"),
+        (reach.max_m, "-", "C2", f"outer radius {reach.max_m:.3f} m (knee at {reach.knee_at_max:.2f} rad)"),
+        (reach.max_unlimited_m, "--", "0.3",
+         f"straight knee {reach.max_unlimited_m:.3f} m (knee {reach.knee_at_max_unlimited:.2f} rad: outside its limits)"),
+    ):
+        axes.plot(radius * np.cos(circle), radius * np.sin(circle), style, color=colour, linewidth=1.6, label=text)
+    # The leg in the stand pose, for scale: hip-pitch joint -> knee -> foot.
+    stand = quadruped.legs[slot].joint_points(STAND_POSE)
+    origin = quadruped.legs[slot].joint_points((0.0, 0.0, 0.0))[1]
+    leg_xz = stand[1:, :][:, [0, 2]] - origin[[0, 2]]
+    axes.plot(leg_xz[:, 0], leg_xz[:, 1], "-o", color="k", linewidth=2.5, markersize=5,
+              label=f"stand pose (pitch {STAND_POSE[1]}, knee {STAND_POSE[2]} rad)")
+    axes.plot([0.0], [0.0], "P", color="k", markersize=10)
+    axes.annotate("hip-pitch joint", (0.0, 0.0), xytext=(8, 8), textcoords="offset points")
+    axes.set_aspect("equal")
+    limit = 1.1 * reach.max_unlimited_m
+    axes.set_xlim(-limit, limit)
+    axes.set_ylim(-limit, limit)
+    axes.set_xlabel("x [m] (forward)")
+    axes.set_ylabel("z [m] (up)")
+    axes.set_title(f"{leg} foot reach in the hip's sagittal plane (hip roll 0)\n{quadruped.model.name}, "
+                   f"relative to the hip-pitch joint")
+    axes.grid(True, linewidth=0.4, alpha=0.6)
+    handles, _ = axes.get_legend_handles_labels()
+    axes.legend(handles=[region, *handles], loc="upper left", fontsize=7.5, framealpha=0.9)
+    return _save(figure, plt, path)
+
+
+def gait_feet(quadruped: Quadruped, gait: Gait | None = None, cycles: float = 2.0, samples_per_cycle: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """``(times [s], feet (N, 4, 3) [m, base frame])`` over ``cycles`` periodic trot cycles of the gait."""
+    gait = gait or Gait(limits_of(quadruped))
+    count = max(2, int(round(cycles * samples_per_cycle)) + 1)
+    times = gait.periodic_from_s + np.linspace(0.0, cycles * gait.period_s, count)
+    angles = np.array([gait.angles(float(t)) for t in times])
+    return times, quadruped.fk_batch(angles)
+
+
+def plot_gait_feet(quadruped: Quadruped, path: str | Path, gait: Gait | None = None, cycles: float = 2.0) -> Path:
+    """Write ``path`` (PNG): the four feet over ``cycles`` cycles of the demo trot, side and top views."""
+    plt = pyplot()
+    gait = gait or Gait(limits_of(quadruped))
+    times, feet = gait_feet(quadruped, gait, cycles)
+    hips = np.array([leg.joint_points((0.0, 0.0, 0.0))[0] for leg in quadruped.legs])
+    figure, (side, top) = plt.subplots(1, 2, figsize=(12, 5.5))
+    for slot, leg in enumerate(LEG_NAMES):
+        colour = LEG_COLOURS[leg]
+        side.plot(feet[:, slot, 0], feet[:, slot, 2], color=colour, linewidth=1.8, label=leg)
+        top.plot(feet[:, slot, 0], feet[:, slot, 1], color=colour, linewidth=1.8, label=leg)
+        for axes, (a, b) in ((side, (0, 2)), (top, (0, 1))):
+            axes.plot(feet[0, slot, a], feet[0, slot, b], "o", color=colour, markersize=5)
+    top.plot(hips[:, 0], hips[:, 1], "x", color="k", markersize=8, label="hip joints")
+    top.plot(hips[[0, 1, 3, 2, 0], 0], hips[[0, 1, 3, 2, 0], 1], ":", color="0.5", linewidth=1.0)
+    side.plot(hips[:, 0], hips[:, 2], "x", color="k", markersize=8, label="hip joints")
+    frame = quadruped.base_frame
+    for axes, vertical, title in ((side, "z [m] (up)", "side view (x-z)"), (top, "y [m] (left)", "top view (x-y)")):
+        axes.set_aspect("equal", adjustable="datalim")
+        axes.set_xlabel(f"x [m] (forward), frame {frame}")
+        axes.set_ylabel(vertical)
+        axes.set_title(title)
+        axes.grid(True, linewidth=0.4, alpha=0.6)
+        axes.legend(fontsize=8, loc="best")
+    figure.suptitle(
+        f"Feet over {cycles:g} cycles of the demo trot ({gait.parameters.trot_hz:g} Hz, diagonal pairs FR+RL / FL+RR), "
+        f"t = {times[0]:.2f}..{times[-1]:.2f} s; dots: start"
+    )
+    return _save(figure, plt, path)
+
+
+def _save(figure, plt, path: str | Path) -> Path:  # noqa: ANN001
+    path = Path(path)
+    try:
+        figure.tight_layout()
+        figure.savefig(path, dpi=100)
+    finally:
+        plt.close(figure)
+    return path

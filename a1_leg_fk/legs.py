@@ -69,6 +69,8 @@ def _discover_feet(model: RobotModel) -> dict[str, str]:
     feet: dict[str, str] = {}
     for leg in LEG_NAMES:
         matching = [link for link in candidates if link.upper().startswith(leg)]
+        if not matching:
+            _explain_missing_foot(model, leg)
         if len(matching) != 1:
             raise LegFkError(
                 f"{model.source}: leg {leg}: expected one leaf link named '{leg}...' with three movable "
@@ -77,6 +79,15 @@ def _discover_feet(model: RobotModel) -> dict[str, str]:
             )
         feet[leg] = matching[0]
     return feet
+
+
+def _explain_missing_foot(model: RobotModel, leg: str) -> None:
+    """Raise the chain error (e.g. a prismatic knee) of the leg's deepest leaf link, if it has one."""
+    leaves = [
+        link for link in model.links if link.upper().startswith(leg) and link != model.root and not model.child_links(link)
+    ]
+    if leaves:
+        _leg_chain(model, leg, max(leaves, key=lambda link: len(model.chain_to(link))))
 
 
 def _chain_or_empty(model: RobotModel, link: str) -> tuple[Joint, ...]:

@@ -73,6 +73,7 @@ class FootTracker:
         self._upper = [j.upper if j.upper is not None else math.inf for j in quadruped.joints]
         self._layout = _NameLayout([], (), (), (), ())
         self._last_outcome = NO_LEG_JOINTS
+        self.last_problem = ""  # what was wrong with the latest message, naming joints and values
         self.new_unknown_names: list[str] = []  # first seen since take_new_unknown_names()
 
     @property
@@ -96,6 +97,7 @@ class FootTracker:
         """
         counts = self.counts
         counts.messages += 1
+        self.last_problem = ""
         layout = self._layout
         if names != layout.names:
             layout = self._layout = self._describe(list(names))
@@ -115,6 +117,7 @@ class FootTracker:
             else:
                 bad_legs.add(slot // JOINTS_PER_LEG)
                 counts.non_finite_joints += 1
+                self.last_problem = f"position {angle} of joint '{names[index]}' is not finite"
         if not merged:
             return self._finish(ALL_POSITIONS_NON_FINITE, [])
         counts.out_of_limit_messages += out_of_limit
@@ -137,11 +140,15 @@ class FootTracker:
         return feet
 
     def _check(self, layout: _NameLayout, names: int, positions: int, velocities: int) -> str | None:
+        """The message's rejection (setting :attr:`last_problem`), NO_LEG_JOINTS, or None if usable."""
         if positions != names:
+            self.last_problem = f"{names} names but {positions} positions"
             return POSITION_LENGTH_MISMATCH
         if velocities and velocities != names:
+            self.last_problem = f"{names} names but {velocities} velocities"
             return VELOCITY_LENGTH_MISMATCH
         if layout.duplicates:
+            self.last_problem = f"joints given more than once: {list(layout.duplicates[:10])}"
             return DUPLICATE_NAMES
         if not layout.pairs:
             return NO_LEG_JOINTS

@@ -111,6 +111,7 @@ class FootFkNode(Node):
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
         self._last_verify = "not called"
+        self._verify_disagreed = False  # the latest verify compared with PyBullet and found a foot off
         self._verify_service = None
         self._stamp_jumps_back = 0
         self._last_stamp_ns = 0
@@ -120,7 +121,7 @@ class FootFkNode(Node):
         self._diagnostics_wanted = False
         self._previous_counts = (0, 0)
         self._pending_model: _Model | None = None
-        self._last_warnings: dict[str, float] = {}  # rejection outcome -> time.monotonic() of its last warning
+        self._last_warnings: dict[str, float] = {}  # kind of problem -> time.monotonic() of its last warning
         self._apply_settings()
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
         self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
@@ -153,8 +154,9 @@ class FootFkNode(Node):
         feet = self._tracker.update(msg.name, msg.position, msg.velocity)
         if self._tracker.new_unknown_names:
             self._warn_unknown_names()
+        if self._tracker.last_problem:
+            self._report_problem()
         if not feet:
-            self._report_rejection()
             return
         now = time.monotonic()
         if now - self._last_publish < self._min_publish_interval_s:
@@ -185,23 +187,37 @@ class FootFkNode(Node):
             return self.get_clock().now().to_msg()
         if stamp_ns < self._last_stamp_ns:
             self._stamp_jumps_back += 1
-            self.get_logger().warn(
-                f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} s "
-                "(bag replay loop or clock reset?); publishing with the new stamps",
-                once=True,
+            self._warn_at_most_every_second(
+                "stamp_went_back",
+                f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} s, from "
+                f"{self._last_stamp_ns / 1e9:.3f} to {stamp_ns / 1e9:.3f} (bag replay loop or clock reset?); "
+                f"publishing with the new stamps ({self._stamp_jumps_back} jumps back so far)",
             )
         self._last_stamp_ns = stamp_ns
         return stamp
 
-    def _report_rejection(self) -> None:
-        outcome = self._tracker.last_outcome
-        now = time.monotonic()
-        if outcome in REJECTIONS and now - self._last_warnings.get(outcome, -math.inf) >= WARNING_INTERVAL_S:
-            self._last_warnings[outcome] = now
-            self.get_logger().warn(
-                f"rejected a joint_states message: {outcome.replace('_', ' ')} "
-                f"({self._tracker.counts.outcomes[outcome]} so far)"
+    def _report_problem(self) -> None:
+        """Warn about a rejected message or joint, at most once a second per kind of problem."""
+        tracker = self._tracker
+        outcome = tracker.last_outcome
+        if outcome in REJECTIONS:
+            self._warn_at_most_every_second(
+                outcome,
+                f"rejected a joint_states message: {outcome.replace('_', ' ')}, {tracker.last_problem} "
+                f"({tracker.counts.outcomes[outcome]} such messages so far)",
             )
+        else:
+            self._warn_at_most_every_second(
+                "non_finite_position",
+                f"ignoring a joint_states value: {tracker.last_problem}; its leg is not published from this "
+                f"message ({tracker.counts.non_finite_joints} such values so far)",
+            )
+
+    def _warn_at_most_every_second(self, kind: str, text: str) -> None:
+        now = time.monotonic()
+        if now - self._last_warnings.get(kind, -math.inf) >= WARNING_INTERVAL_S:
+            self._last_warnings[kind] = now
+            self.get_logger().warn(text)
 
     def _warn_unknown_names(self) -> None:
         names = self._tracker.take_new_unknown_names()
@@ -252,8 +268,8 @@ class FootFkNode(Node):
             level, summary = DiagnosticStatus.WARN, "no joint_states received yet"
         elif rejected_now or outside or counts.non_finite_joints:
             level, summary = DiagnosticStatus.WARN, "some joint_states rejected or joints outside limits"
-        if self._last_verify.startswith("failed"):
-            level, summary = DiagnosticStatus.ERROR, "verify_fk failed: FK disagrees with PyBullet"
+        if self._verify_disagreed:
+            level, summary = DiagnosticStatus.ERROR, "verify_fk: FK disagrees with PyBullet beyond the tolerance"
         values = {
             "messages_received": received,
             **{f"messages_{outcome}": n for outcome, n in sorted(counts.outcomes.items())},
@@ -314,9 +330,10 @@ class FootFkNode(Node):
             if not self._verifier_error:  # enabled after a failure or first use
                 self._load_verifier()
             if self._verifier is None:
-                return False, f"error={self._verifier_error.replace(' ', '_')} message=\"{self._verifier_error}\""
+                return False, f"cannot verify: {self._verifier_error}"
         angles = list(self._tracker.angles)
         result = self._verifier.verify(angles, self._verify_tolerance_m)
+        self._verify_disagreed = not result.success
         stamp_ns = self._last_stamp_ns
         outside = self._tracker.joints_outside_limits()
         tokens = [f"max_error_m={result.max_error_m:.3g}"]

@@ -8,6 +8,7 @@ relative, so ``__ns`` and remaps work; every parameter is declared with a descri
 from __future__ import annotations
 
 import math
+import struct
 import sys
 import time
 from dataclasses import dataclass
@@ -23,11 +24,12 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from a1_leg_fk.joint_state import REJECTIONS, FootTracker
+from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
@@ -90,6 +92,44 @@ PARAMETERS = (
                    "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, > 0"),
 )
 MODEL_PARAMETERS = ("robot_description", "urdf_file", "foot_links", "joint_aliases")
+
+
+class _SerializedStamped:
+    """A PointStamped/Vector3Stamped (same CDR layout: a Header, then three float64) serialized once.
+
+    :meth:`serialized` patches a stamp and three values [m or m/s] into the bytes, so a publish
+    skips rclpy's Python -> C conversion and serialization of the message (about a third of the
+    cost of a publish). ``usable`` is False unless the rmw writes the little-endian CDR this
+    expects (checked on a probe message); the node then publishes message objects.
+    """
+
+    _PROBE = (1.25, -2.5, 3.75)
+    _STAMP = struct.Struct("<iI")  # builtin_interfaces/Time right after the 4-byte encapsulation header
+    _VALUES = struct.Struct("<3d")
+
+    def __init__(self, frame_id: str) -> None:
+        probes = (PointStamped(), Vector3Stamped())
+        for probe, values in zip(probes, (probes[0].point, probes[1].vector)):
+            probe.header.frame_id = frame_id
+            probe.header.stamp.sec, probe.header.stamp.nanosec = 7, 9
+            values.x, values.y, values.z = self._PROBE
+        data = [serialize_message(probe) for probe in probes]
+        self._offset = data[0].find(self._VALUES.pack(*self._PROBE))
+        string_end = 16 + len(frame_id.encode()) + 1  # header, sec, nanosec, length, text, NUL
+        self.usable = (
+            data[0][:4] == b"\x00\x01\x00\x00"
+            and data[0][4:12] == self._STAMP.pack(7, 9)
+            and string_end <= self._offset == data[1].find(self._VALUES.pack(*self._PROBE))
+            and len(data[0]) == len(data[1]) == self._offset + self._VALUES.size
+        )
+        self._buffer = bytearray(data[0])
+        self._buffer[string_end : self._offset] = bytes(self._offset - string_end)  # zero the padding
+
+    def serialized(self, sec: int, nanosec: int, values: tuple[float, float, float]) -> bytes:
+        buffer = self._buffer
+        self._STAMP.pack_into(buffer, 4, sec, nanosec)
+        self._VALUES.pack_into(buffer, self._offset, *values)
+        return bytes(buffer)
 
 
 @dataclass(frozen=True)
@@ -163,6 +203,9 @@ class FootFkNode(Node):
             return
         self._last_publish = now
         stamp = self._stamp_of(msg)
+        if self._serialized.usable:
+            self._publish_serialized(feet, stamp.sec, stamp.nanosec)
+            feet = ()
         for foot in feet:
             position_msg = self._position_msgs[foot.leg_slot]
             position_msg.header.stamp = stamp
@@ -178,6 +221,15 @@ class FootFkNode(Node):
         if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
             self._last_markers = now
             self._publish_markers(stamp)
+
+    def _publish_serialized(self, feet: list[Foot], sec: int, nanosec: int) -> None:
+        """Publish the feet as pre-serialized bytes (same messages, cheaper than message objects)."""
+        serialized = self._serialized.serialized
+        velocities = self._publish_velocities
+        for foot in feet:
+            self._position_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.position))
+            if foot.velocity is not None and velocities:
+                self._velocity_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.velocity))
 
     def _stamp_of(self, msg: JointState):  # noqa: ANN202 (builtin_interfaces/Time)
         """The message's stamp, or the node clock's now where the stamp is zero."""
@@ -371,6 +423,7 @@ class FootFkNode(Node):
     def _set_frame_ids(self) -> None:
         for msg in (*self._position_msgs, *self._velocity_msgs):
             msg.header.frame_id = self._base_frame
+        self._serialized = _SerializedStamped(self._base_frame)
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         changes = {p.name: p.value for p in parameters}

@@ -138,6 +138,22 @@ class RosProbe:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.02)
 
+    def call(self, client, request, timeout_s: float = DEFAULT_WAIT_S, attempt_s: float = 3.0):  # noqa: ANN001, ANN201
+        """Call a service and return its response, asking again every ``attempt_s`` seconds.
+
+        A request can reach a server before the server has matched the client's response reader;
+        Fast DDS then drops the response ("failed to send response (timeout)"). The requests the
+        tests send are idempotent, so asking again is safe.
+        """
+        deadline = time.monotonic() + timeout_s
+        assert self.spin_until(client.service_is_ready, timeout_s), f"service {client.srv_name} not offered"
+        while time.monotonic() < deadline:
+            future = client.call_async(request)
+            if self.spin_until(future.done, min(attempt_s, max(0.0, deadline - time.monotonic()))):
+                return future.result()
+            client.remove_pending_request(future)
+        raise AssertionError(f"service {client.srv_name} did not answer within {timeout_s} s")
+
     def close(self) -> None:
         self.executor.shutdown()
         self.node.destroy_node()

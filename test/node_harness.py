@@ -83,20 +83,16 @@ class NodeClient:
         return self.probe.spin_until(lambda: all(len(self.positions[leg]) >= count_per_leg for leg in legs), timeout_s)
 
     def verify(self, timeout_s: float = 10.0) -> Trigger.Response:
-        assert self.verify_client.wait_for_service(timeout_sec=timeout_s), "verify_fk not offered"
-        future = self.verify_client.call_async(Trigger.Request())
-        assert self.probe.spin_until(future.done, timeout_s), "verify_fk did not answer"
-        return future.result()
+        return self.probe.call(self.verify_client, Trigger.Request(), timeout_s)
 
     def set_string_parameter(self, name: str, value: str, timeout_s: float = 20.0):
         return self.set_parameter(name, ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value), timeout_s)
 
     def set_parameter(self, name: str, value: ParameterValue, timeout_s: float = 20.0):
         """SetParameters on the node; returns the SetParametersResult."""
-        assert self.parameters_client.wait_for_service(timeout_sec=timeout_s), "set_parameters not offered"
-        future = self.parameters_client.call_async(SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)]))
-        assert self.probe.spin_until(future.done, timeout_s), "set_parameters did not answer"
-        return future.result().results[0]
+        request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
+        # A long first attempt: the request may be large (the robustness tests send 50 MB).
+        return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[0]
 
 
 def parse_tokens(message: str) -> dict[str, str]:

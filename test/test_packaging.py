@@ -237,10 +237,7 @@ def _installed_node(colcon_install: ColconInstall) -> str:
 def _call(ros, service_type, name: str, request, timeout_s: float = 20.0):
     client = ros.node.create_client(service_type, name)
     try:
-        assert ros.spin_until(client.service_is_ready, timeout_s), f"no service {name}"
-        future = client.call_async(request)
-        assert ros.spin_until(future.done, timeout_s), f"{name}: no answer"
-        return future.result()
+        return ros.call(client, request, timeout_s)
     finally:
         ros.node.destroy_client(client)
 

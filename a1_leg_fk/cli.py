@@ -578,6 +578,7 @@ class Demo:
         self.ros_args = list(ros_args)
         self.signals = signals
         self.children: list[Child] = []
+        self.temporary_log_dir: Path | None = None  # made by us: removed after a clean run
         self.ros: Ros | None = None
 
     def run(self) -> int:
@@ -592,15 +593,19 @@ class Demo:
                  f"terminal: export ROS_DOMAIN_ID={domain}")
         else:
             _say(f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} (from the environment)")
-        log_dir = Path(options.log_dir) if options.log_dir else Path(tempfile.mkdtemp(prefix="a1_leg_fk_demo_"))
-        log_dir.mkdir(parents=True, exist_ok=True)
+        if options.log_dir:
+            log_dir = Path(options.log_dir)
+            log_dir.mkdir(parents=True, exist_ok=True)
+        else:
+            log_dir = self.temporary_log_dir = Path(tempfile.mkdtemp(prefix="a1_leg_fk_demo_"))
         child_ros_args = self.ros_args
         if options.namespace:
             namespace = options.namespace if options.namespace.startswith("/") else "/" + options.namespace
             child_ros_args = ["--ros-args", "-r", f"__ns:={namespace}", *self.ros_args]
         os.environ["PYTHONUNBUFFERED"] = "1"
 
-        _say(f"\n[1/4] starting the two nodes (their output goes to {log_dir}/)")
+        kept = "kept only if something fails" if self.temporary_log_dir else "kept"
+        _say(f"\n[1/4] starting the two nodes (their output goes to {log_dir}/, {kept})")
         for name, module in (("foot_fk_node", "a1_leg_fk.node"), ("joint_state_demo", "a1_leg_fk.demo")):
             if stop.is_set():
                 return EXIT_INTERRUPTED
@@ -642,7 +647,10 @@ class Demo:
         if self.ros is not None:
             self.ros.close()
             self.ros = None
-        return _stop_children(self.children, code)
+        code = _stop_children(self.children, code)
+        if self.temporary_log_dir is not None and code in (EXIT_OK, EXIT_INTERRUPTED):
+            shutil.rmtree(self.temporary_log_dir, ignore_errors=True)
+        return code
 
 
 def _stop_children(children: list[Child], code: int) -> int:

@@ -307,37 +307,8 @@ VERIFY_CLIENT = textwrap.dedent(
 )
 
 
-FOOT_COLLECTOR = textwrap.dedent(
-    """
-    import json, os, sys, time
-    import rclpy
-    from geometry_msgs.msg import PointStamped
-    from rclpy.experimental import EventsExecutor
-    from rclpy.qos import QoSProfile
-    out, stop = sys.argv[1], sys.argv[2]
-    rclpy.init()
-    node = rclpy.create_node("foot_collector")
-    stamps = {}
-    def collect(leg):
-        received = stamps[leg] = []
-        return lambda msg: received.append(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
-    topics = [f"foot_positions/{leg}" for leg in ("FR", "FL", "RR", "RL")]
-    for topic in topics:
-        node.create_subscription(PointStamped, topic, collect(topic[-2:]), QoSProfile(depth=10000))
-    executor = EventsExecutor()
-    executor.add_node(node)
-    while not all(node.count_publishers(node.resolve_topic_name(t)) for t in topics):
-        executor.spin_once(timeout_sec=0.05)
-    print("ready", flush=True)
-    while not os.path.exists(stop):
-        executor.spin_once(timeout_sec=0.05)
-    deadline = time.monotonic() + 1.0
-    while time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.05)
-    with open(out, "w") as file:
-        json.dump(stamps, file)
-    """
-)
+SOAK_SCRIPT = Path(__file__).resolve().parent.parent / "bench" / "soak.py"
+"""Its ``--collect OUT STOP`` mode records every foot's stamp in a process of its own."""
 
 
 def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes, ros, tmp_path):
@@ -349,7 +320,7 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     assert verify.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert ros.spin_until(lambda: publisher.get_subscription_count() > 0, 20.0)
     go, stop, feet_file = tmp_path / "go", tmp_path / "stop", tmp_path / "feet.json"
-    collector = processes.start([sys.executable, "-c", FOOT_COLLECTOR, str(feet_file), str(stop)])
+    collector = processes.start([sys.executable, str(SOAK_SCRIPT), "--collect", str(feet_file), str(stop)])
     abusers = [processes.start([sys.executable, "-c", VERIFY_CLIENT, str(i), str(go), str(stop), "1000"]) for i in range(5)]
     assert ros.spin_until(lambda: all("ready" in processes.output(p) for p in (*abusers, collector)), 60.0), [
         processes.output(p) for p in (*abusers, collector)

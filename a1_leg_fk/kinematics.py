@@ -87,17 +87,13 @@ class CompiledLeg:
     def __init__(self, chain: LegChain) -> None:
         self.chain = chain
         self.stages, self.foot_offset = _fold_chain(chain)
-        self.position: Callable[..., tuple[float, ...]]
-        self.position_velocity: Callable[..., tuple[float, ...]]
-        self.position_from_trig: Callable[..., tuple]
-        self.jacobian_from_trig: Callable[..., tuple]
         self.source = _leg_source(self.stages, self.foot_offset)
-        namespace: dict[str, object] = {"_cos": math.cos, "_sin": math.sin}
+        namespace: dict[str, Callable[..., tuple]] = {"_cos": math.cos, "_sin": math.sin}
         exec(compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace)
-        self.position = namespace["position"]  # type: ignore[assignment]
-        self.position_velocity = namespace["position_velocity"]  # type: ignore[assignment]
-        self.position_from_trig = namespace["position_from_trig"]  # type: ignore[assignment]
-        self.jacobian_from_trig = namespace["jacobian_from_trig"]  # type: ignore[assignment]
+        self.position = namespace["position"]
+        self.position_velocity = namespace["position_velocity"]
+        self.position_from_trig = namespace["position_from_trig"]
+        self.jacobian_from_trig = namespace["jacobian_from_trig"]
 
     def joint_points(self, angles: Sequence[float]) -> np.ndarray:
         """(4, 3): the three movable joints' origins and the foot [m], root frame, root side first."""

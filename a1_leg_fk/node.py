@@ -158,7 +158,6 @@ class FootFkNode(Node):
         self._last_publish = -math.inf
         self._last_markers = -math.inf
         self._markers_wanted = False
-        self._diagnostics_wanted = False
         self._previous_counts = (0, 0)
         self._pending_model: _Model | None = None
         self._last_warnings: dict[str, float] = {}  # kind of problem -> time.monotonic() of its last warning

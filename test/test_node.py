@@ -28,6 +28,8 @@ from node_harness import (
     stamp_ns,
 )
 from rcl_interfaces.msg import ParameterType, ParameterValue
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import JointState
 
 from a1_leg_fk.kinematics import Quadruped
 
@@ -333,3 +335,17 @@ def test_diagnostics_and_markers_reach_subscribers(a1_node):
 
 def _diagnostic_values(array: DiagnosticArray) -> dict[str, str]:
     return {kv.key: kv.value for status in array.status for kv in status.values}
+
+
+def test_joint_states_qos_can_be_overridden_to_reliable(processes, ros):
+    process = processes.start(node_command("-p", "qos_overrides./joint_states.subscription.reliability:=reliable"))
+    client = NodeClient(ros)  # its joint_states publisher is reliable: matches
+    assert client.wait_until_connected(), processes.output(process)
+    best_effort = ros.node.create_publisher(JointState, "joint_states", qos_profile_sensor_data)
+    ros.spin_for(1.0)
+    for _ in range(20):  # a best-effort writer cannot serve a reliable reader: never heard
+        best_effort.publish(client.joint_state(PYBULLET_NAMES, STANDING))
+        ros.spin_for(0.05)
+    assert not client.positions["FR"]
+    client.send(client.joint_state(PYBULLET_NAMES, STANDING))
+    assert client.wait_for_feet(1)

@@ -38,7 +38,7 @@ ALIENGO_URDF = Path(pybullet_data.getDataPath()) / "aliengo" / "aliengo.urdf"
 STANDING_FR = (0.1684, -0.1320, -0.2923)  # the reference write-up's published value [m]
 
 
-class PyBulletA1:
+class PyBulletRobot:
     """PyBullet's own answer: link-frame positions of the toes, base fixed at the origin."""
 
     def __init__(self, urdf: Path = A1_URDF) -> None:
@@ -66,7 +66,7 @@ class PyBulletA1:
 
 @pytest.fixture(scope="module")
 def reference():
-    twin = PyBulletA1()
+    twin = PyBulletRobot()
     yield twin
     twin.close()
 
@@ -245,7 +245,7 @@ def test_another_urdf_through_robot_description(processes, ros, tmp_path, refere
     process = processes.start(node_command("--params-file", str(params)))
     client = NodeClient(ros)
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(process)
-    aliengo = PyBulletA1(ALIENGO_URDF)
+    aliengo = PyBulletRobot(ALIENGO_URDF)
     try:
         robot = Quadruped.from_urdf(str(ALIENGO_URDF))
         angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
@@ -349,3 +349,33 @@ def test_joint_states_qos_can_be_overridden_to_reliable(processes, ros):
     assert not client.positions["FR"]
     client.send(client.joint_state(PYBULLET_NAMES, STANDING))
     assert client.wait_for_feet(1)
+
+
+def test_urdf_file_foot_links_and_joint_aliases_for_the_mini_cheetah(processes, ros, tmp_path):
+    urdf = Path(pybullet_data.getDataPath()) / "mini_cheetah" / "mini_cheetah.urdf"
+    feet = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_hl"}
+    params = tmp_path / "mini_cheetah.yaml"
+    params.write_text(
+        "a1_leg_fk:\n  ros__parameters:\n"
+        f"    urdf_file: {urdf}\n"
+        f"    foot_links: [{', '.join(f'{leg}={link}' for leg, link in feet.items())}]\n"
+        "    joint_aliases: [fr_roll=torso_to_abduct_fr_j]\n"
+    )
+    process = processes.start(node_command("--params-file", str(params)))
+    client = NodeClient(ros)
+    assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(process)
+    robot = Quadruped.from_urdf(str(urdf), feet)
+    names = ["fr_roll", *robot.joint_names[1:]]  # the FR hip roll under its alias
+    angles = [0.2, -0.7, 1.4, -0.1, -0.9, 1.2, 0.15, -0.6, 1.6, -0.2, -0.8, 1.1]
+    assert client.probe.spin_until(
+        lambda: bool(client.send(client.joint_state(names, angles)) or all(client.positions[leg] for leg in LEGS)), 20.0
+    ), processes.output(process)
+    cheetah = PyBulletRobot(urdf)
+    try:
+        expected = cheetah.feet(dict(zip(robot.joint_names, angles)), list(feet.values()))
+    finally:
+        cheetah.close()
+    for slot, leg in enumerate(LEGS):
+        assert client.positions[leg][-1].header.frame_id == "body"
+        assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7
+    assert client.verify().success

@@ -412,11 +412,17 @@ def run_echo(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
 # --- verify ------------------------------------------------------------------------------------
 
 
+VERIFY_ASK_AGAIN_S = 1.0
+
+
 def call_verify(ros: Ros, namespace: str, timeout_s: float, stop: threading.Event) -> tuple[int, str]:
     """Call verify_fk: ``(exit code, text to print)``."""
+    from rclpy.qos import QoSProfile
     from std_srvs.srv import Trigger
 
-    client = ros.node.create_client(Trigger, prefixed(namespace, "verify_fk"))
+    # Every client of a service receives the replies to all its clients: a deeper history keeps
+    # ours from being pushed out while others call too.
+    client = ros.node.create_client(Trigger, prefixed(namespace, "verify_fk"), qos_profile=QoSProfile(depth=100))
     name = ros.node.resolve_service_name(client.srv_name)
     try:
         deadline = time.monotonic() + timeout_s
@@ -429,13 +435,19 @@ def call_verify(ros: Ros, namespace: str, timeout_s: float, stop: threading.Even
                     "(is foot_fk_node running, in this namespace and ROS domain?)"
                 )
             ros.executor.spin_once(timeout_sec=0.05)
-        future = client.call_async(Trigger.Request())
-        deadline = time.monotonic() + timeout_s
+        future, asked = client.call_async(Trigger.Request()), time.monotonic()
+        deadline = asked + timeout_s
         while not future.done():
             if stop.is_set():
                 return EXIT_INTERRUPTED, "verify_fk: interrupted"
-            if time.monotonic() > deadline:
+            now = time.monotonic()
+            if now > deadline:
                 return EXIT_NO_ANSWER, f"verify_fk: {name} did not answer within {timeout_s:g} s"
+            if now - asked > VERIFY_ASK_AGAIN_S:
+                # Fast DDS drops a response sent before the server has matched our reply reader
+                # ("failed to send response"); verify_fk only reads, so asking again is safe.
+                client.remove_pending_request(future)
+                future, asked = client.call_async(Trigger.Request()), now
             ros.executor.spin_once(timeout_sec=0.05)
         response = future.result()
     finally:

@@ -377,11 +377,7 @@ def _linear(row: Sequence[float], vector: Sequence[Term]) -> Term:
             terms.append(f"-{value}")
         else:
             terms.append(f"{coefficient!r}*{value}")
-    if not terms:
-        return constant
-    if constant != 0.0:
-        terms.insert(0, repr(constant))
-    return terms[0] if len(terms) == 1 else "(" + " + ".join(terms) + ")"
+    return _joined(constant, terms)
 
 
 def _sum(parts: Sequence[tuple[str, Term]]) -> Term:
@@ -396,6 +392,11 @@ def _sum(parts: Sequence[tuple[str, Term]]) -> Term:
                 terms.append(f"{term!r}*{factor}")
         else:
             terms.append(f"{factor}*{term}" if factor else term)
+    return _joined(constant, terms)
+
+
+def _joined(constant: float, terms: list[str]) -> Term:
+    """``constant + terms[0] + ...`` as a constant, a single term, or a parenthesised sum."""
     if not terms:
         return constant
     if constant != 0.0:

@@ -51,27 +51,13 @@ def stand_by_hand_mm(leg: str) -> tuple[float, float, float]:
 
 def pybullet_feet_mm(angles: tuple[float, ...]) -> dict[str, tuple[float, float, float]]:
     """Feet [mm] of pybullet_data's a1.urdf, computed by PyBullet itself (fixed base at the origin)."""
-    pybullet = pytest.importorskip("pybullet")
-    import pybullet_data
+    pytest.importorskip("pybullet")
+    from pybullet_reference import A1_URDF, PyBulletRobot
 
-    client = pybullet.connect(pybullet.DIRECT)
-    try:
-        body = pybullet.loadURDF(os.path.join(pybullet_data.getDataPath(), "a1/a1.urdf"), useFixedBase=True,
-                                 physicsClientId=client)
-        joints, links = {}, {}
-        for index in range(pybullet.getNumJoints(body, physicsClientId=client)):
-            info = pybullet.getJointInfo(body, index, physicsClientId=client)
-            joints[info[1].decode()], links[info[12].decode()] = index, index
-        for slot, angle in enumerate(angles):
-            leg, part = LEGS[slot // 3], ("hip", "upper", "lower")[slot % 3]
-            pybullet.resetJointState(body, joints[f"{leg}_{part}_joint"], angle, physicsClientId=client)
-        return {
-            leg: tuple(1000 * v for v in pybullet.getLinkState(body, links[f"{leg}_toe"], computeForwardKinematics=True,
-                                                               physicsClientId=client)[4])
-            for leg in LEGS
-        }
-    finally:
-        pybullet.disconnect(client)
+    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    with PyBulletRobot(A1_URDF) as robot:
+        feet = robot.feet(names, [f"{leg}_toe" for leg in LEGS], angles)
+    return {leg: tuple(1000 * feet[slot]) for slot, leg in enumerate(LEGS)}
 
 
 def table_values(output: str) -> dict[str, tuple[float, float, float]]:

@@ -10,11 +10,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pybullet
 import pybullet_data
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from visualization_msgs.msg import Marker, MarkerArray
 from node_harness import (
     LEGS,
     PYBULLET_NAMES,
@@ -27,48 +25,22 @@ from node_harness import (
     parse_tokens,
     stamp_ns,
 )
+from pybullet_reference import A1_URDF, PyBulletRobot
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
+from visualization_msgs.msg import Marker, MarkerArray
 
 from a1_leg_fk.kinematics import Quadruped
 
-A1_URDF = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 ALIENGO_URDF = Path(pybullet_data.getDataPath()) / "aliengo" / "aliengo.urdf"
 STANDING_FR = (0.1684, -0.1320, -0.2923)  # the reference write-up's published value [m]
 
 
-class PyBulletRobot:
-    """PyBullet's own answer: link-frame positions of the toes, base fixed at the origin."""
-
-    def __init__(self, urdf: Path = A1_URDF) -> None:
-        self.client = pybullet.connect(pybullet.DIRECT)
-        self.body = pybullet.loadURDF(str(urdf), useFixedBase=True, physicsClientId=self.client)
-        info = [pybullet.getJointInfo(self.body, i, physicsClientId=self.client) for i in range(self.joint_count)]
-        self.joints = {row[1].decode(): row[0] for row in info}
-        self.links = {row[12].decode(): row[0] for row in info}
-
-    @property
-    def joint_count(self) -> int:
-        return pybullet.getNumJoints(self.body, physicsClientId=self.client)
-
-    def feet(self, angles: dict[str, float], toes: list[str]) -> list[tuple[float, float, float]]:
-        for name, angle in angles.items():
-            pybullet.resetJointState(self.body, self.joints[name], angle, physicsClientId=self.client)
-        return [
-            pybullet.getLinkState(self.body, self.links[toe], computeForwardKinematics=True, physicsClientId=self.client)[4]
-            for toe in toes
-        ]
-
-    def close(self) -> None:
-        pybullet.disconnect(self.client)
-
-
 @pytest.fixture(scope="module")
 def reference():
-    twin = PyBulletRobot()
-    yield twin
-    twin.close()
+    with PyBulletRobot(A1_URDF) as twin:
+        yield twin
 
 
 def random_in_limits(robot: Quadruped, rng: np.random.Generator) -> np.ndarray:
@@ -117,7 +89,7 @@ def test_random_joint_states_give_pybullet_feet_with_frame_and_stamp(a1_node, re
         for msg in client.positions[leg]:
             assert msg.header.frame_id == "trunk"
             angles = sent[stamp_ns(msg)]
-            expected = reference.feet(dict(zip(PYBULLET_NAMES, angles)), [f"{leg}_toe"])[0]
+            expected = reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0]
             worst_pybullet = max(worst_pybullet, distance(msg.point, expected))
             worst_core = max(worst_core, distance(msg.point, robot.fk(angles)[slot]))
     assert worst_pybullet <= 1e-7
@@ -238,26 +210,23 @@ def test_verify_fk_without_pybullet_fails_with_install_hint_and_feet_keep_flowin
     assert client.wait_for_feet(1)
 
 
-def test_another_urdf_through_robot_description(processes, ros, tmp_path, reference):
+def test_another_urdf_through_robot_description(processes, ros, tmp_path):
     params = tmp_path / "aliengo.yaml"
     indented = "\n".join("      " + line for line in ALIENGO_URDF.read_text().splitlines())
     params.write_text(f"a1_leg_fk:\n  ros__parameters:\n    robot_description: |\n{indented}\n")
     process = processes.start(node_command("--params-file", str(params)))
     client = NodeClient(ros)
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(process)
-    aliengo = PyBulletRobot(ALIENGO_URDF)
-    try:
+    with PyBulletRobot(ALIENGO_URDF) as aliengo:
         robot = Quadruped.from_urdf(str(ALIENGO_URDF))
         angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
         assert client.probe.spin_until(
             lambda: bool(client.send(client.joint_state(robot.joint_names, angles)) or client.positions["RL"]), 20.0
         ), processes.output(process)
-        expected = aliengo.feet(dict(zip(robot.joint_names, angles)), [f"{leg}_toe" for leg in LEGS])
-        for slot, leg in enumerate(LEGS):
-            assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7
-        assert float(parse_tokens(client.verify().message)["max_error_m"]) <= 1e-7
-    finally:
-        aliengo.close()
+        expected = aliengo.feet(list(robot.joint_names), [f"{leg}_toe" for leg in LEGS], angles)
+    for slot, leg in enumerate(LEGS):
+        assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7
+    assert float(parse_tokens(client.verify().message)["max_error_m"]) <= 1e-7
 
 
 def test_namespace_remap_and_params_file_from_config(processes, ros):
@@ -370,11 +339,8 @@ def test_urdf_file_foot_links_and_joint_aliases_for_the_mini_cheetah(processes, 
     assert client.probe.spin_until(
         lambda: bool(client.send(client.joint_state(names, angles)) or all(client.positions[leg] for leg in LEGS)), 20.0
     ), processes.output(process)
-    cheetah = PyBulletRobot(urdf)
-    try:
-        expected = cheetah.feet(dict(zip(robot.joint_names, angles)), list(feet.values()))
-    finally:
-        cheetah.close()
+    with PyBulletRobot(urdf) as cheetah:
+        expected = cheetah.feet(list(robot.joint_names), list(feet.values()), angles)
     for slot, leg in enumerate(LEGS):
         assert client.positions[leg][-1].header.frame_id == "body"
         assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7

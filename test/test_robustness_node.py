@@ -15,11 +15,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pybullet
-import pybullet_data
 from conftest import BIN
 from diagnostic_msgs.msg import DiagnosticArray
 from node_harness import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, NodeClient, node_command, stamp_ns
+from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -27,7 +26,6 @@ from test_fuzz_joint_state import SPECIAL_VALUES, UNKNOWN_NAMES
 
 from a1_leg_fk.kinematics import Quadruped
 
-A1_URDF = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 ROBOT = Quadruped.from_urdf()
 
 
@@ -94,22 +92,10 @@ def feet_of_stamp(client: NodeClient, stamp: int) -> dict[str, tuple[float, floa
     }
 
 
-def pybullet_feet(angles) -> list[tuple[float, float, float]]:  # noqa: ANN001
+def pybullet_feet(angles) -> np.ndarray:  # noqa: ANN001
     """PyBullet's own toe link frames for the A1 (independent of a1_leg_fk.pybullet_check)."""
-    client = pybullet.connect(pybullet.DIRECT)
-    try:
-        body = pybullet.loadURDF(str(A1_URDF), useFixedBase=True, physicsClientId=client)
-        info = [pybullet.getJointInfo(body, i, physicsClientId=client) for i in range(pybullet.getNumJoints(body, physicsClientId=client))]
-        joints = {row[1].decode(): row[0] for row in info}
-        links = {row[12].decode(): row[0] for row in info}
-        for name, angle in zip(PYBULLET_NAMES, angles):
-            pybullet.resetJointState(body, joints[name], angle, physicsClientId=client)
-        return [
-            pybullet.getLinkState(body, links[f"{leg}_toe"], computeForwardKinematics=True, physicsClientId=client)[4]
-            for leg in LEGS
-        ]
-    finally:
-        pybullet.disconnect(client)
+    with PyBulletRobot(A1_URDF) as robot:
+        return robot.feet(PYBULLET_NAMES, [f"{leg}_toe" for leg in LEGS], angles)
 
 
 def assert_publishes_correct_feet(client: NodeClient, angles=STANDING) -> None:  # noqa: ANN001

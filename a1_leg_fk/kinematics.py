@@ -439,7 +439,7 @@ def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
     return "\n".join(
         [
             f"def position_from_trig({trig}):\n    {body}\n    return ({_tuple(point)})\n",
-            f"def position(q0, q1, q2):\n    " + "\n    ".join(from_angles) + f"\n    {body}\n    return ({_tuple(point)})\n",
+            "def position(q0, q1, q2):\n    " + "\n    ".join(from_angles) + f"\n    {body}\n    return ({_tuple(point)})\n",
             "def position_velocity(q0, q1, q2, dq0, dq1, dq2):\n    "
             + "\n    ".join(from_angles + velocity_code.lines)
             + f"\n    return ({_tuple(point)}, {_tuple(velocity)})\n",

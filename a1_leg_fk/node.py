@@ -30,13 +30,12 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
 from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
-from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
-from a1_leg_fk.urdf import LegFkError, default_urdf_path, parse_urdf
+from a1_leg_fk.robot_config import RobotConfig, load_robot
+from a1_leg_fk.urdf import MAX_URDF_CHARS, LegFkError
 
 NODE_NAME = "a1_leg_fk"
-MAX_URDF_CHARS = 16 * 1024 * 1024  # far above any real robot description; bounds memory
 DIAGNOSTICS_PERIOD_S = 1.0
 SUBSCRIBER_CHECK_PERIOD_S = 0.5
 OUTPUT_QOS = QoSProfile(depth=10)  # reliable: heard by reliable and best-effort subscribers
@@ -132,13 +131,6 @@ class _SerializedStamped:
         return bytes(buffer)
 
 
-@dataclass(frozen=True)
-class _Model:
-    quadruped: Quadruped
-    urdf_xml: str
-    source: str
-
-
 class FootFkNode(Node):
     """Publishes the four feet of the robot for every JointState; offers ``verify_fk``."""
 
@@ -159,7 +151,7 @@ class FootFkNode(Node):
         self._last_markers = -math.inf
         self._markers_wanted = False
         self._previous_counts = (0, 0)
-        self._pending_model: _Model | None = None
+        self._pending_model: RobotConfig | None = None
         self._last_warnings: dict[str, float] = {}  # kind of problem -> time.monotonic() of its last warning
         self._apply_settings()
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
@@ -460,50 +452,19 @@ def _invalid_setting(changes: dict[str, object]) -> str:
     if not (isinstance(rate, float) and math.isfinite(rate) and rate >= 0):
         return f"max_publish_rate_hz must be a finite number >= 0, got {rate!r}"
     description = changes.get("robot_description", "")
-    if isinstance(description, str) and len(description) > MAX_URDF_CHARS:
-        return f"robot_description is {len(description)} characters, more than the {MAX_URDF_CHARS} accepted"
+    if isinstance(description, str) and len(description) > MAX_URDF_CHARS:  # refused before it is parsed
+        return f"robot_description: more than the {MAX_URDF_CHARS} characters accepted for a robot description"
     return ""
 
 
-def _key_values(entries: Sequence[str], parameter: str) -> dict[str, str]:
-    """``["A=b", ...]`` -> ``{"A": "b"}``; empty strings are skipped."""
-    pairs = {}
-    for entry in entries:
-        if not entry:
-            continue
-        key, separator, value = entry.partition("=")
-        if not separator or not key.strip() or not value.strip():
-            raise LegFkError(f"{parameter}: entry '{entry}' is not of the form key=value")
-        pairs[key.strip()] = value.strip()
-    return pairs
-
-
-def _build_model(values: dict[str, object]) -> _Model:
-    """The compiled robot for the model parameters' values; LegFkError names what is wrong."""
-    description = str(values["robot_description"] or "")
-    urdf_file = str(values["urdf_file"] or "")
-    if len(description) > MAX_URDF_CHARS:
-        raise LegFkError(f"robot_description is {len(description)} characters, more than the {MAX_URDF_CHARS} accepted")
-    if description:
-        source, xml = "robot_description", description
-    else:
-        path = urdf_file or str(default_urdf_path())
-        source = path
-        try:
-            with open(path, encoding="utf-8") as file:
-                xml = file.read(MAX_URDF_CHARS + 1)
-        except (OSError, UnicodeDecodeError) as error:
-            raise LegFkError(f"urdf_file '{path}': {error}") from error
-    xml = xml.lstrip()  # an XML declaration must come first; launch files often indent the text
-    if not xml.startswith("<"):
-        raise LegFkError(f"{source}: not URDF XML")
-    model = parse_urdf(xml, source)
-    quadruped = Quadruped(
-        model,
-        _key_values(values["foot_links"], "foot_links") or None,  # type: ignore[arg-type]
-        _key_values(values["joint_aliases"], "joint_aliases"),  # type: ignore[arg-type]
+def _build_model(values: dict[str, object]) -> RobotConfig:
+    """The robot for the model parameters' values; LegFkError names what is wrong."""
+    return load_robot(
+        str(values["robot_description"] or ""),
+        str(values["urdf_file"] or ""),
+        list(values["foot_links"]),  # type: ignore[call-overload]
+        list(values["joint_aliases"]),  # type: ignore[call-overload]
     )
-    return _Model(quadruped, xml, source)
 
 
 def _make_executor() -> rclpy.executors.Executor:

@@ -22,6 +22,9 @@ Vector3 = tuple[float, float, float]
 MOVABLE_JOINT_TYPES = frozenset({"revolute", "continuous"})
 KNOWN_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic", "fixed", "floating", "planar"})
 DEFAULT_AXIS: Vector3 = (1.0, 0.0, 0.0)  # the URDF specification's default
+MAX_URDF_CHARS = 16 * 1024 * 1024
+"""The largest robot description accepted [characters]: far above any real robot (Go2's is
+~60 kB), and a bound on the memory a bad parameter or topic message can make us use."""
 
 
 class LegFkError(ValueError):
@@ -104,18 +107,40 @@ def default_urdf_path() -> Path:
 
 def load_urdf(source: str | Path | None = None) -> RobotModel:
     """Read a URDF from a file path, an XML string, or (``None``) the embedded default A1."""
+    return parse_urdf(*read_urdf_text(source))
+
+
+def read_urdf_text(source: str | Path | None = None) -> tuple[str, str]:
+    """``(XML text, name for messages)`` of a URDF path, an XML string, or ``None`` (the embedded A1).
+
+    The one place that reads robot descriptions; the text passes :func:`checked_urdf_text`.
+    """
     if source is None:
         source = default_urdf_path()
     if isinstance(source, str) and source.lstrip().startswith("<"):
-        # Leading whitespace (a triple-quoted string in a launch file) would put the XML
-        # declaration "not at start of entity", which expat refuses.
-        return parse_urdf(source.lstrip(), "<robot_description>")
-    path = Path(source)
+        return checked_urdf_text(source, "<robot_description>"), "<robot_description>"
+    name = str(source)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(source, encoding="utf-8") as file:
+            text = file.read(MAX_URDF_CHARS + 1)  # a larger file is refused without reading it all
     except (OSError, UnicodeDecodeError) as error:
-        raise LegFkError(f"{path}: cannot read URDF file: {error}") from error
-    return parse_urdf(text, str(path))
+        raise LegFkError(f"{name}: cannot read URDF file: {error}") from error
+    return checked_urdf_text(text, name), name
+
+
+def checked_urdf_text(text: str, name: str) -> str:
+    """``text`` without leading white space, if it can be a URDF of an accepted size.
+
+    At most :data:`MAX_URDF_CHARS` characters; leading white space is removed (a triple-quoted
+    string in a launch file would put the XML declaration "not at start of entity", which expat
+    refuses); text that does not start with ``<`` is refused.
+    """
+    if len(text) > MAX_URDF_CHARS:
+        raise LegFkError(f"{name}: more than the {MAX_URDF_CHARS} characters accepted for a robot description")
+    text = text.lstrip()
+    if not text.startswith("<"):
+        raise LegFkError(f"{name}: not URDF XML")
+    return text
 
 
 def parse_urdf(xml_text: str, source: str = "<string>") -> RobotModel:

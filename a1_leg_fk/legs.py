@@ -16,6 +16,11 @@ LEG_NAMES: tuple[str, ...] = ("FR", "FL", "RR", "RL")
 
 JOINTS_PER_LEG = 3
 
+FOOT_NAME_SUFFIXES: tuple[str, ...] = ("foot", "toe", "foot_link", "toe_link")
+"""Where several leaf links of a leg qualify as its foot, the one named ``<leg>_<suffix>`` with one
+of these suffixes (case-insensitive: ``FR_foot``, ``fr_toe``, ``FR_foot_link``) is the foot. Go2's
+description has two qualifying leaves per leg: ``FR_foot`` and a shin collision link ``FR_calflower1``."""
+
 UNITREE_NAME_PAIRS: tuple[tuple[str, str], ...] = (("upper", "thigh"), ("lower", "calf"))
 """Equivalent joint-name parts: pybullet_data's A1 says ``X_upper_joint``/``X_lower_joint`` where
 Unitree's descriptions (unitree_ros, Gazebo, real-robot bridges) say ``X_thigh_joint``/``X_calf_joint``."""
@@ -44,7 +49,8 @@ def find_legs(model: RobotModel, foot_links: Mapping[str, str] | None = None) ->
 
     ``foot_links`` maps leg name -> foot link name; without it, the feet are the leaf links whose
     chain from the root holds exactly three movable joints, assigned to legs by name prefix
-    (``FR_toe``, ``FR_foot``, ...).
+    (``FR_toe``, ``FR_foot``, ...); where a leg has several, the one named like a foot
+    (:data:`FOOT_NAME_SUFFIXES`).
     """
     if foot_links:
         unknown_legs = sorted(set(foot_links) - set(LEG_NAMES))
@@ -61,6 +67,8 @@ def find_legs(model: RobotModel, foot_links: Mapping[str, str] | None = None) ->
 
 
 def _discover_feet(model: RobotModel) -> dict[str, str]:
+    """Each leg's foot: its one leaf link with three movable joints above it, or, of several, the
+    one named like a foot (:data:`FOOT_NAME_SUFFIXES`)."""
     candidates = [
         link
         for link in model.links
@@ -71,14 +79,21 @@ def _discover_feet(model: RobotModel) -> dict[str, str]:
         matching = [link for link in candidates if link.upper().startswith(leg)]
         if not matching:
             _explain_missing_foot(model, leg)
+        if len(matching) > 1:
+            named_foot = [link for link in matching if _named_like_a_foot(leg, link)]
+            matching = named_foot if len(named_foot) == 1 else matching
         if len(matching) != 1:
             raise LegFkError(
                 f"{model.source}: leg {leg}: expected one leaf link named '{leg}...' with three movable "
-                f"joints above it, found {matching or 'none'} among {candidates}; "
-                "name the feet with foot_links"
+                f"joints above it, or one of them named {leg}_{'|'.join(FOOT_NAME_SUFFIXES)}; found "
+                f"{matching or 'none'} among {candidates}; name the feet with foot_links"
             )
         feet[leg] = matching[0]
     return feet
+
+
+def _named_like_a_foot(leg: str, link: str) -> bool:
+    return link.lower() in {f"{leg.lower()}_{suffix}" for suffix in FOOT_NAME_SUFFIXES}
 
 
 def _explain_missing_foot(model: RobotModel, leg: str) -> None:

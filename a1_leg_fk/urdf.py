@@ -20,6 +20,10 @@ from typing import Mapping
 Vector3 = tuple[float, float, float]
 
 MOVABLE_JOINT_TYPES = frozenset({"revolute", "continuous"})
+AXIS_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic"})
+"""The joint types that move along their ``<axis>``; on every other type (fixed, floating, planar)
+the axis is not read at all, as urdfdom, robot_state_publisher and PyBullet do: CAD exporters write
+``<axis xyz="0 0 0"/>`` on fixed joints (Unitree's Go2 and B2 descriptions)."""
 KNOWN_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic", "fixed", "floating", "planar"})
 DEFAULT_AXIS: Vector3 = (1.0, 0.0, 0.0)  # the URDF specification's default
 MAX_URDF_CHARS = 16 * 1024 * 1024
@@ -39,8 +43,9 @@ class Joint:
     """One URDF joint.
 
     ``origin_xyz`` [m] and ``origin_rpy`` [rad, fixed-axis roll-pitch-yaw] place the joint frame
-    in the parent link's frame; ``axis`` is a unit vector in the joint frame. ``lower`` and
-    ``upper`` [rad] are ``None`` where the joint has no position limit (continuous, fixed).
+    in the parent link's frame; ``axis`` is a unit vector in the joint frame: the default (1, 0, 0)
+    for the types that have none, whatever the file says (see :data:`AXIS_JOINT_TYPES`). ``lower``
+    and ``upper`` [rad] are ``None`` where the joint has no position limit (continuous, fixed).
     """
 
     name: str
@@ -196,7 +201,9 @@ def _parse_joint(element: ElementTree.Element, source: str) -> Joint:
     origin = element.find("origin")
     xyz = _vector(origin, "xyz", (0.0, 0.0, 0.0), where)
     rpy = _vector(origin, "rpy", (0.0, 0.0, 0.0), where)
-    axis = _unit_axis(_vector(element.find("axis"), "xyz", DEFAULT_AXIS, where), where)
+    axis = DEFAULT_AXIS
+    if joint_type in AXIS_JOINT_TYPES:
+        axis = _unit_axis(_vector(element.find("axis"), "xyz", DEFAULT_AXIS, where), where)
     lower, upper = _limits(element, joint_type, where)
     return Joint(name, joint_type, parent, child, xyz, rpy, axis, lower, upper)
 

@@ -9,6 +9,7 @@ import pytest
 
 from a1_leg_fk.legs import LEG_NAMES, find_legs, joint_name_index
 from a1_leg_fk.urdf import LegFkError, load_urdf, parse_urdf
+from exported_urdf import exported_quadruped
 
 DATA = Path(pybullet_data.getDataPath())
 A1_PATH = DATA / "a1" / "a1.urdf"
@@ -179,3 +180,40 @@ def test_ambiguous_discovery_asks_for_foot_links() -> None:
     with pytest.raises(LegFkError) as error:
         find_legs(model)
     assert_leg_fk_error(error, "FR", "FR_foot2", "foot_links")
+
+
+# --- several leaf links per leg (exported descriptions) -----------------------------------
+
+
+def test_go2_like_shin_leaves_lose_to_the_foot_named_link() -> None:
+    """Go2's description has two leaves with three movable joints above them per leg: X_foot and the
+    shin collision link X_calflower1; the one named like a foot is the foot."""
+    legs = find_legs(parse_urdf(exported_quadruped("go2")))
+    assert [leg.foot_link for leg in legs] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
+    assert [j.name for j in legs[0].joints] == ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint", "FR_foot_joint"]
+
+
+def test_b2_like_rotor_leaves_are_not_feet() -> None:
+    """Rotor links are fixed leaves with two, one or no movable joints above them."""
+    model = parse_urdf(exported_quadruped("b2", root="base_link", rotors=True, shin_links=False))
+    assert {"FR_hip_rotor", "FR_thigh_rotor", "FR_calf_rotor"} <= set(model.links)
+    assert [leg.foot_link for leg in find_legs(model)] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
+
+
+@pytest.mark.parametrize("foot", ["FR_toe", "fr_FOOT", "FR_foot_link", "Fr_Toe_Link"])
+def test_every_documented_foot_name_wins_case_insensitively(foot: str) -> None:
+    xml = exported_quadruped("go2").replace('"FR_foot"', f'"{foot}"')
+    assert find_legs(parse_urdf(xml))[0].foot_link == foot
+
+
+@pytest.mark.parametrize(
+    "renamed", [{"FR_foot": "FR_tip"}, {"FR_calflower1": "FR_toe"}], ids=["none-named-like-a-foot", "two-named-so"]
+)
+def test_several_leaves_without_one_foot_name_ask_for_foot_links(renamed: dict) -> None:
+    xml = exported_quadruped("go2")
+    for old, new in renamed.items():
+        xml = xml.replace(f'"{old}"', f'"{new}"')
+    with pytest.raises(LegFkError) as error:
+        find_legs(parse_urdf(xml))
+    candidates = sorted({"FR_foot", "FR_calflower1", "FR_tip", "FR_toe"} & set(parse_urdf(xml).links))
+    assert_leg_fk_error(error, "leg FR", *candidates, "foot_links", "FR_foot|toe|foot_link|toe_link")

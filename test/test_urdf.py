@@ -18,6 +18,7 @@ import pybullet_data
 import pytest
 
 from a1_leg_fk.urdf import LegFkError, RobotModel, default_urdf_path, load_urdf, parse_urdf
+from exported_urdf import ROBOTS, exported_quadruped
 
 A1_PATH = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 
@@ -255,9 +256,24 @@ def test_non_finite_origin_names_the_joint() -> None:
         parse_urdf(two_link_urdf('<origin rpy="0 nan 0"/><limit lower="-1" upper="1"/>'))
 
 
-def test_zero_axis_names_the_joint() -> None:
-    with raises_leg_fk_error("'j'", "axis"):
-        parse_urdf(two_link_urdf('<axis xyz="0 0 0"/><limit lower="-1" upper="1"/>'))
+@pytest.mark.parametrize("joint_type", ["revolute", "continuous", "prismatic"])
+def test_zero_axis_on_a_moving_joint_names_the_joint(joint_type: str) -> None:
+    xml = two_link_urdf('<axis xyz="0 0 0"/><limit lower="-1" upper="1"/>').replace('"revolute"', f'"{joint_type}"')
+    with raises_leg_fk_error("'j'", "axis is the zero vector"):
+        parse_urdf(xml)
+
+
+@pytest.mark.parametrize("joint_type", ["fixed", "floating", "planar"])
+@pytest.mark.parametrize(
+    "axis", ['<axis xyz="0 0 0"/>', '<axis xyz="0 0 7"/>', '<axis xyz="zero"/>', '<axis/>', ""],
+    ids=["zero", "not-unit", "not-numbers", "no-xyz", "missing"],
+)
+def test_the_axis_of_a_joint_that_has_none_is_ignored(joint_type: str, axis: str) -> None:
+    """CAD exporters write <axis xyz="0 0 0"/> on fixed joints (Go2: 16 of them, B2: 8); urdfdom,
+    robot_state_publisher and PyBullet ignore it, and so must we, whatever it says."""
+    xml = two_link_urdf(f'<origin xyz="0.1 0 0"/>{axis}').replace('"revolute"', f'"{joint_type}"')
+    joint = parse_urdf(xml).joints["j"]
+    assert (joint.type, joint.axis, joint.origin_xyz) == (joint_type, (1.0, 0.0, 0.0), (0.1, 0.0, 0.0))
 
 
 def test_revolute_without_limit_names_the_joint() -> None:
@@ -308,3 +324,31 @@ def test_billion_laughs_from_a_file_fails_fast_without_growing_rss(tmp_path: Pat
 def test_empty_document() -> None:
     with raises_leg_fk_error("<robot_description>"):
         load_urdf("<")
+
+
+# --- descriptions written by CAD exporters (Unitree's Go2 and B2 style) --------------------
+
+
+@pytest.mark.parametrize("robot", ["go2", "b2"])
+def test_an_exported_description_with_every_quirk_is_read(robot: str) -> None:
+    xml = exported_quadruped(robot, root="base_link", crlf=True, rotors=True)
+    assert "\r\n" in xml and "Commit Version: 1.6.0" in xml and 'xyz="0 0 0" />\r\n  </joint>' in xml
+    model = load_urdf(xml)
+    assert model.root == "base_link"
+    fixed = [j for j in model.joints.values() if j.type == "fixed"]
+    assert len(fixed) == 4 * 3 + 4 + 4 * 3  # per leg foot, two shin links and three rotors; four sensors
+    assert all(j.axis == (1.0, 0.0, 0.0) for j in fixed)
+    # The transmissions' <joint name=...> children are not joints of the tree.
+    assert sum(j.movable for j in model.joints.values()) == 12
+    geometry = ROBOTS[robot]
+    hip = model.joints["RL_hip_joint"]
+    assert hip.origin_xyz == (-geometry.hip_x, geometry.hip_y, 0.0)
+    assert (hip.lower, hip.upper) == geometry.hip_limits
+
+
+def test_an_exported_file_with_crlf_and_a_header_loads_from_disk(tmp_path: Path) -> None:
+    path = tmp_path / "go2_like.urdf"
+    path.write_bytes(exported_quadruped("go2", crlf=True).encode("utf-8"))
+    model = load_urdf(path)
+    assert model.source == str(path)
+    assert model.joints["FR_calf_joint"].origin_xyz == (0.0, 0.0, -0.213)

@@ -1,0 +1,214 @@
+"""Robot descriptions in the style of published, exporter-written quadruped URDFs, made by the tests.
+
+Unitree's own descriptions (unitreerobotics/unitree_ros, ``robots/*_description/urdf/``) were read
+to learn their structure; none of their text is copied here. What they do that a hand-written URDF
+does not, each switchable so that a test can isolate it:
+
+- an XML declaration, then a SolidWorks-exporter comment header with ``key: value`` text;
+- CRLF line endings;
+- ``<axis xyz="0 0 0"/>`` (and ``dont_collapse="true"``) on fixed joints;
+- a shin collision link under the calf (``X_calflower`` -> ``X_calflower1``, Go2): a second leaf
+  link per leg with three movable joints above it, beside the real foot ``X_foot``;
+- rotor links (``X_hip_rotor``, ``X_thigh_rotor``, ``X_calf_rotor``, B2): fixed leaves with two,
+  one or no movable joint above them;
+- sensor and camera links (imu, lidar/radar, depth cameras with odd rpy), zero or 1e-15 masses,
+  links with no ``<inertial>``;
+- ``<gazebo>`` blocks (plugins, ``<visual>`` inside ``<gazebo reference>``) and ``<transmission>``
+  blocks whose ``<joint>`` children are not joints of the tree;
+- visuals that are ``package://`` meshes of packages that are not installed.
+
+Geometry: the published facts of each robot (origins, lengths, limits), listed in :data:`ROBOTS`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+LEGS = ("FR", "FL", "RR", "RL")
+
+
+@dataclass(frozen=True)
+class LegGeometry:
+    """A Unitree-style leg: hip roll about x, thigh and calf pitch about y (metres, radians)."""
+
+    hip_x: float  # hip joint origin in the root frame: (±hip_x, ±hip_y, 0)
+    hip_y: float
+    thigh_y: float  # hip -> thigh joint, along ±y (left +, right -)
+    thigh_length: float  # thigh -> calf joint, along -z
+    calf_length: float  # calf -> foot, along -z
+    calf_y: float  # a small sideways calf offset some exports carry (B2: -8.6984e-05 m)
+    hip_limits: tuple[float, float]
+    front_thigh_limits: tuple[float, float]
+    rear_thigh_limits: tuple[float, float]
+    calf_limits: tuple[float, float]
+
+
+ROBOTS = {
+    "go2": LegGeometry(0.1934, 0.0465, 0.0955, 0.213, 0.213, 0.0, (-1.0472, 1.0472), (-1.5708, 3.4907),
+                       (-0.5236, 4.5379), (-2.7227, -0.83776)),
+    "b2": LegGeometry(0.3285, 0.072, 0.11973, 0.35, 0.35, -8.6984e-05, (-0.87, 0.87), (-0.94, 4.69),
+                      (-0.94, 4.69), (-2.82, -0.43)),
+}
+
+HEADER = """<?xml version="1.0" encoding="utf-8"?>
+<!-- This URDF was automatically created by a CAD to URDF exporter (test fixture).
+     Commit Version: 1.6.0-4-g7f85cfe  Build Version: 1.6.7995.38578
+     For more information, please see: the exporter's wiki -->
+"""
+
+
+def exported_quadruped(
+    robot: str = "go2",
+    *,
+    root: str = "base",
+    header: bool = True,
+    crlf: bool = False,
+    zero_axis_on_fixed: bool = True,
+    shin_links: bool = True,
+    rotors: bool = False,
+    sensors: bool = True,
+    gazebo: bool = True,
+    meshes: bool = True,
+    mesh_folder: str = "package://not_installed_description/dae",
+) -> str:
+    """URDF XML of a quadruped with ``robot``'s geometry and the chosen exporter quirks.
+
+    With ``meshes=False`` the same robot carries no mesh (primitives only): the reference PyBullet
+    loads that one, so the test's reference never depends on the code under test's mesh handling.
+    ``mesh_folder`` is where the meshes would be: a ``package://`` URI or a file path.
+    """
+    geometry = ROBOTS[robot]
+    parts = [HEADER if header else "", f'<robot\n  name="{robot}_like_description">\n']
+    parts.append(_link(root, _box_visual(meshes, mesh_folder, "base"), mass="6.921", com="0.021112 0 -0.005366"))
+    if sensors:
+        parts.append(_sensors(root, zero_axis_on_fixed))
+    for leg in LEGS:
+        parts.append(_leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder))
+    if gazebo:
+        parts.append(_gazebo_and_transmissions(root))
+    parts.append("</robot>\n")
+    text = "".join(parts)
+    return text.replace("\n", "\r\n") if crlf else text
+
+
+def _leg(leg: str, root: str, g: LegGeometry, zero_axis: bool, shin_links: bool, rotors: bool, meshes: bool,
+         mesh_folder: str) -> str:
+    front, left = leg[0] == "F", leg[1] == "L"
+    x, y = (g.hip_x if front else -g.hip_x), (g.hip_y if left else -g.hip_y)
+    side = 1.0 if left else -1.0
+    thigh_limits = g.front_thigh_limits if front else g.rear_thigh_limits
+    text = [
+        _link(f"{leg}_hip", _box_visual(meshes, mesh_folder, "hip"), mass="0.678", com="-0.0054 0.00194 -0.000105"),
+        _revolute(f"{leg}_hip_joint", root, f"{leg}_hip", f"{x!r} {y!r} 0", "1 0 0", g.hip_limits),
+        _link(f"{leg}_thigh", _box_visual(meshes, mesh_folder, "thigh"), mass="1.152", com="-0.00374 -0.0223 -0.0327"),
+        _revolute(f"{leg}_thigh_joint", f"{leg}_hip", f"{leg}_thigh", f"0 {side * g.thigh_y!r} 0", "0 1 0",
+                  thigh_limits),
+        _link(f"{leg}_calf", _box_visual(meshes, mesh_folder, "calf"), mass="0.154", com="0.00548 -0.000975 -0.115"),
+        _revolute(f"{leg}_calf_joint", f"{leg}_thigh", f"{leg}_calf", f"0 {g.calf_y!r} {-g.thigh_length!r}",
+                  "0 1 0", g.calf_limits),
+        _link(f"{leg}_foot", _box_visual(meshes, mesh_folder, "foot"), mass="0.04", com="0 0 0"),
+        _fixed(f"{leg}_foot_joint", f"{leg}_calf", f"{leg}_foot", f"0 0 {-g.calf_length!r}", "0 0 0", zero_axis,
+               dont_collapse=True),
+    ]
+    if shin_links:  # collision-only links with no <inertial>, the second one a leaf under the calf
+        text += [
+            f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
+            '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n',
+            _fixed(f"{leg}_calflower_joint", f"{leg}_calf", f"{leg}_calflower", "0.020 0 -0.148", "0 0.05 0",
+                   zero_axis),
+            f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
+            '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n',
+            _fixed(f"{leg}_calflower1_joint", f"{leg}_calflower", f"{leg}_calflower1", "-0.01 0 -0.04",
+                   "0 0.48 0", zero_axis),
+        ]
+    if rotors:  # fixed leaves with 0, 1 and 2 movable joints above them; written with no <axis>
+        for rotor, parent, origin in (
+            ("hip", root, f"{0.6 * x!r} {y!r} 0"),
+            ("thigh", f"{leg}_hip", f"0 {-side * 0.008!r} 0"),
+            ("calf", f"{leg}_thigh", f"0 {-side * 0.058!r} 0"),
+        ):
+            text.append(f'  <link name="{leg}_{rotor}_rotor">\n    <inertial>\n      <origin rpy="0 0 0" '
+                        'xyz="0.0 0.0 0.0"/>\n      <mass value="0.2734"/>\n      <inertia ixx="0.000144463" '
+                        'ixy="0.0" ixz="0.0" iyy="0.000144463" iyz="0.0" izz="0.000263053"/>\n    </inertial>\n'
+                        '  </link>\n')
+            text.append(f'  <joint name="{leg}_{rotor}_rotor_joint" type="fixed">\n    <origin rpy="0 0 0" '
+                        f'xyz="{origin}"/>\n    <parent link="{parent}"/>\n    <child link="{leg}_{rotor}_rotor"/>\n'
+                        '  </joint>\n')
+    return "".join(text)
+
+
+def _sensors(root: str, zero_axis: bool) -> str:
+    links = []
+    for name, origin, rpy, mass in (
+        ("imu", "-0.02557 0 0.04232", "0 0 0", "0"),
+        ("radar", "0.28945 0 -0.046825", "0 2.8782 0", "0"),
+        ("lidar_link", "0.34218 0 0.17851", "0 0 0", "4.19E-15"),
+        ("f_dc_link", "0.41251 0.024997 0.04765", "-2.3562 0 -1.5708", "4.19E-15"),
+    ):
+        links.append(_link(name, "", mass=mass, com="0 0 0", inertia="0" if mass == "0" else "1.68E-27"))
+        links.append(_fixed(f"{name}_joint", root, name, origin, rpy, zero_axis))
+    return "".join(links)
+
+
+def _link(name: str, visual: str, mass: str, com: str, inertia: str = "9.6e-06") -> str:
+    return (
+        f'  <link\n    name="{name}">\n    <inertial>\n      <origin\n        xyz="{com}"\n        rpy="0 0 0" />\n'
+        f'      <mass\n        value="{mass}" />\n      <inertia\n        ixx="{inertia}"\n        ixy="0"\n'
+        f'        ixz="0"\n        iyy="{inertia}"\n        iyz="0"\n        izz="{inertia}" />\n    </inertial>\n'
+        f"{visual}  </link>\n"
+    )
+
+
+def _box_visual(meshes: bool, mesh_folder: str, part: str) -> str:
+    geometry = (f'<mesh\n          filename="{mesh_folder}/{part}.dae" />' if meshes
+                else '<box size="0.02 0.02 0.02" />')
+    collision = geometry if meshes else '<sphere radius="0.01" />'
+    return (
+        '    <visual>\n      <origin\n        xyz="0 0 0"\n        rpy="0 0 0" />\n      <geometry>\n'
+        f'        {geometry}\n      </geometry>\n      <material\n        name="">\n        <color\n'
+        '          rgba="1 1 1 1" />\n      </material>\n    </visual>\n'
+        '    <collision>\n      <origin rpy="0 0 0" xyz="0 0 0" />\n      <geometry>\n'
+        f"        {collision}\n      </geometry>\n    </collision>\n"
+    )
+
+
+def _revolute(name: str, parent: str, child: str, xyz: str, axis: str, limits: tuple[float, float]) -> str:
+    return (
+        f'  <joint\n    name="{name}"\n    type="revolute">\n    <origin\n      xyz="{xyz}"\n      rpy="0 0 0" />\n'
+        f'    <parent\n      link="{parent}" />\n    <child\n      link="{child}" />\n    <axis\n      xyz="{axis}" />\n'
+        f'    <limit\n      lower="{limits[0]!r}"\n      upper="{limits[1]!r}"\n      effort="23.7"\n'
+        '      velocity="30.1" />\n  </joint>\n'
+    )
+
+
+def _fixed(name: str, parent: str, child: str, xyz: str, rpy: str, zero_axis: bool, dont_collapse: bool = False) -> str:
+    collapse = ' dont_collapse="true"' if dont_collapse else ""
+    axis = '    <axis\n      xyz="0 0 0" />\n' if zero_axis else ""
+    return (
+        f'  <joint\n    name="{name}"\n    type="fixed"{collapse}>\n    <origin\n      xyz="{xyz}"\n'
+        f'      rpy="{rpy}" />\n    <parent\n      link="{parent}" />\n    <child\n      link="{child}" />\n'
+        f"{axis}  </joint>\n"
+    )
+
+
+def _gazebo_and_transmissions(root: str) -> str:
+    blocks = [
+        '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
+        "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n",
+        f'  <gazebo reference="{root}">\n    <material>Gazebo/Green</material>\n  </gazebo>\n',
+    ]
+    for leg in LEGS:
+        blocks.append(
+            f'  <gazebo reference="{leg}_foot">\n    <visual>\n      <plugin filename="libDrawForce.so" '
+            f'name="drawForcePlugin">\n        <topicName>{leg}_foot_contact</topicName>\n      </plugin>\n'
+            "    </visual>\n  </gazebo>\n"
+        )
+        for joint in ("hip", "thigh", "calf"):
+            blocks.append(
+                f'  <transmission name="{leg}_{joint}_tran">\n    <type>transmission_interface/SimpleTransmission'
+                f'</type>\n    <joint name="{leg}_{joint}_joint">\n      <hardwareInterface>hardware_interface/'
+                'EffortJointInterface</hardwareInterface>\n    </joint>\n    <actuator name="'
+                f'{leg}_{joint}_motor">\n      <mechanicalReduction>1</mechanicalReduction>\n    </actuator>\n'
+                "  </transmission>\n"
+            )
+    return "".join(blocks)

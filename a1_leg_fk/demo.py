@@ -2,7 +2,8 @@
 
 Publishes ``joint_states`` (a relative name: namespaces and remaps apply) at ``rate_hz`` with
 the 12 leg joints' positions [rad] and velocities [rad/s]: the robot stands up from a crouch for
-2 s, then trots in place forever.
+2 s, then trots in place forever. Like robot_state_publisher, it also publishes the URDF it
+animates (the embedded A1) on ``robot_description`` (transient local), once.
 
 Pacing: an rclpy timer alone drifts and misses ticks at hundreds of Hz, so the timer (period
 ``1 / rate_hz``) only wakes the node; each wake-up publishes every sample that is due by the
@@ -24,9 +25,11 @@ from typing import Sequence
 from a1_leg_fk.gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import UNITREE_NAME_PAIRS
+from a1_leg_fk.robot_config import load_robot
 
 NODE_NAME = "joint_state_demo"
 TOPIC = "joint_states"
+DESCRIPTION_TOPIC = "robot_description"
 NAMINGS = ("pybullet", "unitree")
 DEFAULT_RATE_HZ = 500.0
 MAX_RATE_HZ = 10000.0
@@ -55,6 +58,9 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
     from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
     from rclpy.node import Node
     from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    from a1_leg_fk.robot_source import DESCRIPTION_QOS
 
     class JointStateDemo(Node):
         """Publishes the demo gait on ``joint_states`` at ``rate_hz``, paced by the node clock."""
@@ -89,7 +95,8 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
                 raise ValueError(f"parameter rate_hz must be a number in (0, {MAX_RATE_HZ:g}], not {rate!r}")
             if naming not in NAMINGS:
                 raise ValueError(f"parameter naming must be one of {list(NAMINGS)}, not {naming!r}")
-            quadruped = Quadruped.from_urdf()
+            robot = load_robot()
+            quadruped = robot.quadruped
             self.gait = Gait(limits_of(quadruped))
             self.names = joint_names(quadruped, naming)
             self.rate_hz = float(rate)
@@ -100,10 +107,14 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
             self._message = JointState()
             self._message.name = self.names
             self.publisher = self.create_publisher(JointState, TOPIC, 10)
+            # As robot_state_publisher does: the description of the robot it animates, latched.
+            self.description_publisher = self.create_publisher(String, DESCRIPTION_TOPIC, DESCRIPTION_QOS)
+            self.description_publisher.publish(String(data=robot.urdf_xml))
             self.start_ns = self.get_clock().now().nanoseconds
             self.timer = self.create_timer(1.0 / self.rate_hz, self._publish_due)
             self.get_logger().info(
-                f"publishing {self.publisher.topic_name} at {self.rate_hz:g} Hz, {naming} joint names: "
+                f"publishing {self.publisher.topic_name} at {self.rate_hz:g} Hz, {naming} joint names, and the "
+                f"A1's URDF on {self.description_publisher.topic_name} (transient local): "
                 f"standing up for {self.gait.parameters.stand_s:g} s, then trotting in place at "
                 f"{self.gait.parameters.trot_hz:g} Hz"
             )

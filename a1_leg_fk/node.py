@@ -11,14 +11,12 @@ import math
 import struct
 import sys
 import time
-from dataclasses import dataclass
 from typing import Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
-from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
-from rclpy.exceptions import ParameterUninitializedException
+from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -32,8 +30,9 @@ from visualization_msgs.msg import Marker, MarkerArray
 from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
-from a1_leg_fk.robot_config import RobotConfig, load_robot
-from a1_leg_fk.urdf import MAX_URDF_CHARS, LegFkError
+from a1_leg_fk.robot_config import RobotConfig
+from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource, parameter_value
+from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -50,47 +49,22 @@ JOINT_STATES_QOS = QoSProfile(
 WARNING_INTERVAL_S = 1.0  # at most one warning per second for each kind of rejection
 
 
-@dataclass(frozen=True)
-class _ParameterSpec:
-    name: str
-    default: object  # None: a string array with no value until one is given (ROS can't type [])
-    type: int
-    description: str
-
-    def declare(self, node: Node) -> None:
-        descriptor = ParameterDescriptor(description=self.description)
-        if self.default is None:
-            node.declare_parameter(self.name, Parameter.Type.STRING_ARRAY, descriptor)
-        else:
-            descriptor.type = self.type
-            node.declare_parameter(self.name, self.default, descriptor)
-
-
 PARAMETERS = (
-    _ParameterSpec("robot_description", "", ParameterType.PARAMETER_STRING,
-                   "URDF XML of the robot; empty = urdf_file, or the embedded Unitree A1 (pybullet_data a1/a1.urdf)"),
-    _ParameterSpec("urdf_file", "", ParameterType.PARAMETER_STRING,
-                   "Path of a URDF file, used when robot_description is empty"),
-    _ParameterSpec("foot_links", None, ParameterType.PARAMETER_STRING_ARRAY,
-                   "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = leaf links FR..., FL..., RR..., RL..."),
-    _ParameterSpec("joint_aliases", None, ParameterType.PARAMETER_STRING_ARRAY,
-                   "Extra incoming joint names as incoming=urdf_joint_name"),
-    _ParameterSpec("base_frame", "", ParameterType.PARAMETER_STRING,
-                   "frame_id of the published feet; empty = the URDF's root link (trunk for the A1)"),
-    _ParameterSpec("publish_velocities", True, ParameterType.PARAMETER_BOOL,
-                   "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities"),
-    _ParameterSpec("publish_markers", True, ParameterType.PARAMETER_BOOL,
-                   "Publish foot_markers (MarkerArray) while someone subscribes"),
-    _ParameterSpec("marker_rate_hz", 30.0, ParameterType.PARAMETER_DOUBLE,
-                   "Highest rate of foot_markers [Hz], > 0"),
-    _ParameterSpec("max_publish_rate_hz", 0.0, ParameterType.PARAMETER_DOUBLE,
-                   "Highest rate of foot positions/velocities [Hz]; 0 = one set per joint state (no throttling)"),
-    _ParameterSpec("enable_verify", True, ParameterType.PARAMETER_BOOL,
-                   "Offer the verify_fk service (compares the FK with PyBullet's)"),
-    _ParameterSpec("verify_tolerance_m", 1e-6, ParameterType.PARAMETER_DOUBLE,
-                   "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, > 0"),
+    BASE_FRAME_PARAMETER,
+    ParameterSpec("publish_velocities", True, ParameterType.PARAMETER_BOOL,
+                  "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities"),
+    ParameterSpec("publish_markers", True, ParameterType.PARAMETER_BOOL,
+                  "Publish foot_markers (MarkerArray) while someone subscribes"),
+    ParameterSpec("marker_rate_hz", 30.0, ParameterType.PARAMETER_DOUBLE,
+                  "Highest rate of foot_markers [Hz], > 0"),
+    ParameterSpec("max_publish_rate_hz", 0.0, ParameterType.PARAMETER_DOUBLE,
+                  "Highest rate of foot positions/velocities [Hz]; 0 = one set per joint state (no throttling)"),
+    ParameterSpec("enable_verify", True, ParameterType.PARAMETER_BOOL,
+                  "Offer the verify_fk service (compares the FK with PyBullet's)"),
+    ParameterSpec("verify_tolerance_m", 1e-6, ParameterType.PARAMETER_DOUBLE,
+                  "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, > 0"),
 )
-MODEL_PARAMETERS = ("robot_description", "urdf_file", "foot_links", "joint_aliases")
+"""The node's own parameters; the model parameters are :class:`a1_leg_fk.robot_source.RobotSource`'s."""
 
 
 class _SerializedStamped:
@@ -138,7 +112,8 @@ class FootFkNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
-        self._model = _build_model(self._model_parameter_values({}))
+        self._robot = RobotSource(self, self._on_robot)
+        self._model = self._robot.config
         self._tracker = FootTracker(self._model.quadruped)
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
@@ -151,7 +126,6 @@ class FootFkNode(Node):
         self._last_markers = -math.inf
         self._markers_wanted = False
         self._previous_counts = (0, 0)
-        self._pending_model: RobotConfig | None = None
         self._last_warnings: dict[str, float] = {}  # kind of problem -> time.monotonic() of its last warning
         self._apply_settings()
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
@@ -311,6 +285,8 @@ class FootFkNode(Node):
             level, summary = DiagnosticStatus.WARN, "no joint_states received yet"
         elif rejected_now or outside or counts.non_finite_joints:
             level, summary = DiagnosticStatus.WARN, "some joint_states rejected or joints outside limits"
+        if self._robot.topic_rejected:
+            level, summary = DiagnosticStatus.WARN, f"robot description on {self._robot.topic_name} rejected"
         if self._verify_disagreed:
             level, summary = DiagnosticStatus.ERROR, "verify_fk: FK disagrees with PyBullet beyond the tolerance"
         values = {
@@ -325,6 +301,7 @@ class FootFkNode(Node):
             "stamp_jumps_back": self._stamp_jumps_back,
             "last_verify": self._last_verify,
             "model": self._model.source,
+            "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
         }
         status = DiagnosticStatus(
             level=level,
@@ -390,15 +367,8 @@ class FootFkNode(Node):
 
     # --- parameters ------------------------------------------------------------------------
 
-    def _model_parameter_values(self, changes: dict[str, object]) -> dict[str, object]:
-        return {name: changes.get(name, self._value(name)) for name in MODEL_PARAMETERS}
-
     def _value(self, name: str) -> object:
-        """A parameter's value; ``[]`` for a string array that was never given one."""
-        try:
-            return self.get_parameter(name).value
-        except ParameterUninitializedException:
-            return []
+        return parameter_value(self, name)
 
     def _apply_settings(self) -> None:
         value = self._value
@@ -417,28 +387,21 @@ class FootFkNode(Node):
         self._serialized = _SerializedStamped(self._base_frame)
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        changes = {p.name: p.value for p in parameters}
-        problem = _invalid_setting(changes)
-        if problem:
-            return SetParametersResult(successful=False, reason=problem)
-        new_model = None
-        if any(name in changes for name in MODEL_PARAMETERS):
-            try:
-                new_model = _build_model(self._model_parameter_values(changes))
-            except LegFkError as error:
-                self.get_logger().warn(f"parameter change rejected, keeping {self._model.source}: {error}")
-                return SetParametersResult(successful=False, reason=str(error))
-        self._pending_model = new_model  # applied by _after_set_parameters, once rclpy stored the values
-        return SetParametersResult(successful=True)
+        problem = _invalid_setting({p.name: p.value for p in parameters})
+        return SetParametersResult(successful=not problem, reason=problem)
 
-    def _after_set_parameters(self, parameters: list[Parameter]) -> None:
-        if self._pending_model is not None:
-            self._model, self._pending_model = self._pending_model, None
-            self._tracker = FootTracker(self._model.quadruped)
-            self.get_logger().info(f"loaded {self._model.source}")
+    def _on_robot(self, config: RobotConfig) -> None:
+        """Another robot was accepted (a parameter or the description topic): start over with it."""
+        self._model = config
+        self._tracker = FootTracker(config.quadruped)
         self._apply_settings()
         self._set_frame_ids()
-        if any(p.name in (*MODEL_PARAMETERS, "enable_verify") for p in parameters):
+        self._load_verifier()
+
+    def _after_set_parameters(self, parameters: list[Parameter]) -> None:
+        self._apply_settings()
+        self._set_frame_ids()
+        if any(p.name == "enable_verify" for p in parameters):
             self._load_verifier()
         self._update_verify_service()
 
@@ -451,20 +414,7 @@ def _invalid_setting(changes: dict[str, object]) -> str:
     rate = changes.get("max_publish_rate_hz", 0.0)
     if not (isinstance(rate, float) and math.isfinite(rate) and rate >= 0):
         return f"max_publish_rate_hz must be a finite number >= 0, got {rate!r}"
-    description = changes.get("robot_description", "")
-    if isinstance(description, str) and len(description) > MAX_URDF_CHARS:  # refused before it is parsed
-        return f"robot_description: more than the {MAX_URDF_CHARS} characters accepted for a robot description"
     return ""
-
-
-def _build_model(values: dict[str, object]) -> RobotConfig:
-    """The robot for the model parameters' values; LegFkError names what is wrong."""
-    return load_robot(
-        str(values["robot_description"] or ""),
-        str(values["urdf_file"] or ""),
-        list(values["foot_links"]),  # type: ignore[call-overload]
-        list(values["joint_aliases"]),  # type: ignore[call-overload]
-    )
 
 
 def _make_executor() -> rclpy.executors.Executor:

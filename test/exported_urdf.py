@@ -23,8 +23,15 @@ Geometry: the published facts of each robot (origins, lengths, limits), listed i
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
+
+from pybullet_reference import PyBulletRobot
 
 LEGS = ("FR", "FL", "RR", "RL")
+UNITREE_JOINTS = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "thigh", "calf")]
+FEET = [f"{leg}_foot" for leg in LEGS]
+QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
+"""The quirks each robot's fixture carries in the tests (Go2: those of its defaults)."""
 
 
 @dataclass(frozen=True)
@@ -212,3 +219,26 @@ def _gazebo_and_transmissions(root: str) -> str:
                 "  </transmission>\n"
             )
     return "".join(blocks)
+
+
+def reference_robot(folder: Path, robot: str) -> PyBulletRobot:
+    """PyBullet's own model of ``robot`` with its :data:`QUIRKS`, written with primitives only."""
+    path = folder / f"{robot}_primitives.urdf"
+    path.write_text(exported_quadruped(robot, meshes=False, **QUIRKS[robot]), encoding="utf-8")
+    return PyBulletRobot(path)
+
+
+def unitree_style_a1(mesh_folder: str = "package://a1_description/meshes") -> str:
+    """pybullet_data's A1 renamed the way Unitree's own A1 description names it: root link ``base``
+    (fixed to ``trunk``), joints ``X_thigh_joint``/``X_calf_joint``, feet ``X_foot``, meshes in
+    ``mesh_folder``. The geometry stays pybullet_data's, so its feet are known independently."""
+    import pybullet_data
+
+    text = (Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf").read_text(encoding="utf-8")
+    for ours, theirs in (("_upper", "_thigh"), ("_lower", "_calf"), ("_toe", "_foot")):
+        text = text.replace(ours, theirs)
+    text = text.replace('filename="meshes/', f'filename="{mesh_folder}/')
+    robot_start = text.index(">", text.index("<robot")) + 1
+    root = ('\n  <link name="base"/>\n  <joint name="floating_base" type="fixed">\n    <origin rpy="0 0 0" '
+            'xyz="0 0 0"/>\n    <parent link="base"/>\n    <child link="trunk"/>\n  </joint>')
+    return text[:robot_start] + root + text[robot_start:]

@@ -139,3 +139,22 @@ def test_lower_rate_and_integer_parameter(processes, ros) -> None:  # noqa: ANN0
     ros.spin_for(1.0)
     assert 85 <= len(recorder.samples) <= 115
     assert processes.interrupt(process) == 0
+
+
+@pytest.mark.slow
+def test_the_demo_publishes_the_urdf_it_animates_latched_on_robot_description(processes, ros) -> None:  # noqa: ANN001
+    """Like robot_state_publisher: one message, transient local, so a late subscriber still gets it."""
+    from pybullet_reference import A1_URDF
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from std_msgs.msg import String
+
+    processes.start(DEMO + ["--ros-args", "-r", "__ns:=/demo_description"])
+    heard: list[String] = []
+    assert ros.spin_until(lambda: ros.node.count_publishers("/demo_description/robot_description") > 0, 20.0)
+    ros.spin_for(1.0)  # the message was published at start: only a latched subscription hears it now
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    ros.node.create_subscription(String, "/demo_description/robot_description", heard.append, latched)
+    assert ros.spin_until(lambda: bool(heard), 20.0)
+    assert heard[0].data == A1_URDF.read_text(encoding="utf-8").lstrip()
+    ros.spin_for(0.5)
+    assert len(heard) == 1

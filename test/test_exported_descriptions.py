@@ -13,23 +13,13 @@ from pathlib import Path
 import numpy as np
 import pybullet
 import pytest
-from exported_urdf import LEGS, exported_quadruped
+from exported_urdf import FEET, LEGS, QUIRKS, UNITREE_JOINTS, exported_quadruped, reference_robot
 from node_harness import NodeClient, distance, node_command, parse_tokens
-from pybullet_reference import PyBulletRobot
 
 from a1_leg_fk.pybullet_check import PyBulletFeet
 from a1_leg_fk.robot_config import load_robot
 
 TOLERANCE_M = 1e-7
-UNITREE_JOINTS = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "thigh", "calf")]
-FEET = [f"{leg}_foot" for leg in LEGS]
-QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
-
-
-def reference_robot(tmp_path: Path, robot: str) -> PyBulletRobot:
-    path = tmp_path / f"{robot}_primitives.urdf"
-    path.write_text(exported_quadruped(robot, meshes=False, **QUIRKS[robot]), encoding="utf-8")
-    return PyBulletRobot(path)
 
 
 def in_limit_configurations(limits: tuple[np.ndarray, np.ndarray], count: int, seed: int) -> np.ndarray:

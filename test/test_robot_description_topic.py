@@ -1,0 +1,187 @@
+"""foot_fk_node beside robot_state_publisher: the robot_description topic and sim time, over DDS.
+
+The test's own node plays robot_state_publisher (std_msgs/String on ``robot_description``,
+reliable + transient local + depth 1) and, for sim time, a bag replay's ``/clock``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pybullet_data
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from exported_urdf import FEET, UNITREE_JOINTS, exported_quadruped, reference_robot, unitree_style_a1
+from node_harness import PYBULLET_NAMES, STANDING, NodeClient, distance, node_command, stamp_ns
+from pybullet_reference import A1_URDF, PyBulletRobot
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
+
+pytestmark = pytest.mark.slow
+
+TOLERANCE_M = 1e-7
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
+A1_FEET = [f"{leg}_toe" for leg in ("FR", "FL", "RR", "RL")]
+BILLION_LAUGHS = (
+    '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
+    '<robot name="bomb"><link name="&b;"/></robot>'
+)
+
+
+def publish_description(ros, xml: str, topic: str = "robot_description"):  # noqa: ANN001, ANN201
+    publisher = ros.node.create_publisher(String, topic, LATCHED)
+    publisher.publish(String(data=xml))
+    return publisher
+
+
+def feet_in(client: NodeClient, names, angles, frame: str, timeout_s: float = 30.0) -> list:
+    """Send ``angles`` until all four feet come back in ``frame``; the latest foot per leg."""
+    legs = ("FR", "FL", "RR", "RL")
+
+    def arrived() -> bool:
+        client.send(client.joint_state(names, angles))
+        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in legs)
+
+    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in legs}
+    return [client.positions[leg][-1] for leg in legs]
+
+
+def assert_feet(messages, expected) -> None:  # noqa: ANN001
+    for message, position in zip(messages, expected):
+        assert distance(message.point, position) <= TOLERANCE_M
+
+
+def latest_diagnostics(client: NodeClient, key: str, contains: str, timeout_s: float = 10.0) -> dict[str, object]:
+    seen: list[DiagnosticArray] = []
+    client.probe.node.create_subscription(DiagnosticArray, "/diagnostics", seen.append, 10)
+
+    def found() -> bool:
+        return bool(seen) and contains in {kv.key: kv.value for kv in seen[-1].status[0].values}.get(key, "")
+
+    assert client.probe.spin_until(found, timeout_s), [kv for kv in seen[-1].status[0].values] if seen else "none"
+    status = seen[-1].status[0]
+    return {"level": status.level, "message": status.message, **{kv.key: kv.value for kv in status.values}}
+
+
+def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(processes, ros, tmp_path):
+    """A Unitree-style A1 (root base, X_thigh/X_calf joints, X_foot links, package:// meshes)."""
+    publisher = publish_description(ros, unitree_style_a1())
+    process = processes.start(node_command())
+    client = NodeClient(ros)
+    feet = feet_in(client, UNITREE_JOINTS, ANGLES, "base")
+    with PyBulletRobot(A1_URDF) as reference:  # the same geometry under pybullet_data's names
+        assert_feet(feet, reference.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+    response = client.verify()
+    assert response.success, response.message
+    log = processes.output(process)
+    assert "until a description arrives on /robot_description (followed)" in log
+    assert "loaded /robot_description: root link 'base'" in log
+    ros.node.destroy_publisher(publisher)
+
+
+def test_a_description_published_later_switches_the_robot_and_republishing_does_not_reload(processes, ros, tmp_path):
+    process = processes.start(node_command())
+    client = NodeClient(ros)
+    with PyBulletRobot(A1_URDF) as a1:
+        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+    xml = exported_quadruped("go2")
+    publisher = publish_description(ros, xml)
+    with reference_robot(tmp_path, "go2") as go2:
+        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+    assert client.verify().success
+    # robot_state_publisher republishes on parameter changes: the same text must not reload (a reload
+    # empties the joint state), so two of FR's joints still complete FR with the knee merged before.
+    publisher.publish(String(data=xml))
+    client.probe.spin_for(1.0)
+    client.clear()
+    client.send(client.joint_state(UNITREE_JOINTS[:2], ANGLES[:2]))
+    assert client.wait_for_feet(1, legs=("FR",))
+    assert processes.output(process).count("loaded /robot_description") == 1
+
+
+@pytest.mark.parametrize(
+    ("xml", "reason"),
+    [
+        ("<robot name='broken'><link name='a'>", "malformed XML"),
+        ("<robot name='legless'><link name='base'/></robot>", "leg FR"),
+        (BILLION_LAUGHS, "entity"),
+    ],
+    ids=["malformed", "no-legs", "entity-bomb"],
+)
+def test_a_bad_description_on_the_topic_is_rejected_and_the_old_robot_keeps_publishing(processes, ros, xml, reason):
+    process = processes.start(node_command())
+    client = NodeClient(ros)
+    feet_in(client, PYBULLET_NAMES, STANDING, "trunk")
+    publish_description(ros, xml)
+    values = latest_diagnostics(client, "robot_description_topic", "rejected")
+    assert reason in values["robot_description_topic"] and values["level"] == DiagnosticStatus.WARN, values
+    assert "rejected" in values["message"]
+    client.clear()
+    with PyBulletRobot(A1_URDF) as a1:
+        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+    assert process.poll() is None
+    assert f"description on /robot_description rejected, keeping {A1_URDF}" in processes.output(process)
+
+
+def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros, tmp_path):
+    publish_description(ros, exported_quadruped("go2"))
+    process = processes.start(node_command("-p", f"urdf_file:={A1_URDF}"))
+    client = NodeClient(ros)
+    with PyBulletRobot(A1_URDF) as a1:
+        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+    values = latest_diagnostics(client, "robot_description_topic", "ignored")
+    assert values["robot_description_topic"] == "/robot_description: ignored: parameter urdf_file is set"
+    log = processes.output(process)
+    assert "parameter urdf_file is set, so /robot_description is ignored" in log
+    assert log.count("ignoring the description on /robot_description") == 1
+
+
+def test_a_namespaced_node_follows_its_namespaced_description_topic(processes, ros, tmp_path):
+    publish_description(ros, exported_quadruped("go2"), "/robot1/robot_description")
+    publish_description(ros, exported_quadruped("b2"), "/robot_description")  # another robot's: not ours
+    processes.start(node_command("-r", "__ns:=/robot1"))
+    client = NodeClient(ros, prefix="/robot1/")
+    with reference_robot(tmp_path, "go2") as go2:
+        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+
+
+def test_an_empty_topic_parameter_follows_no_topic(processes, ros):
+    publish_description(ros, exported_quadruped("go2"))
+    process = processes.start(node_command("-p", "robot_description_topic:=''"))
+    client = NodeClient(ros)
+    feet_in(client, PYBULLET_NAMES, STANDING, "trunk")
+    client.probe.spin_for(1.0)
+    client.clear()
+    feet_in(client, PYBULLET_NAMES, STANDING, "trunk")
+    assert "no robot_description topic followed" in processes.output(process)
+
+
+def test_sim_time_stamps_everything_the_node_stamps_itself(processes, ros):
+    clock = ros.node.create_publisher(Clock, "/clock", 10)
+    sim_ns = 1_234 * 1_000_000_000 + 500_000_000
+
+    def tick() -> None:
+        message = Clock()
+        message.clock.sec, message.clock.nanosec = divmod(sim_ns, 1_000_000_000)
+        clock.publish(message)
+
+    processes.start(node_command("-p", "use_sim_time:=true"))
+    client = NodeClient(ros)
+    diagnostics: list[DiagnosticArray] = []
+    ros.node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
+
+    def zero_stamped_foot_arrived() -> bool:
+        tick()
+        client.send(client.joint_state(PYBULLET_NAMES, STANDING, stamp_ns=0))
+        return bool(client.positions["FR"]) and bool(diagnostics)
+
+    deadline = time.monotonic() + 30.0
+    assert ros.spin_until(zero_stamped_foot_arrived, 30.0)
+    # The clock stands still at sim_ns: every stamp the node made itself is exactly that time.
+    assert ros.spin_until(lambda: bool(tick()) or len(client.positions["FR"]) >= 3, max(1.0, deadline - time.monotonic()))
+    assert stamp_ns(client.positions["FR"][-1]) == sim_ns
+    assert ros.spin_until(lambda: bool(tick()) or stamp_ns(diagnostics[-1]) == sim_ns, 10.0)
+    assert stamp_ns(diagnostics[-1]) == sim_ns

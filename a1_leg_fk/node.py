@@ -427,12 +427,25 @@ def _make_executor() -> rclpy.executors.Executor:
         return SingleThreadedExecutor()
 
 
+def _ros_args_error(message: str) -> str:
+    """rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
+    ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
+    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML."""
+    first_line = message.splitlines()[0] if message else message
+    if "robot_description:=" not in message:
+        return first_line
+    return (
+        f"{first_line[:160]}... (rcl parses every -p value as YAML, and this URDF is not valid YAML: give it in "
+        "a --params-file as a quoted or block string, through a launch file, or on the robot_description topic)"
+    )
+
+
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk foot_fk_node``; exits 0 on Ctrl-C/SIGTERM."""
     try:
         rclpy.init(args=args)
     except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
-        print(f"foot_fk_node: cannot start: {error}", file=sys.stderr)
+        print(f"foot_fk_node: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
         return 2
     node = None
     try:

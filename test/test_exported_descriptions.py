@@ -122,3 +122,14 @@ def test_the_node_publishes_pybullet_feet_and_verifies_with_no_configuration(pro
     response = client.verify()
     assert response.success, response.message
     assert float(parse_tokens(response.message)["max_error_m"]) <= TOLERANCE_M
+
+
+@pytest.mark.slow
+def test_an_exported_description_on_the_command_line_is_refused_with_a_hint(processes) -> None:  # noqa: ANN001
+    """rcl parses `-p name:=value` as YAML before the node runs; the exporter header is not YAML."""
+    process = processes.start(node_command("-p", f"robot_description:={exported_quadruped('go2')}"))
+    assert process.wait(30) == 2
+    output = processes.output(process)
+    assert "foot_fk_node: cannot start:" in output and "Traceback" not in output
+    assert "not valid YAML: give it in a --params-file" in output
+    assert "Commit Version" not in output  # the URDF is not echoed back whole

@@ -28,7 +28,7 @@ NODE_NAME = "a1_leg_fk"
 PYTHON_DIR = f"python{sys.version_info.major}.{sys.version_info.minor}"
 
 EXEC_DEPENDS = {
-    "rclpy", "sensor_msgs", "geometry_msgs", "std_srvs", "diagnostic_msgs", "visualization_msgs",
+    "rclpy", "std_msgs", "sensor_msgs", "geometry_msgs", "std_srvs", "diagnostic_msgs", "visualization_msgs",
     "ament_index_python", "python3-numpy", "python3-pybullet-pip",
 }
 TEST_DEPENDS = {"python3-pytest", "python3-hypothesis"}
@@ -42,6 +42,7 @@ CONSOLE_SCRIPTS = {
 SCALAR_DEFAULTS = {
     "robot_description": "",
     "urdf_file": "",
+    "robot_description_topic": "robot_description",
     "base_frame": "",
     "publish_velocities": True,
     "publish_markers": True,

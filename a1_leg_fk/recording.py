@@ -20,7 +20,7 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from a1_leg_fk.joint_state import FootTracker, REJECTIONS
-from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError
+from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout
 from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.robot_config import load_robot
@@ -69,7 +69,7 @@ class RecordingSummary:
         rejected = ", ".join(f"{reason} {count}" for reason, count in self.rejected.items()) or "none"
         span = (
             f"{(self.last_stamp_ns - self.first_stamp_ns) / 1e9:.3f} s "
-            f"({self.first_stamp_ns / 1e9:.9f} .. {self.last_stamp_ns / 1e9:.9f})"
+            f"({_seconds(self.first_stamp_ns)} .. {_seconds(self.last_stamp_ns)})"
             if self.first_stamp_ns is not None and self.last_stamp_ns is not None
             else "empty"
         )
@@ -93,6 +93,12 @@ class RecordingSummary:
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
+
+
+def _seconds(stamp_ns: int) -> str:
+    """A stamp [ns] as exact decimal seconds."""
+    sign, magnitude = ("-" if stamp_ns < 0 else ""), abs(stamp_ns)
+    return f"{sign}{magnitude // 1_000_000_000}.{magnitude % 1_000_000_000:09d}"
 
 
 @dataclass(frozen=True)
@@ -195,14 +201,26 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader)
     highlevel = _rosbags()
     if not path.exists():
         raise LegFkError(f"{path}: no such file or directory")
-    if path.is_dir() and not any(child.suffix in (".db3", ".mcap") for child in path.iterdir()):
-        raise LegFkError(f"{path}: a directory without a ROS 2 bag (no .db3 or .mcap file, no metadata.yaml)")
+    opened = _storage_file(path) if path.is_dir() else path
     try:
-        reader = highlevel.AnyReader([path])
+        reader = highlevel.AnyReader([opened])
         reader.open()
     except Exception as error:  # rosbags raises several kinds for unreadable files
         raise LegFkError(f"{path}: cannot open as a ROS bag: {_one_line(error)}") from None
     return reader
+
+
+def _storage_file(directory: Path) -> Path:
+    """What to open for a bag directory: itself when it has ``metadata.yaml``, else its one
+    storage file (``.mcap`` or ``.db3``)."""
+    if (directory / "metadata.yaml").exists():
+        return directory
+    storage = sorted(child for child in directory.iterdir() if child.suffix in (".db3", ".mcap"))
+    if not storage:
+        raise LegFkError(f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file)")
+    if len(storage) > 1:
+        raise LegFkError(f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: {', '.join(p.name for p in storage)}")
+    return storage[0]
 
 
 def _one_line(error: BaseException) -> str:
@@ -356,89 +374,162 @@ def iter_foot_blocks(
     reader, joint_states = recording.reader, recording.joint_states
     tracker = FootTracker(recording.quadruped)
     recording.counts = {"tracker": tracker}
-    decoder = JointStateDecoder(ros1=recording.ros1)
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
     bar = _progress_bar(total, progress)
-    pending = _Pending()
-    last_bag_time = None
-    messages = reader.messages(connections=connections)
+    batch = _Batch(recording, tracker, JointStateDecoder(ros1=recording.ros1))
+    read = shown = 0
     try:
-        while True:
-            try:
-                item = next(messages, None)
-            except Exception as error:  # noqa: BLE001 (rosbags: truncated/corrupt storage)
-                recording.stopped = f"cannot read past bag time {last_bag_time} ns: {_one_line(error)}"
-                break
-            if item is None:
-                break
-            connection, bag_time, raw = item
-            last_bag_time = bag_time
-            if bar is not None:
-                bar.update()
+        for connection, bag_time, raw in _guarded(recording, _raw_messages(reader, connections)):
+            read += 1
             if on_message is not None:
                 on_message(connection, bag_time, raw)
-            if connection is not joint_states:
-                continue
-            try:
-                wire = decoder.decode(raw)
-            except WireError as error:
-                recording.stopped = f"JointState at bag time {bag_time} ns: {error}"
-                break
-            if not pending.accepts(wire):
-                yield from _finish(recording, tracker, pending)
-                pending = _Pending()
-            pending.add(wire, decoder.names, bag_time)
-            if pending.count >= BLOCK_MESSAGES:
-                yield from _finish(recording, tracker, pending)
-                pending = _Pending()
-        yield from _finish(recording, tracker, pending)
+                if connection is not joint_states:
+                    continue
+            if batch.raws and (len(raw) != batch.length or len(batch.raws) >= BLOCK_MESSAGES):
+                if bar is not None:
+                    bar.update(read - shown)
+                    shown = read
+                yield from batch.blocks()
+            batch.add(raw, bag_time)
+        yield from batch.blocks()
+    except _Corrupt as error:
+        recording.stopped = str(error)
     finally:
         if bar is not None:
+            bar.update(read - shown)
             bar.close()
+
+
+def _raw_messages(reader, connections: list) -> Iterator[tuple[object, int, bytes]]:  # noqa: ANN001
+    """(connection, bag time [ns], raw bytes) in bag order; a single bag's reader directly (no
+    merge of several)."""
+    if len(reader.readers) == 1:
+        return reader.readers[0].messages(connections=connections)
+    return reader.messages(connections=connections)
+
+
+def _guarded(recording: Recording, messages: Iterator[tuple[object, int, bytes]]) -> Iterator[tuple[object, int, bytes]]:
+    """``messages`` until the storage cannot be read further (truncated, corrupt): then
+    ``recording.stopped`` says where and why, and the iteration ends."""
+    bag_time = None
+    try:
+        for item in messages:
+            bag_time = item[1]
+            yield item
+    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for broken storage)
+        recording.stopped = f"cannot read past bag time {bag_time} ns: {_one_line(error)}"
+
+
+class _Corrupt(Exception):
+    """A JointState message that cannot be decoded; the pass stops there."""
+
+
+class _Batch:
+    """Consecutive JointState messages of one length, as raw bytes. A steady stream (same name
+    list, lengths and layout, little-endian CDR) is decoded with numpy for the whole batch;
+    anything else message by message."""
+
+    def __init__(self, recording: Recording, tracker: FootTracker, decoder: JointStateDecoder) -> None:
+        self.recording, self.tracker, self.decoder = recording, tracker, decoder
+        self.raws: list[bytes] = []
+        self.bag_times: list[int] = []
+        self.length = -1
+
+    def add(self, raw: bytes, bag_time: int) -> None:
+        if not self.raws:
+            self.length = len(raw)
+        self.raws.append(raw)
+        self.bag_times.append(bag_time)
+
+    def blocks(self) -> Iterator[FootBlock]:
+        """The rows of the batch's messages; empties the batch. :class:`_Corrupt` after the rows
+        before a message that cannot be decoded."""
+        raws, bag_times = self.raws, self.bag_times
+        self.raws, self.bag_times = [], []
+        if not raws:
+            return
+        arrays = None if self.recording.ros1 else self._vectorised(raws, bag_times)
+        if arrays is not None:
+            yield from _finish(self.recording, self.tracker, self.decoder.names, *arrays)
+            return
+        yield from self._one_by_one(raws, bag_times)
+
+    def _vectorised(self, raws: list[bytes], bag_times: list[int]):  # noqa: ANN202 (tuple of arrays or None)
+        layout = cdr_layout(bytes(raws[0]))
+        if layout is None:
+            return None
+        matrix = np.frombuffer(b"".join(raws), dtype=np.uint8).reshape(len(raws), self.length)
+        template = matrix[0, layout.fixed]
+        if not (matrix[:, layout.fixed] == template).all():
+            return None
+        self.decoder.fields(raws[0])  # the names, for the rules (and the next message's check)
+        stamps = (np.ascontiguousarray(matrix[:, 4:8]).view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
+                  + np.ascontiguousarray(matrix[:, 8:12]).view("<u4")[:, 0])
+        bag_times_ns = np.array(bag_times, dtype=np.int64)
+        stamps = np.where(stamps == 0, bag_times_ns, stamps)
+        positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
+        velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
+        return stamps, bag_times_ns, positions, velocities
+
+    def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
+        fields = self.decoder.fields
+        pending = _Pending()
+        for raw, bag_time in zip(raws, bag_times):
+            try:
+                stamp, changed, order, positions, velocities = fields(raw)
+            except WireError as error:
+                yield from pending.finish(self)
+                raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
+            if pending.count and (changed or order != pending.order or len(positions) != pending.position_bytes
+                                  or len(velocities) != pending.velocity_bytes):
+                yield from pending.finish(self)
+                pending = _Pending()
+            if not pending.count:
+                pending.start(self.decoder.names, order, len(positions), len(velocities))
+            pending.count += 1
+            pending.stamps.append(stamp or bag_time)
+            pending.bag_times.append(bag_time)
+            pending.positions.append(positions)
+            pending.velocities.append(velocities)
+        yield from pending.finish(self)
 
 
 class _Pending:
     """Consecutive messages with one name list and the same array lengths, kept as bytes."""
 
     def __init__(self) -> None:
-        self.names: list[str] | None = None
-        self.lengths = (-1, -1)
+        self.names: list[str] = []
+        self.order = "<"
+        self.position_bytes = self.velocity_bytes = 0
         self.count = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
         self.velocities: list[bytes] = []
-        self.dtype = None
 
-    def accepts(self, wire) -> bool:  # noqa: ANN001 (WireJointState)
-        return self.count == 0 or (
-            wire.names is None
-            and (len(wire.positions), len(wire.velocities)) == self.lengths
-            and wire.positions.dtype == self.dtype
+    def start(self, names: list[str], order: str, position_bytes: int, velocity_bytes: int) -> None:
+        self.names, self.order = names, order
+        self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
+
+    def finish(self, batch: _Batch) -> Iterator[FootBlock]:
+        """The rows of these messages (none if there are none)."""
+        if not self.count:
+            return
+        dtype = np.dtype(f"{self.order}f8")
+        positions = np.frombuffer(b"".join(self.positions), dtype).reshape(self.count, self.position_bytes // 8)
+        velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(self.count, self.velocity_bytes // 8)
+        yield from _finish(
+            batch.recording, batch.tracker, self.names, np.array(self.stamps, dtype=np.int64),
+            np.array(self.bag_times, dtype=np.int64), positions.astype(np.float64), velocities.astype(np.float64),
         )
 
-    def add(self, wire, names: list[str], bag_time: int) -> None:  # noqa: ANN001
-        if self.count == 0:
-            self.names, self.lengths, self.dtype = names, (len(wire.positions), len(wire.velocities)), wire.positions.dtype
-        self.count += 1
-        self.stamps.append(wire.stamp_ns or bag_time)
-        self.bag_times.append(bag_time)
-        self.positions.append(wire.positions.tobytes())
-        self.velocities.append(wire.velocities.tobytes())
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        positions = np.frombuffer(b"".join(self.positions), self.dtype).reshape(self.count, self.lengths[0])
-        velocities = np.frombuffer(b"".join(self.velocities), self.dtype).reshape(self.count, self.lengths[1])
-        return positions, velocities
-
-
-def _finish(recording: Recording, tracker: FootTracker, pending: _Pending) -> Iterator[FootBlock]:
-    """Run the rules over a pending run of messages and yield its rows (if any)."""
-    if pending.count == 0:
-        return
-    positions, velocities = pending.arrays()
-    result = tracker.update_block(pending.names, positions, velocities)
+def _finish(recording: Recording, tracker: FootTracker, names: list[str], stamps: np.ndarray, bag_times: np.ndarray,
+            positions: np.ndarray, velocities: np.ndarray) -> Iterator[FootBlock]:
+    """Run the rules over consecutive messages with one name list and yield their rows (if any).
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length)."""
+    result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
     feet = feet_of(recording.quadruped, angles)
     rows = ~np.isnan(feet).all(axis=(1, 2))
@@ -448,8 +539,8 @@ def _finish(recording: Recording, tracker: FootTracker, pending: _Pending) -> It
     rates = result.rates[result.accepted][rows]
     foot_velocities = velocities_of(recording.quadruped, angles[rows], rates)
     recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
-    stamps = np.array(pending.stamps, dtype=np.int64)[result.accepted][rows]
-    bag_times = np.array(pending.bag_times, dtype=np.int64)[result.accepted][rows]
+    stamps = stamps[result.accepted][rows]
+    bag_times = bag_times[result.accepted][rows]
     world = None
     if recording.base_pose is not None:
         origin, rotation = recording.base_pose.at(stamps)

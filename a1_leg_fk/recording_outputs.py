@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from a1_leg_fk.csv_text import format_rows
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.recording import (
     BlockStats,
@@ -147,53 +148,60 @@ def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices
 
 class CsvWriter:
     """Rows ``stamp_ns, bag_time_ns, FR_x .. RL_z[, FR_vx .. RL_vz][, FR_wx .. RL_wz]``; values
-    written so that ``float(text)`` gives the same float back; empty cells for NaN. Velocity
-    columns appear only when the recording has velocities: rows are written with them, and they
-    are dropped in a final pass over the file if none turned up."""
+    written so that ``float(text)`` gives the same float back (:mod:`a1_leg_fk.csv_text`); empty
+    cells for NaN. The velocity columns are there when the recording has foot velocities: decided
+    by the first block of rows; should velocities first turn up later, the rows written so far
+    get empty velocity cells (one pass over the file so far)."""
 
     def __init__(self, path: Path, recording: Recording) -> None:
         self.path = path
-        self.recording = recording
         self.world = recording.base_pose is not None
-        self.file = open(path, "w", encoding="ascii", newline="")
-        self.file.write(",".join(self._columns(True)) + "\n")
+        self.velocity_columns: bool | None = None  # not decided before the first rows
+        self.file = open(path, "wb")
 
-    def _columns(self, velocities: bool) -> list[str]:
-        return ["stamp_ns", "bag_time_ns", *POSITION_COLUMNS, *(VELOCITY_COLUMNS if velocities else []), *(WORLD_COLUMNS if self.world else [])]
+    def _header(self) -> bytes:
+        columns = ["stamp_ns", "bag_time_ns", *POSITION_COLUMNS, *(VELOCITY_COLUMNS if self.velocity_columns else []),
+                   *(WORLD_COLUMNS if self.world else [])]
+        return (",".join(columns) + "\n").encode()
 
     def write(self, block: FootBlock) -> None:
         rows = len(block.stamps_ns)
-        parts = [block.positions.reshape(rows, -1), block.velocities.reshape(rows, -1)]
+        velocities = bool(np.isfinite(block.velocities).any())
+        if self.velocity_columns is None:
+            self.velocity_columns = velocities
+            self.file.write(self._header())
+        elif velocities and not self.velocity_columns:
+            self._add_velocity_columns()
+        parts = [block.positions.reshape(rows, -1)]
+        if self.velocity_columns:
+            parts.append(block.velocities.reshape(rows, -1))
         if block.world_positions is not None:
             parts.append(block.world_positions.reshape(rows, -1))
-        self.file.write(format_rows(block.stamps_ns, block.bag_times_ns, np.concatenate(parts, axis=1)))
+        self.file.write(format_rows(np.stack([block.stamps_ns, block.bag_times_ns], axis=1), np.concatenate(parts, axis=1)))
 
     def close(self) -> None:
+        if self.velocity_columns is None:  # no rows: the header alone
+            self.velocity_columns = False
+            self.file.write(self._header())
         self.file.close()
-        if not self.recording.has_velocities:
-            self._drop_velocity_columns()
 
     def abort(self) -> None:
         self.file.close()
 
-    def _drop_velocity_columns(self) -> None:
-        first, last = 2 + len(POSITION_COLUMNS), 2 + len(POSITION_COLUMNS) + len(VELOCITY_COLUMNS)
-        narrow = self.path.with_name(self.path.name + ".narrow")
-        with open(self.path, encoding="ascii", newline="") as wide, open(narrow, "w", encoding="ascii", newline="") as out:
-            next(wide)
-            out.write(",".join(self._columns(False)) + "\n")
-            for line in wide:
-                cells = line.rstrip("\n").split(",")
-                out.write(",".join(cells[:first] + cells[last:]) + "\n")
-        os.replace(narrow, self.path)
-
-
-def format_rows(stamps: np.ndarray, bag_times: np.ndarray, values: np.ndarray) -> str:
-    """CSV text for rows of two integer columns and float columns; NaN -> empty cell."""
-    cells = values.tolist()
-    template = "%d,%d," + ",".join(["%r"] * values.shape[1]) + "\n"
-    text = "".join([template % (stamp, bag_time, *row) for stamp, bag_time, row in zip(stamps.tolist(), bag_times.tolist(), cells)])
-    return text.replace("nan", "")
+    def _add_velocity_columns(self) -> None:
+        """Rewrite the rows so far with empty velocity cells after the position cells."""
+        self.file.close()
+        self.velocity_columns = True
+        first, empty = 2 + len(POSITION_COLUMNS), [b""] * len(VELOCITY_COLUMNS)
+        wide = self.path.with_name(self.path.name + ".wide")
+        with open(self.path, "rb") as narrow, open(wide, "wb") as out:
+            narrow.readline()
+            out.write(self._header())
+            for line in narrow:
+                cells = line.rstrip(b"\n").split(b",")
+                out.write(b",".join(cells[:first] + empty + cells[first:]) + b"\n")
+        os.replace(wide, self.path)
+        self.file = open(self.path, "ab")
 
 
 # --- the output bag ---------------------------------------------------------------------------------

@@ -170,3 +170,27 @@ def test_installed_script(tmp_path: Path) -> None:
     result = subprocess.run([str(script), "bag", str(tmp_path / "nope"), "--csv", str(tmp_path / "g.csv")], capture_output=True, text=True, timeout=60)
     assert result.returncode == 2 and result.stderr.count("\n") == 1 and "no such file" in result.stderr
     shutil.rmtree(bag)
+
+
+def test_velocities_that_start_late_get_their_columns(tmp_path: Path) -> None:
+    """The first block of rows has no velocities, a later one has: earlier rows get empty cells."""
+    spec = BagSpec()
+    rng = np.random.default_rng(9)
+    angles, rates = [], []
+    for index in range(6000):  # more than one block (4096 messages)
+        q = rng.uniform(-1, 1, 12).tolist()
+        dq = rng.normal(size=12).tolist() if index >= 5000 else []
+        angles.append(q)
+        rates.append(dq)
+        spec.add_joint_state("/joint_states", T0 + index * 1_000_000, JointStateMsg(T0 + index * 1_000_000, NAMES, q, dq))
+    bag = write_bag(tmp_path / "late", spec, "mcap")
+    out = tmp_path / "feet.csv"
+    assert cli.main(["bag", str(bag), "--csv", str(out), "--quiet"]) == 0
+    rows = list(csv.reader(out.open()))
+    assert len(rows[0]) == 26 and all(len(row) == 26 for row in rows)
+    for row, q, dq in zip(rows[1:], angles, rates):
+        velocity = row[14:]
+        if dq:
+            assert np.abs(np.array([float(v) for v in velocity]).reshape(4, 3) - A1.foot_velocities(q, dq)).max() <= 1e-12
+        else:
+            assert velocity == [""] * 12

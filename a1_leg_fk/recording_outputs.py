@@ -38,20 +38,30 @@ INFINITE_DURATION = (9223372036, 854775807)  # rosbag2 Jazzy's spelling of an in
 
 @dataclass
 class _Target:
-    """One output: its final path and the temporary one it is written under."""
+    """One output: its final path, and the temporary one it is written under: the same name in a
+    hidden folder beside it (so a bag's storage file and metadata carry the final name)."""
 
     final: Path
 
     @property
+    def folder(self) -> Path:
+        return self.final.with_name(f".{self.final.name}.partial-{os.getpid()}")
+
+    @property
     def temporary(self) -> Path:
-        return self.final.with_name(f".{self.final.stem}.partial-{os.getpid()}{self.final.suffix}")
+        return self.folder / self.final.name
+
+    def prepare(self) -> None:
+        self.discard()
+        self.folder.mkdir()
 
     def discard(self) -> None:
-        _remove(self.temporary)
+        _remove(self.folder)
 
     def commit(self) -> None:
         _remove(self.final)
         os.replace(self.temporary, self.final)
+        self.folder.rmdir()
 
 
 def _remove(path: Path) -> None:
@@ -112,6 +122,8 @@ def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices
     recording = open_recording(source, **choices)
     writers: list = []
     try:
+        for target in outputs.all():
+            target.prepare()
         if outputs.csv is not None:
             writers.append(CsvWriter(outputs.csv.temporary, recording))
         if outputs.bag is not None:

@@ -16,7 +16,7 @@ from rosbags.highlevel import AnyReader
 
 from a1_leg_fk import cli
 from a1_leg_fk.kinematics import Quadruped
-from bag_factory import T, BagSpec, JointStateMsg, write_bag
+from bag_factory import T, BagSpec, JointStateMsg, header, write_bag
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
@@ -194,3 +194,53 @@ def test_velocities_that_start_late_get_their_columns(tmp_path: Path) -> None:
             assert np.abs(np.array([float(v) for v in velocity]).reshape(4, 3) - A1.foot_velocities(q, dq)).max() <= 1e-12
         else:
             assert velocity == [""] * 12
+
+
+def test_interrupted_run_leaves_nothing(tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch) -> None:
+    from a1_leg_fk import recording_outputs
+
+    bag, _ = steady_bag(tmp_path / "in", count=5000)
+    written = []
+
+    def interrupt(self, block) -> None:  # noqa: ANN001
+        written.append(len(block.stamps_ns))
+        if len(written) == 2:
+            raise KeyboardInterrupt  # as Ctrl-C in the middle of the run
+        original(self, block)
+
+    original = recording_outputs.CsvWriter.write
+    monkeypatch.setattr(recording_outputs.CsvWriter, "write", interrupt)
+    out, out_bag = tmp_path / "feet.csv", tmp_path / "feet_bag"
+    assert cli.main(["bag", str(bag), "--csv", str(out), "--output-bag", str(out_bag), "--quiet"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in"]  # no output, no temporary folder
+
+
+def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
+    spec = BagSpec()
+    rng = np.random.default_rng(21)
+    angles = []
+    for index in range(20):
+        stamp = T0 + index * 10_000_000
+        q = rng.uniform(-1, 1, 12).tolist()
+        angles.append(q)
+        spec.add_joint_state("/joint_states", stamp + 1, JointStateMsg(stamp, NAMES, q))
+        pose = T["geometry_msgs/msg/Pose"](T["geometry_msgs/msg/Point"](1.0 + index, 2.0, 0.5), T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 1.0, 0.0))
+        spec.add("/pose", "geometry_msgs/msg/PoseStamped", stamp, T["geometry_msgs/msg/PoseStamped"](header(stamp, "map"), pose))
+    bag = write_bag(tmp_path / "in", spec, "sqlite3")
+    out, out_bag = tmp_path / "feet.csv", tmp_path / "feet_bag"
+    assert cli.main(["bag", str(bag), "--base-pose", "/pose", "--csv", str(out), "--output-bag", str(out_bag), "--storage", "sqlite3", "--quiet"]) == 0
+    rows = list(csv.reader(out.open()))
+    assert rows[0][14:] == [f"{leg}_w{a}" for leg in LEGS for a in "xyz"] and len(rows) == 21
+    yaw_pi = np.diag([-1.0, -1.0, 1.0])  # the quaternion (0, 0, 1, 0): half a turn about z
+    for index, (row, q) in enumerate(zip(rows[1:], angles)):
+        want = np.array([1.0 + index, 2.0, 0.5]) + A1.fk(q) @ yaw_pi.T
+        assert np.abs(np.array([float(v) for v in row[14:]]).reshape(4, 3) - want).max() <= 1e-12
+    with AnyReader([out_bag]) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        assert topics == {**{f"/foot_positions/{leg}": "geometry_msgs/msg/PointStamped" for leg in LEGS},
+                          **{f"/foot_positions_world/{leg}": "geometry_msgs/msg/PointStamped" for leg in LEGS}}
+        connection = next(c for c in reader.connections if c.topic == "/foot_positions_world/RL")
+        messages = [reader.deserialize(raw, connection.msgtype) for _, _, raw in reader.messages([connection])]
+        assert {m.header.frame_id for m in messages} == {"map"} and len(messages) == 20
+        assert messages[3].point.x == float(rows[4][14 + 9]) and messages[3].point.z == float(rows[4][14 + 11])

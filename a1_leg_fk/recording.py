@@ -12,6 +12,8 @@ block by block (:func:`iter_foot_blocks`), so writers need memory independent of
 from __future__ import annotations
 
 import math
+import shutil
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,6 +25,7 @@ from a1_leg_fk.joint_state import FootTracker, REJECTIONS
 from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout
 from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.mcap_salvage import salvage
 from a1_leg_fk.robot_config import load_robot
 from a1_leg_fk.urdf import LegFkError
 
@@ -141,6 +144,7 @@ class Recording:
     ros1: bool
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
     stopped: str = ""
+    salvage_note: str = ""  # what was read of a truncated MCAP file
     counts: dict = field(default_factory=dict)
 
 
@@ -168,7 +172,7 @@ def open_recording(
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
     problem for bad input. Close with :func:`close_recording`."""
     path = Path(path)
-    reader = _open_reader(path)
+    reader, salvage_note = _open_reader(path)
     try:
         joint_states = _pick_topic(reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState")
         description, description_topic = (None, "") if urdf else _recorded_description(reader, joint_states)
@@ -186,18 +190,27 @@ def open_recording(
         if base_pose:
             pose_connection = _pick_topic(reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose")
             poses = BasePoses.read(reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s)
-        return Recording(reader, path, joint_states, robot.quadruped, source, poses, base_pose, not reader.is2)
+        return Recording(reader, path, joint_states, robot.quadruped, source, poses, base_pose, not reader.is2, salvage_note=salvage_note)
     except BaseException:
-        reader.close()
+        _close_reader(reader)
         raise
 
 
 def close_recording(recording: Recording) -> None:
-    """Close the bag."""
-    recording.reader.close()
+    """Close the bag (and remove the copy of a salvaged one)."""
+    _close_reader(recording.reader)
 
 
-def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader)
+def _close_reader(reader) -> None:  # noqa: ANN001
+    reader.close()
+    folder = getattr(reader, "salvage_folder", None)
+    if folder is not None:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage note)
+    """An open reader of the bag at ``path``, and ``""`` or a note on what was salvaged of a
+    truncated MCAP file (read from a copy of its complete records)."""
     highlevel = _rosbags()
     if not path.exists():
         raise LegFkError(f"{path}: no such file or directory")
@@ -205,9 +218,33 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader)
     try:
         reader = highlevel.AnyReader([opened])
         reader.open()
+        return reader, ""
     except Exception as error:  # rosbags raises several kinds for unreadable files
-        raise LegFkError(f"{path}: cannot open as a ROS bag: {_one_line(error)}") from None
-    return reader
+        problem = f"{path}: cannot open as a ROS bag: {_one_line(error)}"
+    mcap = opened if opened.suffix == ".mcap" else next(iter(sorted(opened.glob("*.mcap"))), None) if opened.is_dir() else None
+    salvaged = _salvaged_reader(highlevel, mcap) if mcap is not None else None
+    if salvaged is None:
+        raise LegFkError(problem)
+    return salvaged
+
+
+def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
+    """A reader of the complete records of a truncated MCAP file (copied to a temporary folder,
+    removed when the reader closes), or None."""
+    folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_salvage_"))
+    try:
+        kept = salvage(mcap, folder / mcap.name)
+        if kept is None:
+            raise LegFkError("nothing to salvage")
+        reader = highlevel.AnyReader([kept.path])
+        reader.open()
+    except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
+        shutil.rmtree(folder, ignore_errors=True)
+        return None
+    reader.salvage_folder = folder
+    note = (f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
+            f"{kept.size:,} bytes (the complete records)")
+    return reader, note
 
 
 def _storage_file(directory: Path) -> Path:
@@ -591,7 +628,8 @@ def summary_of(recording: Recording, rows: int, rows_without_pose: int, first: i
     return RecordingSummary(
         str(recording.path), recording.model_source, recording.joint_states.topic, recording.base_pose_topic,
         counts.messages, dict(counts.outcomes), counts.non_finite_joints, tuple(sorted(counts.unknown_names)),
-        rows, rows_without_pose, first, last, wall_time_s, recording.stopped,
+        rows, rows_without_pose, first, last, wall_time_s,
+        "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
     )
 
 

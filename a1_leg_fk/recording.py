@@ -23,7 +23,7 @@ import numpy as np
 
 from a1_leg_fk.joint_state import FootTracker, REJECTIONS
 from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout
-from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
+from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.mcap_salvage import salvage
 from a1_leg_fk.robot_config import load_robot
@@ -720,5 +720,5 @@ def _collected(blocks: list[FootBlock], recording: Recording, summary: Recording
 
 __all__ = [
     "FootTrajectories", "RecordingSummary", "FootBlock", "read_foot_trajectories", "open_recording",
-    "iter_foot_blocks", "close_recording", "BasePoses", "JOINT_COUNT",
+    "iter_foot_blocks", "close_recording", "BasePoses",
 ]

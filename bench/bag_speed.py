@@ -121,7 +121,7 @@ def speed(options: argparse.Namespace, folder: Path) -> None:
         ("(d) a1-leg-fk bag --output-bag (MCAP)", timed(command, ["bag", str(bag), "--output-bag", str(folder / "feet_bag"), "--quiet", "--force"])),
     ]
     peer_rate = options.messages / rows[1][1]
-    print(f"\n| | messages/s | time [s] | ratio to (b) |\n| --- | --- | --- | --- |")
+    print("\n| | messages/s | time [s] | ratio to (b) |\n| --- | --- | --- | --- |")
     for name, seconds in rows:
         rate = options.messages / seconds
         print(f"| {name} | {rate:,.0f} | {seconds:.2f} | {rate / peer_rate:.2f}x |")

@@ -15,7 +15,7 @@ import math
 import shutil
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator, Sequence
 
@@ -145,7 +145,7 @@ class Recording:
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
     stopped: str = ""
     salvage_note: str = ""  # what was read of a truncated MCAP file
-    counts: dict = field(default_factory=dict)
+    tracker: FootTracker | None = None  # the rules' state and counts of the current pass
 
 
 # --- opening --------------------------------------------------------------------------------------
@@ -221,8 +221,8 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage no
         return reader, ""
     except Exception as error:  # rosbags raises several kinds for unreadable files
         problem = f"{path}: cannot open as a ROS bag: {_one_line(error)}"
-    mcap = opened if opened.suffix == ".mcap" else next(iter(sorted(opened.glob("*.mcap"))), None) if opened.is_dir() else None
-    salvaged = _salvaged_reader(highlevel, mcap) if mcap is not None else None
+    mcaps = sorted(opened.glob("*.mcap")) if opened.is_dir() else [opened] if opened.suffix == ".mcap" else []
+    salvaged = _salvaged_reader(highlevel, mcaps[0]) if len(mcaps) == 1 else None
     if salvaged is None:
         raise LegFkError(problem)
     return salvaged
@@ -234,11 +234,12 @@ def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
     folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_salvage_"))
     try:
         kept = salvage(mcap, folder / mcap.name)
-        if kept is None:
-            raise LegFkError("nothing to salvage")
-        reader = highlevel.AnyReader([kept.path])
-        reader.open()
+        reader = highlevel.AnyReader([kept.path]) if kept is not None else None
+        if reader is not None:
+            reader.open()
     except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
+        reader = None
+    if reader is None:
         shutil.rmtree(folder, ignore_errors=True)
         return None
     reader.salvage_folder = folder
@@ -409,8 +410,7 @@ def iter_foot_blocks(
     ``recording.stopped`` says where and why.
     """
     reader, joint_states = recording.reader, recording.joint_states
-    tracker = FootTracker(recording.quadruped)
-    recording.counts = {"tracker": tracker}
+    tracker = recording.tracker = FootTracker(recording.quadruped)
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
     bar = _progress_bar(total, progress)
@@ -623,8 +623,7 @@ def _progress_bar(total: int, enabled: bool):  # noqa: ANN202 (tqdm or None)
 
 def summary_of(recording: Recording, rows: int, rows_without_pose: int, first: int | None, last: int | None, wall_time_s: float) -> RecordingSummary:
     """The summary of a finished pass."""
-    tracker: FootTracker = recording.counts["tracker"]
-    counts = tracker.counts
+    counts = recording.tracker.counts
     return RecordingSummary(
         str(recording.path), recording.model_source, recording.joint_states.topic, recording.base_pose_topic,
         counts.messages, dict(counts.outcomes), counts.non_finite_joints, tuple(sorted(counts.unknown_names)),

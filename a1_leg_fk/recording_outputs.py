@@ -250,7 +250,7 @@ class BagWriter:
 
     def write(self, block: FootBlock) -> None:
         groups = [("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)]
-        if self.recording.has_velocities or np.isfinite(block.velocities).any():
+        if self.recording.has_velocities:  # already set by this block if it has any
             groups.append(("/foot_velocities", "geometry_msgs/msg/Vector3Stamped", self.base_frame, block.velocities))
         if block.world_positions is not None:
             groups.append(("/foot_positions_world", "geometry_msgs/msg/PointStamped", self.world_frame, block.world_positions))

@@ -65,15 +65,11 @@ def _put_integers(out: np.ndarray, values: np.ndarray) -> None:
 
 
 def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
+    """Every lane is formatted as if in the fast range (others as 1.0), then the lanes outside
+    it are overwritten: cheaper than selecting the fast lanes when nearly all are."""
     magnitude = np.abs(values)
     fast = (magnitude >= _LOW) & (magnitude < _HIGH)
-    for index in np.flatnonzero(~fast & ~np.isnan(values)):
-        _put_text(out[index], repr(float(values[index])))
-    if not fast.any():
-        return
-    every = bool(fast.all())
-    fast_out = out if every else out[fast]
-    x = magnitude if every else magnitude[fast]
+    x = np.where(fast, magnitude, 1.0)
     exponent = np.floor(np.log10(x)).astype(np.int64)
     digits = _scaled(x, exponent)
     # log10 can be one off next to a power of ten: fix the exponent and scale again
@@ -83,10 +79,10 @@ def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
             break
         exponent = exponent - low + high
         digits = _scaled(x, exponent)
-    fast_out[:, 0] = np.where(values[fast] < 0, ord("-"), SPACE)
+    out[:, 0] = np.where(values < 0, ord("-"), SPACE)
     first, rest = np.divmod(digits, 10 ** (_DIGITS - 1))
-    fast_out[:, 1] = ZERO + first
-    fast_out[:, 2] = ord(".")
+    out[:, 1] = ZERO + first
+    out[:, 2] = ord(".")
     high, low = np.divmod(rest, 10**8)  # the 16 digits after the point as 4 groups of 4
     groups = np.empty((len(x), 4), dtype=np.intp)
     for half, column in ((high, 0), (low, 2)):
@@ -95,12 +91,15 @@ def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
         groups[:, column], groups[:, column + 1] = upper, half - upper * 10_000.0
     fraction = _GROUP_TEXT.take(groups).view(np.uint8)
     keep = np.maximum(_DIGITS - 1 - _trailing_zeros(groups), 1)
-    fast_out[:, 3 : 3 + _DIGITS - 1] = np.where(_COLUMNS < keep[:, None], fraction, SPACE)
-    fast_out[:, 19] = ord("e")
-    fast_out[:, 20] = np.where(exponent < 0, ord("-"), ord("+"))
-    fast_out[:, 21:23] = _PAIR_TEXT.take(np.abs(exponent)).view(np.uint8).reshape(-1, 2)
-    if not every:
-        out[fast] = fast_out
+    out[:, 3 : 3 + _DIGITS - 1] = np.where(_COLUMNS < keep[:, None], fraction, SPACE)
+    out[:, 19] = ord("e")
+    out[:, 20] = np.where(exponent < 0, ord("-"), ord("+"))
+    out[:, 21:23] = _PAIR_TEXT.take(np.abs(exponent)).view(np.uint8).reshape(-1, 2)
+    if not fast.all():
+        nan = np.isnan(values)
+        out[nan] = SPACE
+        for index in np.flatnonzero(~fast & ~nan):
+            _put_text(out[index], repr(float(values[index])))
 
 
 def _scaled(x: np.ndarray, exponent: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from rosbags.highlevel import AnyReader
 
 from a1_leg_fk import cli
 from a1_leg_fk.kinematics import Quadruped
-from bag_factory import T, BagSpec, JointStateMsg, header, write_bag
+from bag_factory import TYPESTORE, T, BagSpec, JointStateMsg, header, write_bag
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
@@ -246,3 +246,26 @@ def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
         messages = [reader.deserialize(raw, connection.msgtype) for _, _, raw in reader.messages([connection])]
         assert {m.header.frame_id for m in messages} == {"map"} and len(messages) == 20
         assert messages[3].point.x == float(rows[4][14 + 9]) and messages[3].point.z == float(rows[4][14 + 11])
+
+
+def test_output_mcap_read_by_the_reference_mcap_library(tmp_path: Path) -> None:
+    """The format's own reader (CRCs checked) sees a ros2 profile, ros2msg schemas, CDR messages
+    whose bytes decode (rosbags) to the feet, and a summary that counts them."""
+    from mcap.reader import make_reader
+
+    bag, angles = steady_bag(tmp_path / "in", count=25)
+    out = tmp_path / "feet_bag"
+    assert cli.main(["bag", str(bag), "--output-bag", str(out), "--quiet"]) == 0
+    with (out / "feet_bag.mcap").open("rb") as stream:
+        reader = make_reader(stream, validate_crcs=True)
+        assert reader.get_header().profile == "ros2"
+        summary = reader.get_summary()
+        assert summary.statistics.message_count == 8 * 25
+        seen = {}
+        for schema, channel, message in reader.iter_messages(topics=["/foot_positions/RR"]):
+            assert (schema.name, schema.encoding, channel.message_encoding) == ("geometry_msgs/msg/PointStamped", "ros2msg", "cdr")
+            point = TYPESTORE.deserialize_cdr(message.data, schema.name).point
+            seen[message.log_time] = (point.x, point.y, point.z)
+    assert len(seen) == 25
+    for index, q in enumerate(angles):
+        assert np.abs(np.array(seen[T0 + index * 1_000_000 + 9]) - A1.fk(q)[2]).max() <= 1e-12

@@ -47,9 +47,11 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
     velocities = data.draw(st.lists(finite, min_size=0, max_size=6))
     message = joint_state(JointStateMsg(stamp * 1_000_000_000 + 7, names, positions, velocities, frame))
     cdr = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState")
+    big_endian = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState", little_endian=False)
     ros1 = TYPESTORE.cdr_to_ros1(cdr, "sensor_msgs/msg/JointState")
     for raw, decoder, reference in (
         (cdr, JointStateDecoder(), TYPESTORE.deserialize_cdr(cdr, "sensor_msgs/msg/JointState")),
+        (big_endian, JointStateDecoder(), TYPESTORE.deserialize_cdr(big_endian, "sensor_msgs/msg/JointState")),
         (ros1, JointStateDecoder(ros1=True), ROS1_TYPESTORE.deserialize_ros1(ros1, "sensor_msgs/msg/JointState")),
     ):
         for repeat in range(2):  # the second time the names come from the cache
@@ -254,3 +256,25 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
             assert np.isnan(got).all()
         else:
             assert np.abs(got - want).max() <= 1e-12
+
+
+@pytest.mark.parametrize("kind", ["mcap", "ros1"])
+def test_same_length_messages_with_other_names_are_not_mixed_up(tmp_path: Path, kind: str) -> None:
+    """Messages of one byte length whose name lists differ (FR and FL swapped) stay apart, and
+    the feet follow the names (against PyBullet)."""
+    rng = np.random.default_rng(17)
+    swapped = NAMES[3:6] + NAMES[0:3] + NAMES[6:]
+    spec, angles = BagSpec(), []
+    for index in range(300):
+        q = rng.uniform(-0.9, 0.9, 12).tolist()
+        angles.append(q)
+        names = swapped if (index // 7) % 2 else NAMES
+        positions = [q[NAMES.index(name)] for name in names]
+        spec.add_joint_state("/joint_states", T0 + index * 1_000_000, JointStateMsg(T0 + index * 1_000_000, names, positions))
+    path = write_bag(bag_path(tmp_path, kind), spec, kind)
+    result = read_foot_trajectories(path)
+    feet = [leg.chain.foot_link for leg in A1.legs]
+    with PyBulletRobot(pybullet_data.getDataPath() + "/a1/a1.urdf") as robot:
+        for got, q in zip(result.positions, angles, strict=True):
+            assert np.abs(got - A1.fk(q)).max() <= 1e-12
+            assert np.abs(got - robot.feet(NAMES, feet, q)).max() <= 1e-7

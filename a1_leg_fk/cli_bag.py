@@ -90,6 +90,7 @@ def _non_negative(text: str) -> float:
 
 def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
     """``a1-leg-fk bag``: see the module docstring for exit codes."""
+    from a1_leg_fk.plots import pyplot
     from a1_leg_fk.recording_outputs import Outputs, convert
 
     del ros_args  # no ROS here
@@ -98,12 +99,14 @@ def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
             raise LegFkError("nothing to write: give --csv FILE, --output-bag PATH and/or --plot FILE.png")
         if options.copy_input and not options.output_bag:
             raise LegFkError("--copy-input needs --output-bag")
+        if options.plot:
+            pyplot()  # before the work: MissingMatplotlib says how to install it
         outputs = Outputs.checked(
             Path(options.input), csv=options.csv, bag=options.output_bag, plot=options.plot,
             storage=options.storage, copy_input=options.copy_input, force=options.force,
         )
         summary = convert(Path(options.input), outputs, progress=show_progress(options), **recording_options(options))
-    except LegFkError as error:
+    except (LegFkError, OSError) as error:  # OSError: an output folder not writable, a full disk
         print(f"a1-leg-fk bag: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

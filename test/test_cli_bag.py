@@ -4,6 +4,7 @@ stderr, exit 2, nothing under the final output name)."""
 from __future__ import annotations
 
 import csv
+import os
 import shutil
 import sqlite3
 import subprocess
@@ -269,3 +270,17 @@ def test_output_mcap_read_by_the_reference_mcap_library(tmp_path: Path) -> None:
     assert len(seen) == 25
     for index, q in enumerate(angles):
         assert np.abs(np.array(seen[T0 + index * 1_000_000 + 9]) - A1.fk(q)[2]).max() <= 1e-12
+
+
+def test_unwritable_output_folder_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    bag, _ = steady_bag(tmp_path / "in", count=5)
+    expect_bad(capsys, ["bag", str(bag), "--csv", str(tmp_path / "no_such_folder" / "feet.csv")], "folder", [])
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        if os.access(locked, os.W_OK):
+            pytest.skip("running as root: permissions are not enforced")
+        expect_bad(capsys, ["bag", str(bag), "--csv", str(locked / "feet.csv")], "Permission denied", [locked / "feet.csv"])
+    finally:
+        locked.chmod(0o700)

@@ -232,7 +232,8 @@ def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
         spec.add("/pose", "geometry_msgs/msg/PoseStamped", stamp, T["geometry_msgs/msg/PoseStamped"](header(stamp, "map"), pose))
     bag = write_bag(tmp_path / "in", spec, "sqlite3")
     out, out_bag = tmp_path / "feet.csv", tmp_path / "feet_bag"
-    assert cli.main(["bag", str(bag), "--base-pose", "/pose", "--csv", str(out), "--output-bag", str(out_bag), "--storage", "sqlite3", "--quiet"]) == 0
+    assert cli.main(["bag", str(bag), "--base-pose", "/pose", "--csv", str(out), "--output-bag", str(out_bag), "--storage", "sqlite3",
+                     "--copy-input", "--quiet"]) == 0
     rows = list(csv.reader(out.open()))
     assert rows[0][14:] == [f"{leg}_w{a}" for leg in LEGS for a in "xyz"] and len(rows) == 21
     yaw_pi = np.diag([-1.0, -1.0, 1.0])  # the quaternion (0, 0, 1, 0): half a turn about z
@@ -242,7 +243,11 @@ def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
     with AnyReader([out_bag]) as reader:
         topics = {c.topic: c.msgtype for c in reader.connections}
         assert topics == {**{f"/foot_positions/{leg}": "geometry_msgs/msg/PointStamped" for leg in LEGS},
-                          **{f"/foot_positions_world/{leg}": "geometry_msgs/msg/PointStamped" for leg in LEGS}}
+                          **{f"/foot_positions_world/{leg}": "geometry_msgs/msg/PointStamped" for leg in LEGS},
+                          "/joint_states": "sensor_msgs/msg/JointState", "/pose": "geometry_msgs/msg/PoseStamped"}
+        copied = next(c for c in reader.connections if c.topic == "/pose")
+        poses = [reader.deserialize(raw, copied.msgtype) for _, _, raw in reader.messages([copied])]
+        assert [p.pose.position.x for p in poses] == [1.0 + index for index in range(20)]
         connection = next(c for c in reader.connections if c.topic == "/foot_positions_world/RL")
         messages = [reader.deserialize(raw, connection.msgtype) for _, _, raw in reader.messages([connection])]
         assert {m.header.frame_id for m in messages} == {"map"} and len(messages) == 20

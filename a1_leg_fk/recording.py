@@ -696,10 +696,12 @@ def read_foot_trajectories(
         summary = stats.summary(recording)
     finally:
         close_recording(recording)
-    return _collected(blocks, recording, summary)
+    return collected(blocks, recording, summary)
 
 
-def _collected(blocks: list[FootBlock], recording: Recording, summary: RecordingSummary) -> FootTrajectories:
+def collected(blocks: list[FootBlock], recording: Recording, summary: RecordingSummary) -> FootTrajectories:
+    """The blocks of one pass over ``recording`` as one :class:`FootTrajectories`."""
+
     def joined(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarray:
         parts = [getattr(block, name) for block in blocks]
         return np.concatenate(parts) if parts else np.empty((0, *shape), dtype)
@@ -719,5 +721,5 @@ def _collected(blocks: list[FootBlock], recording: Recording, summary: Recording
 
 __all__ = [
     "FootTrajectories", "RecordingSummary", "FootBlock", "read_foot_trajectories", "open_recording",
-    "iter_foot_blocks", "close_recording", "BasePoses",
+    "iter_foot_blocks", "close_recording", "collected", "BasePoses",
 ]

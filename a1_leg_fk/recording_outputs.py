@@ -21,7 +21,7 @@ from a1_leg_fk.recording import (
     FootBlock,
     Recording,
     RecordingSummary,
-    _collected,
+    collected,
     close_recording,
     iter_foot_blocks,
     open_recording,
@@ -141,7 +141,7 @@ def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices
             writer.close()
         summary = stats.summary(recording)
         if outputs.plot is not None:
-            plot_trajectories(_collected(blocks, recording, summary), outputs.plot.temporary)
+            plot_trajectories(collected(blocks, recording, summary), outputs.plot.temporary)
         for target in outputs.all():
             target.commit()
         return summary

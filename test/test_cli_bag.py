@@ -12,12 +12,14 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pybullet_data
 import pytest
 from rosbags.highlevel import AnyReader
 
 from a1_leg_fk import cli
 from a1_leg_fk.kinematics import Quadruped
 from bag_factory import TYPESTORE, T, BagSpec, JointStateMsg, header, write_bag
+from pybullet_reference import PyBulletRobot
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
@@ -289,3 +291,26 @@ def test_unwritable_output_folder_is_one_line(tmp_path: Path, capsys: pytest.Cap
         expect_bad(capsys, ["bag", str(bag), "--csv", str(locked / "feet.csv")], "Permission denied", [locked / "feet.csv"])
     finally:
         locked.chmod(0o700)
+
+
+def test_urdf_foot_links_and_joint_aliases_for_the_mini_cheetah(tmp_path: Path) -> None:
+    """--urdf, --foot-links and --joint-aliases as the node's parameters; feet against PyBullet."""
+    urdf = Path(pybullet_data.getDataPath()) / "mini_cheetah" / "mini_cheetah.urdf"
+    feet = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_hl"}
+    robot = Quadruped.from_urdf(str(urdf), feet)
+    names = ["fr_roll", *robot.joint_names[1:]]
+    rng = np.random.default_rng(8)
+    spec, angles = BagSpec(), []
+    for index in range(10):
+        q = rng.uniform(-0.7, 0.7, 12).tolist()
+        angles.append(q)
+        spec.add_joint_state("/joint_states", T0 + index, JointStateMsg(T0 + index, names, q))
+    bag = write_bag(tmp_path / "cheetah", spec, "mcap")
+    out = tmp_path / "feet.csv"
+    assert cli.main(["bag", str(bag), "--urdf", str(urdf), "--foot-links", *(f"{leg}={link}" for leg, link in feet.items()),
+                     "--joint-aliases", "fr_roll=torso_to_abduct_fr_j", "--csv", str(out), "--quiet"]) == 0
+    rows = list(csv.reader(out.open()))[1:]
+    with PyBulletRobot(urdf) as reference:
+        for row, q in zip(rows, angles, strict=True):
+            got = np.array([float(v) for v in row[2:14]]).reshape(4, 3)
+            assert np.abs(got - reference.feet(list(robot.joint_names), list(feet.values()), q)).max() <= 1e-7

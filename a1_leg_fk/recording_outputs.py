@@ -278,7 +278,10 @@ class BagWriter:
                 connection.topic, connection.msgtype, typestore=typestore, offered_qos_profiles=_input_qos(connection),
             )
         if self.ros1:
-            raw = typestore.ros1_to_cdr(raw, connection.msgtype)
+            try:
+                raw = typestore.ros1_to_cdr(raw, connection.msgtype)
+            except Exception as error:  # noqa: BLE001 (rosbags: a type it cannot convert)
+                raise LegFkError(f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to ROS 2: {error}") from None
         self.writer.write(target, bag_time, raw)
 
     def close(self) -> None:

@@ -175,7 +175,10 @@ def open_recording(
     reader, salvage_note = _open_reader(path)
     try:
         joint_states = _pick_topic(reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState")
-        description, description_topic = (None, "") if urdf else _recorded_description(reader, joint_states)
+        try:
+            description, description_topic = (None, "") if urdf else _recorded_description(reader, joint_states)
+        except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
+            raise LegFkError(f"{path}: cannot read its robot_description topic: {_one_line(error)}") from None
         if urdf:
             robot = load_robot(urdf_file=str(urdf), foot_links=foot_links, joint_aliases=joint_aliases)
             source = f"--urdf {urdf}"
@@ -189,7 +192,12 @@ def open_recording(
         poses = None
         if base_pose:
             pose_connection = _pick_topic(reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose")
-            poses = BasePoses.read(reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s)
+            try:
+                poses = BasePoses.read(reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s)
+            except LegFkError:
+                raise
+            except Exception as error:  # noqa: BLE001 (rosbags: a corrupt pose message or storage)
+                raise LegFkError(f"--base-pose {base_pose}: cannot read it: {_one_line(error)}") from None
         return Recording(reader, path, joint_states, robot.quadruped, source, poses, base_pose, not reader.is2, salvage_note=salvage_note)
     except BaseException:
         _close_reader(reader)

@@ -69,7 +69,7 @@ NO_MATCH_DEVIATION = 0.25
 WALK_MIN_SEPARATION = 0.125
 """A walk's four touchdowns are at least this far apart [cycles] (evenly spread: 0.25)."""
 WALK_MIN_DUTY = 0.5
-MIN_CONSISTENCY = 0.8
+MIN_CONSISTENCY = 0.6
 """Phase consistency R (mean resultant length) below this names no gait (phases drift)."""
 
 

@@ -26,6 +26,7 @@ from collections import deque
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
+from a1_leg_fk import cli_bag
 from a1_leg_fk.legs import LEG_NAMES
 
 PROG = "a1-leg-fk"
@@ -133,6 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help=f"refresh period [s] (default {TTY_INTERVAL_S:g} on a terminal, else {PIPE_INTERVAL_S:g})")
     demo.add_argument("--log-dir", metavar="DIR", help="where the children's output goes (default: a new temp folder)")
     demo.set_defaults(handler=run_demo)
+    cli_bag.add_parser(commands)
     return parser
 
 

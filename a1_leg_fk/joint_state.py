@@ -14,6 +14,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import Sequence
 
+import numpy as np
+
 from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG
 
@@ -36,6 +38,18 @@ class Foot:
     leg_slot: int
     position: tuple[float, float, float]
     velocity: tuple[float, float, float] | None
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;
+    ``angles`` (K, 12) [rad], the merged state after each message (NaN for joints not yet known);
+    ``rates`` (K, 12) [rad/s], the message's joint velocities where the node publishes that leg's
+    velocity for it, NaN elsewhere."""
+
+    accepted: np.ndarray
+    angles: np.ndarray
+    rates: np.ndarray
 
 
 @dataclass
@@ -127,6 +141,71 @@ class FootTracker:
             if leg_slot not in bad_legs and not self._leg_unknown(leg_slot)
         ]
         return self._finish(ACCEPTED, feet)
+
+    def update_block(self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray) -> BlockResult:
+        """:meth:`update` for K consecutive messages that share one name list, as arrays.
+
+        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] is (K, len(names)) or
+        (K, 0). Outcomes, counts and the merged state end up exactly as after K calls of
+        :meth:`update`; messages whose leg joints are all finite are merged with numpy, the others
+        go through :meth:`update` one by one.
+        """
+        rows = positions.shape[0]
+        layout = self._layout
+        if names != layout.names:
+            layout = self._layout = self._describe(list(names))
+        result = BlockResult(np.zeros(rows, bool), np.empty((rows, JOINT_COUNT)), np.full((rows, JOINT_COUNT), math.nan))
+        outcome = self._check(layout, len(names), positions.shape[1], velocities.shape[1])
+        if outcome is not None:
+            self.counts.messages += rows
+            self._finish_many(outcome, rows, 0)
+            result.angles[:] = self.angles
+            return result
+        index = np.array([i for i, _ in layout.pairs])
+        slots = np.array([slot for _, slot in layout.pairs])
+        values = positions[:, index]
+        finite = np.isfinite(values).all(axis=1)
+        row = 0
+        while row < rows:
+            if finite[row]:
+                end = row + int(np.argmin(finite[row:])) if not finite[row:].all() else rows
+                self._merge_finite(layout, values[row:end], slots, result, slice(row, end))
+                if velocities.shape[1]:
+                    result.rates[row:end, slots] = velocities[row:end, index]
+                row = end
+            else:
+                message_rates = velocities[row].tolist()
+                feet = self.update(names, positions[row].tolist(), message_rates)
+                result.accepted[row] = self._last_outcome == ACCEPTED
+                result.angles[row] = self.angles
+                for foot in feet:
+                    if foot.velocity is not None:
+                        for message_index, slot in layout.pairs:
+                            if slot // JOINTS_PER_LEG == foot.leg_slot:
+                                result.rates[row, slot] = message_rates[message_index]
+                row += 1
+        return result
+
+    def _merge_finite(self, layout: _NameLayout, values: np.ndarray, slots: np.ndarray, result: BlockResult, rows: slice) -> None:
+        """Merge messages whose leg joints are all finite (``values`` (n, pairs) [rad])."""
+        count = values.shape[0]
+        angles = result.angles[rows]
+        angles[:] = self.angles
+        angles[:, slots] = values
+        result.accepted[rows] = True
+        self.angles = angles[-1].tolist()
+        lower, upper = np.array(self._lower)[slots], np.array(self._upper)[slots]
+        self.counts.messages += count
+        self.counts.out_of_limit_messages += int(((values < lower) | (values > upper)).any(axis=1).sum())
+        per_leg = angles.reshape(count, len(self._legs), JOINTS_PER_LEG)
+        feet = sum(int((~np.isnan(per_leg[:, leg_slot]).any(axis=1)).sum()) for leg_slot in layout.legs)
+        self.last_problem = ""
+        self._finish_many(ACCEPTED, count, feet)
+
+    def _finish_many(self, outcome: str, messages: int, feet: int) -> None:
+        self._last_outcome = outcome
+        self.counts.outcomes[outcome] += messages
+        self.counts.feet += feet
 
     @property
     def last_outcome(self) -> str:

@@ -1,0 +1,119 @@
+"""``a1-leg-fk bag``: a recorded run (ROS bag) -> the feet as CSV, a new bag, a PNG, a summary.
+
+A thin layer over :mod:`a1_leg_fk.recording` and :mod:`a1_leg_fk.recording_outputs`. Exit codes:
+0 done; 1 the bag could not be read to its end (what was read is written, the reason printed);
+2 bad usage or input (one line on stderr, nothing written); 130 interrupted (nothing left under
+the final output names).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from a1_leg_fk.recording import (
+    DEFAULT_MAX_POSE_GAP_S,
+    FootTrajectories,
+    read_foot_trajectories,
+)
+from a1_leg_fk.urdf import LegFkError
+
+EXIT_OK, EXIT_STOPPED_EARLY, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
+    """INPUT and the options that choose what is read from it (shared with ``a1-leg-fk gait``)."""
+    parser.add_argument("input", metavar="INPUT", help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag")
+    parser.add_argument("--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)")
+    parser.add_argument("--urdf", metavar="FILE", help="robot model (default: the bag's robot_description topic, else the embedded A1)")
+    parser.add_argument("--foot-links", nargs="*", default=[], metavar="LEG=link", help="as the node's foot_links parameter")
+    parser.add_argument("--joint-aliases", nargs="*", default=[], metavar="NAME=joint", help="as the node's joint_aliases parameter")
+    parser.add_argument("--base-pose", metavar="TOPIC",
+                        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped, or /tf): adds world-frame feet")
+    parser.add_argument("--max-pose-gap", type=_non_negative, default=DEFAULT_MAX_POSE_GAP_S, metavar="S",
+                        help=f"no world position between two poses further apart than S seconds (default {DEFAULT_MAX_POSE_GAP_S:g})")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def recording_options(options: argparse.Namespace) -> dict:
+    """The keyword arguments of :func:`~a1_leg_fk.recording.open_recording` from parsed options."""
+    return {
+        "topic": options.topic,
+        "urdf": options.urdf,
+        "foot_links": options.foot_links,
+        "joint_aliases": options.joint_aliases,
+        "base_pose": options.base_pose,
+        "max_pose_gap_s": options.max_pose_gap,
+    }
+
+
+def show_progress(options: argparse.Namespace) -> bool:
+    """A progress bar on stderr when it is a terminal, unless ``--quiet``."""
+    return not options.quiet and sys.stderr.isatty()
+
+
+def trajectories_from_options(options: argparse.Namespace) -> FootTrajectories:
+    """The feet of ``options.input`` as arrays; :class:`LegFkError` (one line) for bad input."""
+    return read_foot_trajectories(options.input, progress=show_progress(options), **recording_options(options))
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """Register ``bag`` with the ``a1-leg-fk`` sub-commands."""
+    bag = commands.add_parser(
+        "bag",
+        help="a recorded run (ROS bag) -> foot trajectories: CSV, a new bag, a PNG",
+        description="Compute every foot of a recorded run with the node's model and JointState rules, and "
+        "write them as CSV (--csv), a new ROS 2 bag (--output-bag) and/or a plot (--plot); print a summary. "
+        "Exit 0 done, 1 the bag could not be read to its end (what was read is written), 2 bad input.",
+    )
+    add_recording_arguments(bag)
+    bag.add_argument("--csv", metavar="FILE", help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m]")
+    bag.add_argument("--output-bag", metavar="PATH", help="a new ROS 2 bag with foot_positions/<leg> (and velocities, world feet)")
+    bag.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap", help="storage of --output-bag (default mcap)")
+    bag.add_argument("--copy-input", action="store_true", help="copy every input topic into --output-bag as well")
+    bag.add_argument("--plot", metavar="FILE.png", help="the feet over time (x, y, z per leg), needs matplotlib")
+    bag.add_argument("--force", action="store_true", help="replace outputs that exist")
+    bag.set_defaults(handler=run)
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
+    return value
+
+
+def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+    """``a1-leg-fk bag``: see the module docstring for exit codes."""
+    from a1_leg_fk.recording_outputs import Outputs, convert
+
+    del ros_args  # no ROS here
+    try:
+        if not (options.csv or options.output_bag or options.plot):
+            raise LegFkError("nothing to write: give --csv FILE, --output-bag PATH and/or --plot FILE.png")
+        if options.copy_input and not options.output_bag:
+            raise LegFkError("--copy-input needs --output-bag")
+        outputs = Outputs.checked(
+            Path(options.input), csv=options.csv, bag=options.output_bag, plot=options.plot,
+            storage=options.storage, copy_input=options.copy_input, force=options.force,
+        )
+        summary = convert(Path(options.input), outputs, progress=show_progress(options), **recording_options(options))
+    except LegFkError as error:
+        print(f"a1-leg-fk bag: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("a1-leg-fk bag: interrupted; no output written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    for line in summary.lines():
+        print(line)
+    for written in outputs.written():
+        print(f"wrote:     {written}")
+    if summary.stopped:
+        print(f"a1-leg-fk bag: {options.input}: stopped early: {summary.stopped}", file=sys.stderr)
+        return EXIT_STOPPED_EARLY
+    return EXIT_OK

@@ -1,0 +1,595 @@
+"""Recorded runs: a ROS bag in, the four feet over time out (base frame, and world frame with a
+recorded base pose). No ROS install: bags are read with ``rosbags`` (imported lazily).
+
+The JointState rules are :class:`~a1_leg_fk.joint_state.FootTracker`'s, as in the node; the model
+comes from :func:`~a1_leg_fk.robot_config.load_robot`, as in the node. JointState messages are
+read from their serialized bytes (:mod:`a1_leg_fk.joint_state_wire`), not deserialized into
+Python objects, and processed in blocks of :data:`BLOCK_MESSAGES` with numpy. Results stream out
+block by block (:func:`iter_foot_blocks`), so writers need memory independent of the bag's length;
+:func:`read_foot_trajectories` collects them into arrays for notebooks.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterator, Sequence
+
+import numpy as np
+
+from a1_leg_fk.joint_state import FootTracker, REJECTIONS
+from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError
+from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.robot_config import load_robot
+from a1_leg_fk.urdf import LegFkError
+
+ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+DESCRIPTION_TYPE = "std_msgs/msg/String"
+ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
+POSE_TYPE = "geometry_msgs/msg/PoseStamped"
+POSE_COVARIANCE_TYPE = "geometry_msgs/msg/PoseWithCovarianceStamped"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+BASE_POSE_TYPES = (ODOMETRY_TYPE, POSE_TYPE, POSE_COVARIANCE_TYPE, TF_TYPE)
+BLOCK_MESSAGES = 4096
+DEFAULT_MAX_POSE_GAP_S = 0.1
+LEGS = len(LEG_NAMES)
+
+
+@dataclass(frozen=True)
+class RecordingSummary:
+    """What a pass over a bag did. Times in ns (bag clock / header stamps), wall time in s."""
+
+    path: str
+    model: str  # where the robot model came from
+    topic: str
+    base_pose_topic: str | None
+    messages: int  # JointState messages read
+    outcomes: dict[str, int]  # accepted / no_leg_joints / the rejection reasons -> messages
+    non_finite_joints: int
+    unknown_names: tuple[str, ...]
+    rows: int  # accepted messages that leave at least one leg known
+    rows_without_pose: int  # rows outside the base pose's time range or in a gap (with base_pose)
+    first_stamp_ns: int | None
+    last_stamp_ns: int | None
+    wall_time_s: float
+    stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
+
+    @property
+    def rejected(self) -> dict[str, int]:
+        """Rejection reason -> messages, for the reasons that occurred."""
+        return {reason: self.outcomes[reason] for reason in REJECTIONS if self.outcomes.get(reason)}
+
+    def lines(self) -> list[str]:
+        """The human summary, one fact per line."""
+        rate = self.messages / self.wall_time_s if self.wall_time_s > 0 else math.inf
+        rejected = ", ".join(f"{reason} {count}" for reason, count in self.rejected.items()) or "none"
+        span = (
+            f"{(self.last_stamp_ns - self.first_stamp_ns) / 1e9:.3f} s "
+            f"({self.first_stamp_ns / 1e9:.9f} .. {self.last_stamp_ns / 1e9:.9f})"
+            if self.first_stamp_ns is not None and self.last_stamp_ns is not None
+            else "empty"
+        )
+        lines = [
+            f"file:      {self.path}",
+            f"model:     {self.model}",
+            f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
+            f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
+            f"{sum(self.rejected.values())} rejected ({rejected}), "
+            f"{self.outcomes.get('no_leg_joints', 0)} without leg joints",
+            f"rows:      {self.rows}",
+            f"time span: {span}",
+            f"wall time: {self.wall_time_s:.2f} s ({rate:,.0f} messages/s)",
+        ]
+        if self.non_finite_joints:
+            lines.insert(4, f"non-finite joint values: {self.non_finite_joints} (their legs held back)")
+        if self.unknown_names:
+            lines.insert(4, f"ignored names: {list(self.unknown_names[:20])}")
+        if self.base_pose_topic:
+            lines.append(f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a pose (outside its time range or in a gap)")
+        if self.stopped:
+            lines.append(f"stopped early: {self.stopped}")
+        return lines
+
+
+@dataclass(frozen=True)
+class FootTrajectories:
+    """The feet over a recording (see :func:`read_foot_trajectories`). Legs FR, FL, RR, RL."""
+
+    stamps_ns: np.ndarray  # (N,) int64: JointState header stamps (bag time where the stamp is zero)
+    bag_times_ns: np.ndarray  # (N,) int64
+    positions: np.ndarray  # (N, 4, 3) [m], base frame, NaN for legs not yet known
+    velocities: np.ndarray | None  # (N, 4, 3) [m/s] (NaN where none), None without joint velocities
+    world_positions: np.ndarray | None  # (N, 4, 3) [m] in world_frame, NaN where no pose; None without base_pose
+    base_frame: str
+    world_frame: str | None
+    summary: RecordingSummary
+
+
+@dataclass(frozen=True)
+class FootBlock:
+    """Rows of consecutive accepted messages: like :class:`FootTrajectories`, velocities always
+    an array (NaN where the message gives none)."""
+
+    stamps_ns: np.ndarray
+    bag_times_ns: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    world_positions: np.ndarray | None
+
+
+@dataclass
+class Recording:
+    """An open bag with the choices made for it; iterate with :func:`iter_foot_blocks`."""
+
+    reader: object  # rosbags.highlevel.AnyReader, open
+    path: Path
+    joint_states: object  # its Connection
+    quadruped: Quadruped
+    model_source: str
+    base_pose: "BasePoses | None"
+    base_pose_topic: str | None
+    ros1: bool
+    has_velocities: bool = False  # set while reading: some row had a finite foot velocity
+    stopped: str = ""
+    counts: dict = field(default_factory=dict)
+
+
+# --- opening --------------------------------------------------------------------------------------
+
+
+def _rosbags():  # noqa: ANN202 (the module, untyped here)
+    try:
+        from rosbags import highlevel
+    except ImportError as error:
+        raise LegFkError(ROSBAGS_HINT) from error
+    return highlevel
+
+
+def open_recording(
+    path: str | Path,
+    *,
+    topic: str | None = None,
+    urdf: str | Path | None = None,
+    foot_links: Sequence[str] = (),
+    joint_aliases: Sequence[str] = (),
+    base_pose: str | None = None,
+    max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
+) -> Recording:
+    """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
+    problem for bad input. Close with :func:`close_recording`."""
+    path = Path(path)
+    reader = _open_reader(path)
+    try:
+        joint_states = _pick_topic(reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState")
+        description, description_topic = (None, "") if urdf else _recorded_description(reader, joint_states)
+        if urdf:
+            robot = load_robot(urdf_file=str(urdf), foot_links=foot_links, joint_aliases=joint_aliases)
+            source = f"--urdf {urdf}"
+        elif description is not None:
+            name = f"robot_description topic {description_topic} in {path}"
+            robot = load_robot(description, foot_links=foot_links, joint_aliases=joint_aliases, description_name=name)
+            source = name
+        else:
+            robot = load_robot(foot_links=foot_links, joint_aliases=joint_aliases)
+            source = f"embedded A1 ({robot.source})"
+        poses = None
+        if base_pose:
+            pose_connection = _pick_topic(reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose")
+            poses = BasePoses.read(reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s)
+        return Recording(reader, path, joint_states, robot.quadruped, source, poses, base_pose, not reader.is2)
+    except BaseException:
+        reader.close()
+        raise
+
+
+def close_recording(recording: Recording) -> None:
+    """Close the bag."""
+    recording.reader.close()
+
+
+def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader)
+    highlevel = _rosbags()
+    if not path.exists():
+        raise LegFkError(f"{path}: no such file or directory")
+    if path.is_dir() and not any(child.suffix in (".db3", ".mcap") for child in path.iterdir()):
+        raise LegFkError(f"{path}: a directory without a ROS 2 bag (no .db3 or .mcap file, no metadata.yaml)")
+    try:
+        reader = highlevel.AnyReader([path])
+        reader.open()
+    except Exception as error:  # rosbags raises several kinds for unreadable files
+        raise LegFkError(f"{path}: cannot open as a ROS bag: {_one_line(error)}") from None
+    return reader
+
+
+def _one_line(error: BaseException) -> str:
+    text = " ".join(str(error).split()) or type(error).__name__
+    return text[:300]
+
+
+def _pick_topic(reader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str):  # noqa: ANN001, ANN202
+    """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""
+    topics = {connection.topic: connection.msgtype for connection in reader.connections}
+    listing = ", ".join(f"{name} ({kind})" for name, kind in sorted(topics.items())) or "none"
+    if wanted is not None:
+        if wanted not in topics:
+            raise LegFkError(f"{option} {wanted}: no such topic in {path}; topics: {listing}")
+        if topics[wanted] not in types:
+            raise LegFkError(f"{option} {wanted} is {topics[wanted]}, expected {' or '.join(types)}")
+        chosen = wanted
+    else:
+        candidates = sorted(name for name, kind in topics.items() if kind in types)
+        if not candidates:
+            raise LegFkError(f"{path}: no {' or '.join(types)} topic; topics: {listing}")
+        if len(candidates) > 1:
+            raise LegFkError(f"{path}: several {what} topics, choose one with {option}: {', '.join(candidates)}")
+        chosen = candidates[0]
+    return next(connection for connection in reader.connections if connection.topic == chosen)
+
+
+def _recorded_description(reader, joint_states) -> tuple[str | None, str]:  # noqa: ANN001
+    """The latest ``robot_description`` message before the first JointState, and its topic."""
+    connections = [c for c in reader.connections if c.msgtype == DESCRIPTION_TYPE and c.topic.split("/")[-1] == "robot_description"]
+    if not connections:
+        return None, ""
+    latest, topic = None, ""
+    for connection, _, raw in reader.messages(connections=[*connections, joint_states]):
+        if connection is joint_states:
+            break
+        latest, topic = reader.deserialize(raw, connection.msgtype).data, connection.topic
+    return latest, topic
+
+
+# --- base pose ------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BasePoses:
+    """The base's pose over time: stamps [ns] sorted, positions (M, 3) [m], unit quaternions
+    (M, 4) x, y, z, w, in ``world_frame``; interpolated at query stamps (linear / slerp)."""
+
+    stamps_ns: np.ndarray
+    positions: np.ndarray
+    quaternions: np.ndarray
+    world_frame: str
+    max_gap_ns: int
+
+    @classmethod
+    def read(cls, reader, connection, base_frame: str, max_gap_s: float) -> "BasePoses":  # noqa: ANN001
+        """All poses of one topic (deserialized: a pose stream is small next to the joints')."""
+        stamps, values, frames = [], [], []
+        for _, _, raw in reader.messages(connections=[connection]):
+            message = reader.deserialize(raw, connection.msgtype)
+            for stamp, frame, pose in _poses_of(message, connection.msgtype, base_frame.lstrip("/")):
+                stamps.append(stamp)
+                frames.append(frame)
+                values.append(pose)
+        if not stamps:
+            raise LegFkError(f"--base-pose {connection.topic}: no pose of the base frame '{base_frame}' in it")
+        order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
+        data = np.array(values)[order]
+        quaternions = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
+        return cls(np.array(stamps, dtype=np.int64)[order], data[:, :3], quaternions, frames[0], round(max_gap_s * 1e9))
+
+    def at(self, stamps_ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(positions (N, 3) [m], rotation matrices (N, 3, 3)) at ``stamps_ns``; NaN where a stamp
+        lies outside the poses' time range or between two poses further apart than the gap."""
+        stamps = self.stamps_ns
+        upper = np.clip(np.searchsorted(stamps, stamps_ns, side="left"), 1, max(len(stamps) - 1, 1))
+        lower = upper - 1 if len(stamps) > 1 else np.zeros_like(upper)
+        upper = upper if len(stamps) > 1 else lower
+        t0, t1 = stamps[lower], stamps[upper]
+        span = t1 - t0
+        inside = (stamps_ns >= stamps[0]) & (stamps_ns <= stamps[-1]) & (span <= self.max_gap_ns)
+        alpha = np.where(span > 0, (stamps_ns - t0) / np.where(span > 0, span, 1), 0.0)
+        position = self.positions[lower] + alpha[:, None] * (self.positions[upper] - self.positions[lower])
+        quaternion = _slerp(self.quaternions[lower], self.quaternions[upper], alpha)
+        rotation = _rotation_matrices(quaternion)
+        position[~inside] = math.nan
+        rotation[~inside] = math.nan
+        return position, rotation
+
+
+def _poses_of(message, msgtype: str, base_frame: str) -> Iterator[tuple[int, str, list[float]]]:  # noqa: ANN001
+    """(stamp [ns], parent frame, [x, y, z, qx, qy, qz, qw]) of each base pose in a message."""
+    if msgtype == TF_TYPE:
+        for transform in message.transforms:
+            if transform.child_frame_id.lstrip("/") == base_frame:
+                t, r = transform.transform.translation, transform.transform.rotation
+                yield _stamp(transform.header), transform.header.frame_id.lstrip("/"), [t.x, t.y, t.z, r.x, r.y, r.z, r.w]
+        return
+    pose = message.pose if msgtype == POSE_TYPE else message.pose.pose
+    p, r = pose.position, pose.orientation
+    yield _stamp(message.header), message.header.frame_id, [p.x, p.y, p.z, r.x, r.y, r.z, r.w]
+
+
+def _stamp(header) -> int:  # noqa: ANN001
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
+def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """Spherical interpolation between unit quaternions (N, 4), the shorter way round."""
+    dot = np.sum(q0 * q1, axis=1)
+    q1 = np.where(dot[:, None] < 0, -q1, q1)
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    close = sin_theta < 1e-9
+    safe = np.where(close, 1.0, sin_theta)
+    w0 = np.where(close, 1.0 - alpha, np.sin((1.0 - alpha) * theta) / safe)
+    w1 = np.where(close, alpha, np.sin(alpha * theta) / safe)
+    q = w0[:, None] * q0 + w1[:, None] * q1
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def _rotation_matrices(q: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of unit quaternions (N, 4) x, y, z, w."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1),
+        ],
+        axis=1,
+    )
+
+
+# --- the pass over the joint states ---------------------------------------------------------------
+
+
+def iter_foot_blocks(
+    recording: Recording,
+    *,
+    progress: bool = False,
+    on_message: Callable[[object, int, bytes], None] | None = None,
+) -> Iterator[FootBlock]:
+    """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
+    called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
+
+    A truncated or corrupt bag ends the pass early: what was read is yielded, and
+    ``recording.stopped`` says where and why.
+    """
+    reader, joint_states = recording.reader, recording.joint_states
+    tracker = FootTracker(recording.quadruped)
+    recording.counts = {"tracker": tracker}
+    decoder = JointStateDecoder(ros1=recording.ros1)
+    connections = [] if on_message else [joint_states]
+    total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
+    bar = _progress_bar(total, progress)
+    pending = _Pending()
+    last_bag_time = None
+    messages = reader.messages(connections=connections)
+    try:
+        while True:
+            try:
+                item = next(messages, None)
+            except Exception as error:  # noqa: BLE001 (rosbags: truncated/corrupt storage)
+                recording.stopped = f"cannot read past bag time {last_bag_time} ns: {_one_line(error)}"
+                break
+            if item is None:
+                break
+            connection, bag_time, raw = item
+            last_bag_time = bag_time
+            if bar is not None:
+                bar.update()
+            if on_message is not None:
+                on_message(connection, bag_time, raw)
+            if connection is not joint_states:
+                continue
+            try:
+                wire = decoder.decode(raw)
+            except WireError as error:
+                recording.stopped = f"JointState at bag time {bag_time} ns: {error}"
+                break
+            if not pending.accepts(wire):
+                yield from _finish(recording, tracker, pending)
+                pending = _Pending()
+            pending.add(wire, decoder.names, bag_time)
+            if pending.count >= BLOCK_MESSAGES:
+                yield from _finish(recording, tracker, pending)
+                pending = _Pending()
+        yield from _finish(recording, tracker, pending)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+class _Pending:
+    """Consecutive messages with one name list and the same array lengths, kept as bytes."""
+
+    def __init__(self) -> None:
+        self.names: list[str] | None = None
+        self.lengths = (-1, -1)
+        self.count = 0
+        self.stamps: list[int] = []
+        self.bag_times: list[int] = []
+        self.positions: list[bytes] = []
+        self.velocities: list[bytes] = []
+        self.dtype = None
+
+    def accepts(self, wire) -> bool:  # noqa: ANN001 (WireJointState)
+        return self.count == 0 or (
+            wire.names is None
+            and (len(wire.positions), len(wire.velocities)) == self.lengths
+            and wire.positions.dtype == self.dtype
+        )
+
+    def add(self, wire, names: list[str], bag_time: int) -> None:  # noqa: ANN001
+        if self.count == 0:
+            self.names, self.lengths, self.dtype = names, (len(wire.positions), len(wire.velocities)), wire.positions.dtype
+        self.count += 1
+        self.stamps.append(wire.stamp_ns or bag_time)
+        self.bag_times.append(bag_time)
+        self.positions.append(wire.positions.tobytes())
+        self.velocities.append(wire.velocities.tobytes())
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        positions = np.frombuffer(b"".join(self.positions), self.dtype).reshape(self.count, self.lengths[0])
+        velocities = np.frombuffer(b"".join(self.velocities), self.dtype).reshape(self.count, self.lengths[1])
+        return positions, velocities
+
+
+def _finish(recording: Recording, tracker: FootTracker, pending: _Pending) -> Iterator[FootBlock]:
+    """Run the rules over a pending run of messages and yield its rows (if any)."""
+    if pending.count == 0:
+        return
+    positions, velocities = pending.arrays()
+    result = tracker.update_block(pending.names, positions, velocities)
+    angles = result.angles[result.accepted]
+    feet = feet_of(recording.quadruped, angles)
+    rows = ~np.isnan(feet).all(axis=(1, 2))
+    if not rows.any():
+        return
+    feet = feet[rows]
+    rates = result.rates[result.accepted][rows]
+    foot_velocities = velocities_of(recording.quadruped, angles[rows], rates)
+    recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
+    stamps = np.array(pending.stamps, dtype=np.int64)[result.accepted][rows]
+    bag_times = np.array(pending.bag_times, dtype=np.int64)[result.accepted][rows]
+    world = None
+    if recording.base_pose is not None:
+        origin, rotation = recording.base_pose.at(stamps)
+        world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
+    yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
+
+
+def feet_of(quadruped: Quadruped, angles: np.ndarray) -> np.ndarray:
+    """(N, 4, 3) feet [m], base frame, for (N, 12) angles [rad]; NaN for legs with a NaN angle."""
+    out = np.empty((angles.shape[0], LEGS, 3))
+    cos, sin = np.cos(angles), np.sin(angles)
+    for leg_slot, leg in enumerate(quadruped.legs):
+        columns = slice(leg_slot * JOINTS_PER_LEG, (leg_slot + 1) * JOINTS_PER_LEG)
+        trig = [value for pair in zip(cos[:, columns].T, sin[:, columns].T) for value in pair]
+        x, y, z = leg.position_from_trig(*trig)
+        out[:, leg_slot, 0], out[:, leg_slot, 1], out[:, leg_slot, 2] = x, y, z
+    return out
+
+
+def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all finite."""
+    out = np.full((angles.shape[0], LEGS, 3), math.nan)
+    usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
+    rows = usable.any(axis=1)
+    if rows.any():
+        jacobians = quadruped.jacobians_batch(np.nan_to_num(angles[rows]))
+        velocity = np.einsum("nlij,nlj->nli", jacobians, np.nan_to_num(rates[rows]).reshape(-1, LEGS, JOINTS_PER_LEG))
+        with np.errstate(invalid="ignore"):
+            velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan
+        out[rows] = velocity
+    return out
+
+
+def _progress_bar(total: int, enabled: bool):  # noqa: ANN202 (tqdm or None)
+    if not enabled:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, unit="msg", unit_scale=True, mininterval=0.5, smoothing=0.1)
+
+
+def summary_of(recording: Recording, rows: int, rows_without_pose: int, first: int | None, last: int | None, wall_time_s: float) -> RecordingSummary:
+    """The summary of a finished pass."""
+    tracker: FootTracker = recording.counts["tracker"]
+    counts = tracker.counts
+    return RecordingSummary(
+        str(recording.path), recording.model_source, recording.joint_states.topic, recording.base_pose_topic,
+        counts.messages, dict(counts.outcomes), counts.non_finite_joints, tuple(sorted(counts.unknown_names)),
+        rows, rows_without_pose, first, last, wall_time_s, recording.stopped,
+    )
+
+
+class BlockStats:
+    """Counts rows, rows without a pose and the stamp range over a pass (for the summary)."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+        self.rows_without_pose = 0
+        self.first: int | None = None
+        self.last: int | None = None
+        self.started = time.perf_counter()
+
+    def add(self, block: FootBlock) -> None:
+        if not len(block.stamps_ns):
+            return
+        self.rows += len(block.stamps_ns)
+        if block.world_positions is not None:
+            self.rows_without_pose += int(np.isnan(block.world_positions).all(axis=(1, 2)).sum())
+        low, high = int(block.stamps_ns.min()), int(block.stamps_ns.max())
+        self.first = low if self.first is None else min(self.first, low)
+        self.last = high if self.last is None else max(self.last, high)
+
+    def summary(self, recording: Recording) -> RecordingSummary:
+        return summary_of(recording, self.rows, self.rows_without_pose, self.first, self.last, time.perf_counter() - self.started)
+
+
+# --- the notebook API -----------------------------------------------------------------------------
+
+
+def read_foot_trajectories(
+    path: str | Path,
+    *,
+    topic: str | None = None,
+    urdf: str | Path | None = None,
+    foot_links: Sequence[str] = (),
+    joint_aliases: Sequence[str] = (),
+    base_pose: str | None = None,
+    max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
+    progress: bool = False,
+) -> FootTrajectories:
+    """The four feet over a recorded run, as arrays (one row per accepted JointState message
+    that leaves at least one leg known, in bag order).
+
+    ``path``: a ROS 2 bag directory, a ``.mcap`` file or a ROS 1 ``.bag``. ``topic``: the
+    JointState topic (needed when there are several). Model: ``urdf`` (a path), else the bag's
+    ``robot_description`` topic (the latest message before the first JointState), else the
+    embedded A1; ``foot_links``/``joint_aliases`` as the node's parameters (``"KEY=value"``).
+    ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
+    gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
+    stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s]).
+    Raises :class:`LegFkError` for bad input; a bag that cannot be read to its end gives what was
+    read, with ``summary.stopped`` saying why.
+    """
+    recording = open_recording(
+        path, topic=topic, urdf=urdf, foot_links=foot_links, joint_aliases=joint_aliases,
+        base_pose=base_pose, max_pose_gap_s=max_pose_gap_s,
+    )
+    try:
+        stats = BlockStats()
+        blocks = []
+        for block in iter_foot_blocks(recording, progress=progress):
+            stats.add(block)
+            blocks.append(block)
+        summary = stats.summary(recording)
+    finally:
+        close_recording(recording)
+    return _collected(blocks, recording, summary)
+
+
+def _collected(blocks: list[FootBlock], recording: Recording, summary: RecordingSummary) -> FootTrajectories:
+    def joined(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarray:
+        parts = [getattr(block, name) for block in blocks]
+        return np.concatenate(parts) if parts else np.empty((0, *shape), dtype)
+
+    world = joined("world_positions", (LEGS, 3)) if recording.base_pose is not None else None
+    return FootTrajectories(
+        stamps_ns=joined("stamps_ns", (), np.int64),
+        bag_times_ns=joined("bag_times_ns", (), np.int64),
+        positions=joined("positions", (LEGS, 3)),
+        velocities=joined("velocities", (LEGS, 3)) if recording.has_velocities else None,
+        world_positions=world,
+        base_frame=recording.quadruped.base_frame,
+        world_frame=recording.base_pose.world_frame if recording.base_pose is not None else None,
+        summary=summary,
+    )
+
+
+__all__ = [
+    "FootTrajectories", "RecordingSummary", "FootBlock", "read_foot_trajectories", "open_recording",
+    "iter_foot_blocks", "close_recording", "BasePoses", "JOINT_COUNT",
+]

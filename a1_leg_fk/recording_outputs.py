@@ -1,0 +1,326 @@
+"""Writers for :mod:`a1_leg_fk.recording`: CSV, a new ROS 2 bag, a PNG; each written under a
+temporary name and renamed when complete, so an interrupted run leaves nothing under the final
+name. CSV and bag stream block by block (memory independent of the bag's length); the plot
+collects the feet (it draws them all anyway). No ROS; ``rosbags`` and matplotlib imported lazily.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.recording import (
+    BlockStats,
+    FootBlock,
+    Recording,
+    RecordingSummary,
+    _collected,
+    close_recording,
+    iter_foot_blocks,
+    open_recording,
+)
+from a1_leg_fk.urdf import LegFkError
+
+AXES = ("x", "y", "z")
+POSITION_COLUMNS = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in AXES]
+VELOCITY_COLUMNS = [f"{leg}_v{axis}" for leg in LEG_NAMES for axis in AXES]
+WORLD_COLUMNS = [f"{leg}_w{axis}" for leg in LEG_NAMES for axis in AXES]
+BAG_VERSION = 9  # rosbag2 metadata version as Jazzy writes it
+INFINITE_DURATION = (9223372036, 854775807)  # rosbag2 Jazzy's spelling of an infinite QoS duration
+
+
+@dataclass
+class _Target:
+    """One output: its final path and the temporary one it is written under."""
+
+    final: Path
+
+    @property
+    def temporary(self) -> Path:
+        return self.final.with_name(f".{self.final.stem}.partial-{os.getpid()}{self.final.suffix}")
+
+    def discard(self) -> None:
+        _remove(self.temporary)
+
+    def commit(self) -> None:
+        _remove(self.final)
+        os.replace(self.temporary, self.final)
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path)
+    elif path.exists() or path.is_symlink():
+        path.unlink()
+
+
+@dataclass
+class Outputs:
+    """The requested outputs, checked before anything is read."""
+
+    csv: _Target | None
+    bag: _Target | None
+    plot: _Target | None
+    storage: str
+    copy_input: bool
+
+    @classmethod
+    def checked(cls, source: Path, *, csv: str | None, bag: str | None, plot: str | None,
+                storage: str = "mcap", copy_input: bool = False, force: bool = False) -> "Outputs":
+        """:class:`LegFkError` for an output that exists (without ``force``), lies inside the input
+        bag, or sits in a folder that does not exist."""
+        targets = []
+        for option, value in (("--csv", csv), ("--output-bag", bag), ("--plot", plot)):
+            if value is None:
+                targets.append(None)
+                continue
+            path = Path(value)
+            _check_target(source, path, option, force)
+            targets.append(_Target(path))
+        finals = [target.final.resolve() for target in targets if target is not None]
+        if len(set(finals)) != len(finals):
+            raise LegFkError("two outputs name the same path")
+        return cls(*targets, storage=storage, copy_input=copy_input)
+
+    def all(self) -> list[_Target]:
+        return [target for target in (self.csv, self.bag, self.plot) if target is not None]
+
+    def written(self) -> list[Path]:
+        return [target.final for target in self.all() if target.final.exists()]
+
+
+def _check_target(source: Path, path: Path, option: str, force: bool) -> None:
+    resolved, input_path = path.resolve(), source.resolve()
+    if resolved == input_path or input_path in resolved.parents:
+        raise LegFkError(f"{option} {path}: inside the input bag {source}; write it elsewhere")
+    if not resolved.parent.is_dir():
+        raise LegFkError(f"{option} {path}: folder {path.parent} does not exist")
+    if (path.exists() or path.is_symlink()) and not force:
+        raise LegFkError(f"{option} {path}: exists already (use --force to replace it)")
+
+
+def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices) -> RecordingSummary:  # noqa: ANN003
+    """One pass over ``source`` writing every requested output; returns the summary. On any
+    exception (including KeyboardInterrupt) the temporary outputs are removed."""
+    recording = open_recording(source, **choices)
+    writers: list = []
+    try:
+        if outputs.csv is not None:
+            writers.append(CsvWriter(outputs.csv.temporary, recording))
+        if outputs.bag is not None:
+            writers.append(BagWriter(outputs.bag.temporary, recording, outputs.storage, outputs.copy_input))
+        blocks: list[FootBlock] = []
+        stats = BlockStats()
+        copier = writers[-1] if outputs.bag is not None and outputs.copy_input else None
+        for block in iter_foot_blocks(recording, progress=progress, on_message=copier.copy if copier else None):
+            stats.add(block)
+            for writer in writers:
+                writer.write(block)
+            if outputs.plot is not None:
+                blocks.append(block)
+        for writer in writers:
+            writer.close()
+        summary = stats.summary(recording)
+        if outputs.plot is not None:
+            plot_trajectories(_collected(blocks, recording, summary), outputs.plot.temporary)
+        for target in outputs.all():
+            target.commit()
+        return summary
+    except BaseException:
+        for writer in writers:
+            writer.abort()
+        for target in outputs.all():
+            target.discard()
+        raise
+    finally:
+        close_recording(recording)
+
+
+# --- CSV --------------------------------------------------------------------------------------------
+
+
+class CsvWriter:
+    """Rows ``stamp_ns, bag_time_ns, FR_x .. RL_z[, FR_vx .. RL_vz][, FR_wx .. RL_wz]``; values
+    written so that ``float(text)`` gives the same float back; empty cells for NaN. Velocity
+    columns appear only when the recording has velocities: rows are written with them, and they
+    are dropped in a final pass over the file if none turned up."""
+
+    def __init__(self, path: Path, recording: Recording) -> None:
+        self.path = path
+        self.recording = recording
+        self.world = recording.base_pose is not None
+        self.file = open(path, "w", encoding="ascii", newline="")
+        self.file.write(",".join(self._columns(True)) + "\n")
+
+    def _columns(self, velocities: bool) -> list[str]:
+        return ["stamp_ns", "bag_time_ns", *POSITION_COLUMNS, *(VELOCITY_COLUMNS if velocities else []), *(WORLD_COLUMNS if self.world else [])]
+
+    def write(self, block: FootBlock) -> None:
+        rows = len(block.stamps_ns)
+        parts = [block.positions.reshape(rows, -1), block.velocities.reshape(rows, -1)]
+        if block.world_positions is not None:
+            parts.append(block.world_positions.reshape(rows, -1))
+        self.file.write(format_rows(block.stamps_ns, block.bag_times_ns, np.concatenate(parts, axis=1)))
+
+    def close(self) -> None:
+        self.file.close()
+        if not self.recording.has_velocities:
+            self._drop_velocity_columns()
+
+    def abort(self) -> None:
+        self.file.close()
+
+    def _drop_velocity_columns(self) -> None:
+        first, last = 2 + len(POSITION_COLUMNS), 2 + len(POSITION_COLUMNS) + len(VELOCITY_COLUMNS)
+        narrow = self.path.with_name(self.path.name + ".narrow")
+        with open(self.path, encoding="ascii", newline="") as wide, open(narrow, "w", encoding="ascii", newline="") as out:
+            next(wide)
+            out.write(",".join(self._columns(False)) + "\n")
+            for line in wide:
+                cells = line.split(",")
+                out.write(",".join(cells[:first] + cells[last:]))
+        os.replace(narrow, self.path)
+
+
+def format_rows(stamps: np.ndarray, bag_times: np.ndarray, values: np.ndarray) -> str:
+    """CSV text for rows of two integer columns and float columns; NaN -> empty cell."""
+    cells = values.tolist()
+    template = "%d,%d," + ",".join(["%r"] * values.shape[1]) + "\n"
+    text = "".join([template % (stamp, bag_time, *row) for stamp, bag_time, row in zip(stamps.tolist(), bag_times.tolist(), cells)])
+    return text.replace("nan", "")
+
+
+# --- the output bag ---------------------------------------------------------------------------------
+
+
+class BagWriter:
+    """A ROS 2 bag with ``/foot_positions/<leg>``, ``/foot_velocities/<leg>`` (when velocities
+    exist) and ``/foot_positions_world/<leg>`` (with a base pose), messages serialized here (CDR)
+    with the JointState's header stamp and bag time; optionally every input message too."""
+
+    def __init__(self, path: Path, recording: Recording, storage: str, copy_input: bool) -> None:
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.typesys import Stores, get_typestore
+
+        self.recording = recording
+        self.typestore = get_typestore(Stores.ROS2_JAZZY)
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        self.writer = Writer(path, version=BAG_VERSION, storage_plugin=plugin)
+        self.writer.open()
+        self.base_frame = recording.quadruped.base_frame
+        self.world_frame = recording.base_pose.world_frame if recording.base_pose is not None else ""
+        self.topics: dict[str, object] = {}
+        self.copied: dict[int, object] = {}
+        self.copy_input = copy_input
+        self.ros1 = recording.ros1
+
+    def _connection(self, topic: str, msgtype: str, typestore: object = None) -> object:
+        connection = self.topics.get(topic)
+        if connection is None:
+            connection = self.topics[topic] = self.writer.add_connection(
+                topic, msgtype, typestore=typestore or self.typestore, offered_qos_profiles=[default_qos()],
+            )
+        return connection
+
+    def write(self, block: FootBlock) -> None:
+        groups = [("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)]
+        if self.recording.has_velocities or np.isfinite(block.velocities).any():
+            groups.append(("/foot_velocities", "geometry_msgs/msg/Vector3Stamped", self.base_frame, block.velocities))
+        if block.world_positions is not None:
+            groups.append(("/foot_positions_world", "geometry_msgs/msg/PointStamped", self.world_frame, block.world_positions))
+        stamps, bag_times = block.stamps_ns.tolist(), block.bag_times_ns.tolist()
+        for prefix, msgtype, frame, values in groups:
+            for leg_slot, leg in enumerate(LEG_NAMES):
+                leg_values = values[:, leg_slot]
+                rows = np.flatnonzero(np.isfinite(leg_values).all(axis=1))
+                if not len(rows):
+                    continue
+                connection = self._connection(f"{prefix}/{leg}", msgtype)
+                head = _frame_bytes(frame)
+                for row, (x, y, z) in zip(rows.tolist(), leg_values[rows].tolist()):
+                    sec, nanosec = divmod(stamps[row], 1_000_000_000)
+                    self.writer.write(connection, bag_times[row], _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z))
+
+    def copy(self, connection, bag_time: int, raw: bytes) -> None:  # noqa: ANN001 (rosbags Connection)
+        """Copy one input message (ROS 1 messages converted to CDR)."""
+        target = self.copied.get(connection.id)
+        if target is None:
+            typestore = self.recording.reader.typestore
+            target = self.copied[connection.id] = self.writer.add_connection(
+                connection.topic, connection.msgtype, typestore=typestore,
+                offered_qos_profiles=_input_qos(connection),
+            )
+        if self.ros1:
+            raw = self.recording.reader.typestore.ros1_to_cdr(raw, connection.msgtype)
+        self.writer.write(target, bag_time, raw)
+
+    def close(self) -> None:
+        self.writer.close()
+
+    def abort(self) -> None:
+        try:
+            self.writer.close()
+        except Exception:  # noqa: BLE001 (the bag is being discarded anyway)
+            pass
+
+
+_CDR_LE = b"\x00\x01\x00\x00"  # encapsulation header: CDR, little endian
+_STAMP = struct.Struct("<iI")
+_XYZ = struct.Struct("<3d")
+
+
+def _frame_bytes(frame: str) -> bytes:
+    """The CDR ``frame_id`` string after the stamp, padded so the float64s that follow are
+    8-aligned (offsets relative to the 4-byte encapsulation header, which the stamp follows)."""
+    encoded = frame.encode() + b"\0"
+    text = struct.pack("<I", len(encoded)) + encoded
+    padding = -(8 + len(text)) % 8
+    return text + b"\0" * padding
+
+
+def default_qos():  # noqa: ANN201 (rosbags Qos)
+    """The QoS rosbag2 Jazzy records for a default publisher: reliable, volatile, keep last 10."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    infinite = QosTime(*INFINITE_DURATION)
+    return Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE, infinite, infinite,
+               QosLiveliness.AUTOMATIC, infinite, False)
+
+
+def _input_qos(connection) -> list:  # noqa: ANN001
+    profiles = getattr(connection.ext, "offered_qos_profiles", None)
+    return list(profiles) if profiles else [default_qos()]
+
+
+# --- the plot ---------------------------------------------------------------------------------------
+
+
+def plot_trajectories(trajectories, path: Path) -> Path:  # noqa: ANN001 (FootTrajectories)
+    """x, y, z of each foot over time [s from the first stamp]; world frame when available."""
+    from a1_leg_fk.plots import LEG_COLOURS, _save, pyplot
+
+    plt = pyplot()
+    world = trajectories.world_positions is not None and np.isfinite(trajectories.world_positions).any()
+    values = trajectories.world_positions if world else trajectories.positions
+    frame = trajectories.world_frame if world else trajectories.base_frame
+    figure, axes = plt.subplots(3, 1, sharex=True, figsize=(11, 8))
+    stamps = trajectories.stamps_ns
+    seconds = (stamps - stamps[0]) / 1e9 if len(stamps) else stamps
+    for axis_slot, (axis, name) in enumerate(zip(axes, AXES)):
+        for leg_slot, leg in enumerate(LEG_NAMES):
+            axis.plot(seconds, values[:, leg_slot, axis_slot], color=LEG_COLOURS[leg], linewidth=0.8, label=leg)
+        axis.set_ylabel(f"{name} [m]")
+        axis.grid(True, alpha=0.3)
+    axes[0].legend(loc="upper right", ncol=4, fontsize="small")
+    axes[-1].set_xlabel("time since the first JointState stamp [s]")
+    summary = trajectories.summary
+    figure.suptitle(f"Feet in frame '{frame}': {Path(summary.path).name}, {summary.topic}, {summary.rows} rows")
+    return _save(figure, plt, path)
+
+

@@ -388,7 +388,7 @@ def detect_contacts(
     stances = tuple(_stances(times, stance[:, slot], segments[:, slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:
-        notes.append(f"{gaps} rows with a missing foot (gaps): phases are split there")
+        notes.append(f"{gaps} rows with a missing foot (no pose there, a gap): phases are split at them")
     return Contacts(times, feet, valid, heights, speeds, stance, segments, stances, ground, thresholds, tuple(notes))
 
 

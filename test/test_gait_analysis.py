@@ -183,4 +183,4 @@ def test_nan_gap_splits_phases() -> None:
     assert truncated >= 2  # in a trot two feet are down at any time, so two stances end at the gap
     assert report.gait == "trot"
     assert all(abs(m.duty_factor - DUTY["trot"]) <= 0.02 for m in report.legs.values())
-    assert any("gaps" in note for note in contacts.notes)
+    assert any("a gap" in note for note in contacts.notes)

@@ -164,7 +164,7 @@ def test_leg_that_never_touches_down_or_never_lifts() -> None:
 
 
 def test_nan_gap_splits_phases() -> None:
-    stamps, feet, truth = synthetic("trot", 0.5, 200, seconds=6.0)
+    stamps, feet, _ = synthetic("trot", 0.5, 200, seconds=6.0)
     times = stamps - stamps[0]
     gap = (times > 2.9) & (times < 3.3)
     feet[gap] = np.nan

@@ -73,7 +73,7 @@ def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarray
     return folder, times, swinging, code
 
 
-def test_demo_gait_through_a_bag(demo_run, capsys: pytest.CaptureFixture) -> None:
+def test_demo_gait_through_a_bag(demo_run) -> None:
     folder, times, swinging, code = demo_run
     assert code == 0
     document = json.loads((folder / "gait.json").read_text(), parse_constant=lambda name: pytest.fail(f"{name} in JSON"))

@@ -278,13 +278,13 @@ class BasePoses:
         """(positions (N, 3) [m], rotation matrices (N, 3, 3)) at ``stamps_ns``; NaN where a stamp
         lies outside the poses' time range or between two poses further apart than the gap."""
         stamps = self.stamps_ns
-        upper = np.clip(np.searchsorted(stamps, stamps_ns, side="left"), 1, max(len(stamps) - 1, 1))
-        lower = upper - 1 if len(stamps) > 1 else np.zeros_like(upper)
-        upper = upper if len(stamps) > 1 else lower
+        lower = np.clip(np.searchsorted(stamps, stamps_ns, side="right") - 1, 0, len(stamps) - 1)
+        upper = np.minimum(lower + 1, len(stamps) - 1)
         t0, t1 = stamps[lower], stamps[upper]
+        exact = t0 == stamps_ns
         span = t1 - t0
-        inside = (stamps_ns >= stamps[0]) & (stamps_ns <= stamps[-1]) & (span <= self.max_gap_ns)
-        alpha = np.where(span > 0, (stamps_ns - t0) / np.where(span > 0, span, 1), 0.0)
+        inside = (stamps_ns >= stamps[0]) & (stamps_ns <= stamps[-1]) & (exact | (span <= self.max_gap_ns))
+        alpha = np.where(exact | (span == 0), 0.0, (stamps_ns - t0) / np.where(span > 0, span, 1))
         position = self.positions[lower] + alpha[:, None] * (self.positions[upper] - self.positions[lower])
         quaternion = _slerp(self.quaternions[lower], self.quaternions[upper], alpha)
         rotation = _rotation_matrices(quaternion)

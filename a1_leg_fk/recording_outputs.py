@@ -183,8 +183,8 @@ class CsvWriter:
             next(wide)
             out.write(",".join(self._columns(False)) + "\n")
             for line in wide:
-                cells = line.split(",")
-                out.write(",".join(cells[:first] + cells[last:]))
+                cells = line.rstrip("\n").split(",")
+                out.write(",".join(cells[:first] + cells[last:]) + "\n")
         os.replace(narrow, self.path)
 
 
@@ -250,14 +250,15 @@ class BagWriter:
     def copy(self, connection, bag_time: int, raw: bytes) -> None:  # noqa: ANN001 (rosbags Connection)
         """Copy one input message (ROS 1 messages converted to CDR)."""
         target = self.copied.get(connection.id)
+        # ROS 1 messages are converted with the ROS 2 definitions of their types (std_msgs/Header
+        # loses its seq); other bags keep their own definitions.
+        typestore = self.typestore if self.ros1 and connection.msgtype in self.typestore.fielddefs else self.recording.reader.typestore
         if target is None:
-            typestore = self.recording.reader.typestore
             target = self.copied[connection.id] = self.writer.add_connection(
-                connection.topic, connection.msgtype, typestore=typestore,
-                offered_qos_profiles=_input_qos(connection),
+                connection.topic, connection.msgtype, typestore=typestore, offered_qos_profiles=_input_qos(connection),
             )
         if self.ros1:
-            raw = self.recording.reader.typestore.ros1_to_cdr(raw, connection.msgtype)
+            raw = typestore.ros1_to_cdr(raw, connection.msgtype)
         self.writer.write(target, bag_time, raw)
 
     def close(self) -> None:

@@ -29,7 +29,8 @@ Contacts (:func:`detect_contacts`). A foot is in stance when it is near the grou
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
 
 Metrics (:func:`gait_metrics`): per leg the stance intervals, duty factor (stance time over stride
-time of the complete strides), stride period and frequency (touchdown to touchdown), step length
+time of the complete strides; strides off the leg's median period by more than half, such as a pause
+to stand, are left out and counted as irregular), stride period and frequency (touchdown to touchdown), step length
 (horizontal distance between consecutive touchdown positions, each the median position of its
 stance), swing clearance (peak height of each complete swing above the ground plane); for the
 robot, each leg's touchdown phase relative to FR's strides (0..1, circular mean, with its
@@ -69,6 +70,9 @@ NO_MATCH_DEVIATION = 0.25
 WALK_MIN_SEPARATION = 0.125
 """A walk's four touchdowns are at least this far apart [cycles] (evenly spread: 0.25)."""
 WALK_MIN_DUTY = 0.5
+IRREGULAR_STRIDE = 0.5
+"""A stride longer or shorter than the leg's median by more than this fraction (a pause, a stumble)
+is left out of the stride metrics and the phases, and counted as irregular."""
 MIN_CONSISTENCY = 0.6
 """Phase consistency R (mean resultant length) below this names no gait (phases drift)."""
 
@@ -155,7 +159,8 @@ class LegMetrics:
     leg: str
     status: str  # "ok", "no data", "never touches down", "never lifts", "too few strides"
     stance_s: tuple[tuple[float, float], ...]
-    strides: int
+    strides: int  # complete, regular strides the metrics are computed from
+    irregular_strides: int  # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
     duty_factor: float | None
     stride_period_s: float | None
     stride_frequency_hz: float | None
@@ -417,7 +422,7 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     intervals = tuple((s.t_on, s.t_off) for s in stances)
     valid = contacts.valid[:, slot]
     in_stance = contacts.stance[:, slot] & valid
-    empty = dict(strides=0, duty_factor=None, stride_period_s=None, stride_frequency_hz=None, step_length_m=None, clearance_m=None)
+    empty = dict(strides=0, irregular_strides=0, duty_factor=None, stride_period_s=None, stride_frequency_hz=None, step_length_m=None, clearance_m=None)
     if not valid.any():
         return LegMetrics(leg, "no data", intervals, **empty, reason="no finite position of this foot"), []
     if not in_stance.any():
@@ -441,13 +446,16 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     if not strides:
         return LegMetrics(leg, "too few strides", intervals, **{**empty, "clearance_m": clearance},
                           reason="fewer than two touchdowns in one gap-free stretch"), []
-    stride_time = sum(b - a for a, b in strides)
-    period = stride_time / len(strides)
+    durations = np.array([b - a for a, b in strides])
+    regular = np.abs(durations / np.median(durations) - 1.0) <= IRREGULAR_STRIDE
+    kept = [stride for stride, keep in zip(strides, regular) if keep]
+    stride_time = float(durations[regular].sum())
+    period = stride_time / len(kept)
     metrics = LegMetrics(
-        leg, "ok", intervals, len(strides), float(sum(stance_times) / stride_time), float(period), float(1.0 / period),
-        float(np.mean(steps)), clearance,
+        leg, "ok", intervals, len(kept), int((~regular).sum()), float(np.array(stance_times)[regular].sum() / stride_time),
+        period, 1.0 / period, float(np.array(steps)[regular].mean()), clearance,
     )
-    return metrics, strides
+    return metrics, kept
 
 
 def _circular_mean(phases: list[float]) -> tuple[float, float]:

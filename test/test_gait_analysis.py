@@ -36,8 +36,12 @@ NOISE_M = 0.0005
 DEFAULTS = ContactThresholds()
 
 
-def synthetic(gait: str, speed: float, rate_hz: float, seconds: float = 8.0, seed: int = 0):
-    """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the first stamp])."""
+def synthetic(gait: str, speed: float, rate_hz: float, seconds: float = 8.0, seed: int = 0, pause: tuple[float, float] | None = None):
+    """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the first stamp]).
+
+    ``pause=(at, length)`` [s] freezes the gait from ``at`` for ``length`` (the true stances then
+    hold for gait time, not for the stamps).
+    """
     rng = np.random.default_rng(seed)
     dt = 1.0 / rate_hz
     times = np.arange(0.0, seconds, dt)
@@ -48,6 +52,10 @@ def synthetic(gait: str, speed: float, rate_hz: float, seconds: float = 8.0, see
     radius_dz = FOOT_RADIUS_M * math.sqrt(1 + a * a + b * b)  # sphere centre above an inclined plane
     feet = np.empty((times.size, 4, 3))
     truth = []
+    stamps = times
+    if pause is not None:
+        at, length = pause
+        times = np.where(times < at, times, np.maximum(at, times - length))
     for leg in range(4):
         touchdowns = (PHASES[gait][leg] + np.arange(-2, int(seconds / PERIOD_S) + 3)) * PERIOD_S
         holds = HIPS_XY[leg, 0] + speed * (touchdowns + 0.5 * duty * PERIOD_S)
@@ -61,7 +69,7 @@ def synthetic(gait: str, speed: float, rate_hz: float, seconds: float = 8.0, see
         y = np.full(times.size, HIPS_XY[leg, 1])
         feet[:, leg] = np.column_stack((x, y, GROUND_Z0_M + a * x + b * y + radius_dz + lift))
         truth.append([(on, on + duty * PERIOD_S) for on in touchdowns])
-    return times + 1234.5, feet + rng.normal(0.0, NOISE_M, feet.shape), truth
+    return stamps + 1234.5, feet + rng.normal(0.0, NOISE_M, feet.shape), truth
 
 
 def vertical_speed(gait: str) -> float:
@@ -110,6 +118,18 @@ def test_synthetic_gait(gait: str, rate: int, speed: float) -> None:
     assert abs(ground.slope[0] - a) < 0.003 and abs(ground.slope[1] - b) < 0.003
     print(f"{gait} {rate} Hz {speed} m/s: worst touchdown error {worst[0] * 1e3:.1f} ms, lift-off {worst[1] * 1e3:.1f} ms, "
           f"duty {[round(m.duty_factor, 3) for m in report.legs.values()]} (true {DUTY[gait]})")
+
+
+def test_a_pause_is_an_irregular_stride() -> None:
+    # A pronk frozen mid-stance (all four feet down) for 1 s: the stride around it is no gait cycle.
+    pause_at = 3 * PERIOD_S + 0.5 * DUTY["pronk"] * PERIOD_S
+    stamps, feet, _ = synthetic("pronk", 0.0, 200, seconds=7.0, pause=(pause_at, 1.0))
+    _, report = analyze_gait(stamps, feet)
+    assert report.gait == "pronk"
+    for metrics in report.legs.values():
+        assert metrics.irregular_strides == 1
+        assert abs(metrics.stride_period_s - PERIOD_S) <= 0.005
+        assert abs(metrics.duty_factor - DUTY["pronk"]) <= 0.02
 
 
 def test_json_is_strict_and_complete() -> None:

@@ -284,12 +284,10 @@ def fit_ground(points: np.ndarray, percentile: float) -> GroundPlane:
     origin = points[:, :2].mean(axis=0)
     design = np.column_stack((np.ones(points.shape[0]), points[:, :2] - origin))
     keep = np.ones(points.shape[0], dtype=bool)
-    coefficients = np.zeros(3)
     for _ in range(PLANE_REFITS + 1):
-        scale = np.abs(design[keep]).max(axis=0)
-        scale[scale == 0] = 1.0
-        solution = np.linalg.lstsq(design[keep] / scale, points[keep, 2], rcond=SLOPE_RCOND)[0]
-        coefficients = solution / scale
+        # Unscaled columns (1, dx [m], dy [m]): a singular value relative to the first is about the
+        # feet's spread [m] in that direction, so rcond drops slopes the feet cannot determine.
+        coefficients = np.linalg.lstsq(design[keep], points[keep, 2], rcond=SLOPE_RCOND)[0]
         residuals = points[:, 2] - design @ coefficients
         keep = residuals <= np.median(residuals)
     level = coefficients[0] + float(np.percentile(residuals, percentile))

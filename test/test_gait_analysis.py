@@ -204,3 +204,14 @@ def test_nan_gap_splits_phases() -> None:
     assert report.gait == "trot"
     assert all(abs(m.duty_factor - DUTY["trot"]) <= 0.02 for m in report.legs.values())
     assert any("a gap" in note for note in contacts.notes)
+
+
+def test_slope_is_not_fitted_where_the_feet_do_not_spread() -> None:
+    # Only FR is known, stepping in place on one spot: no slope can be told from one spot, so (almost) none is fitted.
+    stamps, feet, _ = synthetic("trot", 0.0, 100, seconds=4.0)
+    feet[:, 1:] = np.nan
+    contacts, report = analyze_gait(stamps, feet)
+    assert max(map(abs, contacts.ground.slope)) < 1e-3  # fitted to the noise: ~0.1
+    assert report.legs["FR"].status == "ok" and abs(report.legs["FR"].duty_factor - DUTY["trot"]) <= 0.02
+    assert [report.legs[leg].status for leg in ("FL", "RR", "RL")] == ["no data"] * 3
+    assert report.gait == "unknown" and json.loads(json.dumps(report.to_json(), allow_nan=False))["phase_vs_FR"]["FL"] is None

@@ -26,7 +26,7 @@ from collections import deque
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
-from a1_leg_fk import cli_bag
+from a1_leg_fk import cli_bag, cli_gait
 from a1_leg_fk.legs import LEG_NAMES
 
 PROG = "a1-leg-fk"
@@ -135,6 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--log-dir", metavar="DIR", help="where the children's output goes (default: a new temp folder)")
     demo.set_defaults(handler=run_demo)
     cli_bag.add_parser(commands)
+    cli_gait.add_parser(commands)
     return parser
 
 

@@ -1,4 +1,4 @@
-"""PNG plots of the kinematics: one leg's reach envelope, and the feet over the demo gait.
+"""PNG plots of the kinematics: one leg's reach envelope, the feet over the demo gait, and a gait diagram.
 
 matplotlib is optional: it is imported only when a plot is drawn (with the non-interactive Agg
 backend), and its absence raises :class:`MissingMatplotlib`, whose message says how to install it.
@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from a1_leg_fk.gait import Gait, limits_of
+from a1_leg_fk.gait_analysis import Contacts, GaitReport
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
@@ -181,3 +182,43 @@ def _save(figure, plt, path: str | Path) -> Path:  # noqa: ANN001
     finally:
         plt.close(figure)
     return path
+
+
+def plot_gait_diagram(contacts: Contacts, report: GaitReport, path: str | Path, title: str = "") -> Path:
+    """Write ``path`` (PNG): a Hildebrand gait diagram above the feet's heights over time.
+
+    Top: one row per leg (FR, FL, RR, RL from the top), a bar over each stance interval [s from the
+    first stamp]. Bottom: each foot's height above the detected ground plane [m] (the plane itself
+    at 0, the on/off height thresholds dashed), so a reader sees at a glance whether the stances sit
+    where the feet are down.
+    """
+    plt = pyplot()
+    thresholds = contacts.thresholds
+    figure, (diagram, heights) = plt.subplots(2, 1, figsize=(14, 7), sharex=True, gridspec_kw={"height_ratios": [1, 1.4]})
+    for row, leg in enumerate(LEG_NAMES):
+        metrics = report.legs[leg]
+        bars = [(t_on, t_off - t_on) for t_on, t_off in metrics.stance_s]
+        diagram.broken_barh(bars, (len(LEG_NAMES) - 1 - row - 0.35, 0.7), color=LEG_COLOURS[leg])
+        duty = "-" if metrics.duty_factor is None else f"{metrics.duty_factor:.2f}"
+        heights.plot(contacts.times_s, contacts.heights_m[:, row], color=LEG_COLOURS[leg], linewidth=1.0,
+                     label=f"{leg} (duty {duty}, {metrics.status})")
+    diagram.set_yticks(range(len(LEG_NAMES)), list(reversed(LEG_NAMES)))
+    diagram.set_ylim(-0.6, len(LEG_NAMES) - 0.4)
+    diagram.set_ylabel("leg (bars: stance)")
+    diagram.grid(True, axis="x", linewidth=0.4, alpha=0.6)
+    phases = ", ".join(f"{leg} {value:.2f}" if value is not None else f"{leg} -" for leg, value in report.phase_vs_fr.items())
+    diagram.set_title(f"{title + ': ' if title else ''}gait {report.gait} (fit {report.gait_fit:.2f}); "
+                      f"touchdown phase vs FR: {phases}")
+    ground = contacts.ground
+    heights.axhline(0.0, color="k", linewidth=1.2,
+                    label=f"detected ground (height 0): z = {ground.level_m:.3f} m\nat x, y = {ground.origin_xy[0]:.2f}, "
+                    f"{ground.origin_xy[1]:.2f} m, slope {ground.slope_deg:.1f} deg")
+    for value, text in ((thresholds.height_on_m, "on"), (thresholds.height_off_m, "off")):
+        heights.axhline(value, color="0.4", linestyle="--", linewidth=0.8)
+        heights.annotate(f"height {text} {value:g} m", (contacts.times_s[0], value), xytext=(2, 2),
+                         textcoords="offset points", fontsize=7, color="0.3")
+    heights.set_xlabel("time [s] from the first stamp")
+    heights.set_ylabel("foot height above the ground plane [m]")
+    heights.grid(True, linewidth=0.4, alpha=0.6)
+    heights.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _save(figure, plt, path)

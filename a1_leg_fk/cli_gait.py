@@ -1,0 +1,155 @@
+"""``a1-leg-fk gait``: a recorded run (ROS bag) -> contacts, stride metrics and the gait's name.
+
+The feet come from :func:`a1_leg_fk.cli_bag.trajectories_from_options` (world frame, so
+``--base-pose`` is required) and go through :mod:`a1_leg_fk.gait_analysis`. Prints a short report;
+``--json``, ``--plot`` and ``--csv-contacts`` write files. Exit codes: 0 done; 1 the bag could not
+be read to its end (the analysis covers what was read) or a plot could not be drawn; 2 bad usage or
+input (one line on stderr); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from dataclasses import fields
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from a1_leg_fk.cli_bag import add_recording_arguments, trajectories_from_options
+from a1_leg_fk.gait_analysis import ContactThresholds, Contacts, GaitReport, analyze_gait
+from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.urdf import LegFkError
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+PROG = "a1-leg-fk gait"
+NEEDS_BASE_POSE = (
+    "needs --base-pose TOPIC (nav_msgs/Odometry, geometry_msgs/PoseStamped or /tf): contacts are found "
+    "from each foot's height above the ground and its speed, which only world-frame feet have; "
+    "base-frame feet move with the body (a stance foot sweeps backwards, a swing foot can look still)"
+)
+THRESHOLD_HELP = {
+    "height_on_m": "stance starts below this height above the ground level [m]",
+    "height_off_m": "stance ends above this height [m]",
+    "speed_on_mps": "stance starts below this foot speed [m/s]",
+    "speed_off_mps": "stance ends above this foot speed [m/s]",
+    "min_phase_s": "shorter swings, then stances, are merged into their neighbours [s]",
+    "ground_percentile": "the ground level is this percentile of the still feet's heights [%%]",
+    "speed_window_s": "speeds are difference quotients over at least this span [s]",
+}
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """Register ``gait`` with the ``a1-leg-fk`` sub-commands."""
+    gait = commands.add_parser(
+        "gait",
+        help="a recorded run (ROS bag) -> when each foot was down, duty factor, stride, step, clearance, gait name",
+        description="Find each foot's stance phases from its world-frame height and speed (hysteresis, minimum "
+        "phase, ground level estimated from the data), then per-leg metrics and the gait (walk, trot, pace, "
+        "bound, pronk or unknown). Needs --base-pose. Exit 0 done, 1 bag not read to its end or plot failed, "
+        "2 bad input.",
+    )
+    add_recording_arguments(gait)
+    gait.add_argument("--json", metavar="FILE", help="write the report as JSON (no NaN: missing values are null with a reason)")
+    gait.add_argument("--plot", metavar="FILE.png", help="Hildebrand gait diagram above the feet's heights (needs matplotlib)")
+    gait.add_argument("--csv-contacts", metavar="FILE", help="one row per sample: time, stance (0/1), height [m] and speed [m/s] per leg")
+    gait.add_argument("--unsorted", choices=("sort", "reject"), default="sort",
+                      help="stamps that go back in time: sort them (default, reported) or reject the input")
+    defaults = ContactThresholds()
+    for item in fields(ContactThresholds):
+        gait.add_argument(f"--{item.name.replace('_', '-')}", dest=item.name, type=float, metavar="X",
+                          default=getattr(defaults, item.name),
+                          help=f"{THRESHOLD_HELP[item.name]} (default {getattr(defaults, item.name):g})")
+    gait.set_defaults(handler=run)
+
+
+def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+    """``a1-leg-fk gait``: see the module docstring for exit codes."""
+    del ros_args  # no ROS here
+    try:
+        if not options.base_pose:
+            raise LegFkError(NEEDS_BASE_POSE)
+        thresholds = ContactThresholds(**{item.name: getattr(options, item.name) for item in fields(ContactThresholds)})
+        trajectories = trajectories_from_options(options)
+        if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
+            raise LegFkError(f"{options.input}: no JointState rows with feet")
+        stamps_s = (trajectories.stamps_ns - trajectories.stamps_ns.min()) * 1e-9
+        contacts, report = analyze_gait(stamps_s, trajectories.world_positions, thresholds, options.unsorted)
+    except LegFkError as error:
+        print(f"{PROG}: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    for line in report_lines(report, trajectories.world_frame):
+        print(line)
+    code = write_outputs(options, contacts, report, trajectories.world_frame)
+    if trajectories.summary.stopped:
+        print(f"{PROG}: {options.input}: stopped early: {trajectories.summary.stopped}", file=sys.stderr)
+        return EXIT_FAILED
+    return code
+
+
+def _number(value: float | None, form: str) -> str:
+    return "-" if value is None else format(value, form)
+
+
+def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
+    """The printed report: gait, ground, one row per leg, notes."""
+    phases = ", ".join(f"{leg} {_number(value, '.2f')}" for leg, value in report.phase_vs_fr.items())
+    lines = [
+        f"gait:      {report.gait} (fit {report.gait_fit:.2f}; {report.gait_reason})",
+        f"phases:    touchdown vs FR: {phases}; mean duty factor {_number(report.duty_factor, '.3f')}",
+        f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
+        f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg",
+        f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} {'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}",
+    ]
+    for leg, metrics in report.legs.items():
+        lines.append(
+            f"{leg:<4} {metrics.status:<19} {len(metrics.stance_s):>7} {_number(metrics.duty_factor, '.3f'):>6} "
+            f"{_number(metrics.stride_period_s, '.3f'):>9} {_number(metrics.stride_frequency_hz, '.2f'):>8} "
+            f"{_number(metrics.step_length_m, '.3f'):>8} {_number(metrics.clearance_m, '.3f'):>8}"
+        )
+    lines.extend(f"note:      {note}" for note in report.notes)
+    return lines
+
+
+def write_outputs(options: argparse.Namespace, contacts: Contacts, report: GaitReport, world_frame: str | None) -> int:
+    """Write --json, --csv-contacts and --plot; EXIT_FAILED if the plot cannot be drawn."""
+    if options.json:
+        document = {"input": str(options.input), "world_frame": world_frame, **report.to_json()}
+        Path(options.json).write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
+        print(f"wrote:     {options.json}")
+    if options.csv_contacts:
+        write_contacts_csv(contacts, Path(options.csv_contacts))
+        print(f"wrote:     {options.csv_contacts}")
+    if options.plot:
+        from a1_leg_fk.plots import plot_gait_diagram
+
+        try:
+            plot_gait_diagram(contacts, report, options.plot, title=Path(options.input).name)
+        except LegFkError as error:
+            print(f"{PROG}: {error}", file=sys.stderr)
+            return EXIT_FAILED
+        print(f"wrote:     {options.plot}")
+    return EXIT_OK
+
+
+def write_contacts_csv(contacts: Contacts, path: Path) -> None:
+    """One row per sample: ``time_s``, ``<leg>_stance`` (0/1), ``<leg>_height_m``, ``<leg>_speed_mps`` (empty where unknown)."""
+    header = ["time_s", *(f"{leg}_stance" for leg in LEG_NAMES), *(f"{leg}_height_m" for leg in LEG_NAMES),
+              *(f"{leg}_speed_mps" for leg in LEG_NAMES)]
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(header)
+        for row in range(contacts.times_s.size):
+            stance = [int(value) if known else "" for value, known in zip(contacts.stance[row], contacts.valid[row])]
+            numbers = [_csv_value(value) for value in (*contacts.heights_m[row], *contacts.speeds_mps[row])]
+            writer.writerow([f"{contacts.times_s[row]:.9f}", *stance, *numbers])
+
+
+def _csv_value(value: float) -> str:
+    return "" if np.isnan(value) else repr(float(value))

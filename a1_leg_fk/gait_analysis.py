@@ -1,0 +1,533 @@
+"""Gait analysis from world-frame feet: contacts (kinematic, with hysteresis), stride metrics, gait name.
+
+Pure numpy (no ROS, no file I/O): the input is ``stamps_s`` (N,) [s] and ``world_feet`` (N, 4, 3)
+[m], the feet in a world frame with z up, legs in :data:`a1_leg_fk.legs.LEG_NAMES` order (FR, FL,
+RR, RL); NaN rows (a missing base pose) are gaps. Any source works: a bag through
+:mod:`a1_leg_fk.recording`, a simulation, a motion-capture file.
+
+Contacts (:func:`detect_contacts`). A foot is in stance when it is near the ground and nearly still:
+
+* **Ground.** A plane ``z = level + gx (x - x0) + gy (y - y0)`` fitted to the samples where a foot is
+  still (speed below ``speed_on_mps``): least squares, then refitted on the lower half of the
+  residuals three times (so a still swing apex does not lift it), and finally shifted to the
+  ``ground_percentile`` percentile of the residuals of all still samples. The level is that of the
+  *foot frame* in stance (ground + foot radius), so neither the floor height nor the foot radius
+  need be known; a slope of a few degrees is followed. Heights are ``z - plane(x, y)``.
+* **Speed** [m/s] comes from central differences over the stamps (no constant rate assumed): the
+  difference quotient over a span of at least ``speed_window_s`` (at least one sample interval),
+  the central-difference velocity at the span's middle. A sample's speed is the smaller of the
+  span that ends at it and the span that starts at it: a foot just landed is still over the span
+  ahead, a foot about to lift is still over the span behind, so the spans do not shorten stances.
+* **Hysteresis.** Swing -> stance when height < ``height_on_m`` and speed < ``speed_on_mps``;
+  stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps``.
+* **Minimum phase.** Interior swings, then interior stances, shorter than ``min_phase_s`` are
+  merged into their neighbours.
+* **Edges.** Each stance's first/last samples are trimmed to those within three noise deviations
+  (robust, from all stance heights; at least 1 mm) of the stance's median height, so the speed
+  window's reach does not bias touchdown early and lift-off late. An edge time is the midpoint
+  between the last sample of one phase and the first of the next (unbiased on a sampling grid);
+  at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
+
+Metrics (:func:`gait_metrics`): per leg the stance intervals, duty factor (stance time over stride
+time of the complete strides; strides off the leg's median period by more than half, such as a pause
+to stand, are left out and counted as irregular), stride period and frequency (touchdown to touchdown), step length
+(horizontal distance between consecutive touchdown positions, each the median position of its
+stance), swing clearance (peak height of each complete swing above the ground plane); for the
+robot, each leg's touchdown phase relative to FR's strides (0..1, circular mean, with its
+consistency ``R`` in 0..1) and the gait named from the phases and the duty factor.
+Times are in seconds from the first stamp.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.urdf import LegFkError
+
+MIN_SAMPLES = 5
+"""Fewer valid rows than this cannot give a speed window and a phase on each side."""
+PLANE_REFITS = 3
+EDGE_NOISE_DEVIATIONS = 3.0
+EDGE_NOISE_FLOOR_M = 0.001
+SLOPE_RCOND = 0.01
+"""Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set 0)."""
+
+GAIT_TEMPLATES: dict[str, tuple[float, float, float]] = {
+    "trot": (0.5, 0.5, 0.0),
+    "pace": (0.5, 0.0, 0.5),
+    "bound": (0.0, 0.5, 0.5),
+    "pronk": (0.0, 0.0, 0.0),
+}
+"""Touchdown phase of (FL, RR, RL) relative to FR for the two-beat gaits (and pronk)."""
+PHASE_TOLERANCE = 0.1
+"""Largest circular phase deviation [cycles] from a template that still names the gait."""
+NO_MATCH_DEVIATION = 0.25
+"""A phase deviation [cycles] of a quarter cycle or more fits a template not at all (fit 0)."""
+WALK_MIN_SEPARATION = 0.125
+"""A walk's four touchdowns are at least this far apart [cycles] (evenly spread: 0.25)."""
+WALK_MIN_DUTY = 0.5
+IRREGULAR_STRIDE = 0.5
+"""A stride longer or shorter than the leg's median by more than this fraction (a pause, a stumble)
+is left out of the stride metrics and the phases, and counted as irregular."""
+MIN_CONSISTENCY = 0.6
+"""Phase consistency R (mean resultant length) below this names no gait (phases drift)."""
+
+
+@dataclass(frozen=True)
+class ContactThresholds:
+    """The contact detector's settings; defaults for the A1 at 20..1000 Hz (README: why these)."""
+
+    height_on_m: float = 0.02
+    height_off_m: float = 0.035
+    speed_on_mps: float = 0.15
+    speed_off_mps: float = 0.3
+    min_phase_s: float = 0.04
+    ground_percentile: float = 5.0
+    speed_window_s: float = 0.02
+
+    def __post_init__(self) -> None:
+        for name, value in asdict(self).items():
+            if not math.isfinite(value) or value < 0:
+                raise LegFkError(f"contact threshold {name} must be a finite number >= 0, got {value}")
+        if self.height_off_m < self.height_on_m or self.speed_off_mps < self.speed_on_mps:
+            raise LegFkError(
+                f"hysteresis needs off >= on: height {self.height_on_m} / {self.height_off_m} m, "
+                f"speed {self.speed_on_mps} / {self.speed_off_mps} m/s"
+            )
+        if self.ground_percentile > 100:
+            raise LegFkError(f"ground_percentile must be in 0..100, got {self.ground_percentile}")
+
+
+@dataclass(frozen=True)
+class GroundPlane:
+    """``z = level_m + slope[0] (x - origin[0]) + slope[1] (y - origin[1])`` [m], world frame."""
+
+    level_m: float
+    origin_xy: tuple[float, float]
+    slope: tuple[float, float]
+
+    @property
+    def slope_deg(self) -> float:
+        """The plane's inclination from horizontal [deg]."""
+        return math.degrees(math.atan(math.hypot(*self.slope)))
+
+    def height_of(self, points: np.ndarray) -> np.ndarray:
+        """Height [m] of ``points`` (..., 3) above the plane, along z."""
+        x0, y0 = self.origin_xy
+        gx, gy = self.slope
+        return points[..., 2] - (self.level_m + gx * (points[..., 0] - x0) + gy * (points[..., 1] - y0))
+
+
+@dataclass(frozen=True)
+class Stance:
+    """One stance phase [s from the first stamp]; an edge at the data's or a gap's border is not observed."""
+
+    t_on: float
+    t_off: float
+    first: int  # sample indices, inclusive
+    last: int
+    touchdown_observed: bool
+    liftoff_observed: bool
+    segment: int  # index of the gap-free run of samples it lies in
+
+
+@dataclass(frozen=True)
+class Contacts:
+    """Per-sample contact states and the stance phases of each leg (arrays sorted by time)."""
+
+    times_s: np.ndarray  # (N,) [s] from the first stamp
+    positions_m: np.ndarray  # (N, 4, 3) world frame
+    valid: np.ndarray  # (N, 4) bool: finite position
+    heights_m: np.ndarray  # (N, 4) above the ground plane; NaN where not valid
+    speeds_mps: np.ndarray  # (N, 4); NaN where not valid or no neighbour
+    stance: np.ndarray  # (N, 4) bool
+    segments: np.ndarray  # (N, 4) int: gap-free run index per leg, -1 where not valid
+    stances: tuple[tuple[Stance, ...], ...]  # per leg
+    ground: GroundPlane
+    thresholds: ContactThresholds
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class LegMetrics:
+    """One leg's stride metrics; ``None`` where the data cannot give a value (``reason`` says why)."""
+
+    leg: str
+    status: str  # "ok", "no data", "never touches down", "never lifts", "too few strides"
+    stance_s: tuple[tuple[float, float], ...]
+    strides: int  # complete, regular strides the metrics are computed from
+    irregular_strides: int  # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
+    duty_factor: float | None
+    stride_period_s: float | None
+    stride_frequency_hz: float | None
+    step_length_m: float | None
+    clearance_m: float | None
+    reason: str | None = None
+
+
+@dataclass(frozen=True)
+class GaitReport:
+    """The gait of a recording: name, fit, per-leg metrics, phases, and what they were computed with."""
+
+    gait: str
+    gait_fit: float  # 0..1: template match x phase consistency
+    gait_reason: str
+    candidates: dict[str, float]  # fit of each gait name
+    legs: dict[str, LegMetrics]
+    phase_vs_fr: dict[str, float | None]  # touchdown phase of FL, RR, RL in FR's stride, 0..1
+    phase_consistency: dict[str, float | None]
+    duty_factor: float | None  # mean over legs with one
+    ground: GroundPlane
+    thresholds: ContactThresholds
+    notes: tuple[str, ...] = field(default=())
+
+    def to_json(self) -> dict:
+        """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a ``reason``)."""
+        legs = {}
+        for leg, metrics in self.legs.items():
+            entry = {key: value for key, value in asdict(metrics).items() if key != "leg"}
+            entry["stance_s"] = [[round(a, 6), round(b, 6)] for a, b in metrics.stance_s]
+            if entry["reason"] is None:
+                del entry["reason"]
+            legs[leg] = entry
+        return {
+            "gait": self.gait,
+            "gait_fit": self.gait_fit,
+            "gait_reason": self.gait_reason,
+            "gait_candidates": self.candidates,
+            "duty_factor": self.duty_factor,
+            "legs": legs,
+            "phase_vs_FR": self.phase_vs_fr,
+            "phase_consistency": self.phase_consistency,
+            "ground_level_m": self.ground.level_m,
+            "ground_plane": {"origin_xy_m": list(self.ground.origin_xy), "slope_dz_dxy": list(self.ground.slope),
+                             "slope_deg": self.ground.slope_deg},
+            "thresholds": asdict(self.thresholds),
+            "notes": list(self.notes),
+        }
+
+
+# --- input -------------------------------------------------------------------------------------
+
+
+def prepare(stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort") -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(stamps, feet, notes)`` checked, sorted by time (``unsorted="sort"``) or refused (``"reject"``).
+
+    Rows with a repeated stamp keep the first; the notes say what was sorted or dropped.
+    """
+    stamps = np.asarray(stamps_s, dtype=float)
+    feet = np.asarray(world_feet, dtype=float)
+    if stamps.ndim != 1 or feet.shape != (stamps.size, len(LEG_NAMES), 3):
+        raise LegFkError(f"expected stamps (N,) and world feet (N, 4, 3), got {stamps.shape} and {feet.shape}")
+    if not np.isfinite(stamps).all():
+        raise LegFkError(f"{int((~np.isfinite(stamps)).sum())} stamps are not finite")
+    notes: list[str] = []
+    backwards = int((np.diff(stamps) < 0).sum())
+    if backwards:
+        if unsorted == "reject":
+            first = int(np.argmax(np.diff(stamps) < 0)) + 1
+            raise LegFkError(f"stamps not increasing: {backwards} go back in time (first at row {first}); rejected")
+        order = np.argsort(stamps, kind="stable")
+        stamps, feet = stamps[order], feet[order]
+        notes.append(f"stamps not increasing: {backwards} rows went back in time; sorted by stamp")
+    repeated = np.concatenate(([False], np.diff(stamps) == 0))
+    if repeated.any():
+        if unsorted == "reject":
+            raise LegFkError(f"stamps not increasing: {int(repeated.sum())} repeat the previous stamp; rejected")
+        stamps, feet = stamps[~repeated], feet[~repeated]
+        notes.append(f"{int(repeated.sum())} rows repeated a stamp; the first of each was kept")
+    valid_rows = int(np.isfinite(feet).all(axis=2).any(axis=1).sum())
+    if valid_rows < MIN_SAMPLES:
+        raise LegFkError(f"too few samples: {valid_rows} rows with a finite foot, need at least {MIN_SAMPLES}")
+    return stamps, feet, notes
+
+
+# --- contacts ----------------------------------------------------------------------------------
+
+
+def segments_of(valid: np.ndarray) -> np.ndarray:
+    """Index of the gap-free run each sample belongs to (-1 where not valid), for one leg's (N,) mask."""
+    starts = valid & ~np.concatenate(([False], valid[:-1]))
+    return np.where(valid, np.cumsum(starts) - 1, -1)
+
+
+def still_speeds(times: np.ndarray, points: np.ndarray, window_s: float) -> np.ndarray:
+    """(n,) speed [m/s] of one gap-free run: the smaller of the spans ending and starting at each sample.
+
+    A span reaches the nearest sample at least ``window_s`` away (at least the neighbour), or the
+    run's end; its difference quotient is the central-difference velocity at the span's middle.
+    """
+    n = times.size
+    index = np.arange(n)
+    back = np.clip(np.searchsorted(times, times - window_s, side="right") - 1, 0, None)
+    back = np.where(back == index, index - 1, back)
+    ahead = np.clip(np.searchsorted(times, times + window_s, side="left"), None, n - 1)
+    ahead = np.where(ahead == index, index + 1, ahead)
+    speeds = np.full((2, n), np.inf)
+    for row, other in enumerate((back, ahead)):
+        ok = (other >= 0) & (other < n)
+        partner = other[ok]
+        distance = np.linalg.norm(points[partner] - points[index[ok]], axis=1)
+        speeds[row, ok] = distance / np.abs(times[partner] - times[index[ok]])
+    speed = speeds.min(axis=0)
+    return np.where(np.isfinite(speed), speed, np.nan)
+
+
+def fit_ground(points: np.ndarray, percentile: float) -> GroundPlane:
+    """The ground plane under still feet ``points`` (M, 3) [m]: see the module docstring."""
+    if points.shape[0] < 3:
+        raise LegFkError(f"too few still foot samples ({points.shape[0]}) to find the ground")
+    origin = points[:, :2].mean(axis=0)
+    design = np.column_stack((np.ones(points.shape[0]), points[:, :2] - origin))
+    keep = np.ones(points.shape[0], dtype=bool)
+    for _ in range(PLANE_REFITS + 1):
+        # Unscaled columns (1, dx [m], dy [m]): a singular value relative to the first is about the
+        # feet's spread [m] in that direction, so rcond drops slopes the feet cannot determine.
+        coefficients = np.linalg.lstsq(design[keep], points[keep, 2], rcond=SLOPE_RCOND)[0]
+        residuals = points[:, 2] - design @ coefficients
+        keep = residuals <= np.median(residuals)
+    level = coefficients[0] + float(np.percentile(residuals, percentile))
+    return GroundPlane(float(level), (float(origin[0]), float(origin[1])), (float(coefficients[1]), float(coefficients[2])))
+
+
+def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) -> np.ndarray:
+    """(n,) stance mask of one gap-free run from its heights [m] and speeds [m/s]."""
+    with np.errstate(invalid="ignore"):
+        enter = (heights < t.height_on_m) & (speeds < t.speed_on_mps)
+        leave = (heights > t.height_off_m) | (speeds > t.speed_off_mps) | np.isnan(speeds)
+    events = np.where(enter | leave)[0]
+    if events.size == 0:
+        # Never past either threshold: the whole run lies between on and off.
+        return np.full(heights.size, bool(heights[0] < t.height_off_m))
+    last = np.maximum.accumulate(np.where(enter | leave, np.arange(heights.size), -1))
+    state = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
+    return state.astype(bool)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
+    """``(first, last, value)`` of each run of equal values in ``mask``."""
+    cuts = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
+    firsts = np.concatenate(([0], cuts))
+    lasts = np.concatenate((cuts - 1, [mask.size - 1]))
+    return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
+
+
+def _run_duration(times: np.ndarray, first: int, last: int) -> float:
+    start = times[first] if first == 0 else 0.5 * (times[first - 1] + times[first])
+    end = times[last] if last == times.size - 1 else 0.5 * (times[last] + times[last + 1])
+    return float(end - start)
+
+
+def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float) -> np.ndarray:
+    """``stance`` with interior swings, then interior stances, shorter than ``min_phase_s`` merged away."""
+    stance = stance.copy()
+    for value in (False, True):
+        for first, last, run_value in _runs(stance):
+            interior = first > 0 and last < stance.size - 1
+            if run_value == value and interior and _run_duration(times, first, last) < min_phase_s:
+                stance[first:last + 1] = not value
+    return stance
+
+
+def trim_edges(heights: np.ndarray, stance: np.ndarray, tolerance_m: float) -> np.ndarray:
+    """``stance`` with each stance's edge samples higher than its median + ``tolerance_m`` moved to swing."""
+    stance = stance.copy()
+    for first, last, value in _runs(stance):
+        if not value:
+            continue
+        low = np.flatnonzero(heights[first:last + 1] <= np.median(heights[first:last + 1]) + tolerance_m)
+        stance[first:first + low[0]] = False
+        stance[first + low[-1] + 1:last + 1] = False
+    return stance
+
+
+def detect_contacts(
+    stamps_s: np.ndarray, world_feet: np.ndarray, thresholds: ContactThresholds = ContactThresholds(),
+    unsorted: str = "sort",
+) -> Contacts:
+    """Stance/swing of each foot from world-frame feet; see the module docstring for the method.
+
+    ``stamps_s`` (N,) [s], ``world_feet`` (N, 4, 3) [m] world frame, z up, NaN rows = gaps.
+    ``unsorted``: ``"sort"`` (default; noted) or ``"reject"`` (:class:`LegFkError`) for stamps that go back.
+    """
+    stamps, feet, notes = prepare(stamps_s, world_feet, unsorted)
+    times = stamps - stamps[0]
+    valid = np.isfinite(feet).all(axis=2)
+    legs = len(LEG_NAMES)
+    segments = np.column_stack([segments_of(valid[:, slot]) for slot in range(legs)])
+    speeds = np.full(valid.shape, np.nan)
+    for slot in range(legs):
+        for segment in range(segments[:, slot].max() + 1):
+            rows = np.flatnonzero(segments[:, slot] == segment)
+            if rows.size >= 2:
+                speeds[rows, slot] = still_speeds(times[rows], feet[rows, slot], thresholds.speed_window_s)
+    with np.errstate(invalid="ignore"):
+        still = valid & (speeds < thresholds.speed_on_mps)
+    if still.sum() < 3:
+        raise LegFkError(
+            f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} samples): "
+            "cannot find the ground; are these world-frame feet?"
+        )
+    ground = fit_ground(feet[still], thresholds.ground_percentile)
+    heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
+    stance = np.zeros(valid.shape, dtype=bool)
+    for slot in range(legs):
+        for segment in range(segments[:, slot].max() + 1):
+            rows = np.flatnonzero(segments[:, slot] == segment)
+            stance[rows, slot] = drop_short_phases(
+                times[rows], hysteresis(heights[rows, slot], speeds[rows, slot], thresholds), thresholds.min_phase_s
+            )
+    stance_heights = heights[stance]
+    deviation = 1.4826 * float(np.median(np.abs(stance_heights - np.median(stance_heights)))) if stance_heights.size else 0.0
+    tolerance = max(EDGE_NOISE_DEVIATIONS * deviation, EDGE_NOISE_FLOOR_M)
+    for slot in range(legs):
+        for segment in range(segments[:, slot].max() + 1):
+            rows = np.flatnonzero(segments[:, slot] == segment)
+            stance[rows, slot] = trim_edges(heights[rows, slot], stance[rows, slot], tolerance)
+    stances = tuple(_stances(times, stance[:, slot], segments[:, slot]) for slot in range(legs))
+    gaps = int((~valid.all(axis=1)).sum())
+    if gaps:
+        notes.append(f"{gaps} rows with a missing foot (no pose there, a gap): phases are split at them")
+    return Contacts(times, feet, valid, heights, speeds, stance, segments, stances, ground, thresholds, tuple(notes))
+
+
+def _stances(times: np.ndarray, stance: np.ndarray, segments: np.ndarray) -> tuple[Stance, ...]:
+    out = []
+    for segment in range(segments.max() + 1):
+        rows = np.flatnonzero(segments == segment)
+        local = times[rows]
+        for first, last, value in _runs(stance[rows]):
+            if not value:
+                continue
+            start_seen, end_seen = first > 0, last < rows.size - 1
+            t_on = 0.5 * (local[first - 1] + local[first]) if start_seen else local[first]
+            t_off = 0.5 * (local[last] + local[last + 1]) if end_seen else local[last]
+            out.append(Stance(float(t_on), float(t_off), int(rows[first]), int(rows[last]), start_seen, end_seen, segment))
+    return tuple(out)
+
+
+# --- metrics -----------------------------------------------------------------------------------
+
+
+def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[float, float]]]:
+    """The leg's metrics and its complete strides ``(touchdown, next touchdown)`` [s]."""
+    leg = LEG_NAMES[slot]
+    stances = contacts.stances[slot]
+    intervals = tuple((s.t_on, s.t_off) for s in stances)
+    valid = contacts.valid[:, slot]
+    in_stance = contacts.stance[:, slot] & valid
+    empty = dict(strides=0, irregular_strides=0, duty_factor=None, stride_period_s=None, stride_frequency_hz=None, step_length_m=None, clearance_m=None)
+    if not valid.any():
+        return LegMetrics(leg, "no data", intervals, **empty, reason="no finite position of this foot"), []
+    if not in_stance.any():
+        return LegMetrics(leg, "never touches down", intervals, **{**empty, "duty_factor": 0.0},
+                          reason="the foot is never near the ground and still"), []
+    if not (valid & ~in_stance).any():
+        return LegMetrics(leg, "never lifts", intervals, **{**empty, "duty_factor": 1.0},
+                          reason="the foot is in stance in every sample"), []
+    strides, stance_times, steps, clearances = [], [], [], []
+    for this, following in zip(stances, stances[1:]):
+        if this.segment != following.segment or not this.touchdown_observed:
+            continue
+        strides.append((this.t_on, following.t_on))
+        stance_times.append(this.t_off - this.t_on)
+        start, end = (np.median(contacts.positions_m[s.first:s.last + 1, slot, :2], axis=0) for s in (this, following))
+        steps.append(float(np.linalg.norm(end - start)))
+    for this, following in zip(stances, stances[1:]):
+        if this.segment == following.segment:
+            clearances.append(float(np.max(contacts.heights_m[this.last + 1:following.first, slot])))
+    clearance = float(np.mean(clearances)) if clearances else None
+    if not strides:
+        return LegMetrics(leg, "too few strides", intervals, **{**empty, "clearance_m": clearance},
+                          reason="fewer than two touchdowns in one gap-free stretch"), []
+    durations = np.array([b - a for a, b in strides])
+    regular = np.abs(durations / np.median(durations) - 1.0) <= IRREGULAR_STRIDE
+    kept = [stride for stride, keep in zip(strides, regular) if keep]
+    stride_time = float(durations[regular].sum())
+    period = stride_time / len(kept)
+    metrics = LegMetrics(
+        leg, "ok", intervals, len(kept), int((~regular).sum()), float(np.array(stance_times)[regular].sum() / stride_time),
+        period, 1.0 / period, float(np.array(steps)[regular].mean()), clearance,
+    )
+    return metrics, kept
+
+
+def _circular_mean(phases: list[float]) -> tuple[float, float]:
+    """(mean phase in [0, 1), consistency R in [0, 1]) of phases in cycles."""
+    vector = np.exp(2j * np.pi * np.asarray(phases)).mean()
+    return float(np.angle(vector) / (2 * np.pi) % 1.0), float(abs(vector))
+
+
+def _circular_distance(a: float, b: float) -> float:
+    d = abs(a - b) % 1.0
+    return min(d, 1.0 - d)
+
+
+def relative_phases(contacts: Contacts, fr_strides: list[tuple[float, float]]) -> tuple[dict, dict]:
+    """Touchdown phase of FL, RR, RL within FR's strides (0..1) and its consistency R, ``None`` without data."""
+    phases: dict[str, float | None] = {}
+    consistency: dict[str, float | None] = {}
+    starts = np.array([a for a, _ in fr_strides])
+    for slot, leg in enumerate(LEG_NAMES[1:], start=1):
+        found = []
+        for stance in contacts.stances[slot]:
+            if not stance.touchdown_observed or not fr_strides:
+                continue
+            k = int(np.searchsorted(starts, stance.t_on, side="right")) - 1
+            if k >= 0 and stance.t_on < fr_strides[k][1]:
+                a, b = fr_strides[k]
+                found.append((stance.t_on - a) / (b - a))
+        phases[leg], consistency[leg] = _circular_mean(found) if found else (None, None)
+    return phases, consistency
+
+
+def name_gait(phases: dict[str, float | None], consistency: dict[str, float | None], duty: float | None) -> tuple[str, float, str, dict[str, float]]:
+    """``(name, fit 0..1, reason, fit of every candidate)`` from the phases vs FR and the duty factor."""
+    if any(value is None for value in phases.values()):
+        missing = [leg for leg, value in phases.items() if value is None]
+        return "unknown", 0.0, f"no touchdown phase for {', '.join(missing)} (needs strides of FR and touchdowns of each leg)", {}
+    measured = [phases[leg] for leg in LEG_NAMES[1:]]
+    r = min(consistency.values())
+    candidates = {}
+    for name, template in GAIT_TEMPLATES.items():
+        deviation = max(_circular_distance(m, t) for m, t in zip(measured, template))
+        candidates[name] = round(max(0.0, 1.0 - deviation / NO_MATCH_DEVIATION) * r, 4)
+    all_phases = [0.0, *measured]
+    separation = min(_circular_distance(a, b) for i, a in enumerate(all_phases) for b in all_phases[i + 1:])
+    candidates["walk"] = round(min(1.0, separation / 0.25) * r, 4) if duty is not None and duty > WALK_MIN_DUTY else 0.0
+    accepted = {
+        name: fit for name, fit in candidates.items()
+        if (name == "walk" and separation >= WALK_MIN_SEPARATION and fit > 0)
+        or (name != "walk" and max(_circular_distance(m, t) for m, t in zip(measured, GAIT_TEMPLATES[name])) <= PHASE_TOLERANCE)
+    }
+    if r < MIN_CONSISTENCY:
+        return "unknown", 0.0, f"touchdown phases are not consistent (R = {r:.2f} < {MIN_CONSISTENCY})", candidates
+    if not accepted:
+        return "unknown", 0.0, "no gait's phase pattern fits within its tolerance", candidates
+    best = max(accepted, key=accepted.get)
+    return best, accepted[best], "phases match " + best, candidates
+
+
+def gait_metrics(contacts: Contacts) -> GaitReport:
+    """Per-leg metrics, phases vs FR and the gait's name from :func:`detect_contacts`'s result."""
+    results = [_leg_metrics(contacts, slot) for slot in range(len(LEG_NAMES))]
+    legs = {metrics.leg: metrics for metrics, _ in results}
+    duties = [m.duty_factor for m in legs.values() if m.status == "ok"]
+    duty = float(np.mean(duties)) if duties else None
+    phases, consistency = relative_phases(contacts, results[0][1])
+    name, fit, reason, candidates = name_gait(phases, consistency, duty)
+    return GaitReport(name, fit, reason, candidates, legs, phases, consistency, duty, contacts.ground,
+                      contacts.thresholds, contacts.notes)
+
+
+def analyze_gait(
+    stamps_s: np.ndarray, world_feet: np.ndarray, thresholds: ContactThresholds = ContactThresholds(),
+    unsorted: str = "sort",
+) -> tuple[Contacts, GaitReport]:
+    """:func:`detect_contacts` then :func:`gait_metrics`: contacts and the gait report in one call."""
+    contacts = detect_contacts(stamps_s, world_feet, thresholds, unsorted)
+    return contacts, gait_metrics(contacts)

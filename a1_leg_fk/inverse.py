@@ -123,7 +123,8 @@ class LegSolver:
         joints = [stage.joint for stage in leg.stages]
         self.lower = np.array([-math.inf if j.lower is None else j.lower for j in joints])
         self.upper = np.array([math.inf if j.upper is None else j.upper for j in joints])
-        self.middle = np.where(np.isfinite(self.lower), (self.lower + self.upper) / 2.0, 0.0)
+        limited = np.isfinite(self.lower)
+        self.middle = np.where(limited, (np.where(limited, self.lower, 0.0) + np.where(limited, self.upper, 0.0)) / 2.0, 0.0)
         # Ranges for the searches: a continuous joint's full turn around its middle.
         self.search_lower = np.where(np.isfinite(self.lower), self.lower, self.middle - math.pi)
         self.search_upper = np.where(np.isfinite(self.upper), self.upper, self.middle + math.pi)

@@ -78,6 +78,7 @@ GRID_STEPS = 3
 PERPENDICULAR_TOLERANCE = 1e-9
 """|cos| between axes below which they count as perpendicular, and |1 - |cos|| for parallel."""
 TWO_PI = 2.0 * math.pi
+Vector3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,7 @@ class LegSolver:
         self.search_lower = np.where(np.isfinite(self.lower), self.lower, self.middle - math.pi)
         self.search_upper = np.where(np.isfinite(self.upper), self.upper, self.middle + math.pi)
         self._limits = tuple(zip(self.lower.tolist(), self.upper.tolist()))
+        self._middle = tuple(self.middle.tolist())
         self.geometry = _closed_form_geometry(leg)
         self.closed_form = self.geometry is not None
 
@@ -155,19 +157,32 @@ class LegSolver:
     def solve(self, point: Sequence[float], seed: Sequence[float] | None = None) -> LegIk:
         """The angles [rad] for ``point`` [m, base frame] nearest ``seed`` (3 angles; ``None``: the
         middle of the ranges), the status code and the residual [m]."""
-        seed_angles = tuple(self.middle.tolist()) if seed is None else tuple(seed)
+        seed_angles = self._middle if seed is None else tuple(seed)
         if not self.closed_form:
             return self._solve_by_search(np.asarray(point, dtype=float), seed_angles)
         best, best_distance, reachable = None, math.inf, False
+        roll_seen, roll_choice = None, None
+        (roll_lower, roll_upper), knee_limits = self._limits[0], self._limits[1:]
         for angles, exact in _branches(self.geometry, *point, _SCALAR):
             if not exact:
                 continue
             reachable = True
-            representative, inside = self._representatives(angles, seed_angles)
-            if inside:
-                distance = sum((a - s) ** 2 for a, s in zip(representative, seed_angles))
+            if angles[0] != roll_seen:  # the two knee branches share the roll angle
+                roll_seen = angles[0]
+                roll, inside = _representative(roll_seen, seed_angles[0], roll_lower, roll_upper, _SCALAR)
+                roll_choice = roll if inside else None
+            if roll_choice is None:
+                continue
+            chosen = [roll_choice]
+            for angle, reference, (lower, upper) in zip(angles[1:], seed_angles[1:], knee_limits):
+                value, inside = _representative(angle, reference, lower, upper, _SCALAR)
+                if not inside:
+                    break
+                chosen.append(value)
+            else:
+                distance = sum((a - s) ** 2 for a, s in zip(chosen, seed_angles))
                 if distance < best_distance:
-                    best, best_distance = representative, distance
+                    best, best_distance = tuple(chosen), distance
         if best is not None:
             x, y, z = self.leg.position(*best)
             residual = math.sqrt((x - point[0]) ** 2 + (y - point[1]) ** 2 + (z - point[2]) ** 2)
@@ -278,6 +293,8 @@ def _representative(angle, reference, lower: float, upper: float, xp):  # noqa: 
     nearest = angle + TWO_PI * xp.round((reference - angle) / TWO_PI)
     low, high = lower - LIMIT_TOLERANCE_RAD, upper + LIMIT_TOLERANCE_RAD
     inside = (nearest >= low) & (nearest <= high)
+    if xp is _SCALAR and inside:  # the common case, without the array-friendly detour below
+        return min(max(nearest, lower), upper), True
     raised = nearest + TWO_PI * xp.ceil((low - nearest) / TWO_PI)  # the smallest value >= low
     lowered = nearest - TWO_PI * xp.ceil((nearest - high) / TWO_PI)  # the largest value <= high
     outside = xp.not_(inside)
@@ -298,14 +315,14 @@ def _representative(angle, reference, lower: float, upper: float, xp):  # noqa: 
 class _Geometry:
     """The closed form's constants, from the compiled stages (see the module docstring)."""
 
-    roll_rotation_t: np.ndarray  # M0^T
-    roll_origin: np.ndarray  # o0 [m]
-    roll_axis: np.ndarray  # a0
-    pitch_axis: np.ndarray  # b = M1 a1, in the roll joint's child frame
-    pitch_cross: np.ndarray  # a0 x b
-    pitch_origin: np.ndarray  # o1 [m]
+    roll_rotation_t: tuple[Vector3, Vector3, Vector3]  # M0^T, by rows
+    roll_origin: Vector3  # o0 [m]
+    roll_axis: Vector3  # a0
+    pitch_axis: Vector3  # b = M1 a1, in the roll joint's child frame
+    pitch_cross: Vector3  # a0 x b
+    pitch_origin: Vector3  # o1 [m]
     lateral_m: float  # h = b . x for every pitch and knee angle [m]
-    plane: np.ndarray  # (2, 3): M1 e1, M1 e2, a basis of the plane normal to the pitch axis
+    plane: tuple[Vector3, Vector3]  # M1 e1, M1 e2: a basis of the plane normal to the pitch axis
     foot_u: tuple[float, float]  # the foot in that plane at knee angle q2: U + cos q2 V + sin q2 W [m]
     foot_v: tuple[float, float]
     foot_w: tuple[float, float]
@@ -340,14 +357,14 @@ def _closed_form_geometry(leg: CompiledLeg) -> _Geometry | None:
     if kappa < 1e-12:  # the foot on the knee axis, or the knee on the pitch axis: the knee moves nothing
         return None
     return _Geometry(
-        roll_rotation_t=roll.rotation.T.copy(),
-        roll_origin=roll.offset,
-        roll_axis=roll.axis,
-        pitch_axis=pitch_axis,
-        pitch_cross=np.cross(roll.axis, pitch_axis),
-        pitch_origin=pitch.offset,
+        roll_rotation_t=tuple(_floats(row) for row in roll.rotation.T),
+        roll_origin=_floats(roll.offset),
+        roll_axis=_floats(roll.axis),
+        pitch_axis=_floats(pitch_axis),
+        pitch_cross=_floats(np.cross(roll.axis, pitch_axis)),
+        pitch_origin=_floats(pitch.offset),
         lateral_m=float(pitch_axis @ pitch.offset + pitch.axis @ u),
-        plane=basis @ pitch.rotation.T,
+        plane=tuple(_floats(row) for row in basis @ pitch.rotation.T),
         foot_u=tuple(foot_u.tolist()),
         foot_v=tuple(foot_v.tolist()),
         foot_w=tuple(foot_w.tolist()),
@@ -358,15 +375,20 @@ def _closed_form_geometry(leg: CompiledLeg) -> _Geometry | None:
     )
 
 
-def _dot(row: np.ndarray, x, y, z):  # noqa: ANN001, ANN202
-    return float(row[0]) * x + float(row[1]) * y + float(row[2]) * z
+def _floats(vector: np.ndarray) -> Vector3:
+    x, y, z = vector.tolist()
+    return (x, y, z)
+
+
+def _dot(row: Vector3, x, y, z):  # noqa: ANN001, ANN202
+    return row[0] * x + row[1] * y + row[2] * z
 
 
 def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or arrays with xp=_ARRAY)
     """The four branches ``((q0, q1, q2), exact)`` for a target (tx, ty, tz) [m, base frame]:
     roll branch +-, knee branch +-. ``exact`` is False where a branch does not reach the target
     (its ``acos`` argument was clamped)."""
-    dx, dy, dz = tx - float(g.roll_origin[0]), ty - float(g.roll_origin[1]), tz - float(g.roll_origin[2])
+    dx, dy, dz = tx - g.roll_origin[0], ty - g.roll_origin[1], tz - g.roll_origin[2]
     rt = g.roll_rotation_t
     t0 = (_dot(rt[0], dx, dy, dz), _dot(rt[1], dx, dy, dz), _dot(rt[2], dx, dy, dz))
     along = _dot(g.roll_axis, *t0)
@@ -379,7 +401,8 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
     roll_exact = abs(roll_argument) <= 1.0 + ARGUMENT_TOLERANCE
     cos_roll = xp.minimum(xp.maximum(roll_argument, -1.0), 1.0)
     sin_roll = xp.sqrt(1.0 - cos_roll * cos_roll)
-    ax, ay, az = (float(v) for v in g.roll_axis)
+    ax, ay, az = g.roll_axis
+    ox, oy, oz = g.pitch_origin
     out = []
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll  # cos(base + sign * acos)
@@ -387,9 +410,9 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
         # x = Rot(a0, -q0) t0 = a0 (a0 . t0) + c0 (t0 - a0 (a0 . t0)) - s0 (a0 x t0), relative to o1
         px, py, pz = t0[0] - ax * along, t0[1] - ay * along, t0[2] - az * along
         cx, cy, cz = ay * t0[2] - az * t0[1], az * t0[0] - ax * t0[2], ax * t0[1] - ay * t0[0]
-        ex = ax * along + c0 * px - s0 * cx - float(g.pitch_origin[0])
-        ey = ay * along + c0 * py - s0 * cy - float(g.pitch_origin[1])
-        ez = az * along + c0 * pz - s0 * cz - float(g.pitch_origin[2])
+        ex = ax * along + c0 * px - s0 * cx - ox
+        ey = ay * along + c0 * py - s0 * cy - oy
+        ez = az * along + c0 * pz - s0 * cz - oz
         gx, gy = _dot(g.plane[0], ex, ey, ez), _dot(g.plane[1], ex, ey, ez)
         knee_argument = (gx * gx + gy * gy - g.alpha) / g.kappa
         exact = roll_exact & (abs(knee_argument) <= 1.0 + ARGUMENT_TOLERANCE)
@@ -531,9 +554,10 @@ def solve_feet(solvers: Sequence[LegSolver], feet: np.ndarray, seed: Sequence[fl
     """IK of four legs for (4, 3) checked targets [m] and 12 checked seed angles (or ``None``)."""
     angles: list[float] = []
     status, residuals = [], []
+    targets = feet.tolist()  # floats: Python arithmetic on numpy scalars is several times slower
     for slot, solver in enumerate(solvers):
         leg_seed = None if seed is None else seed[3 * slot : 3 * slot + 3]
-        result = solver.solve(feet[slot], leg_seed)
+        result = solver.solve(targets[slot], leg_seed)
         angles.extend(result.angles)
         status.append(STATUS_NAMES[result.status])
         residuals.append(result.residual_m)

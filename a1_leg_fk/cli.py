@@ -133,6 +133,10 @@ def build_parser() -> argparse.ArgumentParser:
                       help=f"refresh period [s] (default {TTY_INTERVAL_S:g} on a terminal, else {PIPE_INTERVAL_S:g})")
     demo.add_argument("--log-dir", metavar="DIR", help="where the children's output goes (default: a new temp folder)")
     demo.set_defaults(handler=run_demo)
+
+    from a1_leg_fk import cli_ik
+
+    cli_ik.add_parser(commands)
     return parser
 
 

@@ -50,7 +50,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from a1_leg_fk.urdf import LegFkError
+from a1_leg_fk.urdf import Joint, LegFkError
 
 if TYPE_CHECKING:  # kinematics imports this module: no import cycle at run time
     from a1_leg_fk.kinematics import CompiledLeg
@@ -77,6 +77,8 @@ GRID_STEPS = 3
 """Starts per joint of the grid the least-squares searches start from (GRID_STEPS^3 starts)."""
 PERPENDICULAR_TOLERANCE = 1e-9
 """|cos| between axes below which they count as perpendicular, and |1 - |cos|| for parallel."""
+BATCH_BLOCK_ROWS = 4096
+"""Rows per block of :func:`solve_feet_batch`."""
 TWO_PI = 2.0 * math.pi
 Vector3 = tuple[float, float, float]
 
@@ -104,12 +106,8 @@ class LegIk:
 # --- the math namespaces: one formula for floats and for numpy arrays ----------------------------
 
 
-def _finite_ceil(value: float) -> float:
-    return float(math.ceil(value)) if math.isfinite(value) else value
-
-
 _SCALAR = SimpleNamespace(
-    sqrt=math.sqrt, atan2=math.atan2, ceil=_finite_ceil, round=round, minimum=min, maximum=max,
+    sqrt=math.sqrt, atan2=math.atan2, ceil=math.ceil, round=round, minimum=min, maximum=max,
     where=lambda condition, yes, no: yes if condition else no, not_=operator.not_,
 )
 _ARRAY = SimpleNamespace(
@@ -128,8 +126,7 @@ class LegSolver:
         joints = [stage.joint for stage in leg.stages]
         self.lower = np.array([-math.inf if j.lower is None else j.lower for j in joints])
         self.upper = np.array([math.inf if j.upper is None else j.upper for j in joints])
-        limited = np.isfinite(self.lower)
-        self.middle = np.where(limited, (np.where(limited, self.lower, 0.0) + np.where(limited, self.upper, 0.0)) / 2.0, 0.0)
+        self.middle = np.array([range_middle(joint) for joint in joints])
         # Ranges for the searches: a continuous joint's full turn around its middle.
         self.search_lower = np.where(np.isfinite(self.lower), self.lower, self.middle - math.pi)
         self.search_upper = np.where(np.isfinite(self.upper), self.upper, self.middle + math.pi)
@@ -283,18 +280,29 @@ class LegSolver:
         return found
 
 
+def range_middle(joint: Joint) -> float:
+    """The middle of a joint's range [rad], 0 for a continuous joint: the seed when none is given."""
+    return 0.0 if joint.lower is None or joint.upper is None else (joint.lower + joint.upper) / 2.0
+
+
 def _wrapped_distance(a: Sequence[float], b: Sequence[float]) -> float:
     return max(abs((x - y + math.pi) % TWO_PI - math.pi) for x, y in zip(a, b))
 
 
 def _representative(angle, reference, lower: float, upper: float, xp):  # noqa: ANN001, ANN202
     """``angle + 2 pi k`` inside ``[lower, upper]`` nearest ``reference`` where there is one (then
-    clamped into the range, and ``True``); else the one nearest ``reference`` and ``False``."""
+    clamped into the range, and ``True``); else ``False`` with, for a range narrower than 2 pi,
+    the value just above the lower limit, and otherwise the value nearest ``reference``."""
+    if upper - lower < TWO_PI:  # at most one value in range: no need for the reference
+        low = lower - LIMIT_TOLERANCE_RAD
+        value = low + (angle - low) % TWO_PI
+        inside = value <= upper + LIMIT_TOLERANCE_RAD
+        return xp.where(inside, xp.minimum(xp.maximum(value, lower), upper), value), inside
+    if lower == -math.inf:  # continuous: the value within pi of the reference
+        return reference + (angle - reference + math.pi) % TWO_PI - math.pi, True
     nearest = angle + TWO_PI * xp.round((reference - angle) / TWO_PI)
     low, high = lower - LIMIT_TOLERANCE_RAD, upper + LIMIT_TOLERANCE_RAD
     inside = (nearest >= low) & (nearest <= high)
-    if xp is _SCALAR and inside:  # the common case, without the array-friendly detour below
-        return min(max(nearest, lower), upper), True
     raised = nearest + TWO_PI * xp.ceil((low - nearest) / TWO_PI)  # the smallest value >= low
     lowered = nearest - TWO_PI * xp.ceil((nearest - high) / TWO_PI)  # the largest value <= high
     outside = xp.not_(inside)
@@ -570,8 +578,12 @@ def solve_feet_batch(solvers: Sequence[LegSolver], feet: np.ndarray, seeds: np.n
     angles = np.empty((rows, 3 * len(solvers)))
     status = np.empty((rows, len(solvers)), dtype=np.int8)
     residuals = np.empty((rows, len(solvers)))
-    for slot, solver in enumerate(solvers):
-        columns = slice(3 * slot, 3 * slot + 3)
-        leg_seeds = None if seeds is None else seeds[:, columns]
-        angles[:, columns], status[:, slot], residuals[:, slot] = solver.solve_batch(feet[:, slot], leg_seeds)
+    for block in range(0, rows, BATCH_BLOCK_ROWS):  # blocks whose temporaries stay in the CPU cache
+        rows_in_block = slice(block, min(block + BATCH_BLOCK_ROWS, rows))
+        for slot, solver in enumerate(solvers):
+            columns = slice(3 * slot, 3 * slot + 3)
+            leg_seeds = None if seeds is None else seeds[rows_in_block, columns]
+            angles[rows_in_block, columns], status[rows_in_block, slot], residuals[rows_in_block, slot] = solver.solve_batch(
+                feet[rows_in_block, slot], leg_seeds
+            )
     return IkBatchResult(angles, status, residuals)

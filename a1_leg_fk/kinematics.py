@@ -242,6 +242,11 @@ class Quadruped:
             raise LegFkError(f"seed has {seeds.shape[0]} rows, feet {targets.shape[0]}")
         return inverse.solve_feet_batch(self._ik_solvers, targets, seeds)
 
+    def ik_leg(self, leg: str, point: Sequence[float], seed: Sequence[float] | None = None) -> inverse.LegIk:
+        """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or ``None``."""
+        checked_seed = None if seed is None else _checked_configuration(seed, f"seed of leg {leg}", JOINTS_PER_LEG)
+        return self._ik_solvers[_leg_slot(leg)].solve(inverse.checked_point(point, leg), checked_seed)
+
     def ik_solutions(self, leg: str, point: Sequence[float]) -> list[inverse.Solution]:
         """Every exact IK solution of ``leg`` for ``point`` [m, base frame] (for the A1 topology:
         up to two roll x two knee branches), each with whether it is inside the URDF limits."""
@@ -303,15 +308,18 @@ def _checked_feet(feet: np.ndarray) -> np.ndarray:
     return targets
 
 
-def _checked_configuration(angles: Sequence[float], what: str = "joint angles") -> list[float]:
-    """12 finite floats, or a LegFkError naming the problem."""
+def _checked_configuration(angles: Sequence[float], what: str = "joint angles", count: int = JOINT_COUNT) -> list[float]:
+    """``count`` (12) finite floats, or a LegFkError naming the problem."""
     try:
         q = [float(value) for value in angles]
     except (TypeError, ValueError) as error:
-        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers: {error}") from error
-    if len(q) != JOINT_COUNT:
-        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers (3 per leg, {'/'.join(LEG_NAMES)}), got {len(q)}")
+        raise LegFkError(f"{what} must be {count} numbers: {error}") from error
+    if len(q) != count:
+        per_leg = f" (3 per leg, {'/'.join(LEG_NAMES)})" if count == JOINT_COUNT else ""
+        raise LegFkError(f"{what} must be {count} numbers{per_leg}, got {len(q)}")
     for slot, value in enumerate(q):
+        if not math.isfinite(value) and count != JOINT_COUNT:
+            raise LegFkError(f"{what}: joint {slot} is {value}")
         if not math.isfinite(value):
             leg = LEG_NAMES[slot // JOINTS_PER_LEG]
             raise LegFkError(f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}")

@@ -3,7 +3,7 @@
 #   make venv       create/refresh $(VENV): pinned requirements + this package (editable)
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
 #   make test       the whole test suite (node tests pick their own ROS domain)
-#   make bench      bench/fk_speed.py and bench/node_throughput.py (those that exist)
+#   make bench      bench/fk_speed.py, bench/ik_speed.py and bench/node_throughput.py (those that exist)
 #   make soak       bench/soak.py
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
 
@@ -83,7 +83,7 @@ test: venv
 	  --session-timeout=$(TEST_SESSION_TIMEOUT) $(PYTEST_ARGS) test
 
 bench: venv
-	@ran=0; for script in bench/fk_speed.py bench/node_throughput.py; do \
+	@ran=0; for script in bench/fk_speed.py bench/ik_speed.py bench/node_throughput.py; do \
 	  if [ -f $$script ]; then echo "== $$script"; $(BIN)/python $$script; ran=1; \
 	  else echo "make bench: $$script does not exist (skipped)"; fi; \
 	done; [ $$ran = 1 ] || { echo "make bench: no benchmark scripts" >&2; exit 1; }

@@ -120,7 +120,9 @@ class LegSolver:
     """IK of one compiled leg: :meth:`solve` (one target), :meth:`solve_batch` (N targets) and
     :meth:`solutions` (every exact solution)."""
 
-    def __init__(self, leg: CompiledLeg) -> None:
+    def __init__(self, leg: CompiledLeg, use_closed_form: bool = True) -> None:
+        """``use_closed_form=False`` solves an A1-topology leg by damped least squares as well
+        (for comparisons: the statuses and residuals agree)."""
         self.leg = leg
         self.name = leg.chain.leg
         joints = [stage.joint for stage in leg.stages]
@@ -132,7 +134,7 @@ class LegSolver:
         self.search_upper = np.where(np.isfinite(self.upper), self.upper, self.middle + math.pi)
         self._limits = tuple(zip(self.lower.tolist(), self.upper.tolist()))
         self._middle = tuple(self.middle.tolist())
-        self.geometry = _closed_form_geometry(leg)
+        self.geometry = _closed_form_geometry(leg) if use_closed_form else None
         self.closed_form = self.geometry is not None
 
     # --- public --------------------------------------------------------------------------

@@ -361,3 +361,17 @@ def test_ik_solutions_of_an_unknown_leg_and_bad_point(a1: Quadruped) -> None:
         a1.ik_solutions("XX", (0.2, -0.1, -0.3))
     with pytest.raises(LegFkError, match="FL"):
         a1.ik_solutions("FL", (0.2, math.nan, -0.3))
+
+
+def test_the_least_squares_path_agrees_with_the_closed_form_on_the_a1(a1: Quadruped) -> None:
+    """The same targets through both solvers: same statuses, residuals within 1e-9 m."""
+    searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in a1.legs]
+    rng = np.random.default_rng(9)
+    lower, upper = ranges(a1)
+    inside = a1.fk_batch(rng.uniform(lower, upper, size=(6, 12)))
+    outside = inside + rng.uniform(-0.3, 0.3, size=inside.shape)
+    for feet in np.concatenate([inside, outside]):
+        closed = a1.ik(feet)
+        searched = inverse.solve_feet(searching, feet, None)
+        assert searched.status == closed.status
+        np.testing.assert_allclose(searched.residual_m, closed.residual_m, rtol=0.0, atol=1e-9)

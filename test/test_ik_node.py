@@ -12,10 +12,12 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
+from pathlib import Path
 from collections import defaultdict
 
 import numpy as np
 import pytest
+import yaml
 from conftest import BIN
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped
@@ -25,7 +27,8 @@ from sensor_msgs.msg import JointState
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
-pytestmark = pytest.mark.slow
+from a1_leg_fk import ik_node
+
 
 
 def ik_node_command(*ros_args: str) -> list[str]:
@@ -56,6 +59,7 @@ class Commands:
         return {}
 
 
+@pytest.mark.slow
 def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:  # noqa: ANN001
     demo_states: dict[int, JointState] = {}
     ros.node.create_subscription(JointState, "joint_states", lambda m: demo_states.__setitem__(stamp_of(m), m), QoSProfile(depth=5000))
@@ -86,6 +90,7 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
     assert "Traceback" not in processes.output(ik)
 
 
+@pytest.mark.slow
 def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:  # noqa: ANN001
     commands = Commands(ros)
     ik = processes.start(ik_node_command("-p", f"command_joint_names:={UNITREE_NAMES}".replace("'", '"')))
@@ -130,6 +135,7 @@ def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:  
     assert "'odom'" in output and "unreachable" in output and "Traceback" not in output
 
 
+@pytest.mark.slow
 def test_bad_ros_args_exit_2_in_one_line(processes) -> None:  # noqa: ANN001
     process = processes.start(ik_node_command("-p"))
     try:
@@ -141,6 +147,7 @@ def test_bad_ros_args_exit_2_in_one_line(processes) -> None:  # noqa: ANN001
     assert len(ours) == 1 and "cannot start" in ours[0] and "Traceback" not in output
 
 
+@pytest.mark.slow
 def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0(processes) -> None:  # noqa: ANN001
     bad = processes.start(ik_node_command("-p", 'command_joint_names:=["a", "b"]'))
     assert bad.wait(20) == 1
@@ -153,3 +160,15 @@ def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0
         pass
     good.send_signal(signal.SIGTERM)
     assert good.wait(10) == 0, processes.output(good)
+
+
+def test_ik_params_yaml_states_every_parameter() -> None:
+    """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays commented out."""
+    path = Path(__file__).resolve().parent.parent / "config" / "ik_params.yaml"
+    text = path.read_text()
+    stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
+    scalars = {spec.name: spec.default for spec in ik_node.PARAMETERS if spec.default is not None}
+    assert stated == scalars
+    for spec in ik_node.PARAMETERS:
+        if spec.default is None:
+            assert f"# {spec.name}: [" in text

@@ -17,16 +17,15 @@ import time
 from collections import Counter
 from typing import Callable, Sequence
 
-import rclpy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PointStamped
 from rcl_interfaces.msg import ParameterType
 from rclpy.exceptions import ParameterUninitializedException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from a1_leg_fk import node as fk_node
+from a1_leg_fk import ros_glue
 from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.robot_config import RobotConfig, load_robot
@@ -147,42 +146,14 @@ class FootIkNode(Node):
             "base_frame": self._base_frame,
             "model": self._model.source,
         }
-        status = DiagnosticStatus(
-            level=level,
-            name=f"{self.get_name()}: foot inverse kinematics",
-            message=summary,
-            hardware_id=self._model.quadruped.model.name,
-            values=[KeyValue(key=key, value=str(value)) for key, value in values.items()],
-        )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
+        hardware_id = self._model.quadruped.model.name
+        array = ros_glue.diagnostics(self, "foot inverse kinematics", level, summary, hardware_id, values)
         self._diagnostics.publish(array)
 
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk foot_ik_node``; exits 0 on Ctrl-C/SIGTERM."""
-    try:
-        rclpy.init(args=args)
-    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
-        print(f"foot_ik_node: cannot start: {error}", file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = FootIkNode()
-        executor = fk_node._make_executor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except LegFkError as error:
-        rclpy.logging.get_logger(NODE_NAME).fatal(f"cannot start: {error}")
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return ros_glue.run_node("foot_ik_node", FootIkNode, args)
 
 
 if __name__ == "__main__":

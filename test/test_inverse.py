@@ -15,6 +15,8 @@ import numpy as np
 import pybullet_data
 import pybullet_reference
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import least_squares
 from test_legs import quadruped_urdf
 
@@ -312,7 +314,10 @@ def test_statuses_over_a_uniform_cloud_match_a_dense_search(name: str) -> None:
     judged = {"ok": 0, "outside_limits": 0, "unreachable": 0}
     for row, target in enumerate(targets):
         status = inverse.STATUS_NAMES[batch.status[row, 0]]
-        assert quadruped.ik(rows[row]).status[0] == status
+        single = quadruped.ik(rows[row])
+        assert single.status[0] == status
+        np.testing.assert_allclose(single.angles[:3], batch.angles[row, :3], rtol=0.0, atol=1e-12)
+        assert abs(single.residual_m[0] - batch.residual_m[row, 0]) <= 1e-12
         assert np.isfinite(batch.angles[row]).all()
         assert not quadruped.joints_outside_limits(batch.angles[row])
         reference = dense_search(quadruped, 0, target)
@@ -375,3 +380,14 @@ def test_the_least_squares_path_agrees_with_the_closed_form_on_the_a1(a1: Quadru
         searched = inverse.solve_feet(searching, feet, None)
         assert searched.status == closed.status
         np.testing.assert_allclose(searched.residual_m, closed.residual_m, rtol=0.0, atol=1e-9)
+
+
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
+@given(st.tuples(*[st.floats(-1e6, 1e6, allow_nan=False)] * 3), st.sampled_from(LEGS))
+def test_any_finite_target_gives_finite_angles_and_a_residual(a1: Quadruped, point, leg: str) -> None:
+    """Never a NaN or an exception for finite input; the residual is the foot's real distance."""
+    result = a1.ik_leg(leg, point)
+    assert all(math.isfinite(a) for a in result.angles)
+    assert result.status in (inverse.OK, inverse.OUTSIDE_LIMITS, inverse.UNREACHABLE)
+    foot = a1.legs[LEGS.index(leg)].position(*result.angles)
+    assert math.isclose(result.residual_m, float(np.linalg.norm(np.subtract(foot, point))), rel_tol=1e-9, abs_tol=1e-12)

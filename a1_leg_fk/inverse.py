@@ -199,17 +199,19 @@ class LegSolver:
         if not self.closed_form:
             self._solve_rows_by_search(points, seeds, np.arange(rows), angles, status)
             return angles, status, self._residuals(angles, points)
-        seed_columns = tuple(seeds[:, j] for j in range(3))
+        seed_columns = tuple(np.ascontiguousarray(seeds.T))
         best_distance = np.full(rows, math.inf)
         reachable = np.zeros(rows, dtype=bool)
-        for branch, exact in _branches(self.geometry, points[:, 0], points[:, 1], points[:, 2], _ARRAY):
+        columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
+        chosen = [np.zeros(rows)] * 3
+        for branch, exact in _branches(self.geometry, columns[0], columns[1], columns[2], _ARRAY):
             representative, inside = self._representatives(branch, seed_columns, _ARRAY)
             reachable |= exact
             distance = sum((a - s) ** 2 for a, s in zip(representative, seed_columns))
             better = exact & inside & (distance < best_distance)
             best_distance = np.where(better, distance, best_distance)
-            for j in range(3):
-                angles[:, j] = np.where(better, representative[j], angles[:, j])
+            chosen = [np.where(better, value, previous) for value, previous in zip(representative, chosen)]
+        angles[:] = np.stack(chosen, axis=1)
         status[np.isfinite(best_distance)] = OK
         for row in np.flatnonzero(~np.isfinite(best_distance)):
             result = self._nearest_in_limits(points[row], tuple(seeds[row].tolist()), bool(reachable[row]))

@@ -21,9 +21,9 @@ holds for any rpy, offsets and axis signs in the URDF (A1, aliengo, mini_cheetah
 Up to four solutions. An ``acos`` argument beyond 1 (by more than :data:`ARGUMENT_TOLERANCE`)
 means that branch does not reach the target.
 
-**Other three-joint legs**: damped least squares (Levenberg-Marquardt) on the compiled FK and
-Jacobian, from the seed, then from a fixed grid of starts, each run bounded to
-:data:`MAX_ITERATIONS` iterations.
+**Other three-joint legs**: damped least squares on the compiled FK and Jacobian (Levenberg-damped
+Newton steps on the squared distance, see :func:`_least_squares`), from the seed, then from a
+fixed grid of starts, each run bounded to :data:`MAX_ITERATIONS` iterations.
 
 **Statuses** (:data:`STATUS_NAMES`, codes :data:`OK`, :data:`OUTSIDE_LIMITS`, :data:`UNREACHABLE`):
 ``ok`` - an exact solution inside the URDF limits; ``outside_limits`` - exact solutions exist,
@@ -33,11 +33,13 @@ constrained least-squares search from the clamped solutions, the seed and a grid
 the residual is that foot's distance from the target.
 
 **Which solution, and which angle** (the seed rule): each joint angle is taken modulo 2 pi; of its
-values ``q + 2 pi k`` the one inside the joint's limits nearest the seed's angle is used (for a
-continuous joint: the one nearest the seed, i.e. within pi of it). Among the in-limit solutions the
-one nearest the seed in joint space (Euclidean norm of the three differences, so wrapped angular
-distance for continuous joints) is returned. Without a seed the seed is the middle of each joint's
-range (0 for a continuous joint).
+values ``q + 2 pi k`` the one inside the joint's limits is used (for a range wider than 2 pi: the
+one nearest the seed's angle; for a continuous joint: the one within pi of the seed's angle). Among
+the in-limit solutions the one nearest the seed in joint space (Euclidean norm of the three
+differences, so wrapped angular distance for continuous joints) is returned. Without a seed the
+seed is the middle of each joint's range (0 for a continuous joint). An angle that has no value
+inside a range narrower than 2 pi is reported (by :meth:`LegSolver.solutions`) as its value just
+above the lower limit.
 """
 
 from __future__ import annotations

@@ -186,7 +186,7 @@ class LegSolver:
                     best, best_distance = tuple(chosen), distance
         if best is not None:
             x, y, z = self.leg.position(*best)
-            residual = math.sqrt((x - point[0]) ** 2 + (y - point[1]) ** 2 + (z - point[2]) ** 2)
+            residual = math.hypot(x - point[0], y - point[1], z - point[2])  # hypot: no overflow
             return LegIk(best, OK, residual)
         return self._nearest_in_limits(np.asarray(point, dtype=float), seed_angles, reachable)
 
@@ -233,7 +233,8 @@ class LegSolver:
         return tuple(chosen), all_inside
 
     def _residuals(self, angles: np.ndarray, points: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(_positions(self.leg, angles) - points, axis=1)
+        error = _positions(self.leg, angles) - points
+        return np.hypot(np.hypot(error[:, 0], error[:, 1]), error[:, 2])  # no overflow for far targets
 
     # --- searches: nearest in-limit point, and the damped-least-squares solver ---------------
 
@@ -514,7 +515,7 @@ def _least_squares(
             break
         previous_best = best_cost
     best = int(np.argmin(cost))
-    return q[best], math.sqrt(cost[best])
+    return q[best], math.hypot(*error[best].tolist())  # not sqrt(cost): no overflow for far targets
 
 
 def _jacobian_and_curvature(leg: CompiledLeg, q: np.ndarray, error: np.ndarray, step: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:

@@ -391,3 +391,11 @@ def test_any_finite_target_gives_finite_angles_and_a_residual(a1: Quadruped, poi
     assert result.status in (inverse.OK, inverse.OUTSIDE_LIMITS, inverse.UNREACHABLE)
     foot = a1.legs[LEGS.index(leg)].position(*result.angles)
     assert math.isclose(result.residual_m, float(np.linalg.norm(np.subtract(foot, point))), rel_tol=1e-9, abs_tol=1e-12)
+
+
+@pytest.mark.parametrize("point", [(1e200, 0.0, 0.0), (1e300, -1e300, 1e300), (5e-324, 0.0, -0.0), (0.183, -0.047, 0.0)])
+def test_extreme_targets_give_finite_angles_and_residuals(a1: Quadruped, point) -> None:
+    result = a1.ik_leg("FR", point)
+    assert all(math.isfinite(a) for a in result.angles) and math.isfinite(result.residual_m)
+    assert result.status == inverse.UNREACHABLE
+    assert abs(result.residual_m - math.hypot(*point)) <= 1.0 + 1e-12 * math.hypot(*point)  # the leg is < 1 m from the base

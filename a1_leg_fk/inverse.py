@@ -109,11 +109,11 @@ class LegIk:
 
 
 _SCALAR = SimpleNamespace(
-    sqrt=math.sqrt, atan2=math.atan2, ceil=math.ceil, round=round, minimum=min, maximum=max,
+    sqrt=math.sqrt, hypot=math.hypot, atan2=math.atan2, ceil=math.ceil, round=round, minimum=min, maximum=max,
     where=lambda condition, yes, no: yes if condition else no, not_=operator.not_,
 )
 _ARRAY = SimpleNamespace(
-    sqrt=np.sqrt, atan2=np.arctan2, ceil=np.ceil, round=np.round, minimum=np.minimum, maximum=np.maximum,
+    sqrt=np.sqrt, hypot=np.hypot, atan2=np.arctan2, ceil=np.ceil, round=np.round, minimum=np.minimum, maximum=np.maximum,
     where=np.where, not_=np.logical_not,
 )
 
@@ -190,6 +190,7 @@ class LegSolver:
             return LegIk(best, OK, residual)
         return self._nearest_in_limits(np.asarray(point, dtype=float), seed_angles, reachable)
 
+    @np.errstate(over="ignore")  # far targets: squares overflow to inf, which reads "not reached"
     def solve_batch(self, points: np.ndarray, seeds: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For (N, 3) targets [m] and (N, 3) seeds [rad] (``None``: the middle): (N, 3) angles [rad],
         (N,) int8 status codes, (N,) residuals [m]; row by row the same as :meth:`solve`."""
@@ -244,7 +245,7 @@ class LegSolver:
         grid = np.stack(np.meshgrid(*steps, indexing="ij"), axis=-1).reshape(-1, 3)
         starts = [np.asarray(seed, dtype=float)[np.newaxis], grid]
         if self.closed_form:
-            starts.append(np.array([angles for angles, _ in _branches(self.geometry, *point, _SCALAR)]))
+            starts.append(np.array([angles for angles, _ in _branches(self.geometry, *point.tolist(), _SCALAR)]))
         return np.concatenate(starts)
 
     def _nearest_in_limits(self, point: np.ndarray, seed: Sequence[float], reachable: bool) -> LegIk:
@@ -408,7 +409,7 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
     t0 = (_dot(rt[0], dx, dy, dz), _dot(rt[1], dx, dy, dz), _dot(rt[2], dx, dy, dz))
     along = _dot(g.roll_axis, *t0)
     a, b = _dot(g.pitch_axis, *t0), _dot(g.pitch_cross, *t0)
-    radius = xp.sqrt(a * a + b * b)
+    radius = xp.hypot(a, b)
     on_axis = radius == 0.0
     safe_radius = xp.where(on_axis, 1.0, radius)
     cos_base, sin_base = xp.where(on_axis, 1.0, a / safe_radius), xp.where(on_axis, 0.0, b / safe_radius)
@@ -466,6 +467,7 @@ def _jacobians(leg: CompiledLeg, angles: np.ndarray) -> np.ndarray:
     return out
 
 
+@np.errstate(over="ignore", invalid="ignore")  # a target 1e200 m away: squared distances overflow to inf
 def _least_squares(
     leg: CompiledLeg, point: np.ndarray, starts: np.ndarray, lower: np.ndarray, upper: np.ndarray
 ) -> tuple[np.ndarray, float]:

@@ -147,11 +147,12 @@ class LegSolver:
         seed_angles = tuple(self.middle.tolist()) if seed is None else tuple(seed)
         if self.closed_form:
             candidates = _branches(self.geometry, *point, _SCALAR)
-            found = []
+            found: list[Solution] = []
             for angles, exact in candidates:
                 if exact:
                     representative, inside = self._representatives(angles, seed_angles)
-                    found.append(Solution(representative, inside))
+                    if all(s.angles != representative for s in found):  # branches meet at singularities
+                        found.append(Solution(representative, inside))
             return found
         return self._searched_solutions(np.asarray(point, dtype=float), seed_angles)
 

@@ -48,7 +48,7 @@ import math
 import operator
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
 
@@ -95,10 +95,9 @@ class Solution:
     inside_limits: bool
 
 
-@dataclass(frozen=True)
-class LegIk:
+class LegIk(NamedTuple):
     """One leg's answer: three angles [rad], the status code, and the distance [m] from the foot
-    at those angles to the target."""
+    at those angles to the target. (A named tuple: made on every call, it must be cheap.)"""
 
     angles: tuple[float, float, float]
     status: int

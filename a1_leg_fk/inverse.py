@@ -125,7 +125,6 @@ class LegSolver:
         """``use_closed_form=False`` solves an A1-topology leg by damped least squares as well
         (for comparisons: the statuses and residuals agree)."""
         self.leg = leg
-        self.name = leg.chain.leg
         joints = [stage.joint for stage in leg.stages]
         self.lower = np.array([-math.inf if j.lower is None else j.lower for j in joints])
         self.upper = np.array([math.inf if j.upper is None else j.upper for j in joints])
@@ -143,7 +142,7 @@ class LegSolver:
     def solutions(self, point: Sequence[float], seed: Sequence[float] | None = None) -> list[Solution]:
         """Every exact solution for ``point`` [m, base frame]: the closed form's up to four (two
         roll x two knee branches), else the distinct ones the least-squares runs converge to."""
-        seed_angles = tuple(self.middle.tolist()) if seed is None else tuple(seed)
+        seed_angles = self._middle if seed is None else tuple(seed)
         if self.closed_form:
             candidates = _branches(self.geometry, *point, _SCALAR)
             found: list[Solution] = []
@@ -200,7 +199,9 @@ class LegSolver:
         angles = np.empty((rows, 3))
         status = np.full(rows, UNREACHABLE, dtype=np.int8)
         if not self.closed_form:
-            self._solve_rows_by_search(points, seeds, np.arange(rows), angles, status)
+            for row in range(rows):
+                result = self._solve_by_search(points[row], tuple(seeds[row].tolist()))
+                angles[row], status[row] = result.angles, result.status
             return angles, status, self._residuals(angles, points)
         seed_columns = tuple(np.ascontiguousarray(seeds.T))
         best_distance = np.full(rows, math.inf)
@@ -224,8 +225,8 @@ class LegSolver:
     # --- choosing angles -----------------------------------------------------------------
 
     def _representatives(self, angles, seed, xp=_SCALAR):  # noqa: ANN001, ANN202 (floats or arrays)
-        """Each angle's value modulo 2 pi inside its limits nearest the seed's (else nearest the
-        seed), and whether all three are inside (within :data:`LIMIT_TOLERANCE_RAD`)."""
+        """Each angle's value modulo 2 pi by :func:`_representative` (inside its limits where it
+        can be), and whether all three are inside (within :data:`LIMIT_TOLERANCE_RAD`)."""
         chosen, all_inside = [], True
         for angle, reference, (lower, upper) in zip(angles, seed, self._limits):
             value, inside = _representative(angle, reference, lower, upper, xp)
@@ -267,11 +268,6 @@ class LegSolver:
         unlimited = np.full(3, math.inf)
         _, free_residual = _least_squares(self.leg, point, starts, -unlimited, unlimited)
         return LegIk(tuple(angles.tolist()), OUTSIDE_LIMITS if free_residual <= REACHED_M else UNREACHABLE, residual)
-
-    def _solve_rows_by_search(self, points, seeds, rows, angles, status) -> None:  # noqa: ANN001
-        for row in rows:
-            result = self._solve_by_search(points[row], tuple(seeds[row].tolist()))
-            angles[row], status[row] = result.angles, result.status
 
     def _searched_solutions(self, point: np.ndarray, seed: Sequence[float]) -> list[Solution]:
         """Distinct exact solutions (limits ignored) that the least-squares runs converge to."""

@@ -400,3 +400,23 @@ def test_extreme_targets_give_finite_angles_and_residuals(a1: Quadruped, point) 
     assert all(math.isfinite(a) for a in result.angles) and math.isfinite(result.residual_m)
     assert result.status == inverse.UNREACHABLE
     assert abs(result.residual_m - math.hypot(*point)) <= 1.0 + 1e-12 * math.hypot(*point)  # the leg is < 1 m from the base
+
+
+def test_joint_ranges_wider_than_a_turn() -> None:
+    """Limits -4..4 rad (8 rad > 2 pi): two values of an angle can be in range; the seed picks
+    the one nearest it, and the unseeded answer is inside the limits."""
+    quadruped = Quadruped.from_urdf(quadruped_urdf().replace('lower="-2" upper="2"', 'lower="-4" upper="4"'))
+    rng = np.random.default_rng(21)
+    q = rng.uniform(-4.0, 4.0, size=(200, 12))
+    feet = quadruped.fk_batch(q)
+    seeded = quadruped.ik_batch(feet, seed=q)
+    assert (seeded.status == inverse.OK).all()
+    np.testing.assert_allclose(seeded.angles, q, rtol=0.0, atol=1e-9)
+    unseeded = quadruped.ik_batch(feet)
+    assert (unseeded.status == inverse.OK).all() and (np.abs(unseeded.angles) <= 4.0).all()
+    np.testing.assert_allclose(quadruped.fk_batch(unseeded.angles), feet, rtol=0.0, atol=1e-9)
+    # By hand: the value of 3.5 rad nearest -3.5 in -4..4 is 3.5 - 2 pi = -2.783; of -3 nearest 3, 3.283.
+    shifted = quadruped.ik(quadruped.fk([0.0, 0.3, 3.5] * 4), seed=[0.0, 0.3, -3.5] * 4)
+    assert shifted.angles[2] == pytest.approx(3.5 - 2 * math.pi, abs=1e-9)
+    shifted = quadruped.ik(quadruped.fk([0.0, -3.0, 1.0] * 4), seed=[0.0, 3.0, 1.0] * 4)
+    assert shifted.angles[1] == pytest.approx(2 * math.pi - 3.0, abs=1e-9)

@@ -3,7 +3,7 @@
 #   make venv       create/refresh $(VENV): pinned requirements + this package (editable)
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
 #   make test       the whole test suite (node tests pick their own ROS domain)
-#   make bench      bench/fk_speed.py, bench/node_throughput.py, bench/bag_speed.py (those that exist)
+#   make bench      bench/fk_speed.py, bench/ik_speed.py, bench/node_throughput.py, bench/bag_speed.py
 #   make soak       bench/soak.py
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
 
@@ -64,7 +64,7 @@ $(REQUIREMENTS_STAMP): | $(BIN)/python
 # builds with the pinned setuptools in the venv instead of whatever the index has that day.
 $(PACKAGE_STAMP): setup.py setup.cfg package.xml $(REQUIREMENTS_STAMP)
 	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation --editable .
-	@for script in foot_fk_node joint_state_demo a1-leg-fk; do \
+	@for script in foot_fk_node foot_ik_node joint_state_demo a1-leg-fk; do \
 	  [ -x $(BIN)/$$script ] || { echo "make: $(BIN)/$$script was not installed" >&2; exit 1; }; \
 	done
 	touch $@
@@ -83,7 +83,7 @@ test: venv
 	  --session-timeout=$(TEST_SESSION_TIMEOUT) $(PYTEST_ARGS) test
 
 bench: venv
-	@ran=0; for script in bench/fk_speed.py bench/node_throughput.py bench/bag_speed.py; do \
+	@ran=0; for script in bench/fk_speed.py bench/ik_speed.py bench/node_throughput.py bench/bag_speed.py; do \
 	  if [ -f $$script ]; then echo "== $$script"; $(BIN)/python $$script; ran=1; \
 	  else echo "make bench: $$script does not exist (skipped)"; fi; \
 	done; [ $$ran = 1 ] || { echo "make bench: no benchmark scripts" >&2; exit 1; }

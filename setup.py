@@ -35,6 +35,7 @@ setup(
     entry_points={
         'console_scripts': [
             'foot_fk_node = a1_leg_fk.node:main',
+            'foot_ik_node = a1_leg_fk.ik_node:main',
             'joint_state_demo = a1_leg_fk.demo:main',
             'a1-leg-fk = a1_leg_fk.cli:main',
         ],

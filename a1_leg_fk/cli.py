@@ -26,7 +26,7 @@ from collections import deque
 from pathlib import Path
 from typing import Callable, Sequence, TextIO
 
-from a1_leg_fk import cli_bag, cli_gait
+from a1_leg_fk import cli_bag, cli_gait, cli_ik
 from a1_leg_fk.legs import LEG_NAMES
 
 PROG = "a1-leg-fk"
@@ -136,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(handler=run_demo)
     cli_bag.add_parser(commands)
     cli_gait.add_parser(commands)
+    cli_ik.add_parser(commands)
     return parser
 
 

@@ -24,6 +24,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from a1_leg_fk import inverse
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
 
@@ -215,6 +216,42 @@ class Quadruped:
             if joint.lower is not None and joint.upper is not None and not joint.lower <= value <= joint.upper
         ]
 
+    @cached_property
+    def _ik_solvers(self) -> tuple[inverse.LegSolver, ...]:
+        return tuple(inverse.LegSolver(leg) for leg in self.legs)
+
+    def ik(self, feet: np.ndarray, seed: Sequence[float] | None = None) -> inverse.IkResult:
+        """Joint angles [rad] putting the four feet at ``feet`` ((4, 3) [m], base frame), with a
+        status (``ok``, ``outside_limits``, ``unreachable``) and residual [m] per leg; ``seed``
+        (12 angles [rad]) picks the solution nearest it (see :mod:`a1_leg_fk.inverse`)."""
+        checked_seed = None if seed is None else _checked_configuration(seed, "seed")
+        return inverse.solve_feet(self._ik_solvers, _checked_feet(feet), checked_seed)
+
+    def ik_batch(self, feet: np.ndarray, seed: np.ndarray | None = None) -> inverse.IkBatchResult:
+        """:meth:`ik` for (N, 4, 3) targets [m] and (N, 12) seeds [rad]: (N, 12) angles, (N, 4)
+        status codes (:data:`a1_leg_fk.inverse.OK` ...), (N, 4) residuals [m]."""
+        targets = np.asarray(feet, dtype=np.float64)
+        if targets.ndim != 3 or targets.shape[1:] != (len(LEG_NAMES), 3):
+            raise LegFkError(f"feet must have shape (N, {len(LEG_NAMES)}, 3), got {targets.shape}")
+        bad = ~np.isfinite(targets).all(axis=2)
+        if bad.any():
+            row, slot = (int(i) for i in np.argwhere(bad)[0])
+            raise LegFkError(f"feet: leg {LEG_NAMES[slot]} of row {row} is not finite ({bad.sum()} such targets)")
+        seeds = None if seed is None else _checked_batch(seed, "seed")
+        if seeds is not None and seeds.shape[0] != targets.shape[0]:
+            raise LegFkError(f"seed has {seeds.shape[0]} rows, feet {targets.shape[0]}")
+        return inverse.solve_feet_batch(self._ik_solvers, targets, seeds)
+
+    def ik_leg(self, leg: str, point: Sequence[float], seed: Sequence[float] | None = None) -> inverse.LegIk:
+        """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or ``None``."""
+        checked_seed = None if seed is None else _checked_configuration(seed, f"seed of leg {leg}", JOINTS_PER_LEG)
+        return self._ik_solvers[_leg_slot(leg)].solve(inverse.checked_point(point, leg), checked_seed)
+
+    def ik_solutions(self, leg: str, point: Sequence[float]) -> list[inverse.Solution]:
+        """Every exact IK solution of ``leg`` for ``point`` [m, base frame] (for the A1 topology:
+        up to two roll x two knee branches), each with whether it is inside the URDF limits."""
+        return self._ik_solvers[_leg_slot(leg)].solutions(inverse.checked_point(point, leg))
+
     def reach(self, leg: str) -> Reach:
         """Distance from the leg's hip-pitch axis to its foot, over the knee's range.
 
@@ -257,15 +294,32 @@ def _leg_slot(leg: str) -> int:
         raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}") from None
 
 
-def _checked_configuration(angles: Sequence[float], what: str = "joint angles") -> list[float]:
-    """12 finite floats, or a LegFkError naming the problem."""
+def _checked_feet(feet: np.ndarray) -> np.ndarray:
+    """(4, 3) finite targets [m], or a LegFkError naming the leg."""
+    try:
+        targets = np.asarray(feet, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"feet must be {len(LEG_NAMES)} x 3 numbers: {error}") from error
+    if targets.shape != (len(LEG_NAMES), 3):
+        raise LegFkError(f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}")
+    if not np.isfinite(targets).all():
+        for slot, leg in enumerate(LEG_NAMES):
+            inverse.checked_point(targets[slot], leg)
+    return targets
+
+
+def _checked_configuration(angles: Sequence[float], what: str = "joint angles", count: int = JOINT_COUNT) -> list[float]:
+    """``count`` (12) finite floats, or a LegFkError naming the problem."""
     try:
         q = [float(value) for value in angles]
     except (TypeError, ValueError) as error:
-        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers: {error}") from error
-    if len(q) != JOINT_COUNT:
-        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers (3 per leg, {'/'.join(LEG_NAMES)}), got {len(q)}")
+        raise LegFkError(f"{what} must be {count} numbers: {error}") from error
+    if len(q) != count:
+        per_leg = f" (3 per leg, {'/'.join(LEG_NAMES)})" if count == JOINT_COUNT else ""
+        raise LegFkError(f"{what} must be {count} numbers{per_leg}, got {len(q)}")
     for slot, value in enumerate(q):
+        if not math.isfinite(value) and count != JOINT_COUNT:
+            raise LegFkError(f"{what}: joint {slot} is {value}")
         if not math.isfinite(value):
             leg = LEG_NAMES[slot // JOINTS_PER_LEG]
             raise LegFkError(f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}")

@@ -34,6 +34,7 @@ EXEC_DEPENDS = {
 TEST_DEPENDS = {"python3-pytest", "python3-hypothesis"}
 CONSOLE_SCRIPTS = {
     "foot_fk_node": "a1_leg_fk.node:main",
+    "foot_ik_node": "a1_leg_fk.ik_node:main",
     "joint_state_demo": "a1_leg_fk.demo:main",
     "a1-leg-fk": "a1_leg_fk.cli:main",
 }

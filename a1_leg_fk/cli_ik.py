@@ -1,0 +1,89 @@
+"""``a1-leg-fk ik LEG X Y Z``: the joint angles that put one foot at a point, offline (no ROS).
+
+Prints the chosen angles (rad and degrees), the status, the residual, and every exact solution
+with whether it is inside the URDF limits. ``--seed`` takes the leg's 3 angles or all 12 [rad].
+Exit codes: 0 a status was computed (whatever it is), 2 bad input (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Sequence
+
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+
+EXIT_OK, EXIT_BAD_INPUT = 0, 2
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register ``ik`` on the ``a1-leg-fk`` command parser."""
+    parser = subparsers.add_parser(
+        "ik",
+        help="joint angles that put one foot at X Y Z (base frame, m): status, residual, every solution",
+        description="Inverse kinematics of one leg, offline: the angles nearest the seed (default: the middle of "
+        "the joint ranges) that put the foot at X Y Z [m] in the base frame, the status (ok, outside_limits, "
+        "unreachable), the distance from the foot at those angles to the target, and every exact solution.",
+    )
+    parser.add_argument("leg", choices=LEG_NAMES, metavar="LEG", help=f"one of {', '.join(LEG_NAMES)}")
+    for axis in ("x", "y", "z"):
+        parser.add_argument(axis, type=float, metavar=axis.upper(), help=f"target {axis} [m], base frame")
+    parser.add_argument("--seed", type=float, nargs="+", metavar="RAD",
+                        help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all {JOINTS_PER_LEG * len(LEG_NAMES)} in "
+                        "slot order (FR, FL, RR, RL, root side first)")
+    parser.add_argument("--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)")
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+    """Solve and print; one line on stderr and exit 2 for bad input."""
+    from a1_leg_fk.kinematics import Quadruped
+    from a1_leg_fk.urdf import LegFkError
+
+    try:
+        quadruped = Quadruped.from_urdf(options.urdf)
+        print("\n".join(report(quadruped, options.leg, (options.x, options.y, options.z), options.seed)))
+    except LegFkError as error:
+        print(f"a1-leg-fk ik: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return EXIT_OK
+
+
+def report(quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None) -> list[str]:  # noqa: ANN001
+    """The lines ``a1-leg-fk ik`` prints (see the module docstring)."""
+    from a1_leg_fk.inverse import checked_point, range_middle
+    from a1_leg_fk.urdf import LegFkError
+
+    slot = LEG_NAMES.index(leg)
+    first = slot * JOINTS_PER_LEG
+    target = checked_point(point, leg)
+    feet = quadruped.fk([range_middle(joint) for joint in quadruped.joints])  # the other legs: anywhere in reach
+    feet[slot] = target
+    full_seed = None
+    if seed is not None:
+        if len(seed) == JOINTS_PER_LEG:
+            full_seed = [0.0] * len(quadruped.joints)
+            full_seed[first : first + JOINTS_PER_LEG] = seed
+        elif len(seed) == len(quadruped.joints):
+            full_seed = list(seed)
+        else:
+            raise LegFkError(f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, got {len(seed)}")
+    result = quadruped.ik(feet, full_seed)
+    names = quadruped.joint_names[first : first + JOINTS_PER_LEG]
+    angles = result.angles[first : first + JOINTS_PER_LEG]
+    lines = [
+        f"leg {leg}, target ({', '.join(f'{v:.6f}' for v in target)}) m in frame '{quadruped.base_frame}' of {quadruped.model.source}",
+        f"status: {result.status[slot]}   residual: {result.residual_m[slot]:.3g} m",
+        "angles:",
+        *(f"  {name:<24} {angle:+.9f} rad {math.degrees(angle):+11.4f} deg" for name, angle in zip(names, angles)),
+    ]
+    solutions = quadruped.ik_solutions(leg, target)
+    lines.append(f"exact solutions: {len(solutions)}" + ("" if solutions else " (the target is out of reach)"))
+    for number, solution in enumerate(solutions, 1):
+        values = " ".join(f"{a:+.6f}" for a in solution.angles)
+        degrees = " ".join(f"{math.degrees(a):+9.3f}" for a in solution.angles)
+        where = "inside the limits" if solution.inside_limits else "outside the limits"
+        lines.append(f"  {number}. [{values}] rad  [{degrees}] deg  {where}")
+    return lines

@@ -1,0 +1,96 @@
+"""Foot IK speed of a1_leg_fk, with ratios against references measured in the same process, in one run.
+
+Run: ``.venv/bin/python bench/ik_speed.py`` (about 30 s). Prints:
+
+- four feet, one call: median time of ``Quadruped.ik`` (closed form) beside ``Quadruped.fk`` on
+  the configuration the targets came from, and beside the damped-least-squares path
+  (``LegSolver(leg, use_closed_form=False)``) on the same targets; target: ``ik`` <= 10 us;
+- a batch of 10^6 in-limit configurations' feet: ``ik_batch`` throughput beside ``fk_batch`` and
+  the time of ``np.sin`` + ``np.cos`` alone on a (10^6, 12) array (the trigonometry floor, as
+  bench/fk_speed.py prints it); target: >= 1 M configurations/s.
+
+Every timed answer is first checked: the angles of ``ik`` reproduce the targets within 1e-9 m.
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import timeit
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fk_speed import machine, median_seconds_per_call  # noqa: E402 (the shared bench helpers)
+
+try:
+    from a1_leg_fk import inverse
+    from a1_leg_fk.kinematics import Quadruped
+except ImportError:  # run from a source checkout without installing the package
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+    from a1_leg_fk import inverse
+    from a1_leg_fk.kinematics import Quadruped
+
+STANDING = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
+BATCH_ROWS = 1_000_000
+BATCH_REPEATS = 3
+
+
+def main() -> None:
+    print(machine())
+    quadruped = Quadruped.from_urdf()
+    feet = quadruped.fk(STANDING)
+    result = quadruped.ik(feet)
+    assert result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
+    searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
+    searched = inverse.solve_feet(searching, feet, None)
+    assert searched.status == ("ok",) * 4 and np.abs(quadruped.fk(searched.angles) - feet).max() <= 1e-9
+
+    rows = median_seconds_per_call(
+        {
+            "Quadruped.ik(feet)  [closed form]": lambda: quadruped.ik(feet),
+            "Quadruped.fk(q)": lambda: quadruped.fk(STANDING),
+            "damped least squares, same targets": lambda: inverse.solve_feet(searching, feet, None),
+        },
+        repeats=7,
+    )
+    ik_seconds = rows["Quadruped.ik(feet)  [closed form]"]
+    print("\nfour feet, one call (median of 7 interleaved runs)")
+    print(f"  {'method':<40} {'us/call':>9} {'vs ik':>8}")
+    for name, seconds in rows.items():
+        print(f"  {name:<40} {seconds * 1e6:9.2f} {seconds / ik_seconds:7.2f}x")
+    print(f"  Quadruped.ik: {ik_seconds * 1e6:.1f} us/call (target <= 10 us: {'met' if ik_seconds <= 10e-6 else 'NOT met'})")
+
+    lower = np.array([joint.lower for joint in quadruped.joints])
+    upper = np.array([joint.upper for joint in quadruped.joints])
+    angles = np.random.default_rng(0).uniform(lower, upper, size=(BATCH_ROWS, 12))
+    targets = quadruped.fk_batch(angles)
+    check = quadruped.ik_batch(targets)
+    assert (check.status == inverse.OK).all() and np.abs(quadruped.fk_batch(check.angles) - targets).max() <= 1e-9
+
+    def trig_only() -> None:
+        np.sin(angles)
+        np.cos(angles)
+
+    runs: dict[str, list[float]] = {"ik_batch": [], "fk_batch": [], "trig": []}
+    for _ in range(BATCH_REPEATS):  # interleaved
+        runs["ik_batch"].append(timeit.timeit(lambda: quadruped.ik_batch(targets), number=1))
+        runs["fk_batch"].append(timeit.timeit(lambda: quadruped.fk_batch(angles), number=1))
+        runs["trig"].append(timeit.timeit(trig_only, number=1))
+    seconds = {name: statistics.median(values) for name, values in runs.items()}
+    throughput = BATCH_ROWS / seconds["ik_batch"] / 1e6
+    print(f"\nbatch of {BATCH_ROWS:,} in-limit configurations' feet, (N, 4, 3) (median of {BATCH_REPEATS} interleaved runs)")
+    print(f"  {'method':<40} {'s':>9} {'M configs/s':>12}")
+    print(f"  {'Quadruped.ik_batch':<40} {seconds['ik_batch']:9.3f} {throughput:12.2f}")
+    print(f"  {'Quadruped.fk_batch (of the angles)':<40} {seconds['fk_batch']:9.3f} {BATCH_ROWS / seconds['fk_batch'] / 1e6:12.2f}")
+    print(f"  {'np.sin + np.cos alone (the floor)':<40} {seconds['trig']:9.3f} {BATCH_ROWS / seconds['trig'] / 1e6:12.2f}")
+    print(
+        f"  ik_batch / fk_batch = {seconds['ik_batch'] / seconds['fk_batch']:.2f}x, / trig floor = "
+        f"{seconds['ik_batch'] / seconds['trig']:.2f}x; throughput {throughput:.2f} M/s "
+        f"(target >= 1 M/s: {'met' if throughput >= 1.0 else 'NOT met'})"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,175 @@
+"""foot_ik_node as a real process over real DDS.
+
+The closed loop: joint_state_demo -> foot_fk_node -> foot_ik_node (its foot_targets/<leg>
+remapped to foot_positions/<leg>) -> joint_commands, matched by stamp with the demo's own
+joint_states: the angles come back within 1e-9 rad. And targets the test sends itself: the
+stamp, the command names, an unreachable target (published anyway, counted in /diagnostics),
+a target in a foreign frame (rejected with a warning naming it), bad --ros-args, clean exits.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from collections import defaultdict
+
+import numpy as np
+import pytest
+import yaml
+from conftest import BIN
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PointStamped
+from node_harness import LEGS, PYBULLET_NAMES, UNITREE_NAMES, node_command
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import JointState
+from test_demo import DEMO
+from test_kinematics import a1_foot_closed_form
+
+from a1_leg_fk import ik_node
+
+
+
+def ik_node_command(*ros_args: str) -> list[str]:
+    installed = BIN / "foot_ik_node"
+    command = [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.ik_node"]
+    return command + (["--ros-args", *ros_args] if ros_args else [])
+
+
+def stamp_of(msg) -> int:  # noqa: ANN001
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+class Commands:
+    """joint_commands and /diagnostics as the node publishes them."""
+
+    def __init__(self, ros) -> None:  # noqa: ANN001 (conftest.RosProbe)
+        self.commands: list[JointState] = []
+        self.diagnostics: list[DiagnosticArray] = []
+        ros.node.create_subscription(JointState, "joint_commands", self.commands.append, QoSProfile(depth=5000))
+        ros.node.create_subscription(DiagnosticArray, "/diagnostics", self.diagnostics.append, QoSProfile(depth=100))
+        self.publishers = {leg: ros.node.create_publisher(PointStamped, f"foot_targets/{leg}", QoSProfile(depth=100)) for leg in LEGS}
+
+    def ik_values(self) -> dict[str, str]:
+        for array in reversed(self.diagnostics):
+            for status in array.status:
+                if "inverse kinematics" in status.name:
+                    return {value.key: value.value for value in status.values}
+        return {}
+
+
+@pytest.mark.slow
+def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:  # noqa: ANN001
+    demo_states: dict[int, JointState] = {}
+    ros.node.create_subscription(JointState, "joint_states", lambda m: demo_states.__setitem__(stamp_of(m), m), QoSProfile(depth=5000))
+    commands = Commands(ros)
+    remaps = [argument for leg in LEGS for argument in ("-r", f"foot_targets/{leg}:=foot_positions/{leg}")]
+    ik = processes.start(ik_node_command(*remaps))
+    fk = processes.start(node_command())
+    demo = processes.start(DEMO)
+    # Both streams: the probe may discover the demo seconds after the nodes did (Fast DDS under load).
+    assert ros.spin_until(lambda: len(commands.commands) > 400 and len(demo_states) > 400, 30.0), (
+        f"ik node:\n{processes.output(ik)}\nfk node:\n{processes.output(fk)}\ndemo:\n{processes.output(demo)}"
+    )
+    ros.spin_for(1.0)
+    matched = defaultdict(int)
+    for command in commands.commands:
+        state = demo_states.get(stamp_of(command))
+        if state is None:
+            continue
+        assert list(command.name)[0].split("_")[0] in LEGS
+        expected = dict(zip(state.name, state.position))
+        np.testing.assert_allclose(command.position, [expected[name] for name in command.name], rtol=0.0, atol=1e-9)
+        matched[command.name[0][:2]] += 1
+    assert all(matched[leg] >= 100 for leg in LEGS), (dict(matched), len(demo_states), len(commands.commands))
+    assert ros.spin_until(lambda: commands.ik_values().get("FR_ok", "0") != "0", 5.0)
+    values = commands.ik_values()
+    assert values["FR_unreachable"] == values["FR_outside_limits"] == "0"
+    for process in (demo, fk, ik):
+        assert processes.interrupt(process) == 0, processes.output(process)
+    assert "Traceback" not in processes.output(ik)
+
+
+@pytest.mark.slow
+def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:  # noqa: ANN001
+    commands = Commands(ros)
+    ik = processes.start(ik_node_command("-p", f"command_joint_names:={UNITREE_NAMES}".replace("'", '"')))
+    target = PointStamped()
+    target.header.frame_id = "trunk"
+    target.header.stamp.sec, target.header.stamp.nanosec = 1234, 5678
+    target.point.x, target.point.y, target.point.z = (float(v) for v in a1_foot_closed_form("RL", 0.1, 0.9, -1.6))
+
+    def send_until_answered(leg: str, msg: PointStamped, count: int) -> bool:
+        def answered() -> bool:
+            if len(commands.commands) < count:
+                commands.publishers[leg].publish(msg)
+                ros.spin_for(0.05)
+            return len(commands.commands) >= count
+
+        return ros.spin_until(answered, 20.0)
+
+    assert send_until_answered("RL", target, 1), processes.output(ik)
+    first = commands.commands[0]
+    assert list(first.name) == UNITREE_NAMES[9:12]
+    assert (first.header.stamp.sec, first.header.stamp.nanosec) == (1234, 5678)
+    np.testing.assert_allclose(first.position, [0.1, 0.9, -1.6], atol=1e-9)
+
+    # Out of reach: the nearest in-limit angles are published all the same, and counted.
+    commands.commands.clear()
+    target.point.z = -1.5
+    assert send_until_answered("RL", target, 1)
+    assert list(commands.commands[0].name) == UNITREE_NAMES[9:12]
+    assert np.isfinite(commands.commands[0].position).all()
+    assert ros.spin_until(lambda: commands.ik_values().get("RL_unreachable", "0") != "0", 5.0)
+
+    # A foreign frame: nothing published, a warning naming the frame.
+    commands.commands.clear()
+    target.header.frame_id = "odom"
+    for _ in range(5):
+        commands.publishers["FL"].publish(target)
+        ros.spin_for(0.1)
+    assert not commands.commands
+    assert ros.spin_until(lambda: commands.ik_values().get("rejected_frame", "0") != "0", 5.0)
+    assert processes.interrupt(ik) == 0
+    output = processes.output(ik)
+    assert "'odom'" in output and "unreachable" in output and "Traceback" not in output
+
+
+@pytest.mark.slow
+def test_bad_ros_args_exit_2_in_one_line(processes) -> None:  # noqa: ANN001
+    process = processes.start(ik_node_command("-p"))
+    try:
+        assert process.wait(20) == 2
+    except subprocess.TimeoutExpired:
+        pytest.fail("foot_ik_node kept running with a bad --ros-args")
+    output = processes.output(process)
+    ours = [line for line in output.splitlines() if line.startswith("foot_ik_node:")]
+    assert len(ours) == 1 and "cannot start" in ours[0] and "Traceback" not in output
+
+
+@pytest.mark.slow
+def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0(processes) -> None:  # noqa: ANN001
+    bad = processes.start(ik_node_command("-p", 'command_joint_names:=["a", "b"]'))
+    assert bad.wait(20) == 1
+    assert "command_joint_names must hold 12 names" in processes.output(bad)
+    good = processes.start(ik_node_command("-p", f"command_joint_names:={PYBULLET_NAMES}".replace("'", '"')))
+    try:
+        good.wait(3)
+        pytest.fail(f"foot_ik_node exited:\n{processes.output(good)}")
+    except subprocess.TimeoutExpired:
+        pass
+    good.send_signal(signal.SIGTERM)
+    assert good.wait(10) == 0, processes.output(good)
+
+
+def test_ik_params_yaml_states_every_parameter() -> None:
+    """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays commented out."""
+    path = Path(__file__).resolve().parent.parent / "config" / "ik_params.yaml"
+    text = path.read_text()
+    stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
+    scalars = {spec.name: spec.default for spec in ik_node.PARAMETERS if spec.default is not None}
+    assert stated == scalars
+    for spec in ik_node.PARAMETERS:
+        if spec.default is None:
+            assert f"# {spec.name}: [" in text

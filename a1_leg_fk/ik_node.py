@@ -6,43 +6,44 @@ Thin ROS glue over :meth:`Quadruped.ik_leg` (:mod:`a1_leg_fk.inverse`). Subscrib
 rejected with a warning naming it), publishes ``joint_commands`` with the target's stamp, seeded
 with the leg's previous solution. Every answer is published, the best angles for a target out of
 reach or out of limits included; the statuses are counted in ``/diagnostics`` and warned about at
-most once a second per leg. The model parameters are ``foot_fk_node``'s. All names are relative.
+most once a second per leg. The robot comes from :class:`a1_leg_fk.robot_source.RobotSource`,
+exactly as for ``foot_fk_node`` (its parameters and the ``robot_description`` topic). All names
+are relative.
 """
 
 from __future__ import annotations
 
-import math
 import sys
-import time
 from collections import Counter
 from typing import Callable, Sequence
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PointStamped
-from rcl_interfaces.msg import ParameterType
-from rclpy.exceptions import ParameterUninitializedException
+from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 
-from a1_leg_fk import node as fk_node
 from a1_leg_fk import ros_glue
 from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
-from a1_leg_fk.robot_config import RobotConfig, load_robot
+from a1_leg_fk.node import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.robot_config import RobotConfig
+from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource, parameter_value
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_ik"
 DIAGNOSTICS_PERIOD_S = 1.0
-WARNING_INTERVAL_S = 1.0  # at most one warning per second per leg (and per kind of rejection)
-TARGETS_QOS = fk_node.JOINT_STATES_QOS  # best effort, deep: hears reliable and best-effort publishers
+TARGETS_QOS = JOINT_STATES_QOS  # best effort, deep: hears reliable and best-effort publishers
 
-PARAMETERS = tuple(spec for spec in fk_node.PARAMETERS if spec.name in fk_node.MODEL_PARAMETERS) + (
-    fk_node._ParameterSpec("base_frame", "", ParameterType.PARAMETER_STRING,
-                           "frame_id the targets must have (or empty); empty = the URDF's root link (trunk for the A1)"),
-    fk_node._ParameterSpec("command_joint_names", None, ParameterType.PARAMETER_STRING_ARRAY,
-                           "12 joint names for joint_commands in FR, FL, RR, RL x root-to-foot order "
-                           "(e.g. FR_hip_joint, FR_thigh_joint, FR_calf_joint, ...); empty = the URDF's names"),
+PARAMETERS = (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec("command_joint_names", None, ParameterType.PARAMETER_STRING_ARRAY,
+                  "12 joint names for joint_commands in FR, FL, RR, RL x root-to-foot order "
+                  "(e.g. FR_hip_joint, FR_thigh_joint, FR_calf_joint, ...); empty = the URDF's names"),
 )
+"""The node's own parameters; the model parameters are :class:`RobotSource`'s. Targets must be in
+``base_frame`` (or have an empty frame_id)."""
 
 
 class FootIkNode(Node):
@@ -52,13 +53,18 @@ class FootIkNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
-        self._load_model()
+        self._robot = RobotSource(self, self._on_robot)
+        self._model: RobotConfig = self._robot.config
+        self._apply_settings(self._settings({}))
         self._seeds: list[list[float] | None] = [None] * len(LEG_NAMES)
         self._counts: Counter[str] = Counter()
         self._last_status = ["none"] * len(LEG_NAMES)
-        self._last_warnings: dict[str, float] = {}
-        self._commands = self.create_publisher(JointState, "joint_commands", fk_node.OUTPUT_QOS)
-        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", fk_node.OUTPUT_QOS)
+        self._warnings = ros_glue.WarnThrottle(self)
+        self._pending_settings: tuple[str, list[list[str]]] | None = None
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self._commands = self.create_publisher(JointState, "joint_commands", OUTPUT_QOS)
+        self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         for slot, leg in enumerate(LEG_NAMES):
             self.create_subscription(PointStamped, f"foot_targets/{leg}", self._on_target_of(slot), TARGETS_QOS)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
@@ -67,23 +73,36 @@ class FootIkNode(Node):
             f"{self.resolve_topic_name('foot_targets')}/<leg> to {self.resolve_topic_name('joint_commands')}"
         )
 
-    def _load_model(self) -> None:
-        """The robot, the accepted target frame and the command names, from the parameters."""
-        self._model: RobotConfig = load_robot(
-            self._value("robot_description"), self._value("urdf_file"), self._value("foot_links"), self._value("joint_aliases")
-        )
+    def _settings(self, changes: dict[str, object]) -> tuple[str, list[list[str]]]:
+        """(accepted target frame, command names per leg) for the parameters with ``changes``."""
+        value = {name: changes.get(name, parameter_value(self, name)) for name in ("base_frame", "command_joint_names")}
         quadruped = self._model.quadruped
-        self._base_frame = self._value("base_frame") or quadruped.base_frame
-        names = list(self._value("command_joint_names")) or list(quadruped.joint_names)
+        names = list(value["command_joint_names"]) or list(quadruped.joint_names)  # type: ignore[call-overload]
         if len(names) != len(quadruped.joint_names):
             raise LegFkError(f"command_joint_names must hold {len(quadruped.joint_names)} names, got {len(names)}: {names}")
-        self._command_names = [names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG] for slot in range(len(LEG_NAMES))]
+        per_leg = [names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG] for slot in range(len(LEG_NAMES))]
+        return str(value["base_frame"]) or quadruped.base_frame, per_leg
 
-    def _value(self, name: str):  # noqa: ANN202 (a parameter's value; [] for a string array never given one)
+    def _apply_settings(self, settings: tuple[str, list[list[str]]]) -> None:
+        self._base_frame, self._command_names = settings
+
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         try:
-            return self.get_parameter(name).value
-        except ParameterUninitializedException:
-            return []
+            self._pending_settings = self._settings({p.name: p.value for p in parameters})
+        except LegFkError as error:
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
+        if self._pending_settings is not None:
+            self._apply_settings(self._pending_settings)
+            self._pending_settings = None
+
+    def _on_robot(self, config: RobotConfig) -> None:
+        """Another robot was accepted (a parameter or the description topic): start over with it."""
+        self._model = config
+        self._apply_settings(self._settings({}))
+        self._seeds = [None] * len(LEG_NAMES)
 
     # --- per message ---------------------------------------------------------------------
 
@@ -99,7 +118,7 @@ class FootIkNode(Node):
         frame = msg.header.frame_id
         if frame not in ("", self._base_frame):
             self._counts["rejected_frame"] += 1
-            self._warn(f"frame/{leg}", f"leg {leg}: ignoring a target in frame '{frame}': only '{self._base_frame}' "
+            self._warnings.warn(f"frame/{leg}", f"leg {leg}: ignoring a target in frame '{frame}': only '{self._base_frame}' "
                        f"(or empty) is accepted, there is no TF here ({self._counts['rejected_frame']} so far)")
             return
         point = msg.point
@@ -107,24 +126,18 @@ class FootIkNode(Node):
             result = self._model.quadruped.ik_leg(leg, (point.x, point.y, point.z), self._seeds[slot])
         except LegFkError as error:
             self._counts["rejected_non_finite"] += 1
-            self._warn(f"non_finite/{leg}", f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)")
+            self._warnings.warn(f"non_finite/{leg}", f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)")
             return
         status = STATUS_NAMES[result.status]
         self._counts[f"{leg}_{status}"] += 1
         self._last_status[slot] = f"{status} ({result.residual_m:.3g} m)"
         if result.status != OK:
-            self._warn(f"status/{leg}", f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
+            self._warnings.warn(f"status/{leg}", f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
                        f"publishing the nearest in-limit angles, {result.residual_m:.4f} m from it")
         self._seeds[slot] = list(result.angles)
         command = JointState(name=self._command_names[slot], position=list(result.angles))
         command.header.stamp = msg.header.stamp
         self._commands.publish(command)
-
-    def _warn(self, kind: str, text: str) -> None:
-        now = time.monotonic()
-        if now - self._last_warnings.get(kind, -math.inf) >= WARNING_INTERVAL_S:
-            self._last_warnings[kind] = now
-            self.get_logger().warn(text)
 
     # --- diagnostics -------------------------------------------------------------------------
 
@@ -137,6 +150,8 @@ class FootIkNode(Node):
             level, summary = DiagnosticStatus.WARN, "no foot targets received yet"
         elif any(counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES[1:]) or counts["rejected_frame"]:
             level, summary = DiagnosticStatus.WARN, "some targets out of reach, outside the limits, or rejected"
+        if self._robot.topic_rejected:
+            level, summary = DiagnosticStatus.WARN, f"robot description on {self._robot.topic_name} rejected"
         values = {
             "targets_received": counts["targets_received"],
             **{f"{leg}_{status}": counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES},
@@ -145,6 +160,7 @@ class FootIkNode(Node):
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
             "model": self._model.source,
+            "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
         }
         hardware_id = self._model.quadruped.model.name
         array = ros_glue.diagnostics(self, "foot inverse kinematics", level, summary, hardware_id, values)

@@ -13,11 +13,9 @@ import sys
 import time
 from typing import Sequence
 
-import rclpy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
 from rcl_interfaces.msg import ParameterType, SetParametersResult
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -27,6 +25,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
+from a1_leg_fk import ros_glue
 from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
@@ -46,7 +45,6 @@ JOINT_STATES_QOS = QoSProfile(
     reliability=ReliabilityPolicy.BEST_EFFORT,
     durability=qos_profile_sensor_data.durability,
 )
-WARNING_INTERVAL_S = 1.0  # at most one warning per second for each kind of rejection
 
 
 PARAMETERS = (
@@ -126,7 +124,7 @@ class FootFkNode(Node):
         self._last_markers = -math.inf
         self._markers_wanted = False
         self._previous_counts = (0, 0)
-        self._last_warnings: dict[str, float] = {}  # kind of problem -> time.monotonic() of its last warning
+        self._warnings = ros_glue.WarnThrottle(self)
         self._apply_settings()
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
         self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
@@ -204,7 +202,7 @@ class FootFkNode(Node):
             return self.get_clock().now().to_msg()
         if stamp_ns < self._last_stamp_ns:
             self._stamp_jumps_back += 1
-            self._warn_at_most_every_second(
+            self._warnings.warn(
                 "stamp_went_back",
                 f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} s, from "
                 f"{self._last_stamp_ns / 1e9:.3f} to {stamp_ns / 1e9:.3f} (bag replay loop or clock reset?); "
@@ -218,23 +216,17 @@ class FootFkNode(Node):
         tracker = self._tracker
         outcome = tracker.last_outcome
         if outcome in REJECTIONS:
-            self._warn_at_most_every_second(
+            self._warnings.warn(
                 outcome,
                 f"rejected a joint_states message: {outcome.replace('_', ' ')}, {tracker.last_problem} "
                 f"({tracker.counts.outcomes[outcome]} such messages so far)",
             )
         else:
-            self._warn_at_most_every_second(
+            self._warnings.warn(
                 "non_finite_position",
                 f"ignoring a joint_states value: {tracker.last_problem}; its leg is not published from this "
                 f"message ({tracker.counts.non_finite_joints} such values so far)",
             )
-
-    def _warn_at_most_every_second(self, kind: str, text: str) -> None:
-        now = time.monotonic()
-        if now - self._last_warnings.get(kind, -math.inf) >= WARNING_INTERVAL_S:
-            self._last_warnings[kind] = now
-            self.get_logger().warn(text)
 
     def _warn_unknown_names(self) -> None:
         names = self._tracker.take_new_unknown_names()
@@ -303,16 +295,8 @@ class FootFkNode(Node):
             "model": self._model.source,
             "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
         }
-        status = DiagnosticStatus(
-            level=level,
-            name=f"{self.get_name()}: foot kinematics",
-            message=summary,
-            hardware_id=self._model.quadruped.model.name,
-            values=[KeyValue(key=key, value=str(value)) for key, value in values.items()],
-        )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self._diagnostics_pub.publish(array)
+        hardware_id = self._model.quadruped.model.name
+        self._diagnostics_pub.publish(ros_glue.diagnostics(self, "foot kinematics", level, summary, hardware_id, values))
 
     # --- verify_fk -------------------------------------------------------------------------
 
@@ -417,53 +401,9 @@ def _invalid_setting(changes: dict[str, object]) -> str:
     return ""
 
 
-def _make_executor() -> rclpy.executors.Executor:
-    """rclpy's EventsExecutor where available (the fastest here), else the single-threaded one."""
-    try:
-        from rclpy.experimental import EventsExecutor
-
-        return EventsExecutor()
-    except ImportError:
-        return SingleThreadedExecutor()
-
-
-def _ros_args_error(message: str) -> str:
-    """rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
-    ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
-    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML."""
-    first_line = message.splitlines()[0] if message else message
-    if "robot_description:=" not in message:
-        return first_line
-    return (
-        f"{first_line[:160]}... (rcl parses every -p value as YAML, and this URDF is not valid YAML: give it in "
-        "a --params-file as a quoted or block string, through a launch file, or on the robot_description topic)"
-    )
-
-
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk foot_fk_node``; exits 0 on Ctrl-C/SIGTERM."""
-    try:
-        rclpy.init(args=args)
-    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
-        print(f"foot_fk_node: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = FootFkNode()
-        executor = _make_executor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except LegFkError as error:
-        rclpy.logging.get_logger(NODE_NAME).fatal(f"cannot start: {error}")
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()  # the signal handler may have shut the context down already
-    return 0
+    return ros_glue.run_node("foot_fk_node", FootFkNode, args)
 
 
 if __name__ == "__main__":

@@ -1,20 +1,22 @@
-"""ROS plumbing shared by the package's nodes: the spin loop of ``main`` with its exit codes, and
-one ``/diagnostics`` status. (``foot_ik_node`` uses it; ``foot_fk_node`` and ``joint_state_demo``
-still carry their own copies, to be switched over when node.py's robot_description work lands.)
-"""
+"""ROS plumbing shared by ``foot_fk_node`` and ``foot_ik_node``: the spin loop of ``main`` with its
+exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind."""
 
 from __future__ import annotations
 
+import math
 import sys
+import time
 from typing import Callable, Mapping, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
-from a1_leg_fk.node import _make_executor
 from a1_leg_fk.urdf import LegFkError
+
+WARNING_INTERVAL_S = 1.0
+"""At most one warning a second for each kind of problem."""
 
 
 def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str] | None = None) -> int:
@@ -23,12 +25,12 @@ def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str]
     try:
         rclpy.init(args=args)
     except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
-        print(f"{executable}: cannot start: {error}", file=sys.stderr)
+        print(f"{executable}: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
         return 2
     node = None
     try:
         node = make_node()
-        executor = _make_executor()
+        executor = make_executor()
         executor.add_node(node)
         while rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
@@ -42,6 +44,46 @@ def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str]
             node.destroy_node()
         rclpy.try_shutdown()  # the signal handler may have shut the context down already
     return 0
+
+
+def make_executor() -> Executor:
+    """rclpy's EventsExecutor where available (the fastest here), else the single-threaded one.
+
+    Spun with ``spin_once`` in a loop: ``EventsExecutor().spin()`` ignores SIGINT/SIGTERM.
+    """
+    try:
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor()
+    except ImportError:
+        return SingleThreadedExecutor()
+
+
+def _ros_args_error(message: str) -> str:
+    """rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
+    ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
+    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML."""
+    first_line = message.splitlines()[0] if message else message
+    if "robot_description:=" not in message:
+        return first_line
+    return (
+        f"{first_line[:160]}... (rcl parses every -p value as YAML, and this URDF is not valid YAML: give it in "
+        "a --params-file as a quoted or block string, through a launch file, or on the robot_description topic)"
+    )
+
+
+class WarnThrottle:
+    """A node's warnings, at most one every :data:`WARNING_INTERVAL_S` for each kind of problem."""
+
+    def __init__(self, node: Node) -> None:
+        self._logger = node.get_logger()
+        self._last: dict[str, float] = {}  # kind -> time.monotonic() of its last warning
+
+    def warn(self, kind: str, text: str) -> None:
+        now = time.monotonic()
+        if now - self._last.get(kind, -math.inf) >= WARNING_INTERVAL_S:
+            self._last[kind] = now
+            self._logger.warn(text)
 
 
 def diagnostics(node: Node, name: str, level: bytes, message: str, hardware_id: str, values: Mapping[str, object]) -> DiagnosticArray:

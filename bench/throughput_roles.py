@@ -293,9 +293,9 @@ def baseline(executor_name: str) -> None:
 def make_executor(name: str) -> rclpy.executors.Executor:
     """``node``: whatever ``a1_leg_fk.node`` uses; else ``events``, ``single`` or ``multi``."""
     if name == "node":
-        from a1_leg_fk.node import _make_executor
+        from a1_leg_fk.ros_glue import make_executor as node_executor
 
-        return _make_executor()
+        return node_executor()
     if name == "events":
         from rclpy.experimental import EventsExecutor
 
@@ -310,9 +310,10 @@ def make_executor(name: str) -> rclpy.executors.Executor:
 def node_with_executor(executor_name: str, ros_args: list[str]) -> int:
     """``a1_leg_fk.node.main`` with another executor (for comparing executors)."""
     import a1_leg_fk.node as node_module
+    import a1_leg_fk.ros_glue as glue_module
 
     if executor_name != "node":
-        node_module._make_executor = lambda: make_executor(executor_name)
+        glue_module.make_executor = lambda: make_executor(executor_name)
     return node_module.main(["node", *ros_args])
 
 

@@ -27,7 +27,7 @@ from sensor_msgs.msg import JointState
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
-from a1_leg_fk import ik_node
+from a1_leg_fk import ik_node, robot_source
 
 
 
@@ -168,8 +168,41 @@ def test_ik_params_yaml_states_every_parameter() -> None:
     path = Path(__file__).resolve().parent.parent / "config" / "ik_params.yaml"
     text = path.read_text()
     stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
-    scalars = {spec.name: spec.default for spec in ik_node.PARAMETERS if spec.default is not None}
+    specs = robot_source.PARAMETERS + ik_node.PARAMETERS  # the model's parameters and the node's own
+    scalars = {spec.name: spec.default for spec in specs if spec.default is not None}
     assert stated == scalars
-    for spec in ik_node.PARAMETERS:
+    for spec in specs:
         if spec.default is None:
             assert f"# {spec.name}: [" in text
+
+
+@pytest.mark.slow
+def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None:  # noqa: ANN001
+    """The same mechanism as foot_fk_node's: a Go2-like description on the topic, no parameter."""
+    from exported_urdf import exported_quadruped
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+    from std_msgs.msg import String
+
+    from a1_leg_fk.robot_config import load_robot
+
+    xml = exported_quadruped("go2")
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    ros.node.create_publisher(String, "robot_description", latched).publish(String(data=xml))
+    commands = Commands(ros)
+    process = processes.start(ik_node_command())
+    go2 = load_robot(xml).quadruped
+    q = [0.1, 0.7, -1.4]
+    target = go2.fk(q * 4)[0]
+
+    def answered_in_base() -> bool:
+        message = PointStamped()
+        message.header.frame_id = "base"  # Go2's root link: only accepted once the description is loaded
+        message.point.x, message.point.y, message.point.z = (float(v) for v in target)
+        commands.publishers["FR"].publish(message)
+        return bool(commands.commands)
+
+    assert ros.spin_until(answered_in_base, 30.0), processes.output(process)
+    command = commands.commands[-1]
+    assert list(command.name) == ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint"]
+    np.testing.assert_allclose(go2.fk(list(command.position) * 4)[0], target, rtol=0.0, atol=1e-9)
+    assert "loaded /robot_description: root link 'base'" in processes.output(process)

@@ -146,30 +146,13 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
 
 def main(args: Sequence[str] | None = None) -> int:
     """Run the demo publisher until Ctrl-C or SIGTERM (both exit 0); 2 on a bad parameter."""
-    import rclpy
     from rclpy.exceptions import NameValidationException, ParameterException
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.executors import SingleThreadedExecutor
 
-    # rclpy.init installs handlers for SIGINT and SIGTERM that shut the context down, which ends
-    # the loop below (rclpy.ok() turns false, or spin_once raises ExternalShutdownException).
-    rclpy.init(args=list(sys.argv if args is None else args))
-    node = None
-    try:
-        node = _node_class()()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ValueError, ParameterException, NameValidationException) as error:  # a bad parameter or name
-        print(f"{NODE_NAME}: {error}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    from a1_leg_fk import ros_glue
+
+    usage_errors = (ValueError, ParameterException, NameValidationException)  # a bad parameter or name
+    return ros_glue.run_node(NODE_NAME, _node_class(), args, usage_errors, SingleThreadedExecutor)
 
 
 if __name__ == "__main__":

@@ -19,9 +19,19 @@ WARNING_INTERVAL_S = 1.0
 """At most one warning a second for each kind of problem."""
 
 
-def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str] | None = None) -> int:
-    """Start rclpy, spin the node until Ctrl-C/SIGTERM (exit 0); bad ``--ros-args``: one line on
-    stderr and exit 2; a :class:`LegFkError` while starting: a fatal log line and exit 1."""
+def run_node(
+    executable: str,
+    make_node: Callable[[], Node],
+    args: Sequence[str] | None = None,
+    usage_errors: tuple[type[Exception], ...] = (),
+    executor_factory: Callable[[], Executor] | None = None,
+) -> int:
+    """Start rclpy, spin the node until Ctrl-C/SIGTERM (exit 0).
+
+    Bad ``--ros-args``, or one of ``usage_errors`` while the node starts (a bad parameter): one line
+    on stderr and exit 2. A :class:`LegFkError` while starting: a fatal log line and exit 1.
+    ``executor_factory`` defaults to :func:`make_executor`.
+    """
     try:
         rclpy.init(args=args)
     except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
@@ -30,13 +40,16 @@ def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str]
     node = None
     try:
         node = make_node()
-        executor = make_executor()
+        executor = (executor_factory or make_executor)()
         executor.add_node(node)
         while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
+            _spin_once(executor)
     except LegFkError as error:
         rclpy.logging.get_logger(executable).fatal(f"cannot start: {error}")
         return 1
+    except usage_errors as error:
+        print(f"{executable}: {error}", file=sys.stderr)
+        return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
@@ -44,6 +57,16 @@ def run_node(executable: str, make_node: Callable[[], Node], args: Sequence[str]
             node.destroy_node()
         rclpy.try_shutdown()  # the signal handler may have shut the context down already
     return 0
+
+
+def _spin_once(executor: Executor) -> None:
+    """One turn of the executor; a SIGINT/SIGTERM that shut the context down between the loop's
+    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid"."""
+    try:
+        executor.spin_once(timeout_sec=0.1)
+    except Exception:
+        if rclpy.ok():
+            raise
 
 
 def make_executor() -> Executor:

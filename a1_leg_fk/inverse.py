@@ -136,7 +136,8 @@ class LegSolver:
         self._middle = tuple(self.middle.tolist())
         self.geometry = _closed_form_geometry(leg) if use_closed_form else None
         self.closed_form = self.geometry is not None
-        self._fast = None if self.geometry is None else _fast_solver(self.geometry, self._limits, leg.chain.leg)
+        generated = None if self.geometry is None else _fast_solver(self.geometry, self._limits, leg.chain.leg)
+        self._fast, self._fast_batch = (None, None) if generated is None else generated
 
     # --- public --------------------------------------------------------------------------
 
@@ -213,9 +214,21 @@ class LegSolver:
                 angles[row], status[row] = result.angles, result.status
             return angles, status, self._residuals(angles, points)
         seed_columns = tuple(np.ascontiguousarray(seeds.T))
+        columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
+        if self._fast_batch is not None:
+            with np.errstate(all="ignore"):  # a target on the roll axis or far away: not found here
+                *chosen, best_distance = self._fast_batch(*columns, *seed_columns)
+            found = np.isfinite(best_distance)
+            status[found] = OK
+            for row in np.flatnonzero(~found):  # the rare rows: the scalar path decides
+                result = self.solve(points[row].tolist(), seeds[row].tolist())
+                for column, angle in zip(chosen, result.angles):
+                    column[row] = angle
+                status[row] = result.status
+            angles[:] = np.stack(chosen, axis=1)
+            return angles, status, self._column_residuals(chosen, columns)
         best_distance = np.full(rows, math.inf)
         reachable = np.zeros(rows, dtype=bool)
-        columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
         chosen = [np.zeros(rows)] * 3
         for branch, exact in _branches(self.geometry, columns[0], columns[1], columns[2], _ARRAY):
             representative, inside = self._representatives(branch, seed_columns, _ARRAY)
@@ -244,8 +257,14 @@ class LegSolver:
         return tuple(chosen), all_inside
 
     def _residuals(self, angles: np.ndarray, points: np.ndarray) -> np.ndarray:
-        error = _positions(self.leg, angles) - points
-        return np.hypot(np.hypot(error[:, 0], error[:, 1]), error[:, 2])  # no overflow for far targets
+        """(N,) distances [m] from the feet at (N, 3) angles [rad] to (N, 3) targets [m]."""
+        return self._column_residuals(tuple(np.ascontiguousarray(angles.T)), tuple(np.ascontiguousarray(points.T)))
+
+    def _column_residuals(self, angles: Sequence[np.ndarray], points: Sequence[np.ndarray]) -> np.ndarray:
+        """:meth:`_residuals` for the angles and targets given as three (N,) columns each."""
+        trig = [f(angle) for angle in angles for f in (np.cos, np.sin)]
+        x, y, z = self.leg.position_from_trig(*trig)
+        return np.hypot(np.hypot(x - points[0], y - points[1]), z - points[2])  # no overflow for far targets
 
     # --- searches: nearest in-limit point, and the damped-least-squares solver ---------------
 
@@ -488,6 +507,7 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     gx, gy = bind(knee, [_linear(row, moved) for row in g.plane])
     cos_knee = _sum([("cos_knee", g.cos_peak), ("knee_sign * sin_knee", -g.sin_peak)])
     sin_knee = _sum([("cos_knee", g.sin_peak), ("knee_sign * sin_knee", g.cos_peak)])
+    peak = math.atan2(g.sin_peak, g.cos_peak)  # q2 = peak +- acos(knee argument)
     roll_body = "\n        ".join(knee.lines)
     fx = _sum([("", g.foot_u[0]), ("c2", g.foot_v[0]), ("s2", g.foot_w[0])])
     fy = _sum([("", g.foot_u[1]), ("c2", g.foot_v[1]), ("s2", g.foot_w[1])])
@@ -527,9 +547,10 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
         d0 = (q0 - r0) ** 2
         cos_knee = 1.0 if knee_argument > 1.0 else -1.0 if knee_argument < -1.0 else knee_argument
         sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+        knee_angle = _atan2(sin_knee, cos_knee)
         for knee_sign in (1.0, -1.0):
             c2, s2 = {cos_knee}, {sin_knee}
-            {representative("q2", "_atan2(s2, c2)", 2, " " * 12)}
+            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
             fx, fy = {fx}, {fy}
             {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
             distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
@@ -539,9 +560,57 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
         return None
     return best, reachable
 """
+
+    def representatives(name: str, angle: str, slot: int, indent: str = " " * 12) -> str:
+        """:func:`_representative` on arrays for a range narrower than 2 pi: ``name`` clamped into
+        the range and ``name_inside`` (by floor: numpy's ``%`` on floats is several times slower)."""
+        lower, upper = limits[slot]
+        low = lower - LIMIT_TOLERANCE_RAD
+        return (
+            f"{name} = {angle}\n{indent}{name} = {name} - {TWO_PI!r} * _floor(({name} - {low!r}) * {1.0 / TWO_PI!r})\n{indent}"
+            f"{name}_inside = {name} <= {upper + LIMIT_TOLERANCE_RAD!r}\n{indent}"
+            f"{name} = _minimum(_maximum({name}, {lower!r}), {upper!r})"
+        )
+
+    source += f"""
+def solve_batch(tx, ty, tz, r0, r1, r2):
+    {head}
+    radius = _hypot({a}, {b})
+    roll_argument = {g.lateral_m!r} / radius
+    roll_exact = abs(roll_argument) <= {tolerance!r}
+    cos_roll = _minimum(_maximum(roll_argument, -1.0), 1.0)
+    sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
+    cos_base, sin_base = {a} / radius, {b} / radius
+    best_distance = _full(tx.shape, _inf)
+    best0 = best1 = best2 = best_distance
+    for roll_sign in (1.0, -1.0):
+        c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
+        s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
+        {representatives("q0", "_atan2(s0, c0)", 0, " " * 8)}
+        {roll_body}
+        knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
+        roll_usable = roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})
+        d0 = (q0 - r0) ** 2
+        cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
+        sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+        knee_angle = _atan2(sin_knee, cos_knee)
+        for knee_sign in (1.0, -1.0):
+            c2, s2 = {cos_knee}, {sin_knee}
+            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
+            fx, fy = {fx}, {fy}
+            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
+            best_distance = _where(better, distance, best_distance)
+            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
+    return best0, best1, best2, best_distance
+"""
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}>", "exec"), namespace)
-    return namespace["solve"]
+    arrays = {"_hypot": np.hypot, "_sqrt": np.sqrt, "_atan2": np.arctan2, "_inf": math.inf, "_minimum": np.minimum,
+              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor}
+    exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}, arrays>", "exec"), arrays)
+    return namespace["solve"], arrays["solve_batch"]
 
 
 # --- damped least squares -------------------------------------------------------------------------

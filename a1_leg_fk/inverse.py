@@ -79,7 +79,7 @@ GRID_STEPS = 3
 """Starts per joint of the grid the least-squares searches start from (GRID_STEPS^3 starts)."""
 PERPENDICULAR_TOLERANCE = 1e-9
 """|cos| between axes below which they count as perpendicular, and |1 - |cos|| for parallel."""
-BATCH_BLOCK_ROWS = 4096
+BATCH_BLOCK_ROWS = 8192
 """Rows per block of :func:`solve_feet_batch`."""
 TWO_PI = 2.0 * math.pi
 Vector3 = tuple[float, float, float]
@@ -475,15 +475,17 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
 def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):  # noqa: ANN202
     """The closed form of :func:`_branches` and the choice of :meth:`LegSolver.solve` as one
     generated function on floats with the leg's constants folded in, as the FK is (see
-    :func:`a1_leg_fk.kinematics._leg_source`), or ``None`` when a joint's range is not narrower
-    than 2 pi (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
+    :func:`a1_leg_fk.kinematics._leg_source`), or ``None`` when a joint has finite limits 2 pi or more
+    apart (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
     [m, base frame] and the seed [rad]; it returns ``(angles, reachable)`` with ``angles`` the
     in-limit exact solution nearest the seed (``None`` if there is none), or ``None`` for the
     general path to decide (a target on the roll axis; no solution in the limits and a roll
-    angle outside them, whose branch was not followed)."""
+    angle outside them, whose branch was not followed). Returned with it: ``solve_batch``, the
+    same code on (N,) numpy columns (the branch chosen by ``np.where``), returning the three angle
+    columns and the seed distance, ``inf`` in rows without an in-limit solution."""
     from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module
 
-    if any(not upper - lower < TWO_PI for lower, upper in limits):
+    if any(lower != -math.inf and not upper - lower < TWO_PI for lower, upper in limits):
         return None
     code = _Code("t")
 
@@ -514,8 +516,11 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     tolerance = 1.0 + ARGUMENT_TOLERANCE
 
     def representative(name: str, angle: str, slot: int, indent: str, outside: str = "continue") -> str:
-        """:func:`_representative` for a range narrower than 2 pi, ``outside`` when outside."""
+        """:func:`_representative` for a range narrower than 2 pi (``outside`` when outside) or
+        a continuous joint."""
         lower, upper = limits[slot]
+        if lower == -math.inf:
+            return f"{name} = r{slot} + ({angle} - r{slot} + {math.pi!r}) % {TWO_PI!r} - {math.pi!r}"
         low = lower - LIMIT_TOLERANCE_RAD
         return (
             f"{name} = {low!r} + ({angle} - {low!r}) % {TWO_PI!r}\n{indent}if {name} > {upper!r}:\n"
@@ -563,8 +568,15 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
 
     def representatives(name: str, angle: str, slot: int, indent: str = " " * 12) -> str:
         """:func:`_representative` on arrays for a range narrower than 2 pi: ``name`` clamped into
-        the range and ``name_inside`` (by floor: numpy's ``%`` on floats is several times slower)."""
+        the range and ``name_inside`` (by floor: numpy's ``%`` on floats is several times slower);
+        for a continuous joint the value within pi of the seed."""
         lower, upper = limits[slot]
+        if lower == -math.inf:
+            return (
+                f"{name} = {angle} - r{slot} + {math.pi!r}\n{indent}"
+                f"{name} = {name} - {TWO_PI!r} * _floor({name} * {1.0 / TWO_PI!r}) - {math.pi!r} + r{slot}\n{indent}"
+                f"{name}_inside = True"
+            )
         low = lower - LIMIT_TOLERANCE_RAD
         return (
             f"{name} = {angle}\n{indent}{name} = {name} - {TWO_PI!r} * _floor(({name} - {low!r}) * {1.0 / TWO_PI!r})\n{indent}"

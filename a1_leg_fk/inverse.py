@@ -79,7 +79,7 @@ GRID_STEPS = 3
 """Starts per joint of the grid the least-squares searches start from (GRID_STEPS^3 starts)."""
 PERPENDICULAR_TOLERANCE = 1e-9
 """|cos| between axes below which they count as perpendicular, and |1 - |cos|| for parallel."""
-BATCH_BLOCK_ROWS = 4096
+BATCH_BLOCK_ROWS = 8192
 """Rows per block of :func:`solve_feet_batch`."""
 TWO_PI = 2.0 * math.pi
 Vector3 = tuple[float, float, float]
@@ -136,6 +136,8 @@ class LegSolver:
         self._middle = tuple(self.middle.tolist())
         self.geometry = _closed_form_geometry(leg) if use_closed_form else None
         self.closed_form = self.geometry is not None
+        generated = None if self.geometry is None else _fast_solver(self.geometry, self._limits, leg.chain.leg)
+        self._fast, self._fast_batch = (None, None) if generated is None else generated
 
     # --- public --------------------------------------------------------------------------
 
@@ -160,6 +162,18 @@ class LegSolver:
         seed_angles = self._middle if seed is None else tuple(seed)
         if not self.closed_form:
             return self._solve_by_search(np.asarray(point, dtype=float), seed_angles)
+        found = None if self._fast is None else self._fast(*point, *seed_angles)
+        best, reachable = self._choose(point, seed_angles) if found is None else found
+        if best is not None:
+            x, y, z = self.leg.position(*best)
+            residual = math.hypot(x - point[0], y - point[1], z - point[2])  # hypot: no overflow
+            return LegIk(best, OK, residual)
+        return self._nearest_in_limits(np.asarray(point, dtype=float), seed_angles, reachable)
+
+    def _choose(self, point: Sequence[float], seed_angles: Sequence[float]) -> tuple[tuple[float, ...] | None, bool]:
+        """The closed form's in-limit solution nearest the seed (``None`` if none) and whether any
+        branch reaches ``point``: the general path, for what the generated :func:`_fast_solver`
+        does not decide (a joint range of 2 pi or more, a target on the roll axis)."""
         best, best_distance, reachable = None, math.inf, False
         roll_seen, roll_choice = None, None
         (roll_lower, roll_upper), knee_limits = self._limits[0], self._limits[1:]
@@ -183,11 +197,7 @@ class LegSolver:
                 distance = sum((a - s) ** 2 for a, s in zip(chosen, seed_angles))
                 if distance < best_distance:
                     best, best_distance = tuple(chosen), distance
-        if best is not None:
-            x, y, z = self.leg.position(*best)
-            residual = math.hypot(x - point[0], y - point[1], z - point[2])  # hypot: no overflow
-            return LegIk(best, OK, residual)
-        return self._nearest_in_limits(np.asarray(point, dtype=float), seed_angles, reachable)
+        return best, reachable
 
     @np.errstate(over="ignore")  # far targets: squares overflow to inf, which reads "not reached"
     def solve_batch(self, points: np.ndarray, seeds: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -204,9 +214,21 @@ class LegSolver:
                 angles[row], status[row] = result.angles, result.status
             return angles, status, self._residuals(angles, points)
         seed_columns = tuple(np.ascontiguousarray(seeds.T))
+        columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
+        if self._fast_batch is not None:
+            with np.errstate(all="ignore"):  # a target on the roll axis or far away: not found here
+                *chosen, best_distance = self._fast_batch(*columns, *seed_columns)
+            found = np.isfinite(best_distance)
+            status[found] = OK
+            for row in np.flatnonzero(~found):  # the rare rows: the scalar path decides
+                result = self.solve(points[row].tolist(), seeds[row].tolist())
+                for column, angle in zip(chosen, result.angles):
+                    column[row] = angle
+                status[row] = result.status
+            angles[:] = np.stack(chosen, axis=1)
+            return angles, status, self._column_residuals(chosen, columns)
         best_distance = np.full(rows, math.inf)
         reachable = np.zeros(rows, dtype=bool)
-        columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
         chosen = [np.zeros(rows)] * 3
         for branch, exact in _branches(self.geometry, columns[0], columns[1], columns[2], _ARRAY):
             representative, inside = self._representatives(branch, seed_columns, _ARRAY)
@@ -235,8 +257,14 @@ class LegSolver:
         return tuple(chosen), all_inside
 
     def _residuals(self, angles: np.ndarray, points: np.ndarray) -> np.ndarray:
-        error = _positions(self.leg, angles) - points
-        return np.hypot(np.hypot(error[:, 0], error[:, 1]), error[:, 2])  # no overflow for far targets
+        """(N,) distances [m] from the feet at (N, 3) angles [rad] to (N, 3) targets [m]."""
+        return self._column_residuals(tuple(np.ascontiguousarray(angles.T)), tuple(np.ascontiguousarray(points.T)))
+
+    def _column_residuals(self, angles: Sequence[np.ndarray], points: Sequence[np.ndarray]) -> np.ndarray:
+        """:meth:`_residuals` for the angles and targets given as three (N,) columns each."""
+        trig = [f(angle) for angle in angles for f in (np.cos, np.sin)]
+        x, y, z = self.leg.position_from_trig(*trig)
+        return np.hypot(np.hypot(x - points[0], y - points[1]), z - points[2])  # no overflow for far targets
 
     # --- searches: nearest in-limit point, and the damped-least-squares solver ---------------
 
@@ -439,6 +467,162 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
             q1 = xp.atan2(fx * gy - fy * gx, fx * gx + fy * gy)
             out.append(((q0, q1, xp.atan2(s2, c2)), exact))
     return out
+
+
+# --- the closed form as generated straight-line code (the common case, fast) --------------------
+
+
+def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):  # noqa: ANN202
+    """The closed form of :func:`_branches` and the choice of :meth:`LegSolver.solve` as one
+    generated function on floats with the leg's constants folded in, as the FK is (see
+    :func:`a1_leg_fk.kinematics._leg_source`), or ``None`` when a joint has finite limits 2 pi or more
+    apart (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
+    [m, base frame] and the seed [rad]; it returns ``(angles, reachable)`` with ``angles`` the
+    in-limit exact solution nearest the seed (``None`` if there is none), or ``None`` for the
+    general path to decide (a target on the roll axis; no solution in the limits and a roll
+    angle outside them, whose branch was not followed). Returned with it: ``solve_batch``, the
+    same code on (N,) numpy columns (the branch chosen by ``np.where``), returning the three angle
+    columns and the seed distance, ``inf`` in rows without an in-limit solution."""
+    from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module
+
+    if any(lower != -math.inf and not upper - lower < TWO_PI for lower, upper in limits):
+        return None
+    code = _Code("t")
+
+    def bind(code: _Code, expressions: Sequence[Term]) -> tuple[Term, ...]:
+        """Constants and names as they are, other expressions bound to fresh variables."""
+        return tuple(e if isinstance(e, float) or e.lstrip("-").isidentifier() else code.assign([e])[0] for e in expressions)
+
+    target = tuple(_sum([("", name), ("", -origin)]) for name, origin in zip(("tx", "ty", "tz"), g.roll_origin))
+    relative = bind(code, target)
+    t0 = bind(code, [_linear(row, relative) for row in g.roll_rotation_t])
+    along, a, b = bind(code, [_linear(g.roll_axis, t0), _linear(g.pitch_axis, t0), _linear(g.pitch_cross, t0)])
+    ax, ay, az = g.roll_axis
+    across = bind(code, [_sum([("", t), (along, -axis)]) for t, axis in zip(t0, g.roll_axis)])  # t0 - a0 (a0 . t0)
+    crossed = bind(code, [_linear(row, t0) for row in ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))])  # a0 x t0
+    head = "\n    ".join(code.lines)
+    knee = _Code("k")
+    moved = bind(
+        knee,
+        [_sum([(along, axis), ("", -origin), ("c0", p), ("-s0", c)]) for axis, origin, p, c in zip(g.roll_axis, g.pitch_origin, across, crossed)],
+    )
+    gx, gy = bind(knee, [_linear(row, moved) for row in g.plane])
+    cos_knee = _sum([("cos_knee", g.cos_peak), ("knee_sign * sin_knee", -g.sin_peak)])
+    sin_knee = _sum([("cos_knee", g.sin_peak), ("knee_sign * sin_knee", g.cos_peak)])
+    peak = math.atan2(g.sin_peak, g.cos_peak)  # q2 = peak +- acos(knee argument)
+    roll_body = "\n        ".join(knee.lines)
+    fx = _sum([("", g.foot_u[0]), ("c2", g.foot_v[0]), ("s2", g.foot_w[0])])
+    fy = _sum([("", g.foot_u[1]), ("c2", g.foot_v[1]), ("s2", g.foot_w[1])])
+    tolerance = 1.0 + ARGUMENT_TOLERANCE
+
+    def representative(name: str, angle: str, slot: int, indent: str, outside: str = "continue") -> str:
+        """:func:`_representative` for a range narrower than 2 pi (``outside`` when outside) or
+        a continuous joint."""
+        lower, upper = limits[slot]
+        if lower == -math.inf:
+            return f"{name} = r{slot} + ({angle} - r{slot} + {math.pi!r}) % {TWO_PI!r} - {math.pi!r}"
+        low = lower - LIMIT_TOLERANCE_RAD
+        return (
+            f"{name} = {low!r} + ({angle} - {low!r}) % {TWO_PI!r}\n{indent}if {name} > {upper!r}:\n"
+            f"{indent}    if {name} > {upper + LIMIT_TOLERANCE_RAD!r}:\n{indent}        {outside}\n"
+            f"{indent}    {name} = {upper!r}\n{indent}elif {name} < {lower!r}:\n{indent}    {name} = {lower!r}"
+        )
+
+    source = f"""def solve(tx, ty, tz, r0, r1, r2):
+    {head}
+    radius = _hypot({a}, {b})
+    if radius == 0.0:
+        return None
+    roll_argument = {g.lateral_m!r} / radius
+    if abs(roll_argument) > {tolerance!r}:
+        return None, False
+    cos_roll = 1.0 if roll_argument > 1.0 else -1.0 if roll_argument < -1.0 else roll_argument
+    sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
+    cos_base, sin_base = {a} / radius, {b} / radius
+    best, best_distance, reachable, roll_outside = None, _inf, False, False
+    for roll_sign in (1.0, -1.0):
+        c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
+        s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
+        {representative("q0", "_atan2(s0, c0)", 0, " " * 8, "roll_outside = True; continue")}
+        {roll_body}
+        knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
+        if abs(knee_argument) > {tolerance!r}:
+            continue
+        reachable = True
+        d0 = (q0 - r0) ** 2
+        cos_knee = 1.0 if knee_argument > 1.0 else -1.0 if knee_argument < -1.0 else knee_argument
+        sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+        knee_angle = _atan2(sin_knee, cos_knee)
+        for knee_sign in (1.0, -1.0):
+            c2, s2 = {cos_knee}, {sin_knee}
+            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
+            fx, fy = {fx}, {fy}
+            {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            if distance < best_distance:
+                best, best_distance = (q0, q1, q2), distance
+    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
+        return None
+    return best, reachable
+"""
+
+    def representatives(name: str, angle: str, slot: int, indent: str = " " * 12) -> str:
+        """:func:`_representative` on arrays for a range narrower than 2 pi: ``name`` clamped into
+        the range and ``name_inside`` (by floor: numpy's ``%`` on floats is several times slower);
+        for a continuous joint the value within pi of the seed."""
+        lower, upper = limits[slot]
+        if lower == -math.inf:
+            return (
+                f"{name} = {angle} - r{slot} + {math.pi!r}\n{indent}"
+                f"{name} = {name} - {TWO_PI!r} * _floor({name} * {1.0 / TWO_PI!r}) - {math.pi!r} + r{slot}\n{indent}"
+                f"{name}_inside = True"
+            )
+        low = lower - LIMIT_TOLERANCE_RAD
+        return (
+            f"{name} = {angle}\n{indent}{name} = {name} - {TWO_PI!r} * _floor(({name} - {low!r}) * {1.0 / TWO_PI!r})\n{indent}"
+            f"{name}_inside = {name} <= {upper + LIMIT_TOLERANCE_RAD!r}\n{indent}"
+            f"{name} = _minimum(_maximum({name}, {lower!r}), {upper!r})"
+        )
+
+    source += f"""
+def solve_batch(tx, ty, tz, r0, r1, r2):
+    {head}
+    radius = _hypot({a}, {b})
+    roll_argument = {g.lateral_m!r} / radius
+    roll_exact = abs(roll_argument) <= {tolerance!r}
+    cos_roll = _minimum(_maximum(roll_argument, -1.0), 1.0)
+    sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
+    cos_base, sin_base = {a} / radius, {b} / radius
+    best_distance = _full(tx.shape, _inf)
+    best0 = best1 = best2 = best_distance
+    for roll_sign in (1.0, -1.0):
+        c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
+        s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
+        {representatives("q0", "_atan2(s0, c0)", 0, " " * 8)}
+        {roll_body}
+        knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
+        roll_usable = roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})
+        d0 = (q0 - r0) ** 2
+        cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
+        sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+        knee_angle = _atan2(sin_knee, cos_knee)
+        for knee_sign in (1.0, -1.0):
+            c2, s2 = {cos_knee}, {sin_knee}
+            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
+            fx, fy = {fx}, {fy}
+            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
+            best_distance = _where(better, distance, best_distance)
+            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
+    return best0, best1, best2, best_distance
+"""
+    namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}
+    exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}>", "exec"), namespace)
+    arrays = {"_hypot": np.hypot, "_sqrt": np.sqrt, "_atan2": np.arctan2, "_inf": math.inf, "_minimum": np.minimum,
+              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor}
+    exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}, arrays>", "exec"), arrays)
+    return namespace["solve"], arrays["solve_batch"]
 
 
 # --- damped least squares -------------------------------------------------------------------------

@@ -420,3 +420,39 @@ def test_joint_ranges_wider_than_a_turn() -> None:
     assert shifted.angles[2] == pytest.approx(3.5 - 2 * math.pi, abs=1e-9)
     shifted = quadruped.ik(quadruped.fk([0.0, -3.0, 1.0] * 4), seed=[0.0, 3.0, 1.0] * 4)
     assert shifted.angles[1] == pytest.approx(2 * math.pi - 3.0, abs=1e-9)
+
+
+# --- the generated closed form (the fast path) ------------------------------------------------
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_the_generated_closed_form_picks_the_nearest_in_limit_solution(name: str) -> None:
+    """Reference: every branch the general closed form enumerates (``solutions``, with the seed
+    rule), and the seed distance computed here; 400 targets around each hip, many outside the
+    limits or the reach, with random seeds; the batch (generated array code) equals the scalar."""
+    path, feet, _ = ROBOTS[name]
+    quadruped = Quadruped.from_urdf(str(path), foot_links=feet)
+    lower, upper = ranges(quadruped)
+    rng = np.random.default_rng(11)
+    for slot, leg in enumerate(LEGS):
+        solver = quadruped._ik_solvers[slot]
+        hip = quadruped.fk(np.zeros(12))[slot]
+        targets = hip + rng.uniform(-0.45, 0.45, size=(400, 3))
+        seeds = rng.uniform(lower[3 * slot : 3 * slot + 3], upper[3 * slot : 3 * slot + 3], size=(400, 3))
+        batch_angles, batch_status, batch_residual = solver.solve_batch(targets, seeds)
+        counts = np.zeros(3, dtype=int)
+        for row, (target, seed) in enumerate(zip(targets, seeds)):
+            result = quadruped.ik_leg(leg, target, seed)
+            inside = [s.angles for s in solver.solutions(target, seed) if s.inside_limits]
+            reachable = bool(solver.solutions(target, seed))
+            expected = inverse.OK if inside else inverse.OUTSIDE_LIMITS if reachable else inverse.UNREACHABLE
+            assert result.status == expected == batch_status[row], f"leg {leg} target {target}"
+            counts[expected] += 1
+            if inside:
+                nearest = min(inside, key=lambda angles: sum((a - s) ** 2 for a, s in zip(angles, seed)))
+                np.testing.assert_allclose(result.angles, nearest, rtol=0.0, atol=1e-9)
+                foot = quadruped.fk(np.concatenate([np.zeros(3 * slot), result.angles, np.zeros(9 - 3 * slot)]))[slot]
+                assert abs(result.residual_m - float(np.linalg.norm(foot - target))) <= 1e-12
+            np.testing.assert_allclose(batch_angles[row], result.angles, rtol=0.0, atol=1e-12)
+            assert abs(batch_residual[row] - result.residual_m) <= 1e-12
+        assert counts[inverse.OK] >= 20 and counts[inverse.UNREACHABLE] >= 20, (leg, counts)

@@ -1,4 +1,4 @@
-"""``joint_state_demo``: the A1 gait of :mod:`a1_leg_fk.gait` as a sensor_msgs/JointState stream.
+"""``joint_state_demo``: the A1 gait of :mod:`a1_leg_fk.demo_gait` as a sensor_msgs/JointState stream.
 
 Publishes ``joint_states`` (a relative name: namespaces and remaps apply) at ``rate_hz`` with
 the 12 leg joints' positions [rad] and velocities [rad/s]: the robot stands up from a crouch for
@@ -22,7 +22,7 @@ from __future__ import annotations
 import sys
 from typing import Sequence
 
-from a1_leg_fk.gait import Gait, limits_of
+from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import UNITREE_NAME_PAIRS
 from a1_leg_fk.robot_config import load_robot

@@ -25,7 +25,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from a1_leg_fk import inverse
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index, leg_slot
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
 
 JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
@@ -245,19 +245,19 @@ class Quadruped:
     def ik_leg(self, leg: str, point: Sequence[float], seed: Sequence[float] | None = None) -> inverse.LegIk:
         """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or ``None``."""
         checked_seed = None if seed is None else _checked_configuration(seed, f"seed of leg {leg}", JOINTS_PER_LEG)
-        return self._ik_solvers[_leg_slot(leg)].solve(inverse.checked_point(point, leg), checked_seed)
+        return self._ik_solvers[leg_slot(leg)].solve(inverse.checked_point(point, leg), checked_seed)
 
     def ik_solutions(self, leg: str, point: Sequence[float]) -> list[inverse.Solution]:
         """Every exact IK solution of ``leg`` for ``point`` [m, base frame] (for the A1 topology:
         up to two roll x two knee branches), each with whether it is inside the URDF limits."""
-        return self._ik_solvers[_leg_slot(leg)].solutions(inverse.checked_point(point, leg))
+        return self._ik_solvers[leg_slot(leg)].solutions(inverse.checked_point(point, leg))
 
     def reach(self, leg: str) -> Reach:
         """Distance from the leg's hip-pitch axis to its foot, over the knee's range.
 
         Defined for legs of the A1 topology, whose knee axis is parallel to the hip-pitch axis.
         """
-        compiled = self.legs[_leg_slot(leg)]
+        compiled = self.legs[leg_slot(leg)]
         pitch, knee = compiled.stages[1], compiled.stages[2]
         if abs(abs(float(pitch.axis @ knee.rotation @ knee.axis)) - 1.0) > 1e-9:
             raise LegFkError(f"leg {leg}: knee axis is not parallel to the hip-pitch axis; reach is not defined")
@@ -285,13 +285,6 @@ class Quadruped:
         knee_at_min = min(candidates, key=distance)
         knee_at_max = max(candidates, key=distance)
         return Reach(leg, distance(knee_at_min), knee_at_min, distance(knee_at_max), knee_at_max, distance(peak), peak)
-
-
-def _leg_slot(leg: str) -> int:
-    try:
-        return LEG_NAMES.index(leg)
-    except ValueError:
-        raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}") from None
 
 
 def _checked_feet(feet: np.ndarray) -> np.ndarray:

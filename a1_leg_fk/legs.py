@@ -16,6 +16,14 @@ LEG_NAMES: tuple[str, ...] = ("FR", "FL", "RR", "RL")
 
 JOINTS_PER_LEG = 3
 
+
+def leg_slot(leg: str) -> int:
+    """The slot 0..3 of ``leg`` in :data:`LEG_NAMES`; :class:`LegFkError` naming it if unknown."""
+    try:
+        return LEG_NAMES.index(leg)
+    except ValueError:
+        raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}") from None
+
 FOOT_NAME_SUFFIXES: tuple[str, ...] = ("foot", "toe", "foot_link", "toe_link")
 """Where several leaf links of a leg qualify as its foot, the one named ``<leg>_<suffix>`` with one
 of these suffixes (case-insensitive: ``FR_foot``, ``fr_toe``, ``FR_foot_link``) is the foot. Go2's

@@ -12,16 +12,15 @@ from pathlib import Path
 
 import numpy as np
 
-from a1_leg_fk.gait import Gait, limits_of
+from a1_leg_fk.demo_gait import STAND_POSE, Gait, limits_of
 from a1_leg_fk.gait_analysis import Contacts, GaitReport
 from a1_leg_fk.kinematics import Quadruped
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
 from a1_leg_fk.urdf import LegFkError
 
 INSTALL_HINT = "matplotlib is not installed: pip install matplotlib (or: sudo apt install python3-matplotlib)"
 REGION_COLOUR = "#c6dbef"
 LEG_COLOURS = {leg: f"C{slot}" for slot, leg in enumerate(LEG_NAMES)}
-STAND_POSE = (0.0, 0.8, -1.5)  # drawn in the reach plot for scale
 
 
 class MissingMatplotlib(LegFkError):
@@ -40,12 +39,6 @@ def pyplot():  # noqa: ANN201 (matplotlib.pyplot, untyped here)
     return plt
 
 
-def _leg_slot(leg: str) -> int:
-    if leg not in LEG_NAMES:
-        raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}")
-    return LEG_NAMES.index(leg)
-
-
 def _limits(joint, fallback: tuple[float, float] = (-math.pi, math.pi)) -> tuple[float, float]:  # noqa: ANN001
     if joint.lower is None or joint.upper is None:
         return fallback
@@ -59,7 +52,7 @@ def reach_samples(quadruped: Quadruped, leg: str, samples: int = 250) -> tuple[n
     to the hip-pitch joint: ``points`` (samples**2, 2) fill the reachable region and ``edge`` (M, 2)
     traces its outline (the images of the four edges of the angle rectangle, in order).
     """
-    slot = _leg_slot(leg)
+    slot = leg_slot(leg)
     first = slot * JOINTS_PER_LEG
     pitch_range = _limits(quadruped.joints[first + 1])
     knee_range = _limits(quadruped.joints[first + 2])
@@ -86,7 +79,7 @@ def _plane_points(quadruped: Quadruped, slot: int, pitch: np.ndarray, knee: np.n
 def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 250) -> Path:
     """Write ``path`` (PNG): where the leg's foot can be in its hip's sagittal plane (hip roll 0)."""
     plt = pyplot()
-    slot = _leg_slot(leg)
+    slot = leg_slot(leg)
     points, edge = reach_samples(quadruped, leg, samples)
     reach = quadruped.reach(leg)
     first = slot * JOINTS_PER_LEG

@@ -34,7 +34,6 @@ Definitions (per phase; inputs are matched to outputs by their stamp)
 from __future__ import annotations
 
 import argparse
-import ctypes
 import json
 import os
 import platform
@@ -42,7 +41,6 @@ import queue
 import re
 import shutil
 import signal
-import subprocess
 import sys
 import tempfile
 import threading
@@ -52,6 +50,8 @@ from importlib import metadata
 from pathlib import Path
 
 import numpy as np
+
+from a1_leg_fk.cli import common
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -79,27 +79,15 @@ def machine_busy_s() -> float:
     return (sum(fields) - fields[3] - fields[4]) / CLOCK_TICKS
 
 
-def _prctl_pdeathsig() -> None:
-    """In the child: be killed when the orchestrator dies, and get a session of its own."""
-    os.setsid()
-    try:
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except OSError:
-        pass
-
-
-class Child:
-    """A child process with JSON-lines events on stdout (collected by a thread) and its log."""
+class Child(common.Child):
+    """A role process (its own session; SIGKILL should the orchestrator die) with JSON-lines events
+    on stdout, collected by a thread, and its stderr in ``<log_dir>/<name>.log``."""
 
     def __init__(self, name: str, command: list[str], env: dict[str, str], log_dir: Path) -> None:
-        self.name = name
-        self.log = log_dir / f"{name}.log"
         self.events: queue.Queue[dict] = queue.Queue()
         self.started_ns = time.time_ns()
-        self.process = subprocess.Popen(
-            command, env=env, cwd=env["PYTHONPATH"].split(os.pathsep)[0], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            stderr=self.log.open("w"), text=True, bufsize=1, preexec_fn=_prctl_pdeathsig,
-        )
+        super().__init__(name, command, log_dir / f"{name}.log", env=env, cwd=env["PYTHONPATH"].split(os.pathsep)[0],
+                         pipes=True, death_signal=signal.SIGKILL)
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
@@ -139,19 +127,10 @@ class Child:
             return float("nan")
         return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # utime, stime (fields 14, 15)
 
-    def stop(self, sig: int = signal.SIGINT, timeout: float = 5.0) -> tuple[int | None, float]:
-        """Signal, wait (then SIGKILL); return (exit code, seconds to exit)."""
-        if self.process.poll() is not None:
-            return self.process.returncode, 0.0
-        started = time.monotonic()
-        try:
-            self.process.send_signal(sig)
-            code = self.process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
-            return None, time.monotonic() - started
-        return code, time.monotonic() - started
+    def timed_stop(self, sig: int = signal.SIGINT) -> tuple[int | None, float]:
+        """Stop it; (exit code, None if it had to be killed; seconds from the signal to the exit)."""
+        code = self.stop(sig)
+        return (None if self.killed else code), self.stop_s
 
 
 class Scenario:
@@ -236,7 +215,7 @@ class Scenario:
                 failures = 0 if ok else failures + 1
         self.generator.send(op="stop")
         self.generator.stop(signal.SIGTERM)
-        self.exit = self.under_test.stop(signal.SIGINT)
+        self.exit = self.under_test.timed_stop(signal.SIGINT)
         self.receiver.send(op="stop")
         self.receiver.wait_event("done", 30)
         self.receiver.stop(signal.SIGTERM)
@@ -453,7 +432,7 @@ def main() -> int:
         keep_logs = True
     finally:
         for child in reversed(children):
-            child.stop(signal.SIGINT, timeout=3)
+            child.stop(signal.SIGINT, timeout_s=3)
         if keep_logs or args.keep_logs:
             print(f"logs and records: {args.log_dir}")
         else:

@@ -35,6 +35,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from a1_leg_fk.cli.common import Child
+
 LEGS = ("FR", "FL", "RR", "RL")
 PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
 UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
@@ -172,17 +174,16 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
     folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_soak_"))
     node_log = folder / "node.log"
     stop, feet_file = folder / "stop", folder / "feet.json"
-    children: list[subprocess.Popen] = []
+    children: list[Child] = []
 
-    def start(command: list[str], log: Path) -> subprocess.Popen:
-        child = subprocess.Popen(command, stdout=open(log, "w"), stderr=subprocess.STDOUT, start_new_session=True)  # noqa: SIM115
-        children.append(child)
-        return child
+    def start(name: str, command: list[str], log: Path) -> subprocess.Popen:
+        children.append(Child(name, command, log))
+        return children[-1].process
 
     print(f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
           f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}", flush=True)
-    node_process = start(node_command(), node_log)
-    collector = start([sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
+    node_process = start("foot_fk_node", node_command(), node_log)
+    collector = start("collector", [sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
 
     rclpy.init()
     node = rclpy.create_node("soak_driver")
@@ -298,13 +299,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
     finally:
         stop.touch()
         for child in children:
-            if child.poll() is None:
-                child.send_signal(signal.SIGINT)
-        for child in children:
-            try:
-                child.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(child.pid, signal.SIGKILL)
+            child.stop(signal.SIGINT, timeout_s=10)
         node.destroy_node()
         rclpy.try_shutdown()
 

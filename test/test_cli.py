@@ -14,7 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from a1_leg_fk.cli import FootTable, prefixed, split_ros_args
+from a1_leg_fk.cli import build_parser, main
+from a1_leg_fk.cli.common import Ros, our_arguments, prefixed, ros_section
+from a1_leg_fk.cli.echo import FootTable
 
 LEGS = ("FR", "FL", "RR", "RL")
 STAND = (0.0, 0.8, -1.5)
@@ -135,15 +137,36 @@ def test_help_lists_the_subcommands() -> None:
 
 
 def test_ros_arguments_are_split_off() -> None:
-    assert split_ros_args(["echo", "--once"]) == (["echo", "--once"], [])
-    assert split_ros_args(["verify", "--ros-args", "-r", "__ns:=/r1", "--", "--timeout", "1"]) == (
-        ["verify", "--timeout", "1"],
-        ["--ros-args", "-r", "__ns:=/r1", "--"],
-    )
+    assert our_arguments(["echo", "--once"]) == ["echo", "--once"]
+    argv = ["verify", "--ros-args", "-r", "__ns:=/r1", "-p", "use_sim_time:=false", "--", "--timeout", "1"]
+    assert our_arguments(argv) == ["verify", "--timeout", "1"]
+    options = build_parser().parse_args(our_arguments(argv))
+    assert options.command == "verify" and options.timeout == 1.0 and options.namespace == ""
+    # Without a closing --, everything after --ros-args is ROS's.
+    assert our_arguments(["echo", "--once", "--ros-args", "-r", "__ns:=/r1"]) == ["echo", "--once"]
+    # The demo hands its nodes the command line from the first --ros-args on.
+    assert ros_section(argv) == argv[1:] and ros_section(["echo"]) == []
     assert prefixed("", "verify_fk") == "verify_fk"
     assert prefixed("/robot1/", "verify_fk") == "/robot1/verify_fk"
     assert prefixed("robot1", "foot_positions/FR") == "robot1/foot_positions/FR"
     assert prefixed("/", "verify_fk") == "/verify_fk"
+
+
+def test_ros_arguments_reach_rclpy_whole() -> None:
+    """rclpy.init gets the whole command line: it applies the remaps and ignores our options."""
+    ros = Ros("verify", ["verify", "--ros-args", "-r", "__ns:=/r1", "-r", "verify_fk:=check", "--", "--timeout", "1"])
+    try:
+        assert ros.node.get_namespace() == "/r1"
+        assert ros.node.resolve_service_name("verify_fk") == "/r1/check"
+    finally:
+        ros.close()
+
+
+def test_bad_ros_arguments_are_one_line_and_exit_2(capsys) -> None:  # noqa: ANN001
+    assert main(["ik", "FR", "0.2", "-0.13", "-0.3", "--ros-args", "-r"]) == 2
+    captured = capsys.readouterr()
+    assert not captured.out and len(captured.err.strip().splitlines()) == 1
+    assert captured.err.startswith("a1-leg-fk: bad --ros-args: ") and "-r" in captured.err
 
 
 def test_rate_counts_what_the_publisher_sent() -> None:

@@ -5,7 +5,7 @@ The base pose: the demo trots in place in the base frame, its stance feet sweepi
 test moves the base forward by exactly the stance feet's mean sweep (from the FK), and holds it at
 the height that puts the stance feet a foot radius above z = 0, so that in the world frame the
 stance feet stand still on the ground, as a real robot's would. The truth is the demo gait's own
-swing flag (:meth:`a1_leg_fk.gait.Gait.swinging`), which the analysis never sees.
+swing flag (:meth:`a1_leg_fk.demo_gait.Gait.swinging`), which the analysis never sees.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from bag_factory import BagSpec, JointStateMsg, T, header, write_bag
 from test_plots import colour_share, load_png
 
 from a1_leg_fk import cli
-from a1_leg_fk.gait import default_gait
+from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.plots import LEG_COLOURS
@@ -30,7 +30,7 @@ POSE_RATE_HZ = 100.0
 SECONDS = 6.0
 FOOT_RADIUS_M = 0.02
 START_NS = 1_700_000_000_000_000_000
-GAIT = default_gait()
+GAIT = Gait(limits_of(Quadruped.from_urdf()))
 
 
 def demo_bag(path: Path) -> tuple[np.ndarray, np.ndarray]:

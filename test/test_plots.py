@@ -9,9 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from a1_leg_fk.gait import default_gait
+from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.plots import LEG_COLOURS, REGION_COLOUR, gait_feet, reach_samples
+from a1_leg_fk.urdf import LegFkError
 
 ROBOT = Quadruped.from_urdf()
 
@@ -64,8 +65,13 @@ def test_reach_samples_lie_between_the_reach_radii(leg: str) -> None:
     assert np.min(np.hypot(*(points - foot).T)) < 0.01
 
 
+def test_an_unknown_leg_is_named() -> None:
+    with pytest.raises(LegFkError, match=r"unknown leg 'fr'.*\['FR', 'FL', 'RR', 'RL'\]"):
+        reach_samples(ROBOT, "fr", samples=4)
+
+
 def test_gait_feet_cover_two_trot_cycles() -> None:
-    gait = default_gait()
+    gait = Gait(limits_of(ROBOT))
     times, feet = gait_feet(ROBOT, gait, cycles=2.0)
     assert feet.shape == (len(times), 4, 3)
     assert times[0] >= gait.periodic_from_s

@@ -9,19 +9,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from a1_leg_fk.gait import Gait, GaitParameters, default_gait, gait_angles, gait_velocities, limits_of
+from a1_leg_fk.demo_gait import Gait, GaitParameters, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
 ROBOT = Quadruped.from_urdf()
-GAIT = default_gait()
+GAIT = Gait(limits_of(ROBOT))
 # Stand-up, fade-in and several trot cycles, sampled densely (1 ms).
 TIMES = np.arange(-0.5, GAIT.periodic_from_s + 4 * GAIT.period_s, 0.001)
 
 
 def angles_over(times: np.ndarray) -> np.ndarray:
-    return np.array([gait_angles(float(t)) for t in times])
+    return np.array([GAIT.angles(float(t)) for t in times])
 
 
 def test_every_angle_stays_inside_the_urdf_limits() -> None:
@@ -37,7 +37,7 @@ def test_every_angle_stays_inside_the_urdf_limits() -> None:
 def test_stands_up_from_a_crouch_then_trots() -> None:
     knee_lower = min(joint.lower for joint in ROBOT.joints[2::3])
     knee_upper = max(joint.upper for joint in ROBOT.joints[2::3])
-    crouch, stood = np.array(gait_angles(0.0)), np.array(gait_angles(GAIT.trot_start_s))
+    crouch, stood = np.array(GAIT.angles(0.0)), np.array(GAIT.angles(GAIT.trot_start_s))
     # Crouched: knees in the most-bent 10 % of their range; standing: the A1's usual pose.
     assert (crouch[2::3] < knee_lower + 0.1 * (knee_upper - knee_lower)).all()
     np.testing.assert_allclose(stood.reshape(4, 3), [[0.0, 0.8, -1.5]] * 4, atol=1e-12)
@@ -57,26 +57,26 @@ def test_velocities_match_finite_differences() -> None:
     step = 1e-7  # small: the swing's sin**2 lift has a kink in its second derivative at lift-off
     for t in TIMES[::13]:
         t = float(t)
-        numeric = (np.array(gait_angles(t + step)) - np.array(gait_angles(t - step))) / (2 * step)
-        np.testing.assert_allclose(gait_velocities(t), numeric, atol=1e-5, err_msg=f"t={t}")
+        numeric = (np.array(GAIT.angles(t + step)) - np.array(GAIT.angles(t - step))) / (2 * step)
+        np.testing.assert_allclose(GAIT.velocities(t), numeric, atol=1e-5, err_msg=f"t={t}")
 
 
 @settings(max_examples=200, deadline=None)
 @given(st.floats(min_value=-1.0, max_value=60.0))
 def test_velocities_match_finite_differences_anywhere(t: float) -> None:
     step = 1e-7
-    numeric = (np.array(gait_angles(t + step)) - np.array(gait_angles(t - step))) / (2 * step)
-    np.testing.assert_allclose(gait_velocities(t), numeric, atol=1e-5)
+    numeric = (np.array(GAIT.angles(t + step)) - np.array(GAIT.angles(t - step))) / (2 * step)
+    np.testing.assert_allclose(GAIT.velocities(t), numeric, atol=1e-5)
 
 
 def test_velocities_are_continuous_and_nonzero_while_trotting() -> None:
-    rates = np.array([gait_velocities(float(t)) for t in TIMES])
+    rates = np.array([GAIT.velocities(float(t)) for t in TIMES])
     # No jumps (1 ms steps): the largest change is bounded by the peak acceleration (the knee's
     # 2 * knee_lift * omega**2 ~ 160 rad/s**2 at 2 Hz, i.e. 0.16 rad/s per ms), never a step.
     assert np.abs(np.diff(rates, axis=0)).max() < 0.2
     trotting = rates[TIMES > GAIT.periodic_from_s]
     assert np.abs(trotting).max(axis=0).min() > 0.05  # every joint moves
-    np.testing.assert_allclose(gait_velocities(-0.2), 0.0)
+    np.testing.assert_allclose(GAIT.velocities(-0.2), 0.0)
 
 
 def test_diagonal_pairs_alternate() -> None:

@@ -1,6 +1,6 @@
 """``a1-leg-fk gait``: a recorded run (ROS bag) -> contacts, stride metrics and the gait's name.
 
-The feet come from :func:`a1_leg_fk.cli_bag.trajectories_from_options` (world frame, so
+The feet come from :func:`a1_leg_fk.cli.bag.trajectories_from_options` (world frame, so
 ``--base-pose`` is required) and go through :mod:`a1_leg_fk.gait_analysis`. Prints a short report;
 ``--json``, ``--plot`` and ``--csv-contacts`` write files. Exit codes: 0 done; 1 the bag could not
 be read to its end (the analysis covers what was read) or a plot could not be drawn; 2 bad usage or
@@ -19,12 +19,12 @@ from typing import Sequence
 
 import numpy as np
 
-from a1_leg_fk.cli_bag import add_recording_arguments, trajectories_from_options
+from a1_leg_fk.cli.bag import add_recording_arguments, trajectories_from_options
+from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 from a1_leg_fk.gait_analysis import ContactThresholds, Contacts, GaitReport, analyze_gait
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 PROG = "a1-leg-fk gait"
 NEEDS_BASE_POSE = (
     "needs --base-pose TOPIC (nav_msgs/Odometry, geometry_msgs/PoseStamped or /tf): contacts are found "
@@ -66,9 +66,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     gait.set_defaults(handler=run)
 
 
-def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk gait``: see the module docstring for exit codes."""
-    del ros_args  # no ROS here
+    del argv  # no ROS here
     try:
         if not options.base_pose:
             raise LegFkError(NEEDS_BASE_POSE)

@@ -10,11 +10,13 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_OK
+from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
 
-EXIT_OK, EXIT_BAD_INPUT = 0, 2
+if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
+    from a1_leg_fk.kinematics import Quadruped
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -37,8 +39,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     return parser
 
 
-def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """Solve and print; one line on stderr and exit 2 for bad input."""
+    del argv  # no ROS here
     from a1_leg_fk.kinematics import Quadruped
     from a1_leg_fk.urdf import LegFkError
 
@@ -51,12 +54,14 @@ def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
     return EXIT_OK
 
 
-def report(quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None) -> list[str]:  # noqa: ANN001
+def report(
+    quadruped: Quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None
+) -> list[str]:
     """The lines ``a1-leg-fk ik`` prints (see the module docstring)."""
     from a1_leg_fk.inverse import checked_point, range_middle
     from a1_leg_fk.urdf import LegFkError
 
-    slot = LEG_NAMES.index(leg)
+    slot = leg_slot(leg)
     first = slot * JOINTS_PER_LEG
     target = checked_point(point, leg)
     feet = quadruped.fk([range_middle(joint) for joint in quadruped.joints])  # the other legs: anywhere in reach

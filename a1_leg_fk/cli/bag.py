@@ -13,14 +13,13 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
+from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, non_negative
 from a1_leg_fk.recording import (
     DEFAULT_MAX_POSE_GAP_S,
     FootTrajectories,
     read_foot_trajectories,
 )
 from a1_leg_fk.urdf import LegFkError
-
-EXIT_OK, EXIT_STOPPED_EARLY, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,7 +31,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--joint-aliases", nargs="*", default=[], metavar="NAME=joint", help="as the node's joint_aliases parameter")
     parser.add_argument("--base-pose", metavar="TOPIC",
                         help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped, or /tf): adds world-frame feet")
-    parser.add_argument("--max-pose-gap", type=_non_negative, default=DEFAULT_MAX_POSE_GAP_S, metavar="S",
+    parser.add_argument("--max-pose-gap", type=non_negative, default=DEFAULT_MAX_POSE_GAP_S, metavar="S",
                         help=f"no world position between two poses further apart than S seconds (default {DEFAULT_MAX_POSE_GAP_S:g})")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -78,22 +77,12 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     bag.set_defaults(handler=run)
 
 
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
-    return value
-
-
-def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
+def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk bag``: see the module docstring for exit codes."""
     from a1_leg_fk.plots import pyplot
     from a1_leg_fk.recording_outputs import Outputs, convert
 
-    del ros_args  # no ROS here
+    del argv  # no ROS here
     try:
         if not (options.csv or options.output_bag or options.plot):
             raise LegFkError("nothing to write: give --csv FILE, --output-bag PATH and/or --plot FILE.png")
@@ -118,5 +107,5 @@ def run(options: argparse.Namespace, ros_args: Sequence[str]) -> int:
         print(f"wrote:     {written}")
     if summary.stopped:
         print(f"a1-leg-fk bag: {options.input}: stopped early: {summary.stopped}", file=sys.stderr)
-        return EXIT_STOPPED_EARLY
+        return EXIT_FAILED
     return EXIT_OK

@@ -1,4 +1,6 @@
-"""A plausible A1 gait as a function of time: stand up from a crouch, then trot in place forever.
+"""The demo gait generator (for ``joint_state_demo``; gait *analysis* is :mod:`a1_leg_fk.gait_analysis`).
+
+A plausible A1 gait as a function of time: stand up from a crouch, then trot in place forever.
 
 Pure Python (no ROS, no numpy needed): :class:`Gait` maps a time ``t`` [s] to the 12 joint
 angles [rad] and their analytic rates [rad/s] in the package's slot order (FR, FL, RR, RL; hip
@@ -28,11 +30,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
+
+if TYPE_CHECKING:  # kinematics needs numpy; this module does not
+    from a1_leg_fk.kinematics import Quadruped
 
 JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
 
@@ -180,24 +184,7 @@ class Gait:
                 )
 
 
-def limits_of(quadruped: object) -> list[tuple[float | None, float | None]]:
+def limits_of(quadruped: Quadruped) -> list[tuple[float | None, float | None]]:
     """The 12 ``(lower, upper)`` joint limits [rad] of a :class:`a1_leg_fk.kinematics.Quadruped`."""
-    return [(joint.lower, joint.upper) for joint in quadruped.joints]  # type: ignore[attr-defined]
+    return [(joint.lower, joint.upper) for joint in quadruped.joints]
 
-
-@lru_cache(maxsize=1)
-def default_gait() -> Gait:
-    """The gait for the embedded A1 model (built once)."""
-    from a1_leg_fk.kinematics import Quadruped
-
-    return Gait(limits_of(Quadruped.from_urdf()))
-
-
-def gait_angles(t: float, gait: Gait | None = None) -> list[float]:
-    """The 12 joint angles [rad] at time ``t`` [s] (default: the embedded A1's limits)."""
-    return (gait or default_gait()).angles(t)
-
-
-def gait_velocities(t: float, gait: Gait | None = None) -> list[float]:
-    """The 12 joint rates [rad/s] at time ``t`` [s]: analytic derivatives of :func:`gait_angles`."""
-    return (gait or default_gait()).velocities(t)

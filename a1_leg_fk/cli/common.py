@@ -1,0 +1,296 @@
+"""The plumbing the ``a1-leg-fk`` commands share: exit codes, argument types, signals, ROS, children.
+
+Nothing here imports rclpy at import time: the commands that need no ROS (plot, bag, gait, ik)
+never load it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Callable, Sequence, TypeVar
+
+PROG = "a1-leg-fk"
+EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_BAD_INPUT = 2
+"""Bad usage or input: one line on stderr (argparse's own code for bad usage)."""
+ROS_ARGS_FLAG = "--ros-args"
+CHILD_STOP_TIMEOUT_S = 5.0
+T = TypeVar("T")
+
+
+# --- command line ------------------------------------------------------------------------------
+
+
+def our_arguments(argv: Sequence[str]) -> list[str]:
+    """``argv`` (program name excluded) less its ROS arguments, as rclpy's ``remove_ros_args`` says.
+
+    :class:`BadRosArguments` (a ``ValueError``) when rcl cannot parse them.
+
+    rcl reads ROS arguments only after a ``--ros-args``: without one there are none, and rclpy is
+    not imported. That keeps the commands without ROS (plot, bag, gait, ik) from paying for
+    loading rclpy's C extension (about 0.15 s here) on every run; and rclpy, though a requirement
+    of every install of this package, then need not even be importable for them.
+    """
+    if ROS_ARGS_FLAG not in argv:
+        return list(argv)
+    from rclpy.utilities import remove_ros_args
+
+    try:
+        return remove_ros_args([PROG, *argv])[1:]
+    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLInvalidROSArgsError)
+        raise BadRosArguments(str(error)) from None
+
+
+class BadRosArguments(ValueError):
+    """rcl could not parse the ``--ros-args`` part of the command line."""
+
+
+def ros_section(argv: Sequence[str]) -> list[str]:
+    """``argv`` from its first ``--ros-args`` on (empty without one): what the demo hands its nodes.
+
+    rcl finds in it the same ROS arguments as in the whole ``argv``; the nodes ignore the rest
+    (anything of ours after a closing ``--``), as ``rclpy.init`` does.
+    """
+    return list(argv[argv.index(ROS_ARGS_FLAG) :]) if ROS_ARGS_FLAG in argv else []
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def positive(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = _number(text)
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
+    return value
+
+
+def non_negative(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    value = _number(text)
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
+    return value
+
+
+def namespace_parent() -> argparse.ArgumentParser:
+    """A parent parser with ``--namespace NS`` (echo, verify, demo)."""
+    parent = argparse.ArgumentParser(add_help=False)
+    parent.add_argument(
+        "--namespace",
+        metavar="NS",
+        default="",
+        help="prefix the topic/service names with NS (e.g. /robot1 -> /robot1/foot_positions/FR); "
+        "or move the tool's own node with --ros-args -r __ns:=/robot1",
+    )
+    return parent
+
+
+def prefixed(namespace: str, name: str) -> str:
+    """``name`` under ``namespace`` ('' leaves the relative name as it is)."""
+    if not namespace:
+        return name
+    return namespace.rstrip("/") + "/" + name if namespace != "/" else "/" + name
+
+
+def say(text: str = "") -> None:
+    """Print a line now (the demo's output is interleaved with its children's timing)."""
+    print(text, flush=True)
+
+
+# --- stopping on Ctrl-C / SIGTERM ---------------------------------------------------------------
+
+
+class StopSignals:
+    """Turns SIGINT and SIGTERM into a flag (``stop.is_set()``) instead of an exception.
+
+    With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call or of the
+    cleanup; every loop here waits in short slices and checks the flag.
+    """
+
+    def __init__(self) -> None:
+        self.stop = threading.Event()
+        self.signal_name = ""
+        self._previous: dict[int, object] = {}
+
+    def __enter__(self) -> StopSignals:
+        for number in (signal.SIGINT, signal.SIGTERM):
+            self._previous[number] = signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)  # type: ignore[arg-type]
+
+    def _handle(self, number: int, _frame: object) -> None:
+        self.signal_name = signal.Signals(number).name
+        self.stop.set()
+
+
+# --- this tool's ROS node ------------------------------------------------------------------------
+
+
+class Ros:
+    """This tool's own rclpy context, node and executor (rclpy's signal handlers off).
+
+    ``argv`` is the whole command line (program name excluded): ``rclpy.init`` takes the ROS
+    arguments from it and ignores the rest.
+    """
+
+    def __init__(self, command: str, argv: Sequence[str]) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(
+            args=[PROG, *argv], context=self.context, signal_handler_options=SignalHandlerOptions.NO
+        )
+        try:
+            self.node = rclpy.create_node(f"a1_leg_fk_{command}_{os.getpid()}", context=self.context)
+        except BaseException:
+            rclpy.try_shutdown(context=self.context)
+            raise
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+
+def start_ros(command: str, argv: Sequence[str]) -> Ros | None:
+    """:class:`Ros`, or None after one line on stderr (e.g. bad ``--ros-args``)."""
+    try:
+        return Ros(command, argv)
+    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
+        print(f"{PROG} {command}: cannot start ROS: {error}", file=sys.stderr)
+        return None
+
+
+def with_ros(command: str, argv: Sequence[str], work: Callable[[Ros, threading.Event], T]) -> T | None:
+    """``work(ros, stop)`` with this tool's node, ``stop`` set by Ctrl-C or SIGTERM; the node is
+    closed afterwards. None (after one line on stderr) when ROS cannot start."""
+    with StopSignals() as signals:
+        ros = start_ros(command, argv)
+        if ros is None:
+            return None
+        try:
+            return work(ros, signals.stop)
+        finally:
+            ros.close()
+
+
+# --- child processes (the demo's nodes; bench/node_throughput.py's roles) -----------------------
+
+
+def child_command(script: str, module: str) -> list[str]:
+    """An installed console script beside this Python (bin/, or lib/a1_leg_fk/ as ``ros2 run``
+    uses), else ``python -m module``."""
+    here = Path(sys.executable).parent
+    for candidate in (here / script, Path(sys.prefix) / "lib" / "a1_leg_fk" / script):
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return [str(candidate)]
+    found = shutil.which(script)
+    if found and Path(found).parent == here:
+        return [found]
+    return [sys.executable, "-m", module]
+
+
+def _die_with_parent(death_signal: int) -> None:
+    """In the child before exec: get ``death_signal`` if the parent dies (even by SIGKILL). Linux only."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, death_signal)  # PR_SET_PDEATHSIG = 1
+    except Exception:  # noqa: BLE001, S110 (best effort; other platforms just lack the safety net)
+        pass
+
+
+class Child:
+    """A child process in its own process group (session), its output in the file ``log``.
+
+    A terminal's Ctrl-C reaches only the parent, which stops its children itself; should the
+    parent die, the child gets ``death_signal`` (Linux). With ``pipes`` the child's stdin and
+    stdout are text pipes to the parent (line buffered) and only its stderr goes to ``log``.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        command: Sequence[str],
+        log: Path,
+        *,
+        env: dict[str, str] | None = None,
+        cwd: str | Path | None = None,
+        pipes: bool = False,
+        death_signal: int = signal.SIGTERM,
+    ) -> None:
+        self.name = name
+        self.log = log
+        self.killed = False  # stop() had to SIGKILL it
+        self.stop_s = 0.0  # seconds from stop()'s signal to the exit
+        linux = sys.platform.startswith("linux")
+        with open(log, "wb") as output:
+            self.process = subprocess.Popen(
+                list(command),
+                env=env,
+                cwd=cwd,
+                stdin=subprocess.PIPE if pipes else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if pipes else output,
+                stderr=output if pipes else subprocess.STDOUT,
+                text=pipes,
+                bufsize=1 if pipes else -1,
+                start_new_session=True,
+                preexec_fn=functools.partial(_die_with_parent, death_signal) if linux else None,
+            )
+
+    def alive(self) -> bool:
+        return self.process.poll() is None
+
+    def stop(self, sig: int = signal.SIGINT, timeout_s: float = CHILD_STOP_TIMEOUT_S) -> int:
+        """``sig`` (default SIGINT, as Ctrl-C), then SIGKILL to its group after ``timeout_s``.
+
+        Returns the exit code; sets :attr:`killed` and :attr:`stop_s`.
+        """
+        if self.process.poll() is None:
+            started = time.monotonic()
+            self._signal_group(sig)
+            try:
+                self.process.wait(timeout_s)
+            except subprocess.TimeoutExpired:
+                self.killed = True
+                self._signal_group(signal.SIGKILL)
+                self.process.wait(5.0)
+            self.stop_s = time.monotonic() - started
+        self._signal_group(signal.SIGKILL)  # anything it left behind in its group
+        return self.process.returncode
+
+    def _signal_group(self, number: int) -> None:
+        try:
+            os.killpg(self.process.pid, number)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+    def tail(self, lines: int = 15) -> str:
+        """The last ``lines`` lines of its log, indented for a report."""
+        try:
+            text = self.log.read_text(errors="replace").rstrip().splitlines()
+        except OSError:
+            return "(no output)"
+        return "\n".join("    | " + line for line in text[-lines:]) or "    | (no output)"

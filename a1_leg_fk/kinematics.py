@@ -152,10 +152,10 @@ class Quadruped:
         out = np.empty((q.shape[0], len(LEG_NAMES), 3))
         for rows in _row_blocks(q.shape[0]):
             cos, sin = np.cos(q[rows]), np.sin(q[rows])
-            for leg_slot, leg in enumerate(self.legs):
-                trig = _leg_trig(cos, sin, leg_slot)
+            for slot, leg in enumerate(self.legs):
+                trig = _leg_trig(cos, sin, slot)
                 x, y, z = leg.position_from_trig(*trig)
-                out[rows, leg_slot, 0], out[rows, leg_slot, 1], out[rows, leg_slot, 2] = x, y, z
+                out[rows, slot, 0], out[rows, slot, 1], out[rows, slot, 2] = x, y, z
         return out
 
     def foot_velocities(self, angles: Sequence[float], rates: Sequence[float]) -> np.ndarray:
@@ -163,8 +163,8 @@ class Quadruped:
         q = _checked_configuration(angles)
         dq = _checked_configuration(rates, "joint velocities")
         out = []
-        for leg_slot, leg in enumerate(self.legs):
-            first = leg_slot * JOINTS_PER_LEG
+        for slot, leg in enumerate(self.legs):
+            first = slot * JOINTS_PER_LEG
             out.extend(leg.position_velocity(*q[first : first + 3], *dq[first : first + 3])[3:])
         return np.array(out).reshape(len(LEG_NAMES), 3)
 
@@ -187,11 +187,11 @@ class Quadruped:
         out = np.empty((q.shape[0], len(LEG_NAMES), 3, JOINTS_PER_LEG))
         for rows in _row_blocks(q.shape[0]):
             cos, sin = np.cos(q[rows]), np.sin(q[rows])
-            for leg_slot, leg in enumerate(self.legs):
-                columns = leg.jacobian_from_trig(*_leg_trig(cos, sin, leg_slot))
+            for slot, leg in enumerate(self.legs):
+                columns = leg.jacobian_from_trig(*_leg_trig(cos, sin, slot))
                 for joint_slot in range(JOINTS_PER_LEG):
                     for axis in range(3):
-                        out[rows, leg_slot, axis, joint_slot] = columns[3 * joint_slot + axis]
+                        out[rows, slot, axis, joint_slot] = columns[3 * joint_slot + axis]
         return out
 
     def angles_from_names(self, positions: Mapping[str, float]) -> list[float]:
@@ -347,8 +347,8 @@ def _row_blocks(rows: int) -> list[slice]:
     return [slice(start, min(start + BATCH_CHUNK_ROWS, rows)) for start in range(0, rows, BATCH_CHUNK_ROWS)]
 
 
-def _leg_trig(cos: np.ndarray, sin: np.ndarray, leg_slot: int) -> list[np.ndarray]:
-    first = leg_slot * JOINTS_PER_LEG
+def _leg_trig(cos: np.ndarray, sin: np.ndarray, slot: int) -> list[np.ndarray]:
+    first = slot * JOINTS_PER_LEG
     return [array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)]
 
 

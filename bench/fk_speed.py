@@ -19,45 +19,17 @@ from __future__ import annotations
 
 import math
 import os
-import platform
 import statistics
-import sys
 import timeit
-from importlib import metadata
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from common import LEGS, REPEATS, SPEED_POSE, machine, median_seconds_per_call
 
-try:
-    from a1_leg_fk.kinematics import Quadruped
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.kinematics import Quadruped
 
-LEGS = ("FR", "FL", "RR", "RL")
-STANDING = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
-REPEATS = 15
 BATCH_ROWS = 1_000_000
 BATCH_REPEATS = 5
-
-
-def median_seconds_per_call(functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05) -> dict[str, float]:
-    """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
-
-    The runs are interleaved (one run of every function per round), so a slow spell of the
-    machine hits all of them alike and the ratios stay fair.
-    """
-    timers = {name: timeit.Timer(function) for name, function in functions.items()}
-    numbers = {}
-    for name, timer in timers.items():
-        number, elapsed = timer.autorange()
-        numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
-    runs: dict[str, list[float]] = {name: [] for name in functions}
-    for _ in range(repeats):
-        for name, timer in timers.items():
-            runs[name].append(timer.timeit(numbers[name]) / numbers[name])
-    return {name: statistics.median(times) for name, times in runs.items()}
 
 
 # --- reference (a): the write-up's per-leg numpy code ----------------------------------------
@@ -142,25 +114,10 @@ class PyBulletFk:
 # --- the run ------------------------------------------------------------------------------------
 
 
-def machine() -> str:
-    try:
-        usable = len(os.sched_getaffinity(0))
-    except AttributeError:
-        usable = os.cpu_count()
-    try:
-        pybullet_version = metadata.version("pybullet")
-    except metadata.PackageNotFoundError:
-        pybullet_version = "absent"
-    return (
-        f"machine: nproc={usable} (cpu_count={os.cpu_count()}), {platform.platform()}, {platform.processor() or platform.machine()}\n"
-        f"python {platform.python_version()}, numpy {np.__version__}, pybullet {pybullet_version}"
-    )
-
-
 def main() -> None:
     print(machine())
     quadruped = Quadruped.from_urdf()
-    q = [float(v) for v in STANDING]
+    q = [float(v) for v in SPEED_POSE]
     expected = quadruped.fk(q)
 
     legs = quadruped.legs

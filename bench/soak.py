@@ -23,7 +23,6 @@ Run:  python bench/soak.py --duration 60        (ROS_DOMAIN_ID: the caller's, el
 from __future__ import annotations
 
 import argparse
-import fcntl
 import json
 import math
 import os
@@ -34,11 +33,10 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import IO
 
-LEGS = ("FR", "FL", "RR", "RL")
-PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
-STANDING = [0.0, 0.8, -1.5] * 4
+from common import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, claim_domain_id, installed_command, rss_mb
+
 VERIFY_TIMEOUT_S = 5.0
 
 
@@ -85,34 +83,19 @@ def collect(out: str, stop: str) -> int:
 # --- helpers -----------------------------------------------------------------------------------
 
 
-def claim_domain_id() -> object | None:
-    """Use the caller's ROS_DOMAIN_ID, else claim a free one (the test suite's lock files)."""
+def use_a_free_domain() -> IO[str] | None:
+    """Use the caller's ROS_DOMAIN_ID, else claim a free one (the test suite's lock) and set it.
+
+    Returns the lock file to hold until exit (None for the caller's domain).
+    """
     if os.environ.get("ROS_DOMAIN_ID"):
         return None
-    folder = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
-    folder.mkdir(exist_ok=True)
-    for domain_id in range(1, 102):
-        lock = open(folder / f"{domain_id}.lock", "w")  # noqa: SIM115 (held until exit)
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.close()
-            continue
-        os.environ["ROS_DOMAIN_ID"] = str(domain_id)
-        return lock
-    raise SystemExit("soak: every ROS domain id 1..101 is in use")
-
-
-def node_command() -> list[str]:
-    installed = Path(sys.executable).parent / "foot_fk_node"
-    return [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.node"]
-
-
-def rss_mb(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    return math.nan
+    try:
+        domain_id, lock = claim_domain_id()
+    except RuntimeError as error:
+        raise SystemExit(f"soak: {error}") from None
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    return lock
 
 
 def cpu_seconds(pid: int) -> float:
@@ -161,7 +144,7 @@ class Stream:
 
 
 def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure)
-    domain_lock = claim_domain_id()  # noqa: F841 (held until exit)
+    domain_lock = use_a_free_domain()  # noqa: F841 (held until exit)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -181,7 +164,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
 
     print(f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
           f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}", flush=True)
-    node_process = start(node_command(), node_log)
+    node_process = start(installed_command("foot_fk_node", "a1_leg_fk.node"), node_log)
     collector = start([sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
 
     rclpy.init()

@@ -37,23 +37,15 @@ import struct
 import sys
 import threading
 import time
-from pathlib import Path
 
 import rclpy
+from common import LEGS, PYBULLET_NAMES, STANDING
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 
-try:
-    import a1_leg_fk  # noqa: F401
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-LEGS = ("FR", "FL", "RR", "RL")
-JOINT_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-STANDING = (0.0, 0.8, -1.5) * 4
 OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in LEGS] + [f"foot_velocities/{leg}" for leg in LEGS]
 WARMUP_RATE_HZ = 100.0
 POSES = 250  # distinct pre-built messages the generator cycles through
@@ -109,7 +101,7 @@ def _poses() -> list[JointState]:
         phase = 2 * math.pi * i / POSES
         positions = [a + 0.2 * math.sin(phase + k) for k, a in enumerate(STANDING)]
         velocities = [0.2 * 2 * math.pi * math.cos(phase + k) for k in range(len(STANDING))]
-        messages.append(JointState(name=list(JOINT_NAMES), position=positions, velocity=velocities))
+        messages.append(JointState(name=list(PYBULLET_NAMES), position=positions, velocity=velocities))
     return messages
 
 

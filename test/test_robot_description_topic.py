@@ -11,11 +11,12 @@ from pathlib import Path
 import pybullet_data
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from exported_urdf import FEET, UNITREE_JOINTS, exported_quadruped, reference_robot, unitree_style_a1
-from node_harness import PYBULLET_NAMES, STANDING, NodeClient, distance, node_command, stamp_ns
+from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
+from node_harness import NodeClient, distance, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
+from shared import PYBULLET_NAMES, STANDING, UNITREE_NAMES
 from std_msgs.msg import String
 
 pytestmark = pytest.mark.slow
@@ -70,7 +71,7 @@ def test_a_description_published_before_the_node_starts_is_used_with_no_paramete
     publisher = publish_description(ros, unitree_style_a1())
     process = processes.start(node_command())
     client = NodeClient(ros)
-    feet = feet_in(client, UNITREE_JOINTS, ANGLES, "base")
+    feet = feet_in(client, UNITREE_NAMES, ANGLES, "base")
     with PyBulletRobot(A1_URDF) as reference:  # the same geometry under pybullet_data's names
         assert_feet(feet, reference.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
     response = client.verify()
@@ -89,14 +90,14 @@ def test_a_description_published_later_switches_the_robot_and_republishing_does_
     xml = exported_quadruped("go2")
     publisher = publish_description(ros, xml)
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
     assert client.verify().success
     # robot_state_publisher republishes on parameter changes: the same text must not reload (a reload
     # empties the joint state), so two of FR's joints still complete FR with the knee merged before.
     publisher.publish(String(data=xml))
     client.probe.spin_for(1.0)
     client.clear()
-    client.send(client.joint_state(UNITREE_JOINTS[:2], ANGLES[:2]))
+    client.send(client.joint_state(UNITREE_NAMES[:2], ANGLES[:2]))
     assert client.wait_for_feet(1, legs=("FR",))
     assert processes.output(process).count("loaded /robot_description") == 1
 
@@ -144,7 +145,7 @@ def test_a_namespaced_node_follows_its_namespaced_description_topic(processes, r
     processes.start(node_command("-r", "__ns:=/robot1"))
     client = NodeClient(ros, prefix="/robot1/")
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
 
 
 def test_an_empty_topic_parameter_follows_no_topic(processes, ros):

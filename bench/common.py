@@ -1,9 +1,9 @@
 """What the bench/ scripts share: the import path, the names and poses, the machine line, timing.
 
 Import it first (``from common import ...``; a script's own folder is on ``sys.path``): it makes
-``a1_leg_fk`` importable from a source checkout that was not installed, and brings the names,
-the ROS-domain lock and the process helpers the tests use (test/shared.py), so the bench and the
-tests keep one definition of each.
+``a1_leg_fk`` importable from a source checkout that was not installed, and hands on the module
+the tests use for the names, the ROS-domain lock and the process helpers (``common.shared``, i.e.
+test/shared.py), so the bench and the tests keep one definition of each.
 """
 
 from __future__ import annotations
@@ -23,23 +23,9 @@ if importlib.util.find_spec("a1_leg_fk") is None:  # a source checkout without t
     sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "test"))  # appended: nothing in test/ may shadow an installed module
 
-from shared import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES  # noqa: E402 (needs the path above)
-from shared import claim_domain_id, installed_command, rss_mb  # noqa: E402 (needs the path above)
+import shared  # noqa: E402 (needs the path above)
 
-__all__ = [
-    "LEGS",
-    "PYBULLET_NAMES",
-    "REPEATS",
-    "ROOT",
-    "SPEED_POSE",
-    "STANDING",
-    "UNITREE_NAMES",
-    "claim_domain_id",
-    "installed_command",
-    "machine",
-    "median_seconds_per_call",
-    "rss_mb",
-]
+__all__ = ["REPEATS", "ROOT", "SPEED_POSE", "machine", "median_seconds_per_call", "shared"]
 
 SPEED_POSE = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
 """The configuration the speed benchmarks time [rad]: standing, with hip roll and unequal legs."""

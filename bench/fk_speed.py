@@ -24,7 +24,7 @@ import timeit
 from typing import Callable
 
 import numpy as np
-from common import LEGS, REPEATS, SPEED_POSE, machine, median_seconds_per_call
+from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared
 
 from a1_leg_fk.kinematics import Quadruped
 
@@ -59,7 +59,7 @@ def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[
     """Per-leg numpy FK with the URDF numbers read from the model (A1 joint names)."""
     joints = quadruped.model.joints
     legs = []
-    for leg in LEGS:
+    for leg in shared.LEGS:
         hip = np.array(joints[f"{leg}_hip_joint"].origin_xyz)  # trunk -> hip roll joint
         thigh = np.array(joints[f"{leg}_upper_joint"].origin_xyz)  # hip link -> hip pitch joint
         knee = np.array(joints[f"{leg}_lower_joint"].origin_xyz)  # thigh link -> knee joint
@@ -99,7 +99,7 @@ class PyBulletFk:
         by_joint = {info[1].decode(): info[0] for info in infos}
         by_link = {info[12].decode(): info[0] for info in infos}
         self.joints = [by_joint[name] for name in quadruped.joint_names]
-        self.feet = [by_link[f"{leg}_toe"] for leg in LEGS]
+        self.feet = [by_link[f"{leg}_toe"] for leg in shared.LEGS]
 
     def fk(self, q: list[float]) -> list:
         p, body, client = self.p, self.body, self.client

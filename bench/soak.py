@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 from typing import IO
 
-from common import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, claim_domain_id, installed_command, rss_mb
+from common import shared
 
 VERIFY_TIMEOUT_S = 5.0
 
@@ -61,8 +61,8 @@ def collect(out: str, stop: str) -> int:
         received = stamps[leg] = []
         return lambda msg: received.append(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
 
-    topics = [f"foot_positions/{leg}" for leg in LEGS]
-    for leg, topic in zip(LEGS, topics):
+    topics = [f"foot_positions/{leg}" for leg in shared.LEGS]
+    for leg, topic in zip(shared.LEGS, topics):
         node.create_subscription(PointStamped, topic, recorder(leg), QoSProfile(depth=10000))
     executor = Executor()
     executor.add_node(node)
@@ -91,7 +91,7 @@ def use_a_free_domain() -> IO[str] | None:
     if os.environ.get("ROS_DOMAIN_ID"):
         return None
     try:
-        domain_id, lock = claim_domain_id()
+        domain_id, lock = shared.claim_domain_id()
     except RuntimeError as error:
         raise SystemExit(f"soak: {error}") from None
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
@@ -117,10 +117,10 @@ class Stream:
         angles = [rng.uniform(-0.8, 0.8), rng.uniform(-0.5, 2.0), rng.uniform(-2.6, -0.9)] * 4
         rates = [rng.uniform(-5.0, 5.0) for _ in range(12)]
         if rng.random() >= self.bad_fraction:
-            return True, PYBULLET_NAMES, angles, rates
+            return True, shared.PYBULLET_NAMES, angles, rates
         kind = rng.choice(["partial", "position_length", "velocity_length", "duplicate", "nan", "one_nan", "unknown", "empty"])
         self.kinds[kind] = self.kinds.get(kind, 0) + 1
-        names = list(rng.choice([PYBULLET_NAMES, UNITREE_NAMES]))
+        names = list(rng.choice([shared.PYBULLET_NAMES, shared.UNITREE_NAMES]))
         if kind == "partial":
             keep = sorted(rng.sample(range(12), rng.randint(1, 11)))
             return False, [names[i] for i in keep], [angles[i] for i in keep], [rates[i] for i in keep]
@@ -164,7 +164,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
 
     print(f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
           f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}", flush=True)
-    node_process = start(installed_command("foot_fk_node", "a1_leg_fk.node"), node_log)
+    node_process = start(shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log)
     collector = start([sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
 
     rclpy.init()
@@ -206,7 +206,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             raise RuntimeError("the node did not come up")
         if not spin_until(lambda: "ready" in (folder / "collector.log").read_text(), 60.0):
             raise RuntimeError("the foot collector did not come up")
-        publisher.publish(message(PYBULLET_NAMES, STANDING, [0.0] * 12))
+        publisher.publish(message(shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12))
         spin_until(lambda: False, 0.5)
         before = fresh_diagnostics()
 
@@ -245,7 +245,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             if now >= next_sample:
                 if node_process.poll() is not None:
                     raise RuntimeError(f"the node exited with {node_process.returncode}")
-                samples.append((now - start_time, rss_mb(node_process.pid), cpu_seconds(node_process.pid)))
+                samples.append((now - start_time, shared.rss_mb(node_process.pid), cpu_seconds(node_process.pid)))
                 next_sample += 1.0
             if pending is not None:
                 future, asked = pending
@@ -292,11 +292,11 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
         rclpy.try_shutdown()
 
     # --- accounting ---------------------------------------------------------------------------
-    feet = {leg: set(received.get(leg, ())) for leg in LEGS}
+    feet = {leg: set(received.get(leg, ())) for leg in shared.LEGS}
     feet_received = sum(len(stamps & all_stamps) for stamps in feet.values())
     complete = partial = missing = 0
     for stamp in good_stamps:
-        legs = sum(stamp in feet[leg] for leg in LEGS)
+        legs = sum(stamp in feet[leg] for leg in shared.LEGS)
         complete += legs == 4
         partial += 0 < legs < 4
         missing += legs == 0

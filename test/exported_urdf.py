@@ -26,7 +26,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pybullet_reference import PyBulletRobot
-from shared import LEGS, UNITREE_NAMES
+from shared import LEGS
+
 FEET = [f"{leg}_foot" for leg in LEGS]
 QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
 """The quirks each robot's fixture carries in the tests (Go2: those of its defaults)."""

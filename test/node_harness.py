@@ -14,7 +14,7 @@ from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, installed_command
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command
 from std_srvs.srv import Trigger
 
 __all__ = [
@@ -114,4 +114,4 @@ def distance(point, xyz) -> float:  # noqa: ANN001
 
 
 def package_root() -> Path:
-    return Path(__file__).resolve().parent.parent
+    return ROOT

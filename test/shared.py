@@ -22,11 +22,17 @@ PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "u
 UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
 """Unitree's names for the same joints (unitree_ros, Gazebo, real-robot bridges)."""
 
+A1_FEET = [f"{leg}_toe" for leg in LEGS]
+"""pybullet_data's A1 (and Aliengo) foot links, in leg order."""
+
 STAND_LEG = (0.0, 0.8, -1.5)
 """One leg standing [rad]: hip roll, hip pitch, knee."""
 
 STANDING = list(STAND_LEG) * 4
 """All four legs standing [rad], in slot order: the reference write-up's pose."""
+
+ROOT = Path(__file__).resolve().parent.parent
+"""The repository (the package's source tree: package.xml, config/, bench/)."""
 
 DOMAIN_IDS = range(1, 102)
 """ROS domain ids that are safe on one machine (higher ones clash with port ranges)."""

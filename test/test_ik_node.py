@@ -13,7 +13,6 @@ import signal
 import subprocess
 from collections import defaultdict
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,12 +22,11 @@ from geometry_msgs.msg import PointStamped
 from node_harness import node_command, stamp_ns
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, UNITREE_NAMES, installed_command
+from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES, installed_command
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
 from a1_leg_fk import ik_node, robot_source
-
 
 ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
 
@@ -157,7 +155,7 @@ def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0
 
 def test_ik_params_yaml_states_every_parameter() -> None:
     """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays commented out."""
-    path = Path(__file__).resolve().parent.parent / "config" / "ik_params.yaml"
+    path = ROOT / "config" / "ik_params.yaml"
     text = path.read_text()
     stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
     specs = robot_source.PARAMETERS + ik_node.PARAMETERS  # the model's parameters and the node's own

@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pybullet_data
 import pytest
+from conftest import raises_leg_fk_error
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from conftest import raises_leg_fk_error
 from hypothesis.extra import numpy as hnp
+from shared import LEGS, STANDING
 from shared import PYBULLET_NAMES as A1_JOINT_NAMES
-from shared import STANDING
 
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.urdf import LegFkError
@@ -100,7 +100,7 @@ def test_a1_joint_order_and_base_frame(a1: Quadruped) -> None:
 @PROPERTY
 @given(any_angles)
 def test_fk_equals_the_closed_form_a1_leg(a1: Quadruped, q: np.ndarray) -> None:
-    expected = [a1_foot_closed_form(leg, *q[3 * i : 3 * i + 3]) for i, leg in enumerate(("FR", "FL", "RR", "RL"))]
+    expected = [a1_foot_closed_form(leg, *q[3 * i : 3 * i + 3]) for i, leg in enumerate(LEGS)]
     np.testing.assert_allclose(a1.fk(q), expected, rtol=0.0, atol=1e-12)
 
 
@@ -240,7 +240,7 @@ def test_knee_zero_is_outside_its_limits(a1: Quadruped) -> None:
 
 
 def test_all_zero_reports_the_four_knees(a1: Quadruped) -> None:
-    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [f"{leg}_lower_joint" for leg in ("FR", "FL", "RR", "RL")]
+    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [f"{leg}_lower_joint" for leg in LEGS]
 
 
 def test_in_limit_and_boundary_angles_are_not_reported(a1: Quadruped) -> None:
@@ -268,7 +268,7 @@ def test_continuous_joints_are_never_reported() -> None:
     assert cheetah.joints_outside_limits([1e3, -1e3, 50.0] * 4) == []
 
 
-@pytest.mark.parametrize("leg", ["FR", "FL", "RR", "RL"])
+@pytest.mark.parametrize("leg", LEGS)
 def test_a1_reach_is_0_4_cos_half_knee(a1: Quadruped, leg: str) -> None:
     """Two 0.2 m links: the foot is 0.4 cos(q / 2) from the hip-pitch axis."""
     knee_lower, knee_upper = -2.69653369433, -0.916297857297
@@ -305,7 +305,7 @@ def test_reach_of_an_unknown_leg(a1: Quadruped) -> None:
 
 def test_angles_from_unitree_and_pybullet_data_names(a1: Quadruped) -> None:
     names = {}
-    for slot, leg in enumerate(("FR", "FL", "RR", "RL")):
+    for slot, leg in enumerate(LEGS):
         names[f"{leg}_hip_joint"] = 0.1 * slot
         names[f"{leg}_thigh_joint" if slot % 2 else f"{leg}_upper_joint"] = 0.8 + 0.01 * slot
         names[f"{leg}_calf_joint" if slot < 2 else f"{leg}_lower_joint"] = -1.5 - 0.01 * slot
@@ -316,9 +316,9 @@ def test_angles_from_unitree_and_pybullet_data_names(a1: Quadruped) -> None:
 
 
 def test_user_alias_map() -> None:
-    aliases = {f"{leg.lower()}_knee": f"{leg}_lower_joint" for leg in ("FR", "FL", "RR", "RL")}
+    aliases = {f"{leg.lower()}_knee": f"{leg}_lower_joint" for leg in LEGS}
     quadruped = Quadruped.from_urdf(joint_aliases=aliases)
-    names = {f"{leg}_{part}_joint": 0.0 for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper")}
+    names = {f"{leg}_{part}_joint": 0.0 for leg in LEGS for part in ("hip", "upper")}
     names |= {f"{leg}_knee": -1.0 - 0.1 * i for i, leg in enumerate(("fr", "fl", "rr", "rl"))}
     q = quadruped.angles_from_names(names)
     assert q[2::3] == pytest.approx([-1.0, -1.1, -1.2, -1.3])

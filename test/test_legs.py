@@ -6,11 +6,11 @@ from pathlib import Path
 
 import pybullet_data
 import pytest
+from conftest import raises_leg_fk_error
+from exported_urdf import exported_quadruped
 
 from a1_leg_fk.legs import LEG_NAMES, find_legs, joint_name_index
 from a1_leg_fk.urdf import load_urdf, parse_urdf
-from conftest import raises_leg_fk_error
-from exported_urdf import exported_quadruped
 
 DATA = Path(pybullet_data.getDataPath())
 A1_PATH = DATA / "a1" / "a1.urdf"

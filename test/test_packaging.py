@@ -22,9 +22,9 @@ import pytest
 import yaml
 from conftest import BIN
 from shared import PYBULLET_NAMES as JOINTS
+from shared import ROOT as REPO
 from shared import STANDING as POSE
 
-REPO = Path(__file__).resolve().parent.parent
 PACKAGE = "a1_leg_fk"
 NODE_NAME = "a1_leg_fk"
 PYTHON_DIR = f"python{sys.version_info.major}.{sys.version_info.minor}"

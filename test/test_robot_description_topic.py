@@ -6,9 +6,6 @@ reliable + transient local + depth 1) and, for sim time, a bag replay's ``/clock
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import pybullet_data
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
@@ -16,7 +13,7 @@ from node_harness import NodeClient, distance, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from shared import PYBULLET_NAMES, STANDING, UNITREE_NAMES
+from shared import A1_FEET, LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES
 from std_msgs.msg import String
 
 pytestmark = pytest.mark.slow
@@ -24,7 +21,6 @@ pytestmark = pytest.mark.slow
 TOLERANCE_M = 1e-7
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
-A1_FEET = [f"{leg}_toe" for leg in ("FR", "FL", "RR", "RL")]
 BILLION_LAUGHS = (
     '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
     '<robot name="bomb"><link name="&b;"/></robot>'
@@ -39,14 +35,13 @@ def publish_description(ros, xml: str, topic: str = "robot_description"):  # noq
 
 def feet_in(client: NodeClient, names, angles, frame: str, timeout_s: float = 30.0) -> list:
     """Send ``angles`` until all four feet come back in ``frame``; the latest foot per leg."""
-    legs = ("FR", "FL", "RR", "RL")
 
     def arrived() -> bool:
         client.send(client.joint_state(names, angles))
-        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in legs)
+        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in LEGS)
 
-    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in legs}
-    return [client.positions[leg][-1] for leg in legs]
+    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in LEGS}
+    return [client.positions[leg][-1] for leg in LEGS]
 
 
 def assert_feet(messages, expected) -> None:  # noqa: ANN001

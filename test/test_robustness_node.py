@@ -12,7 +12,6 @@ import re
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,7 +20,7 @@ from node_harness import NodeClient, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, installed_command, rss_mb
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command, rss_mb
 from std_srvs.srv import Trigger
 from test_fuzz_joint_state import SPECIAL_VALUES, UNKNOWN_NAMES
 
@@ -282,7 +281,7 @@ VERIFY_CLIENT = textwrap.dedent(
 )
 
 
-SOAK_SCRIPT = Path(__file__).resolve().parent.parent / "bench" / "soak.py"
+SOAK_SCRIPT = ROOT / "bench" / "soak.py"
 """Its ``--collect OUT STOP`` mode records every foot's stamp in a process of its own."""
 
 

@@ -7,11 +7,11 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from shared import ROOT
 
-SOAK = Path(__file__).resolve().parent.parent / "bench" / "soak.py"
+SOAK = ROOT / "bench" / "soak.py"
 
 pytestmark = [pytest.mark.slow, pytest.mark.soak]  # slow: it starts processes, as every slow test does
 

@@ -18,7 +18,6 @@ Every reference is first checked against ``Quadruped.fk`` on the configuration i
 from __future__ import annotations
 
 import math
-import os
 import statistics
 import timeit
 from typing import Callable
@@ -83,23 +82,18 @@ def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[
 
 
 class PyBulletFk:
-    """A1 in a DIRECT client, fixed base at the origin; ``fk(q)`` = resetJointState x 12 + getLinkState x 4."""
+    """The A1 in PyBullet, loaded by the tests' reference (test/pybullet_reference.py: a DIRECT
+    client, fixed base at the origin); ``fk(q)`` = resetJointState x 12 + getLinkState x 4."""
 
     def __init__(self, quadruped: Quadruped) -> None:
         import pybullet
-        import pybullet_data
+        from pybullet_reference import A1_URDF, PyBulletRobot  # test/ is on the path (common)
 
         self.p = pybullet
-        self.client = pybullet.connect(pybullet.DIRECT)
-        self.body = pybullet.loadURDF(
-            os.path.join(pybullet_data.getDataPath(), "a1", "a1.urdf"), [0, 0, 0], [0, 0, 0, 1], useFixedBase=True,
-            physicsClientId=self.client,
-        )
-        infos = [pybullet.getJointInfo(self.body, j, physicsClientId=self.client) for j in range(pybullet.getNumJoints(self.body, physicsClientId=self.client))]
-        by_joint = {info[1].decode(): info[0] for info in infos}
-        by_link = {info[12].decode(): info[0] for info in infos}
-        self.joints = [by_joint[name] for name in quadruped.joint_names]
-        self.feet = [by_link[f"{leg}_toe"] for leg in shared.LEGS]
+        self.robot = PyBulletRobot(A1_URDF)
+        self.body, self.client = self.robot.body, self.robot.client
+        self.joints = [self.robot.joint_index[name] for name in quadruped.joint_names]
+        self.feet = [self.robot.link_index[foot] for foot in shared.A1_FEET]
 
     def fk(self, q: list[float]) -> list:
         p, body, client = self.p, self.body, self.client
@@ -108,7 +102,7 @@ class PyBulletFk:
         return [p.getLinkState(body, foot, computeForwardKinematics=True, physicsClientId=client)[4] for foot in self.feet]
 
     def close(self) -> None:
-        self.p.disconnect(self.client)
+        self.robot.close()
 
 
 # --- the run ------------------------------------------------------------------------------------

@@ -24,6 +24,7 @@ from conftest import BIN
 from shared import PYBULLET_NAMES as JOINTS
 from shared import ROOT as REPO
 from shared import STANDING as POSE
+from shared import STANDING_FR as FR_FOOT
 
 PACKAGE = "a1_leg_fk"
 NODE_NAME = "a1_leg_fk"
@@ -62,8 +63,6 @@ ROS_OWN_PARAMETERS = {"use_sim_time", "start_type_description_service"}
 PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg")
 PACKAGE_FOLDERS = ("resource", "config", "a1_leg_fk")
 
-# The published FR foot of the A1 standing pose (shared.STANDING), in the trunk frame [m].
-FR_FOOT = (0.1684, -0.1320, -0.2923)
 FOOT_TOLERANCE_M = 1e-4
 FOOT_WAIT_S = 30.0
 

@@ -82,14 +82,12 @@ test: venv
 	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \
 	  --session-timeout=$(TEST_SESSION_TIMEOUT) $(PYTEST_ARGS) test
 
+BENCH_SCRIPTS := bench/fk_speed.py bench/ik_speed.py bench/node_throughput.py bench/bag_speed.py
+
 bench: venv
-	@ran=0; for script in bench/fk_speed.py bench/ik_speed.py bench/node_throughput.py bench/bag_speed.py; do \
-	  if [ -f $$script ]; then echo "== $$script"; $(BIN)/python $$script; ran=1; \
-	  else echo "make bench: $$script does not exist (skipped)"; fi; \
-	done; [ $$ran = 1 ] || { echo "make bench: no benchmark scripts" >&2; exit 1; }
+	@for script in $(BENCH_SCRIPTS); do echo "== $$script"; $(BIN)/python $$script; done
 
 soak: venv
-	@[ -f bench/soak.py ] || { echo "make soak: bench/soak.py does not exist yet" >&2; exit 1; }
 	$(BIN)/python bench/soak.py
 
 clean:

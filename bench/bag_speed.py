@@ -28,12 +28,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from common import machine
 
-try:
-    from a1_leg_fk import cli
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from a1_leg_fk import cli
+from a1_leg_fk import cli
 from a1_leg_fk.kinematics import Quadruped
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
@@ -159,6 +156,7 @@ def main() -> None:
     parser.add_argument("--velocities", action="store_true", help="give the joint velocities too (12 more CSV columns)")
     parser.add_argument("--long", action="store_true", help="peak RSS over a 3-minute and a 30-minute bag instead")
     options = parser.parse_args()
+    print(machine())
     with tempfile.TemporaryDirectory(prefix="a1_leg_fk_bag_bench_") as folder:
         (long_run if options.long else speed)(options, Path(folder))
 

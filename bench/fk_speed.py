@@ -18,46 +18,17 @@ Every reference is first checked against ``Quadruped.fk`` on the configuration i
 from __future__ import annotations
 
 import math
-import os
-import platform
 import statistics
-import sys
 import timeit
-from importlib import metadata
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared
 
-try:
-    from a1_leg_fk.kinematics import Quadruped
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.kinematics import Quadruped
 
-LEGS = ("FR", "FL", "RR", "RL")
-STANDING = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
-REPEATS = 15
 BATCH_ROWS = 1_000_000
 BATCH_REPEATS = 5
-
-
-def median_seconds_per_call(functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05) -> dict[str, float]:
-    """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
-
-    The runs are interleaved (one run of every function per round), so a slow spell of the
-    machine hits all of them alike and the ratios stay fair.
-    """
-    timers = {name: timeit.Timer(function) for name, function in functions.items()}
-    numbers = {}
-    for name, timer in timers.items():
-        number, elapsed = timer.autorange()
-        numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
-    runs: dict[str, list[float]] = {name: [] for name in functions}
-    for _ in range(repeats):
-        for name, timer in timers.items():
-            runs[name].append(timer.timeit(numbers[name]) / numbers[name])
-    return {name: statistics.median(times) for name, times in runs.items()}
 
 
 # --- reference (a): the write-up's per-leg numpy code ----------------------------------------
@@ -87,7 +58,7 @@ def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[
     """Per-leg numpy FK with the URDF numbers read from the model (A1 joint names)."""
     joints = quadruped.model.joints
     legs = []
-    for leg in LEGS:
+    for leg in shared.LEGS:
         hip = np.array(joints[f"{leg}_hip_joint"].origin_xyz)  # trunk -> hip roll joint
         thigh = np.array(joints[f"{leg}_upper_joint"].origin_xyz)  # hip link -> hip pitch joint
         knee = np.array(joints[f"{leg}_lower_joint"].origin_xyz)  # thigh link -> knee joint
@@ -111,23 +82,18 @@ def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[
 
 
 class PyBulletFk:
-    """A1 in a DIRECT client, fixed base at the origin; ``fk(q)`` = resetJointState x 12 + getLinkState x 4."""
+    """The A1 in PyBullet, loaded by the tests' reference (test/pybullet_reference.py: a DIRECT
+    client, fixed base at the origin); ``fk(q)`` = resetJointState x 12 + getLinkState x 4."""
 
     def __init__(self, quadruped: Quadruped) -> None:
         import pybullet
-        import pybullet_data
+        from pybullet_reference import A1_URDF, PyBulletRobot  # test/ is on the path (common)
 
         self.p = pybullet
-        self.client = pybullet.connect(pybullet.DIRECT)
-        self.body = pybullet.loadURDF(
-            os.path.join(pybullet_data.getDataPath(), "a1", "a1.urdf"), [0, 0, 0], [0, 0, 0, 1], useFixedBase=True,
-            physicsClientId=self.client,
-        )
-        infos = [pybullet.getJointInfo(self.body, j, physicsClientId=self.client) for j in range(pybullet.getNumJoints(self.body, physicsClientId=self.client))]
-        by_joint = {info[1].decode(): info[0] for info in infos}
-        by_link = {info[12].decode(): info[0] for info in infos}
-        self.joints = [by_joint[name] for name in quadruped.joint_names]
-        self.feet = [by_link[f"{leg}_toe"] for leg in LEGS]
+        self.robot = PyBulletRobot(A1_URDF)
+        self.body, self.client = self.robot.body, self.robot.client
+        self.joints = [self.robot.joint_index[name] for name in quadruped.joint_names]
+        self.feet = [self.robot.link_index[foot] for foot in shared.A1_FEET]
 
     def fk(self, q: list[float]) -> list:
         p, body, client = self.p, self.body, self.client
@@ -136,31 +102,16 @@ class PyBulletFk:
         return [p.getLinkState(body, foot, computeForwardKinematics=True, physicsClientId=client)[4] for foot in self.feet]
 
     def close(self) -> None:
-        self.p.disconnect(self.client)
+        self.robot.close()
 
 
 # --- the run ------------------------------------------------------------------------------------
 
 
-def machine() -> str:
-    try:
-        usable = len(os.sched_getaffinity(0))
-    except AttributeError:
-        usable = os.cpu_count()
-    try:
-        pybullet_version = metadata.version("pybullet")
-    except metadata.PackageNotFoundError:
-        pybullet_version = "absent"
-    return (
-        f"machine: nproc={usable} (cpu_count={os.cpu_count()}), {platform.platform()}, {platform.processor() or platform.machine()}\n"
-        f"python {platform.python_version()}, numpy {np.__version__}, pybullet {pybullet_version}"
-    )
-
-
 def main() -> None:
     print(machine())
     quadruped = Quadruped.from_urdf()
-    q = [float(v) for v in STANDING]
+    q = [float(v) for v in SPEED_POSE]
     expected = quadruped.fk(q)
 
     legs = quadruped.legs

@@ -15,24 +15,14 @@ Every timed answer is first checked: the angles of ``ik`` reproduce the targets 
 from __future__ import annotations
 
 import statistics
-import sys
 import timeit
-from pathlib import Path
 
 import numpy as np
+from common import SPEED_POSE, machine, median_seconds_per_call
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fk_speed import machine, median_seconds_per_call  # noqa: E402 (the shared bench helpers)
+from a1_leg_fk import inverse
+from a1_leg_fk.kinematics import Quadruped
 
-try:
-    from a1_leg_fk import inverse
-    from a1_leg_fk.kinematics import Quadruped
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-    from a1_leg_fk import inverse
-    from a1_leg_fk.kinematics import Quadruped
-
-STANDING = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
 BATCH_ROWS = 1_000_000
 BATCH_REPEATS = 3
 
@@ -40,7 +30,7 @@ BATCH_REPEATS = 3
 def main() -> None:
     print(machine())
     quadruped = Quadruped.from_urdf()
-    feet = quadruped.fk(STANDING)
+    feet = quadruped.fk(SPEED_POSE)
     result = quadruped.ik(feet)
     assert result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
     searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
@@ -50,7 +40,7 @@ def main() -> None:
     rows = median_seconds_per_call(
         {
             "Quadruped.ik(feet)  [closed form]": lambda: quadruped.ik(feet),
-            "Quadruped.fk(q)": lambda: quadruped.fk(STANDING),
+            "Quadruped.fk(q)": lambda: quadruped.fk(SPEED_POSE),
             "damped least squares, same targets": lambda: inverse.solve_feet(searching, feet, None),
         },
         repeats=7,

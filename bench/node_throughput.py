@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import queue
 import re
 import shutil
@@ -46,15 +45,14 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
+from common import ROOT, machine
 
 from a1_leg_fk.cli import common
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
 ROLES = HERE / "throughput_roles.py"
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 LOSS_LIMIT = 0.001  # a ramp step passes below 0.1 % input and foot loss
@@ -271,19 +269,6 @@ def max_sustained(phases: list[Phase]) -> tuple[float, bool]:
             break
     topped_out = bool(ran) and failures == 0 and ran[-1].rate == best
     return best, topped_out
-
-
-def machine() -> str:
-    model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                  if line.startswith("model name")), platform.processor())
-    try:
-        rclpy_version = metadata.version("rclpy")
-    except metadata.PackageNotFoundError:
-        rclpy_version = "?"
-    rmw = os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp (default)")
-    load = os.getloadavg()
-    return (f"machine: {os.cpu_count()} CPUs ({model}), load avg {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; "
-            f"Python {platform.python_version()}, rclpy {rclpy_version}, {rmw}")
 
 
 def fmt(value: float, spec: str) -> str:

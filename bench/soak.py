@@ -23,7 +23,6 @@ Run:  python bench/soak.py --duration 60        (ROS_DOMAIN_ID: the caller's, el
 from __future__ import annotations
 
 import argparse
-import fcntl
 import json
 import math
 import os
@@ -34,13 +33,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import IO
+
+from common import shared
 
 from a1_leg_fk.cli.common import Child
 
-LEGS = ("FR", "FL", "RR", "RL")
-PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
-STANDING = [0.0, 0.8, -1.5] * 4
 VERIFY_TIMEOUT_S = 5.0
 
 
@@ -65,8 +63,8 @@ def collect(out: str, stop: str) -> int:
         received = stamps[leg] = []
         return lambda msg: received.append(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
 
-    topics = [f"foot_positions/{leg}" for leg in LEGS]
-    for leg, topic in zip(LEGS, topics):
+    topics = [f"foot_positions/{leg}" for leg in shared.LEGS]
+    for leg, topic in zip(shared.LEGS, topics):
         node.create_subscription(PointStamped, topic, recorder(leg), QoSProfile(depth=10000))
     executor = Executor()
     executor.add_node(node)
@@ -87,34 +85,19 @@ def collect(out: str, stop: str) -> int:
 # --- helpers -----------------------------------------------------------------------------------
 
 
-def claim_domain_id() -> object | None:
-    """Use the caller's ROS_DOMAIN_ID, else claim a free one (the test suite's lock files)."""
+def use_a_free_domain() -> IO[str] | None:
+    """Use the caller's ROS_DOMAIN_ID, else claim a free one (the test suite's lock) and set it.
+
+    Returns the lock file to hold until exit (None for the caller's domain).
+    """
     if os.environ.get("ROS_DOMAIN_ID"):
         return None
-    folder = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
-    folder.mkdir(exist_ok=True)
-    for domain_id in range(1, 102):
-        lock = open(folder / f"{domain_id}.lock", "w")  # noqa: SIM115 (held until exit)
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.close()
-            continue
-        os.environ["ROS_DOMAIN_ID"] = str(domain_id)
-        return lock
-    raise SystemExit("soak: every ROS domain id 1..101 is in use")
-
-
-def node_command() -> list[str]:
-    installed = Path(sys.executable).parent / "foot_fk_node"
-    return [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.node"]
-
-
-def rss_mb(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    return math.nan
+    try:
+        domain_id, lock = shared.claim_domain_id()
+    except RuntimeError as error:
+        raise SystemExit(f"soak: {error}") from None
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    return lock
 
 
 def cpu_seconds(pid: int) -> float:
@@ -136,10 +119,10 @@ class Stream:
         angles = [rng.uniform(-0.8, 0.8), rng.uniform(-0.5, 2.0), rng.uniform(-2.6, -0.9)] * 4
         rates = [rng.uniform(-5.0, 5.0) for _ in range(12)]
         if rng.random() >= self.bad_fraction:
-            return True, PYBULLET_NAMES, angles, rates
+            return True, shared.PYBULLET_NAMES, angles, rates
         kind = rng.choice(["partial", "position_length", "velocity_length", "duplicate", "nan", "one_nan", "unknown", "empty"])
         self.kinds[kind] = self.kinds.get(kind, 0) + 1
-        names = list(rng.choice([PYBULLET_NAMES, UNITREE_NAMES]))
+        names = list(rng.choice([shared.PYBULLET_NAMES, shared.UNITREE_NAMES]))
         if kind == "partial":
             keep = sorted(rng.sample(range(12), rng.randint(1, 11)))
             return False, [names[i] for i in keep], [angles[i] for i in keep], [rates[i] for i in keep]
@@ -163,7 +146,7 @@ class Stream:
 
 
 def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure)
-    domain_lock = claim_domain_id()  # noqa: F841 (held until exit)
+    domain_lock = use_a_free_domain()  # noqa: F841 (held until exit)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -182,7 +165,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
 
     print(f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
           f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}", flush=True)
-    node_process = start("foot_fk_node", node_command(), node_log)
+    node_process = start("foot_fk_node", shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log)
     collector = start("collector", [sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
 
     rclpy.init()
@@ -224,7 +207,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             raise RuntimeError("the node did not come up")
         if not spin_until(lambda: "ready" in (folder / "collector.log").read_text(), 60.0):
             raise RuntimeError("the foot collector did not come up")
-        publisher.publish(message(PYBULLET_NAMES, STANDING, [0.0] * 12))
+        publisher.publish(message(shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12))
         spin_until(lambda: False, 0.5)
         before = fresh_diagnostics()
 
@@ -263,7 +246,7 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             if now >= next_sample:
                 if node_process.poll() is not None:
                     raise RuntimeError(f"the node exited with {node_process.returncode}")
-                samples.append((now - start_time, rss_mb(node_process.pid), cpu_seconds(node_process.pid)))
+                samples.append((now - start_time, shared.rss_mb(node_process.pid), cpu_seconds(node_process.pid)))
                 next_sample += 1.0
             if pending is not None:
                 future, asked = pending
@@ -304,11 +287,11 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
         rclpy.try_shutdown()
 
     # --- accounting ---------------------------------------------------------------------------
-    feet = {leg: set(received.get(leg, ())) for leg in LEGS}
+    feet = {leg: set(received.get(leg, ())) for leg in shared.LEGS}
     feet_received = sum(len(stamps & all_stamps) for stamps in feet.values())
     complete = partial = missing = 0
     for stamp in good_stamps:
-        legs = sum(stamp in feet[leg] for leg in LEGS)
+        legs = sum(stamp in feet[leg] for leg in shared.LEGS)
         complete += legs == 4
         partial += 0 < legs < 4
         missing += legs == 0

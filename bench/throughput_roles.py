@@ -37,24 +37,16 @@ import struct
 import sys
 import threading
 import time
-from pathlib import Path
 
 import rclpy
+from common import shared
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 
-try:
-    import a1_leg_fk  # noqa: F401
-except ImportError:  # run from a source checkout without installing the package
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-LEGS = ("FR", "FL", "RR", "RL")
-JOINT_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-STANDING = (0.0, 0.8, -1.5) * 4
-OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in LEGS] + [f"foot_velocities/{leg}" for leg in LEGS]
+OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in shared.LEGS] + [f"foot_velocities/{leg}" for leg in shared.LEGS]
 WARMUP_RATE_HZ = 100.0
 POSES = 250  # distinct pre-built messages the generator cycles through
 
@@ -107,9 +99,9 @@ def _poses() -> list[JointState]:
     messages = []
     for i in range(POSES):
         phase = 2 * math.pi * i / POSES
-        positions = [a + 0.2 * math.sin(phase + k) for k, a in enumerate(STANDING)]
-        velocities = [0.2 * 2 * math.pi * math.cos(phase + k) for k in range(len(STANDING))]
-        messages.append(JointState(name=list(JOINT_NAMES), position=positions, velocity=velocities))
+        positions = [a + 0.2 * math.sin(phase + k) for k, a in enumerate(shared.STANDING)]
+        velocities = [0.2 * 2 * math.pi * math.cos(phase + k) for k in range(len(shared.STANDING))]
+        messages.append(JointState(name=list(shared.PYBULLET_NAMES), position=positions, velocity=velocities))
     return messages
 
 
@@ -253,12 +245,12 @@ def baseline(executor_name: str) -> None:
 
     rclpy.init()
     node = Node("bench_echo_baseline")
-    position_msgs = [PointStamped() for _ in LEGS]
-    velocity_msgs = [Vector3Stamped() for _ in LEGS]
+    position_msgs = [PointStamped() for _ in shared.LEGS]
+    velocity_msgs = [Vector3Stamped() for _ in shared.LEGS]
     for msg in (*position_msgs, *velocity_msgs):
         msg.header.frame_id = "trunk"
-    position_pubs = [node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS) for leg in LEGS]
-    velocity_pubs = [node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS) for leg in LEGS]
+    position_pubs = [node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS) for leg in shared.LEGS]
+    velocity_pubs = [node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS) for leg in shared.LEGS]
 
     def on_joint_state(msg: JointState) -> None:
         stamp = msg.header.stamp

@@ -1,40 +1,25 @@
-"""Shared test fixtures: an isolated ROS domain per test run, processes that always stop, and an
-in-test rclpy node that spins until a condition holds or a bounded wait runs out."""
+"""Shared test fixtures: an isolated ROS domain per test run, processes that always stop, an
+in-test rclpy node that spins until a condition holds or a bounded wait runs out, and the check
+of a LegFkError's message."""
 
 from __future__ import annotations
 
-import fcntl
+import contextlib
 import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Callable, Iterator
 
 import pytest
+from shared import claim_domain_id
 
-DOMAIN_IDS = range(1, 102)  # 0..101 are safe; higher values clash with port ranges
-
-
-def _claim_domain_id() -> tuple[int, object]:
-    """The first domain id no other test run on this machine holds, with its lock file open."""
-    lock_folder = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
-    lock_folder.mkdir(exist_ok=True)
-    for domain_id in DOMAIN_IDS:
-        lock = open(lock_folder / f"{domain_id}.lock", "w")  # noqa: SIM115 (held for the whole run)
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.close()
-            continue
-        return domain_id, lock
-    raise RuntimeError("every ROS domain id 1..101 is held by another test run")
-
+from a1_leg_fk.urdf import LegFkError
 
 # Set before rclpy is imported anywhere, so the in-test nodes and every child share the domain.
-DOMAIN_ID, _DOMAIN_LOCK = _claim_domain_id()
+DOMAIN_ID, _DOMAIN_LOCK = claim_domain_id()
 os.environ["ROS_DOMAIN_ID"] = str(DOMAIN_ID)
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.pop("ROS_LOCALHOST_ONLY", None)
@@ -44,12 +29,14 @@ BIN = Path(sys.executable).parent
 DEFAULT_WAIT_S = 20.0
 
 
-def executable(name: str) -> str:
-    """Path of a console script installed beside the test's Python (the package's executables)."""
-    path = BIN / name
-    if not path.exists():
-        pytest.fail(f"{path} is not installed: run `make test` (it installs the package)")
-    return str(path)
+@contextlib.contextmanager
+def raises_leg_fk_error(*culprits: str) -> Iterator[pytest.ExceptionInfo]:
+    """Expect a LegFkError, which must also be a ValueError, whose message names every culprit."""
+    with pytest.raises(LegFkError) as info:
+        yield info
+    assert isinstance(info.value, ValueError)
+    for culprit in culprits:
+        assert culprit in str(info.value), f"{culprit!r} not named in: {info.value}"
 
 
 class Processes:

@@ -26,9 +26,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pybullet_reference import PyBulletRobot
+from shared import LEGS
 
-LEGS = ("FR", "FL", "RR", "RL")
-UNITREE_JOINTS = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "thigh", "calf")]
 FEET = [f"{leg}_foot" for leg in LEGS]
 QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
 """The quirks each robot's fixture carries in the tests (Go2: those of its defaults)."""

@@ -3,30 +3,35 @@
 from __future__ import annotations
 
 import math
-import sys
 from collections import defaultdict
+from functools import partial
 from pathlib import Path
 
-from conftest import BIN, RosProbe
+from conftest import RosProbe
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command
 from std_srvs.srv import Trigger
 
-LEGS = ("FR", "FL", "RR", "RL")
-PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
-STANDING = [0.0, 0.8, -1.5] * 4
+__all__ = [
+    "LEGS",
+    "PYBULLET_NAMES",
+    "STANDING",
+    "UNITREE_NAMES",
+    "NodeClient",
+    "distance",
+    "node_command",
+    "package_root",
+    "parse_tokens",
+    "stamp_ns",
+]
 
-
-def node_command(*ros_args: str) -> list[str]:
-    """The installed node executable (as ``ros2 run`` would start it), with ``--ros-args``."""
-    installed = BIN / "foot_fk_node"
-    command = [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.node"]
-    return command + (["--ros-args", *ros_args] if ros_args else [])
+node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
+"""``node_command(*ros_args)``: the installed foot_fk_node (else ``python -m``), with ``--ros-args``."""
 
 
 class NodeClient:
@@ -109,4 +114,4 @@ def distance(point, xyz) -> float:  # noqa: ANN001
 
 
 def package_root() -> Path:
-    return Path(__file__).resolve().parent.parent
+    return ROOT

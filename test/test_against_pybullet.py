@@ -18,15 +18,13 @@ import pybullet
 import pybullet_data
 import pybullet_reference
 import pytest
+from shared import A1_FEET, LEGS
+from shared import PYBULLET_NAMES as A1_JOINTS
 
 from a1_leg_fk.kinematics import Quadruped
 
 DATA = Path(pybullet_data.getDataPath())
 TOLERANCE_M = 1e-7
-LEGS = ("FR", "FL", "RR", "RL")
-
-A1_JOINTS = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
-A1_FEET = [f"{leg}_toe" for leg in LEGS]
 CHEETAH_LEGS = ("fr", "fl", "hr", "hl")
 CHEETAH_JOINTS = [
     name

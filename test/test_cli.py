@@ -8,31 +8,24 @@ import re
 import select
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
+from shared import LEGS, installed_command
+from shared import STAND_LEG as STAND
 
 from a1_leg_fk.cli import build_parser, main
 from a1_leg_fk.cli.common import Ros, our_arguments, prefixed, ros_section
 from a1_leg_fk.cli.echo import FootTable
 
-LEGS = ("FR", "FL", "RR", "RL")
-STAND = (0.0, 0.8, -1.5)
 # An asymmetric pose, every joint inside its limits, roll included.
 TWISTED = (0.1, 0.5, -1.2, -0.2, 1.0, -2.0, 0.3, 0.2, -1.0, -0.1, 1.2, -1.8)
 ROW = re.compile(r"^(FR|FL|RR|RL)\s+(-?\d+\.\d)\s+(-?\d+\.\d)\s+(-?\d+\.\d)\s", re.MULTILINE)
 
 
-def command(script: str, module: str) -> list[str]:
-    """The installed console script beside this Python, else ``python -m module``."""
-    path = Path(sys.executable).parent / script
-    return [str(path)] if path.exists() else [sys.executable, "-m", module]
-
-
-CLI = command("a1-leg-fk", "a1_leg_fk.cli")
-NODE = command("foot_fk_node", "a1_leg_fk.node")
+CLI = installed_command("a1-leg-fk", "a1_leg_fk.cli")
+NODE = installed_command("foot_fk_node", "a1_leg_fk.node")
 
 
 def stand_by_hand_mm(leg: str) -> tuple[float, float, float]:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pybullet_data
 import pytest
+from shared import LEGS
 from rosbags.highlevel import AnyReader
 
 from a1_leg_fk import cli
@@ -24,7 +25,6 @@ from pybullet_reference import PyBulletRobot
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
 T0 = 1_700_000_000_000_000_000
-LEGS = ("FR", "FL", "RR", "RL")
 
 
 def steady_bag(path: Path, kind: str = "mcap", count: int = 30, velocities: bool = True, seed: int = 5) -> tuple[Path, list]:

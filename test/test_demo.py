@@ -4,29 +4,20 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import PYBULLET_NAMES, UNITREE_NAMES, installed_command
 
 from a1_leg_fk.demo import joint_names
 from a1_leg_fk.kinematics import Quadruped
 
 ROBOT = Quadruped.from_urdf()
-PYBULLET_NAMES = [f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper", "lower")]
-UNITREE_NAMES = [f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "thigh", "calf")]
 WINDOW_S = 2.0
 
 
-def command(script: str, module: str) -> list[str]:
-    """The installed console script beside this Python, else ``python -m module``."""
-    path = Path(sys.executable).parent / script
-    return [str(path)] if path.exists() else [sys.executable, "-m", module]
-
-
-DEMO = command("joint_state_demo", "a1_leg_fk.demo")
+DEMO = installed_command("joint_state_demo", "a1_leg_fk.demo")
 
 
 def test_joint_names_for_both_namings() -> None:

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pybullet
 import pytest
-from exported_urdf import FEET, LEGS, QUIRKS, UNITREE_JOINTS, exported_quadruped, reference_robot
+from exported_urdf import FEET, QUIRKS, exported_quadruped, reference_robot
 from node_harness import NodeClient, distance, node_command, parse_tokens
+from shared import LEGS, UNITREE_NAMES
 
 from a1_leg_fk.pybullet_check import PyBulletFeet
 from a1_leg_fk.robot_config import load_robot
@@ -23,19 +24,19 @@ TOLERANCE_M = 1e-7
 
 
 def in_limit_configurations(limits: tuple[np.ndarray, np.ndarray], count: int, seed: int) -> np.ndarray:
-    return np.random.default_rng(seed).uniform(*limits, size=(count, len(UNITREE_JOINTS)))
+    return np.random.default_rng(seed).uniform(*limits, size=(count, len(UNITREE_NAMES)))
 
 
 @pytest.mark.parametrize("robot", ["go2", "b2"])
 def test_feet_match_pybullet_with_no_configuration(tmp_path: Path, robot: str) -> None:
     config = load_robot(exported_quadruped(robot, **QUIRKS[robot]))
     quadruped = config.quadruped
-    assert list(quadruped.joint_names) == UNITREE_JOINTS
+    assert list(quadruped.joint_names) == UNITREE_NAMES
     assert [leg.chain.foot_link for leg in quadruped.legs] == FEET
     with reference_robot(tmp_path, robot) as reference:
-        configurations = in_limit_configurations(reference.limits(UNITREE_JOINTS), 500, seed=14)
+        configurations = in_limit_configurations(reference.limits(UNITREE_NAMES), 500, seed=14)
         worst = max(
-            float(np.abs(quadruped.fk(q) - reference.feet(UNITREE_JOINTS, FEET, q)).max()) for q in configurations
+            float(np.abs(quadruped.fk(q) - reference.feet(UNITREE_NAMES, FEET, q)).max()) for q in configurations
         )
     assert worst <= TOLERANCE_M, f"{robot}: max error {worst:.3e} m"
 
@@ -75,11 +76,11 @@ def test_the_verify_twin_loads_descriptions_whose_meshes_cannot_be_found(tmp_pat
     twin = PyBulletFeet(config.quadruped, config.urdf_xml)
     try:
         with reference_robot(tmp_path, robot) as reference:
-            for q in in_limit_configurations(reference.limits(UNITREE_JOINTS), 50, seed=3):
+            for q in in_limit_configurations(reference.limits(UNITREE_NAMES), 50, seed=3):
                 result = twin.verify(q, TOLERANCE_M)
                 assert result.success, result
                 np.testing.assert_allclose(
-                    twin.foot_positions(q), reference.feet(UNITREE_JOINTS, FEET, q), rtol=0.0, atol=TOLERANCE_M
+                    twin.foot_positions(q), reference.feet(UNITREE_NAMES, FEET, q), rtol=0.0, atol=TOLERANCE_M
                 )
     finally:
         twin.close()
@@ -110,10 +111,10 @@ def test_the_node_publishes_pybullet_feet_and_verifies_with_no_configuration(pro
     client = NodeClient(ros)
     angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
     assert client.probe.spin_until(
-        lambda: bool(client.send(client.joint_state(UNITREE_JOINTS, angles)) or client.positions["RL"]), 30.0
+        lambda: bool(client.send(client.joint_state(UNITREE_NAMES, angles)) or client.positions["RL"]), 30.0
     ), processes.output(process)
     with reference_robot(tmp_path, robot) as reference:
-        expected = reference.feet(UNITREE_JOINTS, FEET, angles)
+        expected = reference.feet(UNITREE_NAMES, FEET, angles)
     root = QUIRKS[robot].get("root", "base")
     for slot, leg in enumerate(LEGS):
         message = client.positions[leg][-1]

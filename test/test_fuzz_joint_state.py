@@ -30,6 +30,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from shared import PYBULLET_NAMES, UNITREE_NAMES
 
 from a1_leg_fk.joint_state import (
     ACCEPTED,
@@ -44,10 +45,7 @@ from a1_leg_fk.joint_state import (
 )
 from a1_leg_fk.kinematics import Quadruped
 
-LEGS = ("FR", "FL", "RR", "RL")
-PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
-UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
-# Written from the naming conventions, independently of legs.joint_name_index.
+# The names (test/shared.py) are written from the naming conventions, independently of legs.joint_name_index.
 SLOT_OF = {**{n: i for i, n in enumerate(PYBULLET_NAMES)}, **{n: i for i, n in enumerate(UNITREE_NAMES)}}
 UNKNOWN_NAMES = [
     "", " ", "arm_joint_1", "gripper", "fr_hip_joint", "FR_hip_joint ", " FR_hip_joint", "FR_HIP_JOINT",

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from shared import LEGS
 
 from a1_leg_fk.gait_analysis import ContactThresholds, analyze_gait, detect_contacts
 from a1_leg_fk.urdf import LegFkError
@@ -100,7 +101,7 @@ def test_synthetic_gait(gait: str, rate: int, speed: float) -> None:
                 error = min(abs(f - true_time) for f in found)
                 worst[edge] = max(worst[edge], error)
                 assert error <= tolerances[edge], (leg, edge, true_time, error)
-        metrics = report.legs[("FR", "FL", "RR", "RL")[leg]]
+        metrics = report.legs[LEGS[leg]]
         assert metrics.status == "ok"
         assert abs(metrics.duty_factor - DUTY[gait]) <= 0.02
         assert abs(metrics.stride_period_s - PERIOD_S) <= 0.005
@@ -137,7 +138,7 @@ def test_json_is_strict_and_complete() -> None:
     _, report = analyze_gait(stamps, feet)
     document = json.loads(json.dumps(report.to_json(), allow_nan=False))
     assert document["gait"] == "trot"
-    assert set(document["legs"]) == {"FR", "FL", "RR", "RL"}
+    assert set(document["legs"]) == set(LEGS)
     for leg in document["legs"].values():
         assert {"duty_factor", "stride_period_s", "step_length_m", "clearance_m", "stance_s"} <= set(leg)
         assert all(a < b for a, b in leg["stance_s"])

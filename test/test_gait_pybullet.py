@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pybullet
 import pybullet_data
+from shared import STAND_LEG as STAND
 
 from a1_leg_fk.gait_analysis import analyze_gait
 from a1_leg_fk.kinematics import Quadruped
@@ -26,7 +27,6 @@ SIM_S = 3.5
 TROT_START_S = 0.5
 TROT_HZ = 2.5
 KNEE_LIFT_RAD = 0.4
-STAND = (0.0, 0.8, -1.5)
 POSITION_GAIN = 0.3
 MAX_TORQUE_NM = 33.5
 ENCODER_NOISE_RAD = 2e-4

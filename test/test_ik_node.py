@@ -11,34 +11,24 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import sys
-from pathlib import Path
 from collections import defaultdict
+from functools import partial
 
 import numpy as np
 import pytest
 import yaml
-from conftest import BIN
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped
-from node_harness import LEGS, PYBULLET_NAMES, UNITREE_NAMES, node_command
+from node_harness import node_command, stamp_ns
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
+from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES, installed_command
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
 from a1_leg_fk import ik_node, robot_source
 
-
-
-def ik_node_command(*ros_args: str) -> list[str]:
-    installed = BIN / "foot_ik_node"
-    command = [str(installed)] if installed.exists() else [sys.executable, "-m", "a1_leg_fk.ik_node"]
-    return command + (["--ros-args", *ros_args] if ros_args else [])
-
-
-def stamp_of(msg) -> int:  # noqa: ANN001
-    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
 
 
 class Commands:
@@ -62,7 +52,7 @@ class Commands:
 @pytest.mark.slow
 def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:  # noqa: ANN001
     demo_states: dict[int, JointState] = {}
-    ros.node.create_subscription(JointState, "joint_states", lambda m: demo_states.__setitem__(stamp_of(m), m), QoSProfile(depth=5000))
+    ros.node.create_subscription(JointState, "joint_states", lambda m: demo_states.__setitem__(stamp_ns(m), m), QoSProfile(depth=5000))
     commands = Commands(ros)
     remaps = [argument for leg in LEGS for argument in ("-r", f"foot_targets/{leg}:=foot_positions/{leg}")]
     ik = processes.start(ik_node_command(*remaps))
@@ -75,7 +65,7 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
     ros.spin_for(1.0)
     matched = defaultdict(int)
     for command in commands.commands:
-        state = demo_states.get(stamp_of(command))
+        state = demo_states.get(stamp_ns(command))
         if state is None:
             continue
         assert list(command.name)[0].split("_")[0] in LEGS
@@ -165,7 +155,7 @@ def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0
 
 def test_ik_params_yaml_states_every_parameter() -> None:
     """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays commented out."""
-    path = Path(__file__).resolve().parent.parent / "config" / "ik_params.yaml"
+    path = ROOT / "config" / "ik_params.yaml"
     text = path.read_text()
     stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
     specs = robot_source.PARAMETERS + ik_node.PARAMETERS  # the model's parameters and the node's own

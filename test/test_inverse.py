@@ -18,6 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import least_squares
+from shared import A1_FEET, LEGS
 from test_legs import quadruped_urdf
 
 from a1_leg_fk import inverse
@@ -25,11 +26,10 @@ from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.urdf import LegFkError
 
 DATA = Path(pybullet_data.getDataPath())
-LEGS = ("FR", "FL", "RR", "RL")
 MINI_CHEETAH_FEET = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_hl"}
 ROBOTS = {
-    "a1": (DATA / "a1" / "a1.urdf", None, [f"{leg}_toe" for leg in LEGS]),
-    "aliengo": (DATA / "aliengo" / "aliengo.urdf", None, [f"{leg}_toe" for leg in LEGS]),
+    "a1": (DATA / "a1" / "a1.urdf", None, A1_FEET),
+    "aliengo": (DATA / "aliengo" / "aliengo.urdf", None, A1_FEET),
     "mini_cheetah": (DATA / "mini_cheetah" / "mini_cheetah.urdf", MINI_CHEETAH_FEET, list(MINI_CHEETAH_FEET.values())),
 }
 ROUND_TRIPS = 2000

@@ -14,9 +14,12 @@ from pathlib import Path
 import numpy as np
 import pybullet_data
 import pytest
+from conftest import raises_leg_fk_error
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
+from shared import LEGS, STANDING
+from shared import PYBULLET_NAMES as A1_JOINT_NAMES
 
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.urdf import LegFkError
@@ -27,8 +30,6 @@ MINI_CHEETAH_FEET = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_
 # A1 limits as typed in a1.urdf [rad]: hip roll, hip pitch ("upper"), knee ("lower").
 A1_LOWER = np.tile([-0.802851455917, -1.0471975512, -2.69653369433], 4)
 A1_UPPER = np.tile([0.802851455917, 4.18879020479, -0.916297857297], 4)
-A1_JOINT_NAMES = [f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper", "lower")]
-STANDING = [0.0, 0.8, -1.5] * 4
 
 PROPERTY = settings(max_examples=60, deadline=None, derandomize=True, database=None)
 any_angles = hnp.arrays(np.float64, 12, elements=st.floats(-math.pi, math.pi))
@@ -65,12 +66,6 @@ def central_difference(function, q: np.ndarray, step: float = 1e-6) -> np.ndarra
     return np.stack(columns, axis=-1)
 
 
-def assert_leg_fk_error(error: pytest.ExceptionInfo, *culprits: str) -> None:
-    assert isinstance(error.value, ValueError)
-    for culprit in culprits:
-        assert culprit in str(error.value), f"{culprit!r} not named in: {error.value}"
-
-
 # --- the reference write-up's poses ---------------------------------------------------------
 
 
@@ -105,7 +100,7 @@ def test_a1_joint_order_and_base_frame(a1: Quadruped) -> None:
 @PROPERTY
 @given(any_angles)
 def test_fk_equals_the_closed_form_a1_leg(a1: Quadruped, q: np.ndarray) -> None:
-    expected = [a1_foot_closed_form(leg, *q[3 * i : 3 * i + 3]) for i, leg in enumerate(("FR", "FL", "RR", "RL"))]
+    expected = [a1_foot_closed_form(leg, *q[3 * i : 3 * i + 3]) for i, leg in enumerate(LEGS)]
     np.testing.assert_allclose(a1.fk(q), expected, rtol=0.0, atol=1e-12)
 
 
@@ -245,7 +240,7 @@ def test_knee_zero_is_outside_its_limits(a1: Quadruped) -> None:
 
 
 def test_all_zero_reports_the_four_knees(a1: Quadruped) -> None:
-    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [f"{leg}_lower_joint" for leg in ("FR", "FL", "RR", "RL")]
+    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [f"{leg}_lower_joint" for leg in LEGS]
 
 
 def test_in_limit_and_boundary_angles_are_not_reported(a1: Quadruped) -> None:
@@ -273,7 +268,7 @@ def test_continuous_joints_are_never_reported() -> None:
     assert cheetah.joints_outside_limits([1e3, -1e3, 50.0] * 4) == []
 
 
-@pytest.mark.parametrize("leg", ["FR", "FL", "RR", "RL"])
+@pytest.mark.parametrize("leg", LEGS)
 def test_a1_reach_is_0_4_cos_half_knee(a1: Quadruped, leg: str) -> None:
     """Two 0.2 m links: the foot is 0.4 cos(q / 2) from the hip-pitch axis."""
     knee_lower, knee_upper = -2.69653369433, -0.916297857297
@@ -301,9 +296,8 @@ def test_mini_cheetah_reach_with_a_continuous_knee() -> None:
 
 
 def test_reach_of_an_unknown_leg(a1: Quadruped) -> None:
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("'LF'"):
         a1.reach("LF")
-    assert_leg_fk_error(error, "'LF'")
 
 
 # --- names --------------------------------------------------------------------------------
@@ -311,7 +305,7 @@ def test_reach_of_an_unknown_leg(a1: Quadruped) -> None:
 
 def test_angles_from_unitree_and_pybullet_data_names(a1: Quadruped) -> None:
     names = {}
-    for slot, leg in enumerate(("FR", "FL", "RR", "RL")):
+    for slot, leg in enumerate(LEGS):
         names[f"{leg}_hip_joint"] = 0.1 * slot
         names[f"{leg}_thigh_joint" if slot % 2 else f"{leg}_upper_joint"] = 0.8 + 0.01 * slot
         names[f"{leg}_calf_joint" if slot < 2 else f"{leg}_lower_joint"] = -1.5 - 0.01 * slot
@@ -322,9 +316,9 @@ def test_angles_from_unitree_and_pybullet_data_names(a1: Quadruped) -> None:
 
 
 def test_user_alias_map() -> None:
-    aliases = {f"{leg.lower()}_knee": f"{leg}_lower_joint" for leg in ("FR", "FL", "RR", "RL")}
+    aliases = {f"{leg.lower()}_knee": f"{leg}_lower_joint" for leg in LEGS}
     quadruped = Quadruped.from_urdf(joint_aliases=aliases)
-    names = {f"{leg}_{part}_joint": 0.0 for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper")}
+    names = {f"{leg}_{part}_joint": 0.0 for leg in LEGS for part in ("hip", "upper")}
     names |= {f"{leg}_knee": -1.0 - 0.1 * i for i, leg in enumerate(("fr", "fl", "rr", "rl"))}
     q = quadruped.angles_from_names(names)
     assert q[2::3] == pytest.approx([-1.0, -1.1, -1.2, -1.3])
@@ -332,24 +326,21 @@ def test_user_alias_map() -> None:
 
 def test_unknown_joint_name(a1: Quadruped) -> None:
     names = dict.fromkeys(A1_JOINT_NAMES, 0.0) | {"FR_knee_joint": -1.0}
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("'FR_knee_joint'"):
         a1.angles_from_names(names)
-    assert_leg_fk_error(error, "'FR_knee_joint'")
 
 
 def test_missing_joint_names(a1: Quadruped) -> None:
     names = dict.fromkeys(A1_JOINT_NAMES, 0.0)
     del names["RL_hip_joint"]
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("RL_hip_joint"):
         a1.angles_from_names(names)
-    assert_leg_fk_error(error, "RL_hip_joint")
 
 
 def test_nan_from_names_names_the_slot(a1: Quadruped) -> None:
     names = dict.fromkeys(A1_JOINT_NAMES, 0.0) | {"RR_upper_joint": math.nan}
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("slot 7", "RR", "nan"):
         a1.angles_from_names(names)
-    assert_leg_fk_error(error, "slot 7", "RR", "nan")
 
 
 # --- input refusals -----------------------------------------------------------------------
@@ -360,17 +351,15 @@ def test_non_finite_angle(a1: Quadruped, bad: float, slot: int, leg: str) -> Non
     q = list(STANDING)
     q[slot] = bad
     for call in (lambda: a1.fk(q), lambda: a1.jacobians(q), lambda: a1.joints_outside_limits(q), lambda: a1.foot_velocities(q, [0.0] * 12)):
-        with pytest.raises(LegFkError) as error:
+        with raises_leg_fk_error(f"slot {slot}", f"leg {leg}", str(bad)):
             call()
-        assert_leg_fk_error(error, f"slot {slot}", f"leg {leg}", str(bad))
 
 
 def test_non_finite_rate(a1: Quadruped) -> None:
     rates = [0.0] * 12
     rates[5] = math.nan
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("joint velocities", "slot 5", "FL"):
         a1.foot_velocities(STANDING, rates)
-    assert_leg_fk_error(error, "joint velocities", "slot 5", "FL")
 
 
 def test_non_finite_batch_row(a1: Quadruped) -> None:
@@ -378,26 +367,22 @@ def test_non_finite_batch_row(a1: Quadruped) -> None:
     q[4, 9] = math.nan
     q[5, 0] = math.inf
     for call in (lambda: a1.fk_batch(q), lambda: a1.jacobians_batch(q), lambda: a1.foot_velocities_batch(q, np.zeros_like(q))):
-        with pytest.raises(LegFkError) as error:
+        with raises_leg_fk_error("rows [4, 5]"):
             call()
-        assert_leg_fk_error(error, "rows [4, 5]")
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("joint velocities", "rows [4, 5]"):
         a1.foot_velocities_batch(np.tile(STANDING, (6, 1)), q)
-    assert_leg_fk_error(error, "joint velocities", "rows [4, 5]")
 
 
 @pytest.mark.parametrize("count", [0, 11, 13])
 def test_wrong_number_of_angles(a1: Quadruped, count: int) -> None:
     for call in (lambda: a1.fk([0.0] * count), lambda: a1.jacobians([0.0] * count), lambda: a1.foot_velocities(STANDING, [0.0] * count)):
-        with pytest.raises(LegFkError) as error:
+        with raises_leg_fk_error("12", f"got {count}"):
             call()
-        assert_leg_fk_error(error, "12", f"got {count}")
 
 
 def test_non_numeric_angles(a1: Quadruped) -> None:
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("12 numbers"):
         a1.fk(["zero"] * 12)
-    assert_leg_fk_error(error, "12 numbers")
     with pytest.raises(LegFkError):
         a1.fk(None)  # type: ignore[arg-type]
 
@@ -406,12 +391,10 @@ def test_non_numeric_angles(a1: Quadruped) -> None:
 def test_wrong_batch_shape(a1: Quadruped, shape) -> None:
     q = np.zeros(shape)
     for call in (lambda: a1.fk_batch(q), lambda: a1.jacobians_batch(q)):
-        with pytest.raises(LegFkError) as error:
+        with raises_leg_fk_error("(N, 12)", str(shape)):
             call()
-        assert_leg_fk_error(error, "(N, 12)", str(shape))
 
 
 def test_mismatched_velocity_batch(a1: Quadruped) -> None:
-    with pytest.raises(LegFkError) as error:
+    with raises_leg_fk_error("(3, 12)", "(4, 12)"):
         a1.foot_velocities_batch(np.zeros((4, 12)), np.zeros((3, 12)))
-    assert_leg_fk_error(error, "(3, 12)", "(4, 12)")

@@ -20,9 +20,12 @@ from typing import Iterator
 
 import pytest
 import yaml
+from conftest import BIN
+from shared import PYBULLET_NAMES as JOINTS
+from shared import ROOT as REPO
+from shared import STANDING as POSE
+from shared import STANDING_FR as FR_FOOT
 
-REPO = Path(__file__).resolve().parent.parent
-BIN = Path(sys.executable).parent
 PACKAGE = "a1_leg_fk"
 NODE_NAME = "a1_leg_fk"
 PYTHON_DIR = f"python{sys.version_info.major}.{sys.version_info.minor}"
@@ -60,11 +63,6 @@ ROS_OWN_PARAMETERS = {"use_sim_time", "start_type_description_service"}
 PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg")
 PACKAGE_FOLDERS = ("resource", "config", "a1_leg_fk")
 
-# The A1 standing pose of the published reference values (FR foot in the trunk frame).
-LEGS = ("FR", "FL", "RR", "RL")
-JOINTS = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
-POSE = [0.0, 0.8, -1.5] * 4
-FR_FOOT = (0.1684, -0.1320, -0.2923)
 FOOT_TOLERANCE_M = 1e-4
 FOOT_WAIT_S = 30.0
 
@@ -107,6 +105,7 @@ def test_package_xml_passes_catkin_pkg_validation():
     assert EXEC_DEPENDS <= {dependency.name for dependency in package.exec_depends}
 
 
+@pytest.mark.slow
 def test_setup_py_name_and_version_are_package_xmls():
     result = subprocess.run(
         [sys.executable, "setup.py", "--name", "--version"],

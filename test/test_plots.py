@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared import installed_command
 
 from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
@@ -17,13 +18,7 @@ from a1_leg_fk.urdf import LegFkError
 ROBOT = Quadruped.from_urdf()
 
 
-def command(script: str, module: str) -> list[str]:
-    """The installed console script beside this Python, else ``python -m module``."""
-    path = Path(sys.executable).parent / script
-    return [str(path)] if path.exists() else [sys.executable, "-m", module]
-
-
-CLI = command("a1-leg-fk", "a1_leg_fk.cli")
+CLI = installed_command("a1-leg-fk", "a1_leg_fk.cli")
 
 
 def load_png(path: Path) -> np.ndarray:

@@ -6,16 +6,14 @@ reliable + transient local + depth 1) and, for sim time, a bag replay's ``/clock
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import pybullet_data
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from exported_urdf import FEET, UNITREE_JOINTS, exported_quadruped, reference_robot, unitree_style_a1
-from node_harness import PYBULLET_NAMES, STANDING, NodeClient, distance, node_command, stamp_ns
+from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
+from node_harness import NodeClient, distance, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
+from shared import A1_FEET, LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES
 from std_msgs.msg import String
 
 pytestmark = pytest.mark.slow
@@ -23,7 +21,6 @@ pytestmark = pytest.mark.slow
 TOLERANCE_M = 1e-7
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
-A1_FEET = [f"{leg}_toe" for leg in ("FR", "FL", "RR", "RL")]
 BILLION_LAUGHS = (
     '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
     '<robot name="bomb"><link name="&b;"/></robot>'
@@ -38,14 +35,13 @@ def publish_description(ros, xml: str, topic: str = "robot_description"):  # noq
 
 def feet_in(client: NodeClient, names, angles, frame: str, timeout_s: float = 30.0) -> list:
     """Send ``angles`` until all four feet come back in ``frame``; the latest foot per leg."""
-    legs = ("FR", "FL", "RR", "RL")
 
     def arrived() -> bool:
         client.send(client.joint_state(names, angles))
-        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in legs)
+        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in LEGS)
 
-    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in legs}
-    return [client.positions[leg][-1] for leg in legs]
+    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in LEGS}
+    return [client.positions[leg][-1] for leg in LEGS]
 
 
 def assert_feet(messages, expected) -> None:  # noqa: ANN001
@@ -70,7 +66,7 @@ def test_a_description_published_before_the_node_starts_is_used_with_no_paramete
     publisher = publish_description(ros, unitree_style_a1())
     process = processes.start(node_command())
     client = NodeClient(ros)
-    feet = feet_in(client, UNITREE_JOINTS, ANGLES, "base")
+    feet = feet_in(client, UNITREE_NAMES, ANGLES, "base")
     with PyBulletRobot(A1_URDF) as reference:  # the same geometry under pybullet_data's names
         assert_feet(feet, reference.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
     response = client.verify()
@@ -89,14 +85,14 @@ def test_a_description_published_later_switches_the_robot_and_republishing_does_
     xml = exported_quadruped("go2")
     publisher = publish_description(ros, xml)
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
     assert client.verify().success
     # robot_state_publisher republishes on parameter changes: the same text must not reload (a reload
     # empties the joint state), so two of FR's joints still complete FR with the knee merged before.
     publisher.publish(String(data=xml))
     client.probe.spin_for(1.0)
     client.clear()
-    client.send(client.joint_state(UNITREE_JOINTS[:2], ANGLES[:2]))
+    client.send(client.joint_state(UNITREE_NAMES[:2], ANGLES[:2]))
     assert client.wait_for_feet(1, legs=("FR",))
     assert processes.output(process).count("loaded /robot_description") == 1
 
@@ -144,7 +140,7 @@ def test_a_namespaced_node_follows_its_namespaced_description_topic(processes, r
     processes.start(node_command("-r", "__ns:=/robot1"))
     client = NodeClient(ros, prefix="/robot1/")
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_JOINTS, ANGLES, "base"), go2.feet(UNITREE_JOINTS, FEET, ANGLES))
+        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
 
 
 def test_an_empty_topic_parameter_follows_no_topic(processes, ros):

@@ -12,19 +12,21 @@ import re
 import sys
 import textwrap
 import time
-from pathlib import Path
 
 import numpy as np
-from conftest import BIN
+import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from node_harness import LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES, NodeClient, node_command, stamp_ns
+from node_harness import NodeClient, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command, rss_mb
 from std_srvs.srv import Trigger
 from test_fuzz_joint_state import SPECIAL_VALUES, UNKNOWN_NAMES
 
 from a1_leg_fk.kinematics import Quadruped
+
+pytestmark = pytest.mark.slow  # every test runs foot_fk_node
 
 ROBOT = Quadruped.from_urdf()
 
@@ -32,22 +34,8 @@ ROBOT = Quadruped.from_urdf()
 # --- helpers -------------------------------------------------------------------------------
 
 
-def rss_mb(pid: int) -> float:
-    """Resident set size [MB] from /proc/<pid>/status."""
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    raise AssertionError(f"no VmRSS for {pid}")
-
-
 def open_fds(pid: int) -> int:
     return len(os.listdir(f"/proc/{pid}/fd"))
-
-
-def script_command(name: str) -> list[str]:
-    installed = BIN / name
-    module = {"joint_state_demo": "a1_leg_fk.demo"}[name]
-    return [str(installed)] if installed.exists() else [sys.executable, "-m", module]
 
 
 class Diagnostics:
@@ -293,7 +281,7 @@ VERIFY_CLIENT = textwrap.dedent(
 )
 
 
-SOAK_SCRIPT = Path(__file__).resolve().parent.parent / "bench" / "soak.py"
+SOAK_SCRIPT = ROOT / "bench" / "soak.py"
 """Its ``--collect OUT STOP`` mode records every foot's stamp in a process of its own."""
 
 
@@ -391,7 +379,7 @@ def test_node_first_then_publisher_dies_and_another_comes_back(processes, ros):
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert not any(client.positions[leg] for leg in LEGS)
     for generation in range(2):
-        publisher = processes.start(script_command("joint_state_demo") + ["--ros-args", "-p", "rate_hz:=100.0"])
+        publisher = processes.start(installed_command("joint_state_demo", "a1_leg_fk.demo", "-p", "rate_hz:=100.0"))
         client.clear()
         assert client.wait_for_feet(20, timeout_s=20.0), (generation, processes.output(node), processes.output(publisher))
         publisher.kill()  # dies: no goodbye to DDS

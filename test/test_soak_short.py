@@ -7,14 +7,15 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from shared import ROOT
 
-SOAK = Path(__file__).resolve().parent.parent / "bench" / "soak.py"
+SOAK = ROOT / "bench" / "soak.py"
+
+pytestmark = [pytest.mark.slow, pytest.mark.soak]  # slow: it starts processes, as every slow test does
 
 
-@pytest.mark.soak
 def test_soak_60_s(tmp_path):
     summary = tmp_path / "soak.json"
     # ROS_DOMAIN_ID comes from conftest (this run's own domain), so soak.py uses it.

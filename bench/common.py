@@ -1,0 +1,74 @@
+"""What the bench/ scripts share: the import path, the names and poses, the machine line, timing.
+
+Import it first (``from common import ...``; a script's own folder is on ``sys.path``): it makes
+``a1_leg_fk`` importable from a source checkout that was not installed, and hands on the module
+the tests use for the names, the ROS-domain lock and the process helpers (``common.shared``, i.e.
+test/shared.py), so the bench and the tests keep one definition of each.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import platform
+import statistics
+import sys
+import timeit
+from importlib import metadata
+from pathlib import Path
+from typing import Callable
+
+ROOT = Path(__file__).resolve().parent.parent
+if importlib.util.find_spec("a1_leg_fk") is None:  # a source checkout without the package installed
+    sys.path.insert(0, str(ROOT))
+sys.path.append(str(ROOT / "test"))  # appended: nothing in test/ may shadow an installed module
+
+import shared  # noqa: E402 (needs the path above)
+
+__all__ = ["REPEATS", "ROOT", "SPEED_POSE", "machine", "median_seconds_per_call", "shared"]
+
+SPEED_POSE = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
+"""The configuration the speed benchmarks time [rad]: standing, with hip roll and unequal legs."""
+
+REPEATS = 15
+"""Interleaved runs per function in :func:`median_seconds_per_call`."""
+
+
+def _version(distribution: str) -> str:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return "absent"
+
+
+def machine() -> str:
+    """Two lines on what a result was measured on: CPUs, model, load; Python and the libraries."""
+    model = next(
+        (line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")),
+        platform.processor() or platform.machine(),
+    )
+    load = " ".join(f"{average:.2f}" for average in os.getloadavg())
+    rmw = os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp (default)")
+    libraries = ", ".join(f"{name} {_version(name)}" for name in ("numpy", "pybullet", "rclpy"))
+    return (
+        f"machine: nproc={len(os.sched_getaffinity(0))} (cpu_count={os.cpu_count()}), {model}, {platform.platform()}, "
+        f"load avg {load}\npython {platform.python_version()}, {libraries}, {rmw}"
+    )
+
+
+def median_seconds_per_call(functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05) -> dict[str, float]:
+    """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
+
+    The runs are interleaved (one run of every function per round), so a slow spell of the
+    machine hits all of them alike and the ratios stay fair.
+    """
+    timers = {name: timeit.Timer(function) for name, function in functions.items()}
+    numbers = {}
+    for name, timer in timers.items():
+        number, elapsed = timer.autorange()
+        numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
+    runs: dict[str, list[float]] = {name: [] for name in functions}
+    for _ in range(repeats):
+        for name, timer in timers.items():
+            runs[name].append(timer.timeit(numbers[name]) / numbers[name])
+    return {name: statistics.median(times) for name, times in runs.items()}

@@ -1,0 +1,80 @@
+"""What the tests and the bench/ scripts share: the A1's names and standing pose, the machine-wide
+ROS-domain lock, and the package's installed executables.
+
+Standard library only (no pytest, no ROS, no a1_leg_fk), so a bench script imports it as it is.
+The names are written from the naming conventions, independently of the package's own tables.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import sys
+import tempfile
+from pathlib import Path
+from typing import IO
+
+LEGS = ("FR", "FL", "RR", "RL")
+"""Leg order: front-right, front-left, rear-right, rear-left."""
+
+PYBULLET_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "upper", "lower")]
+"""pybullet_data's A1 joint names, in slot order (hip roll, hip pitch, knee per leg)."""
+
+UNITREE_NAMES = [f"{leg}_{joint}_joint" for leg in LEGS for joint in ("hip", "thigh", "calf")]
+"""Unitree's names for the same joints (unitree_ros, Gazebo, real-robot bridges)."""
+
+A1_FEET = [f"{leg}_toe" for leg in LEGS]
+"""pybullet_data's A1 (and Aliengo) foot links, in leg order."""
+
+STAND_LEG = (0.0, 0.8, -1.5)
+"""One leg standing [rad]: hip roll, hip pitch, knee."""
+
+STANDING = list(STAND_LEG) * 4
+"""All four legs standing [rad], in slot order: the reference write-up's pose."""
+
+STANDING_FR = (0.1684, -0.1320, -0.2923)
+"""The FR foot of the A1 in :data:`STANDING`, trunk frame [m]: the reference write-up's published value."""
+
+ROOT = Path(__file__).resolve().parent.parent
+"""The repository (the package's source tree: package.xml, config/, bench/)."""
+
+DOMAIN_IDS = range(1, 102)
+"""ROS domain ids that are safe on one machine (higher ones clash with port ranges)."""
+
+DOMAIN_LOCK_FOLDER = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
+
+
+def claim_domain_id() -> tuple[int, IO[str]]:
+    """The first ROS domain id no other test run or soak on this machine holds, with its lock file.
+
+    Keep the returned file open for as long as the domain is in use: the lock (``flock``) goes
+    with it. Raises RuntimeError when every id in :data:`DOMAIN_IDS` is held.
+    """
+    DOMAIN_LOCK_FOLDER.mkdir(exist_ok=True)
+    for domain_id in DOMAIN_IDS:
+        lock = open(DOMAIN_LOCK_FOLDER / f"{domain_id}.lock", "w")  # noqa: SIM115 (returned, held by the caller)
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        return domain_id, lock
+    raise RuntimeError(f"every ROS domain id {DOMAIN_IDS.start}..{DOMAIN_IDS.stop - 1} is held by another run")
+
+
+def installed_command(script: str, module: str, *ros_args: str) -> list[str]:
+    """The console script ``script`` installed beside this Python (as ``ros2 run`` would start it),
+    else ``python -m module``; followed by ``--ros-args ros_args...`` when any are given."""
+    installed = Path(sys.executable).parent / script
+    command = [str(installed)] if installed.exists() else [sys.executable, "-m", module]
+    return command + (["--ros-args", *ros_args] if ros_args else [])
+
+
+def rss_mb(pid: int) -> float:
+    """Resident set size [MB] of process ``pid``, from /proc/<pid>/status (VmRSS).
+
+    Raises LookupError when the process has no VmRSS (a zombie), FileNotFoundError when it is gone.
+    """
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024.0
+    raise LookupError(f"no VmRSS for process {pid}")

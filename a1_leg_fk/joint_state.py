@@ -16,8 +16,8 @@ from typing import Sequence
 
 import numpy as np
 
-from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
-from a1_leg_fk.legs import JOINTS_PER_LEG
+from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG
 
 # Message outcomes; every message received ends in exactly one of them.
 ACCEPTED = "accepted"

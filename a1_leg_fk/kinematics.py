@@ -25,10 +25,9 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from a1_leg_fk import inverse
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
 
-JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
 BATCH_CHUNK_ROWS = 4096
 """Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
 

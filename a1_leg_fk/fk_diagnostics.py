@@ -9,7 +9,7 @@ rejections since the previous report. The node wraps the result in a DiagnosticA
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from collections.abc import Sequence
 
 from a1_leg_fk.joint_state import REJECTIONS, TrackerCounts
 

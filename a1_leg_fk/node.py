@@ -14,7 +14,7 @@ from typing import Sequence
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
+from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -22,10 +22,11 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 from a1_leg_fk import ros_glue
 from a1_leg_fk.fk_diagnostics import FkReport, PeriodCounter, fk_status
+from a1_leg_fk.foot_markers import foot_markers
 from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
@@ -215,30 +216,7 @@ class FootFkNode(Node):
         self._markers_wanted = self._publish_markers_enabled and self._marker_pub.get_subscription_count() > 0
 
     def _publish_markers(self, stamp: Time) -> None:
-        markers = MarkerArray()
-        angles = self._tracker.angles
-        for slot, leg in enumerate(self._model.quadruped.legs):
-            leg_angles = angles[3 * slot : 3 * slot + 3]
-            if any(math.isnan(a) for a in leg_angles):
-                continue
-            points = [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in leg.joint_points(leg_angles)]
-            markers.markers.append(self._marker(stamp, 2 * slot, Marker.SPHERE, points[-1:], leg.chain.leg))
-            markers.markers.append(self._marker(stamp, 2 * slot + 1, Marker.LINE_STRIP, points, leg.chain.leg))
-        self._marker_pub.publish(markers)
-
-    def _marker(self, stamp: Time, marker_id: int, kind: int, points: list[Point], leg: str) -> Marker:
-        marker = Marker(ns=f"feet/{leg}", id=marker_id, type=kind, action=Marker.ADD)
-        marker.header.frame_id = self._base_frame
-        marker.header.stamp = stamp
-        marker.pose.orientation.w = 1.0
-        if kind == Marker.SPHERE:
-            marker.pose.position = points[0]
-            marker.scale.x = marker.scale.y = marker.scale.z = 0.04
-        else:
-            marker.points = points
-            marker.scale.x = 0.015
-        marker.color.r, marker.color.g, marker.color.b, marker.color.a = (0.1, 0.6, 1.0, 1.0)
-        return marker
+        self._marker_pub.publish(foot_markers(self._model.quadruped, self._tracker.angles, self._base_frame, stamp))
 
     def _publish_diagnostics(self) -> None:
         received, rejected = self._period.take(self._tracker.counts)  # the period runs unobserved too

@@ -30,7 +30,7 @@ class SerializedStamped:
 
     def __init__(self, frame_id: str) -> None:
         probes = (PointStamped(), Vector3Stamped())
-        for probe, values in zip(probes, (probes[0].point, probes[1].vector)):
+        for probe, values in zip(probes, (probes[0].point, probes[1].vector), strict=True):
             probe.header.frame_id = frame_id
             probe.header.stamp.sec, probe.header.stamp.nanosec = 7, 9
             values.x, values.y, values.z = self._PROBE

@@ -49,6 +49,22 @@ def random_in_limits(robot: Quadruped, rng: np.random.Generator) -> np.ndarray:
     return rng.uniform(lower, upper)
 
 
+def send_random_states(
+    client: NodeClient, robot: Quadruped, rng: np.random.Generator, names, count: int, with_rates: bool = False
+) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Send ``count`` joint states with random angles in limits [rad] (and, ``with_rates``, random
+    rates in [-2, 2] rad/s, else none); returns stamp [ns] -> (angles, rates)."""
+    sent = {}
+    for _ in range(count):
+        angles = random_in_limits(robot, rng)
+        rates = rng.uniform(-2.0, 2.0, 12) if with_rates else np.empty(0)
+        msg = client.joint_state(names, angles, rates)
+        sent[stamp_ns(msg)] = (angles, rates)
+        client.send(msg)
+        client.probe.spin_for(0.01)
+    return sent
+
+
 @dataclass
 class RunningNode:
     process: subprocess.Popen
@@ -75,20 +91,13 @@ def a1_node(processes, ros) -> RunningNode:
 def test_random_joint_states_give_pybullet_feet_with_frame_and_stamp(a1_node, reference, names):
     client = a1_node.client
     robot = Quadruped.from_urdf()
-    rng = np.random.default_rng(7)
-    sent = {}
-    for _ in range(40):
-        angles = random_in_limits(robot, rng)
-        msg = client.joint_state(names, angles)
-        sent[stamp_ns(msg)] = angles
-        client.send(msg)
-        client.probe.spin_for(0.01)
+    sent = send_random_states(client, robot, np.random.default_rng(7), names, 40)
     assert client.wait_for_feet(len(sent)), {leg: len(v) for leg, v in client.positions.items()}
     worst_pybullet, worst_core = 0.0, 0.0
     for slot, leg in enumerate(LEGS):
         for msg in client.positions[leg]:
             assert msg.header.frame_id == "trunk"
-            angles = sent[stamp_ns(msg)]
+            angles, _ = sent[stamp_ns(msg)]
             expected = reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0]
             worst_pybullet = max(worst_pybullet, distance(msg.point, expected))
             worst_core = max(worst_core, distance(msg.point, robot.fk(angles)[slot]))
@@ -121,14 +130,7 @@ def test_message_object_output_publishes_the_same_feet_velocities_frames_and_sta
     switched on at run time, the pre-serialized path sends the very same values for one message."""
     client = start_node(processes, ros, "-p", "preserialized_output:=false").client
     robot = Quadruped.from_urdf()
-    rng = np.random.default_rng(11)
-    sent = {}
-    for _ in range(20):
-        angles, rates = random_in_limits(robot, rng), rng.uniform(-2.0, 2.0, 12)
-        msg = client.joint_state(PYBULLET_NAMES, angles, rates)
-        sent[stamp_ns(msg)] = (angles, rates)
-        client.send(msg)
-        client.probe.spin_for(0.01)
+    sent = send_random_states(client, robot, np.random.default_rng(11), PYBULLET_NAMES, 20, with_rates=True)
     assert client.probe.spin_until(lambda: all(len(client.velocities[leg]) >= len(sent) for leg in LEGS), 10.0)
     assert client.wait_for_feet(len(sent))
     for slot, leg in enumerate(LEGS):

@@ -32,13 +32,12 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
 if TYPE_CHECKING:  # kinematics needs numpy; this module does not
     from a1_leg_fk.kinematics import Quadruped
 
-JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
 
 STAND_POSE = (0.0, 0.8, -1.5)
 """Hip roll, hip pitch, knee [rad] of the A1's usual standing pose (a gait design choice, not a limit)."""

@@ -16,8 +16,8 @@ from typing import Sequence
 
 import numpy as np
 
-from a1_leg_fk.kinematics import JOINT_COUNT, Quadruped
-from a1_leg_fk.legs import JOINTS_PER_LEG
+from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG
 
 # Message outcomes; every message received ends in exactly one of them.
 ACCEPTED = "accepted"
@@ -124,7 +124,7 @@ class FootTracker:
         out_of_limit = False
         for index, slot in layout.pairs:
             angle = positions[index]
-            if angle - angle == 0.0:  # finite: NaN - NaN and inf - inf are NaN
+            if math.isfinite(angle):
                 angles[slot] = angle
                 merged += 1
                 out_of_limit = out_of_limit or not lower[slot] <= angle <= upper[slot]
@@ -245,7 +245,7 @@ class FootTracker:
         if rates is None:
             return Foot(leg_slot, leg.position(q0, q1, q2), None)
         x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
-        finite = vx - vx == 0.0 and vy - vy == 0.0 and vz - vz == 0.0  # huge rates can overflow
+        finite = math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)  # huge rates can overflow
         return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
 
     @staticmethod
@@ -256,7 +256,7 @@ class FootTracker:
         for index, slot in layout.pairs:
             if first <= slot < first + JOINTS_PER_LEG:
                 rates[slot - first] = velocities[index]
-        return rates if all(rate - rate == 0.0 for rate in rates) else None
+        return rates if all(math.isfinite(rate) for rate in rates) else None
 
     def _describe(self, names: list[str]) -> _NameLayout:
         slots = self.quadruped.name_to_slot

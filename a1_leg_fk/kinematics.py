@@ -25,10 +25,9 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from a1_leg_fk import inverse
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index, leg_slot
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index, leg_slot
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
 
-JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
 BATCH_CHUNK_ROWS = 4096
 """Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
 
@@ -306,7 +305,7 @@ def _checked_configuration(angles: Sequence[float], what: str = "joint angles", 
     """``count`` (12) finite floats, or a LegFkError naming the problem."""
     try:
         q = [float(value) for value in angles]
-    except (TypeError, ValueError) as error:
+    except (TypeError, ValueError, OverflowError) as error:
         raise LegFkError(f"{what} must be {count} numbers: {error}") from error
     if len(q) != count:
         per_leg = f" (3 per leg, {'/'.join(LEG_NAMES)})" if count == JOINT_COUNT else ""
@@ -321,16 +320,16 @@ def _checked_configuration(angles: Sequence[float], what: str = "joint angles", 
 
 
 def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
-    """As :func:`_checked_configuration`, but the common case (12 finite numbers) costs a list copy
-    and a sum: a NaN or infinity makes the sum non-finite, and only then is each value examined."""
+    """As :func:`_checked_configuration`, but the common case (12 finite Python floats or ints)
+    costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
+    value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0`` here, ratio 0.995.)"""
     try:
         q = angles.tolist() if isinstance(angles, np.ndarray) else list(angles)
         total = sum(q)
-    except TypeError:
+        usable = len(q) == JOINT_COUNT and isinstance(total, (float, int)) and math.isfinite(total)
+    except (TypeError, OverflowError):  # not numbers; an int too large for a float
         return _checked_configuration(angles)
-    if len(q) == JOINT_COUNT and isinstance(total, (float, int)) and total - total == 0.0:
-        return q
-    return _checked_configuration(angles)
+    return q if usable else _checked_configuration(angles)
 
 
 def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:

@@ -15,6 +15,8 @@ LEG_NAMES: tuple[str, ...] = ("FR", "FL", "RR", "RL")
 """Leg order everywhere in the package: front-right, front-left, rear-right, rear-left."""
 
 JOINTS_PER_LEG = 3
+JOINT_COUNT = len(LEG_NAMES) * JOINTS_PER_LEG
+"""Joints of a configuration: three per leg, in :data:`LEG_NAMES` order (12)."""
 
 
 def leg_slot(leg: str) -> int:

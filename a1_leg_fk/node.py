@@ -8,29 +8,31 @@ relative, so ``__ns`` and remaps work; every parameter is declared with a descri
 from __future__ import annotations
 
 import math
-import struct
 import sys
 import time
 from typing import Sequence
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import Point, PointStamped, Vector3Stamped
-from rcl_interfaces.msg import ParameterType, SetParametersResult
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PointStamped, Vector3Stamped
+from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 from a1_leg_fk import ros_glue
+from a1_leg_fk.fk_diagnostics import FkReport, PeriodCounter, fk_status
+from a1_leg_fk.foot_markers import foot_markers
 from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
 from a1_leg_fk.robot_config import RobotConfig
 from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource, parameter_value
+from a1_leg_fk.serialized_output import SerializedStamped
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_fk"
@@ -47,6 +49,11 @@ JOINT_STATES_QOS = QoSProfile(
 )
 
 
+MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
+PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
+VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
+"""Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
+
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
     ParameterSpec("publish_velocities", True, ParameterType.PARAMETER_BOOL,
@@ -54,53 +61,21 @@ PARAMETERS = (
     ParameterSpec("publish_markers", True, ParameterType.PARAMETER_BOOL,
                   "Publish foot_markers (MarkerArray) while someone subscribes"),
     ParameterSpec("marker_rate_hz", 30.0, ParameterType.PARAMETER_DOUBLE,
-                  "Highest rate of foot_markers [Hz], > 0"),
+                  f"Highest rate of foot_markers [Hz], in {MARKER_RATE_RANGE_HZ}", value_range=MARKER_RATE_RANGE_HZ),
     ParameterSpec("max_publish_rate_hz", 0.0, ParameterType.PARAMETER_DOUBLE,
-                  "Highest rate of foot positions/velocities [Hz]; 0 = one set per joint state (no throttling)"),
+                  "Highest rate of foot positions/velocities [Hz], in "
+                  f"{PUBLISH_RATE_RANGE_HZ}; 0 = one set per joint state (no throttling)",
+                  value_range=PUBLISH_RATE_RANGE_HZ),
     ParameterSpec("enable_verify", True, ParameterType.PARAMETER_BOOL,
                   "Offer the verify_fk service (compares the FK with PyBullet's)"),
     ParameterSpec("verify_tolerance_m", 1e-6, ParameterType.PARAMETER_DOUBLE,
-                  "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, > 0"),
+                  "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, in "
+                  f"{VERIFY_TOLERANCE_RANGE_M}", value_range=VERIFY_TOLERANCE_RANGE_M),
+    ParameterSpec("preserialized_output", True, ParameterType.PARAMETER_BOOL,
+                  "Publish the foot messages as bytes patched into a pre-serialized message (the same "
+                  "messages, cheaper); false = as message objects"),
 )
 """The node's own parameters; the model parameters are :class:`a1_leg_fk.robot_source.RobotSource`'s."""
-
-
-class _SerializedStamped:
-    """A PointStamped/Vector3Stamped (same CDR layout: a Header, then three float64) serialized once.
-
-    :meth:`serialized` patches a stamp and three values [m or m/s] into the bytes, so a publish
-    skips rclpy's Python -> C conversion and serialization of the message (about a third of the
-    cost of a publish). ``usable`` is False unless the rmw writes the little-endian CDR this
-    expects (checked on a probe message); the node then publishes message objects.
-    """
-
-    _PROBE = (1.25, -2.5, 3.75)
-    _STAMP = struct.Struct("<iI")  # builtin_interfaces/Time right after the 4-byte encapsulation header
-    _VALUES = struct.Struct("<3d")
-
-    def __init__(self, frame_id: str) -> None:
-        probes = (PointStamped(), Vector3Stamped())
-        for probe, values in zip(probes, (probes[0].point, probes[1].vector)):
-            probe.header.frame_id = frame_id
-            probe.header.stamp.sec, probe.header.stamp.nanosec = 7, 9
-            values.x, values.y, values.z = self._PROBE
-        data = [serialize_message(probe) for probe in probes]
-        self._offset = data[0].find(self._VALUES.pack(*self._PROBE))
-        string_end = 16 + len(frame_id.encode()) + 1  # header, sec, nanosec, length, text, NUL
-        self.usable = (
-            data[0][:4] == b"\x00\x01\x00\x00"
-            and data[0][4:12] == self._STAMP.pack(7, 9)
-            and string_end <= self._offset == data[1].find(self._VALUES.pack(*self._PROBE))
-            and len(data[0]) == len(data[1]) == self._offset + self._VALUES.size
-        )
-        self._buffer = bytearray(data[0])
-        self._buffer[string_end : self._offset] = bytes(self._offset - string_end)  # zero the padding
-
-    def serialized(self, sec: int, nanosec: int, values: tuple[float, float, float]) -> bytes:
-        buffer = self._buffer
-        self._STAMP.pack_into(buffer, 4, sec, nanosec)
-        self._VALUES.pack_into(buffer, self._offset, *values)
-        return bytes(buffer)
 
 
 class FootFkNode(Node):
@@ -123,7 +98,7 @@ class FootFkNode(Node):
         self._last_publish = -math.inf
         self._last_markers = -math.inf
         self._markers_wanted = False
-        self._previous_counts = (0, 0)
+        self._period = PeriodCounter()
         self._warnings = ros_glue.WarnThrottle(self)
         self._apply_settings()
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
@@ -144,7 +119,6 @@ class FootFkNode(Node):
         )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.create_timer(SUBSCRIBER_CHECK_PERIOD_S, self._check_subscribers)
-        self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
             f"feet of {self._model.source} in frame '{self._base_frame}' from "
@@ -166,9 +140,16 @@ class FootFkNode(Node):
             return
         self._last_publish = now
         stamp = self._stamp_of(msg)
-        if self._serialized.usable:
-            self._publish_serialized(feet, stamp.sec, stamp.nanosec)
-            feet = ()
+        if self._serialized is not None:
+            self._publish_serialized(self._serialized, feet, stamp.sec, stamp.nanosec)
+        else:
+            self._publish_objects(feet, stamp)
+        if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
+            self._last_markers = now
+            self._publish_markers(stamp)
+
+    def _publish_objects(self, feet: list[Foot], stamp: Time) -> None:
+        """Publish the feet as message objects (one reused message per leg and kind)."""
         for foot in feet:
             position_msg = self._position_msgs[foot.leg_slot]
             position_msg.header.stamp = stamp
@@ -181,20 +162,17 @@ class FootFkNode(Node):
                 vector = velocity_msg.vector
                 vector.x, vector.y, vector.z = foot.velocity
                 self._velocity_pubs[foot.leg_slot].publish(velocity_msg)
-        if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
-            self._last_markers = now
-            self._publish_markers(stamp)
 
-    def _publish_serialized(self, feet: list[Foot], sec: int, nanosec: int) -> None:
+    def _publish_serialized(self, writer: SerializedStamped, feet: list[Foot], sec: int, nanosec: int) -> None:
         """Publish the feet as pre-serialized bytes (same messages, cheaper than message objects)."""
-        serialized = self._serialized.serialized
+        serialized = writer.serialized
         velocities = self._publish_velocities
         for foot in feet:
             self._position_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.position))
             if foot.velocity is not None and velocities:
                 self._velocity_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.velocity))
 
-    def _stamp_of(self, msg: JointState):  # noqa: ANN202 (builtin_interfaces/Time)
+    def _stamp_of(self, msg: JointState) -> Time:
         """The message's stamp, or the node clock's now where the stamp is zero."""
         stamp = msg.header.stamp
         stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
@@ -237,64 +215,29 @@ class FootFkNode(Node):
     def _check_subscribers(self) -> None:
         self._markers_wanted = self._publish_markers_enabled and self._marker_pub.get_subscription_count() > 0
 
-    def _publish_markers(self, stamp) -> None:  # noqa: ANN001
-        markers = MarkerArray()
-        angles = self._tracker.angles
-        for slot, leg in enumerate(self._model.quadruped.legs):
-            leg_angles = angles[3 * slot : 3 * slot + 3]
-            if any(math.isnan(a) for a in leg_angles):
-                continue
-            points = [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in leg.joint_points(leg_angles)]
-            markers.markers.append(self._marker(stamp, 2 * slot, Marker.SPHERE, points[-1:], leg.chain.leg))
-            markers.markers.append(self._marker(stamp, 2 * slot + 1, Marker.LINE_STRIP, points, leg.chain.leg))
-        self._marker_pub.publish(markers)
-
-    def _marker(self, stamp, marker_id: int, kind: int, points: list[Point], leg: str) -> Marker:  # noqa: ANN001
-        marker = Marker(ns=f"feet/{leg}", id=marker_id, type=kind, action=Marker.ADD)
-        marker.header.frame_id = self._base_frame
-        marker.header.stamp = stamp
-        marker.pose.orientation.w = 1.0
-        if kind == Marker.SPHERE:
-            marker.pose.position = points[0]
-            marker.scale.x = marker.scale.y = marker.scale.z = 0.04
-        else:
-            marker.points = points
-            marker.scale.x = 0.015
-        marker.color.r, marker.color.g, marker.color.b, marker.color.a = (0.1, 0.6, 1.0, 1.0)
-        return marker
+    def _publish_markers(self, stamp: Time) -> None:
+        self._marker_pub.publish(foot_markers(self._model.quadruped, self._tracker.angles, self._base_frame, stamp))
 
     def _publish_diagnostics(self) -> None:
-        counts = self._tracker.counts
-        received, feet = counts.messages, counts.feet
-        rate_hz = (received - self._previous_counts[0]) / DIAGNOSTICS_PERIOD_S
-        rejected_now = sum(counts.outcomes[r] for r in REJECTIONS) - self._previous_counts[1]
-        self._previous_counts = (received, sum(counts.outcomes[r] for r in REJECTIONS))
+        received, rejected = self._period.take(self._tracker.counts)  # the period runs unobserved too
         if self._diagnostics_pub.get_subscription_count() == 0:
             return
-        outside = self._tracker.joints_outside_limits()
-        level, summary = DiagnosticStatus.OK, "feet published"
-        if not received:
-            level, summary = DiagnosticStatus.WARN, "no joint_states received yet"
-        elif rejected_now or outside or counts.non_finite_joints:
-            level, summary = DiagnosticStatus.WARN, "some joint_states rejected or joints outside limits"
-        if self._robot.topic_rejected:
-            level, summary = DiagnosticStatus.WARN, f"robot description on {self._robot.topic_name} rejected"
-        if self._verify_disagreed:
-            level, summary = DiagnosticStatus.ERROR, "verify_fk: FK disagrees with PyBullet beyond the tolerance"
-        values = {
-            "messages_received": received,
-            **{f"messages_{outcome}": n for outcome, n in sorted(counts.outcomes.items())},
-            "non_finite_joint_values": counts.non_finite_joints,
-            "feet_published": feet,
-            "input_rate_hz": f"{rate_hz:.1f}",
-            "joints_outside_limits": ",".join(outside) or "none",
-            "messages_out_of_limits": counts.out_of_limit_messages,
-            "unknown_joint_names": ",".join(sorted(counts.unknown_names)[:20]) or "none",
-            "stamp_jumps_back": self._stamp_jumps_back,
-            "last_verify": self._last_verify,
-            "model": self._model.source,
-            "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
-        }
+        robot = self._robot
+        report = FkReport(
+            counts=self._tracker.counts,
+            received_in_period=received,
+            rejected_in_period=rejected,
+            period_s=DIAGNOSTICS_PERIOD_S,
+            joints_outside_limits=self._tracker.joints_outside_limits(),
+            stamp_jumps_back=self._stamp_jumps_back,
+            model=self._model.source,
+            description_topic=robot.topic_name,
+            description_status=robot.topic_status,
+            description_rejected=robot.topic_rejected,
+            last_verify=self._last_verify,
+            verify_disagreed=self._verify_disagreed,
+        )
+        level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
         self._diagnostics_pub.publish(ros_glue.diagnostics(self, "foot kinematics", level, summary, hardware_id, values))
 
@@ -351,28 +294,31 @@ class FootFkNode(Node):
 
     # --- parameters ------------------------------------------------------------------------
 
-    def _value(self, name: str) -> object:
-        return parameter_value(self, name)
+    def _float(self, name: str) -> float:
+        return self.get_parameter(name).get_parameter_value().double_value
+
+    def _bool(self, name: str) -> bool:
+        return self.get_parameter(name).get_parameter_value().bool_value
 
     def _apply_settings(self) -> None:
-        value = self._value
-        self._base_frame = value("base_frame") or self._model.quadruped.base_frame
-        self._publish_velocities = bool(value("publish_velocities"))
-        self._publish_markers_enabled = bool(value("publish_markers"))
-        self._marker_interval_s = 1.0 / value("marker_rate_hz")
-        rate = value("max_publish_rate_hz")
+        """Read the node's parameters; rclpy has checked their types and ranges already."""
+        self._base_frame = str(parameter_value(self, "base_frame")) or self._model.quadruped.base_frame
+        self._publish_velocities = self._bool("publish_velocities")
+        self._publish_markers_enabled = self._bool("publish_markers")
+        self._marker_interval_s = 1.0 / self._float("marker_rate_hz")
+        rate = self._float("max_publish_rate_hz")
         self._min_publish_interval_s = 1.0 / rate if rate > 0 else 0.0
-        self._enable_verify = bool(value("enable_verify"))
-        self._verify_tolerance_m = float(value("verify_tolerance_m"))
+        self._enable_verify = self._bool("enable_verify")
+        self._verify_tolerance_m = self._float("verify_tolerance_m")
+        self._preserialized_output = self._bool("preserialized_output")
 
     def _set_frame_ids(self) -> None:
+        """Stamp the output messages with the base frame; the pre-serialized writer is None when
+        ``preserialized_output`` is off or the rmw's CDR is not the one it patches."""
         for msg in (*self._position_msgs, *self._velocity_msgs):
             msg.header.frame_id = self._base_frame
-        self._serialized = _SerializedStamped(self._base_frame)
-
-    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        problem = _invalid_setting({p.name: p.value for p in parameters})
-        return SetParametersResult(successful=not problem, reason=problem)
+        writer = SerializedStamped(self._base_frame) if self._preserialized_output else None
+        self._serialized = writer if writer is not None and writer.usable else None
 
     def _on_robot(self, config: RobotConfig) -> None:
         """Another robot was accepted (a parameter or the description topic): start over with it."""
@@ -388,17 +334,6 @@ class FootFkNode(Node):
         if any(p.name == "enable_verify" for p in parameters):
             self._load_verifier()
         self._update_verify_service()
-
-
-def _invalid_setting(changes: dict[str, object]) -> str:
-    """Why a parameter change is unacceptable, or '' when it is fine."""
-    for name in ("marker_rate_hz", "verify_tolerance_m"):
-        if name in changes and not (isinstance(changes[name], float) and math.isfinite(changes[name]) and changes[name] > 0):
-            return f"{name} must be a finite number > 0, got {changes[name]!r}"
-    rate = changes.get("max_publish_rate_hz", 0.0)
-    if not (isinstance(rate, float) and math.isfinite(rate) and rate >= 0):
-        return f"max_publish_rate_hz must be a finite number >= 0, got {rate!r}"
-    return ""
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -22,8 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from rcl_interfaces.msg import ParameterDescriptor, ParameterType, SetParametersResult
-from rclpy.exceptions import ParameterUninitializedException
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType, SetParametersResult
+from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -45,21 +45,32 @@ DESCRIPTION_QOS = QoSProfile(
 @dataclass(frozen=True)
 class ParameterSpec:
     """A parameter a node declares: name, default (``None``: a string array with no value until
-    one is given, since ROS cannot type ``[]``), type, description, and whether it is read-only."""
+    one is given, since ROS cannot type ``[]``), type, description, whether it is read-only, and
+    for a double the inclusive ``(lowest, highest)`` range rclpy enforces on every value (NaN is
+    outside every range); the description should state the range."""
 
     name: str
     default: object
     type: int
     description: str
     read_only: bool = False
+    value_range: tuple[float, float] | None = None
 
     def declare(self, node: Node) -> None:
+        """Declare the parameter on ``node``; a value given at start (``-p``, a params file) that
+        is out of range raises :class:`LegFkError` with rclpy's reason."""
         descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        if self.value_range is not None:
+            lowest, highest = self.value_range
+            descriptor.floating_point_range = [FloatingPointRange(from_value=lowest, to_value=highest)]
         if self.default is None:
             node.declare_parameter(self.name, Parameter.Type.STRING_ARRAY, descriptor)
-        else:
-            descriptor.type = self.type
+            return
+        descriptor.type = self.type
+        try:
             node.declare_parameter(self.name, self.default, descriptor)
+        except InvalidParameterValueException as error:
+            raise LegFkError(f"parameter {self.name}: {error}") from error
 
 
 def parameter_value(node: Node, name: str) -> object:

@@ -78,10 +78,6 @@ class RobotModel:
     def __post_init__(self) -> None:
         object.__setattr__(self, "_parent_joints", {j.child: j for j in self.joints.values()})
 
-    def parent_joint(self, link: str) -> Joint | None:
-        """The joint whose child is ``link``; ``None`` for the root."""
-        return self._parent_joints.get(link)
-
     def child_links(self, link: str) -> tuple[str, ...]:
         """The links attached below ``link``, in document order."""
         return tuple(j.child for j in self.joints.values() if j.parent == link)

@@ -49,6 +49,22 @@ def random_in_limits(robot: Quadruped, rng: np.random.Generator) -> np.ndarray:
     return rng.uniform(lower, upper)
 
 
+def send_random_states(
+    client: NodeClient, robot: Quadruped, rng: np.random.Generator, names, count: int, with_rates: bool = False
+) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Send ``count`` joint states with random angles in limits [rad] (and, ``with_rates``, random
+    rates in [-2, 2] rad/s, else none); returns stamp [ns] -> (angles, rates)."""
+    sent = {}
+    for _ in range(count):
+        angles = random_in_limits(robot, rng)
+        rates = rng.uniform(-2.0, 2.0, 12) if with_rates else np.empty(0)
+        msg = client.joint_state(names, angles, rates)
+        sent[stamp_ns(msg)] = (angles, rates)
+        client.send(msg)
+        client.probe.spin_for(0.01)
+    return sent
+
+
 @dataclass
 class RunningNode:
     process: subprocess.Popen
@@ -75,20 +91,13 @@ def a1_node(processes, ros) -> RunningNode:
 def test_random_joint_states_give_pybullet_feet_with_frame_and_stamp(a1_node, reference, names):
     client = a1_node.client
     robot = Quadruped.from_urdf()
-    rng = np.random.default_rng(7)
-    sent = {}
-    for _ in range(40):
-        angles = random_in_limits(robot, rng)
-        msg = client.joint_state(names, angles)
-        sent[stamp_ns(msg)] = angles
-        client.send(msg)
-        client.probe.spin_for(0.01)
+    sent = send_random_states(client, robot, np.random.default_rng(7), names, 40)
     assert client.wait_for_feet(len(sent)), {leg: len(v) for leg, v in client.positions.items()}
     worst_pybullet, worst_core = 0.0, 0.0
     for slot, leg in enumerate(LEGS):
         for msg in client.positions[leg]:
             assert msg.header.frame_id == "trunk"
-            angles = sent[stamp_ns(msg)]
+            angles, _ = sent[stamp_ns(msg)]
             expected = reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0]
             worst_pybullet = max(worst_pybullet, distance(msg.point, expected))
             worst_core = max(worst_core, distance(msg.point, robot.fk(angles)[slot]))
@@ -113,6 +122,45 @@ def test_foot_velocities_are_jacobian_times_rates_and_match_finite_differences(a
         block = slice(3 * slot, 3 * slot + 3)
         np.testing.assert_allclose(got, robot.jacobians(angles)[slot] @ rates[block], atol=1e-12)
         np.testing.assert_allclose(got, central[slot], atol=1e-8)
+
+
+@pytest.mark.slow
+def test_message_object_output_publishes_the_same_feet_velocities_frames_and_stamps(processes, ros, reference):
+    """preserialized_output:=false: the message-object path, against PyBullet and the core; then
+    switched on at run time, the pre-serialized path sends the very same values for one message."""
+    client = start_node(processes, ros, "-p", "preserialized_output:=false").client
+    robot = Quadruped.from_urdf()
+    sent = send_random_states(client, robot, np.random.default_rng(11), PYBULLET_NAMES, 20, with_rates=True)
+    assert client.probe.spin_until(lambda: all(len(client.velocities[leg]) >= len(sent) for leg in LEGS), 10.0)
+    assert client.wait_for_feet(len(sent))
+    for slot, leg in enumerate(LEGS):
+        for position, velocity in zip(client.positions[leg], client.velocities[leg]):
+            assert position.header.frame_id == velocity.header.frame_id == "trunk"
+            angles, rates = sent[stamp_ns(position)]
+            assert stamp_ns(velocity) == stamp_ns(position)
+            assert distance(position.point, reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0]) <= 1e-7
+            assert distance(position.point, robot.fk(angles)[slot]) <= 1e-12
+            expected = robot.jacobians(angles)[slot] @ rates[3 * slot : 3 * slot + 3]
+            assert distance(velocity.vector, expected) <= 1e-12
+    last = client.joint_state(PYBULLET_NAMES, *sent[max(sent)])
+    as_objects = _feet_for(client, last)
+    switched = client.set_parameter("preserialized_output", ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True))
+    assert switched.successful, switched.reason
+    assert _feet_for(client, last) == as_objects
+
+
+def _feet_for(client: NodeClient, msg) -> list[tuple]:  # noqa: ANN001
+    """Send ``msg`` alone; the (frame, stamp, x, y, z) of every foot position and velocity it gives."""
+    client.clear()
+    client.send(msg)
+    assert client.probe.spin_until(lambda: all(client.velocities[leg] for leg in LEGS), 10.0)
+    assert client.wait_for_feet(1)
+    out = []
+    for leg in LEGS:
+        position, velocity = client.positions[leg][0], client.velocities[leg][0]
+        out.append((position.header.frame_id, stamp_ns(position), position.point.x, position.point.y, position.point.z))
+        out.append((velocity.header.frame_id, stamp_ns(velocity), velocity.vector.x, velocity.vector.y, velocity.vector.z))
+    return out
 
 
 def test_nan_velocities_publish_positions_without_velocities(a1_node):

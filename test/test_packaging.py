@@ -54,6 +54,7 @@ SCALAR_DEFAULTS = {
     "max_publish_rate_hz": 0.0,
     "enable_verify": True,
     "verify_tolerance_m": 1e-6,
+    "preserialized_output": True,
 }
 STRING_ARRAYS = ("foot_links", "joint_aliases")
 # Parameters rclpy declares on every node (and per-topic QoS overrides), not the package's own.

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from rclpy.serialization import deserialize_message, serialize_message
 
-from a1_leg_fk.node import _SerializedStamped
+from a1_leg_fk.serialized_output import SerializedStamped
 
 frame_ids = st.text(alphabet=st.characters(min_codepoint=33, max_codepoint=0x2FF), max_size=24)
 finite = st.floats(allow_nan=False, allow_infinity=False)
@@ -24,7 +24,7 @@ finite = st.floats(allow_nan=False, allow_infinity=False)
 @settings(max_examples=300, deadline=None, derandomize=True, database=None)
 @given(frame_ids, st.integers(-(2**31), 2**31 - 1), st.integers(0, 2**32 - 1), st.tuples(finite, finite, finite))
 def test_patched_bytes_equal_rclpy_serialization(frame_id, sec, nanosec, values):
-    patched = _SerializedStamped(frame_id)
+    patched = SerializedStamped(frame_id)
     assert patched.usable
     point, vector = PointStamped(), Vector3Stamped()
     for msg, fields in ((point, point.point), (vector, vector.vector)):
@@ -39,7 +39,7 @@ def test_patched_bytes_equal_rclpy_serialization(frame_id, sec, nanosec, values)
 
 
 def test_one_buffer_serves_successive_feet_without_leftovers():
-    patched = _SerializedStamped("trunk")
+    patched = SerializedStamped("trunk")
     first = patched.serialized(1, 2, (0.1, -0.2, math.pi))
     patched.serialized(3, 4, (9.0, 9.0, 9.0))
     assert patched.serialized(1, 2, (0.1, -0.2, math.pi)) == first

@@ -6,23 +6,22 @@ URDF strings written here, never from the code under test.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 import time
 import tracemalloc
 from pathlib import Path
-from typing import Iterator
 
 import pybullet_data
 import pytest
+from conftest import raises_leg_fk_error
+from shared import PYBULLET_NAMES
 
-from a1_leg_fk.urdf import LegFkError, RobotModel, default_urdf_path, load_urdf, parse_urdf
+from a1_leg_fk.urdf import RobotModel, default_urdf_path, load_urdf, parse_urdf
 from exported_urdf import ROBOTS, exported_quadruped
 
 A1_PATH = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 
-A1_MOVABLE_JOINTS = [f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper", "lower")]
 A1_FIXED_JOINTS = ["imu_joint"] + [f"{leg}_{part}" for leg in ("FR", "FL", "RR", "RL") for part in ("hip_fixed", "toe_fixed")]
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
@@ -55,16 +54,6 @@ def two_link_urdf(joint_body: str = "", extra: str = "") -> str:
 </robot>"""
 
 
-@contextlib.contextmanager
-def raises_leg_fk_error(*culprits: str) -> Iterator[pytest.ExceptionInfo]:
-    """Expect a LegFkError, which must also be a ValueError, whose message names every culprit."""
-    with pytest.raises(LegFkError) as info:
-        yield info
-    assert isinstance(info.value, ValueError)
-    for culprit in culprits:
-        assert culprit in str(info.value), f"{culprit!r} not named in: {info.value}"
-
-
 # --- the default model --------------------------------------------------------------------
 
 
@@ -79,7 +68,7 @@ def test_a1_loads_from_every_kind_of_source(source) -> None:
     assert isinstance(model, RobotModel)
     assert model.name == "a1_description"
     assert model.root == "trunk"
-    assert sorted(model.joints) == sorted(A1_MOVABLE_JOINTS + A1_FIXED_JOINTS)
+    assert sorted(model.joints) == sorted(PYBULLET_NAMES + A1_FIXED_JOINTS)
 
 
 def test_a1_loads_from_an_xml_string_with_leading_whitespace() -> None:

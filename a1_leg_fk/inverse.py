@@ -44,6 +44,7 @@ above the lower limit.
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from dataclasses import dataclass
@@ -137,7 +138,7 @@ class LegSolver:
         self.geometry = _closed_form_geometry(leg) if use_closed_form else None
         self.closed_form = self.geometry is not None
         generated = None if self.geometry is None else _fast_solver(self.geometry, self._limits, leg.chain.leg)
-        self._fast, self._fast_batch = (None, None) if generated is None else generated
+        self._fast, self._fast_batch, self._fast_body = (None, None, None) if generated is None else generated
 
     # --- public --------------------------------------------------------------------------
 
@@ -482,7 +483,9 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     general path to decide (a target on the roll axis; no solution in the limits and a roll
     angle outside them, whose branch was not followed). Returned with it: ``solve_batch``, the
     same code on (N,) numpy columns (the branch chosen by ``np.where``), returning the three angle
-    columns and the seed distance, ``inf`` in rows without an in-limit solution."""
+    columns and the seed distance, ``inf`` in rows without an in-limit solution; and the text of
+    ``solve``'s body for :func:`_fused_solver` (``return None`` wherever ``solve`` would not return
+    an in-limit solution, ``best`` the chosen angles or ``None``)."""
     from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module
 
     if any(lower != -math.inf and not upper - lower < TWO_PI for lower, upper in limits):
@@ -528,14 +531,13 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{indent}    {name} = {upper!r}\n{indent}elif {name} < {lower!r}:\n{indent}    {name} = {lower!r}"
         )
 
-    source = f"""def solve(tx, ty, tz, r0, r1, r2):
-    {head}
+    body = f"""{head}
     radius = _hypot({a}, {b})
     if radius == 0.0:
         return None
     roll_argument = {g.lateral_m!r} / radius
     if abs(roll_argument) > {tolerance!r}:
-        return None, False
+        return UNREACHED
     cos_roll = 1.0 if roll_argument > 1.0 else -1.0 if roll_argument < -1.0 else roll_argument
     sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
     cos_base, sin_base = {a} / radius, {b} / radius
@@ -543,7 +545,7 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
-        {representative("q0", "_atan2(s0, c0)", 0, " " * 8, "roll_outside = True; continue")}
+        {representative("q0", "_atan2(s0, c0)", 0, " " * 8, "ROLL_OUTSIDE")}
         {roll_body}
         knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
         if abs(knee_argument) > {tolerance!r}:
@@ -561,7 +563,10 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
             if distance < best_distance:
                 best, best_distance = (q0, q1, q2), distance
-    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
+"""
+    source = "def solve(tx, ty, tz, r0, r1, r2):\n    " + body.replace("UNREACHED", "None, False").replace(
+        "ROLL_OUTSIDE", "roll_outside = True; continue"
+    ) + """    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
         return None
     return best, reachable
 """
@@ -622,7 +627,8 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     arrays = {"_hypot": np.hypot, "_sqrt": np.sqrt, "_atan2": np.arctan2, "_inf": math.inf, "_minimum": np.minimum,
               "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}, arrays>", "exec"), arrays)
-    return namespace["solve"], arrays["solve_batch"]
+    fused_body = body.replace("UNREACHED", "None").replace("ROLL_OUTSIDE", "continue")
+    return namespace["solve"], arrays["solve_batch"], fused_body
 
 
 # --- damped least squares -------------------------------------------------------------------------
@@ -747,8 +753,54 @@ class IkBatchResult:
     residual_m: np.ndarray
 
 
+@functools.lru_cache(maxsize=16)
+def _fused_solver(solvers: tuple[LegSolver, ...]):  # noqa: ANN202
+    """The generated bodies of every leg's :func:`_fast_solver` in one function, and the default
+    seed (the middles, 12 angles [rad]); ``None`` when a leg has no generated solver.
+
+    ``solve(x0, y0, z0, ..., z3, r0, ..., r11)`` takes the targets [m, base frame] and the seed
+    [rad] in slot order; it returns the 12 angles [rad] and the 4 residuals [m] (the distance from
+    :meth:`CompiledLeg.position` at those angles to the target) as one flat tuple, or ``None``
+    when some leg has no in-limit solution there or needs the general path (:meth:`LegSolver.solve`
+    then decides every leg, as it would have)."""
+    if any(solver._fast_body is None for solver in solvers):
+        return None
+    targets = ", ".join(f"_{axis}{slot}" for slot in range(len(solvers)) for axis in "xyz")
+    seeds = ", ".join(f"_r{joint}" for joint in range(3 * len(solvers)))
+    lines = [f"def solve({targets}, {seeds}):"]
+    namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf, "_cos": math.cos, "_sin": math.sin}
+    for slot, solver in enumerate(solvers):
+        lines += [
+            f"    tx, ty, tz, r0, r1, r2 = _x{slot}, _y{slot}, _z{slot}, _r{3 * slot}, _r{3 * slot + 1}, _r{3 * slot + 2}",
+            "    " + solver._fast_body,
+            "    if best is None:\n        return None",
+            f"    q0, q1, q2 = _q{3 * slot}, _q{3 * slot + 1}, _q{3 * slot + 2} = best",
+            _position_body(solver.leg.source, "fx, fy, fz"),
+            f"    _e{slot} = _hypot(fx - tx, fy - ty, fz - tz)  # hypot: no overflow",
+        ]
+    outputs = [f"_q{joint}" for joint in range(3 * len(solvers))] + [f"_e{slot}" for slot in range(len(solvers))]
+    lines.append(f"    return ({', '.join(outputs)})\n")
+    exec(compile("\n".join(lines), "<a1_leg_fk generated IK of the legs>", "exec"), namespace)
+    return namespace["solve"], sum((solver._middle for solver in solvers), ())
+
+
+def _position_body(source: str, names: str) -> str:
+    """The body of the generated ``position(q0, q1, q2)`` in a leg's FK ``source`` (see
+    :class:`CompiledLeg`), assigning the foot [m, base frame] to ``names`` instead of returning it."""
+    header = "def position(q0, q1, q2):\n"
+    body, _ = source[source.index(header) + len(header) :].split("\n\n", 1)  # the functions are blank-line separated
+    return body.replace("\n    return ", f"\n    {names} = ")
+
+
 def solve_feet(solvers: Sequence[LegSolver], feet: np.ndarray, seed: Sequence[float] | None) -> IkResult:
     """IK of four legs for (4, 3) checked targets [m] and 12 checked seed angles (or ``None``)."""
+    fused = _fused_solver(tuple(solvers))
+    if fused is not None:  # the common case: every leg has an in-limit solution
+        solve, middle = fused
+        found = solve(*feet.ravel().tolist(), *(middle if seed is None else seed))
+        if found is not None:
+            values = np.array(found)
+            return IkResult(values[: 3 * len(solvers)], ("ok",) * len(solvers), values[3 * len(solvers) :])  # type: ignore[arg-type]
     angles: list[float] = []
     status, residuals = [], []
     targets = feet.tolist()  # floats: Python arithmetic on numpy scalars is several times slower

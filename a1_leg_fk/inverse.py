@@ -473,6 +473,18 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
 # --- the closed form as generated straight-line code (the common case, fast) --------------------
 
 
+def _knee_branch_can_be_inside(peak: float, sign: float, lower: float, upper: float) -> bool:
+    """Whether the knee branch ``peak + sign * acos(...)`` (the acos in [0, pi]) has any value
+    modulo 2 pi inside ``[lower, upper]`` [rad] (with a margin of 1e-6 rad: a branch kept in doubt
+    only costs time); always for a continuous joint."""
+    if lower == -math.inf:
+        return True
+    start, end = sorted((peak, peak + sign * math.pi))
+    low, high = lower - 1e-6, upper + 1e-6
+    turns = math.ceil((low - end) / TWO_PI)  # the first shift of the interval that ends at or above low
+    return start + TWO_PI * turns <= high
+
+
 def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):  # noqa: ANN202
     """The closed form of :func:`_branches` and the choice of :meth:`LegSolver.solve` as one
     generated function on floats with the leg's constants folded in, as the FK is (see
@@ -531,6 +543,22 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{indent}    {name} = {upper!r}\n{indent}elif {name} < {lower!r}:\n{indent}    {name} = {lower!r}"
         )
 
+    knee_signs = tuple(sign for sign in (1.0, -1.0) if _knee_branch_can_be_inside(peak, sign, *limits[2])) or (1.0, -1.0)
+
+    def knee_loop(branch: str) -> str:
+        """The code of one knee branch (``branch``, its lines indented 12) for each knee sign that
+        can give an angle inside the knee's limits: a loop, or the one branch without a loop."""
+        if len(knee_signs) == 2:
+            return f"for knee_sign in {knee_signs!r}:\n            {branch}"
+        return f"knee_sign = {knee_signs[0]!r}\n        " + branch.replace("\n    ", "\n")
+
+    scalar_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
+            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
+            fx, fy = {fx}, {fy}
+            {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            if distance < best_distance:
+                best, best_distance = (q0, q1, q2), distance"""
     body = f"""{head}
     radius = _hypot({a}, {b})
     if radius == 0.0:
@@ -555,14 +583,7 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
         cos_knee = 1.0 if knee_argument > 1.0 else -1.0 if knee_argument < -1.0 else knee_argument
         sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
         knee_angle = _atan2(sin_knee, cos_knee)
-        for knee_sign in (1.0, -1.0):
-            c2, s2 = {cos_knee}, {sin_knee}
-            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
-            fx, fy = {fx}, {fy}
-            {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
-            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
-            if distance < best_distance:
-                best, best_distance = (q0, q1, q2), distance
+        {knee_loop(scalar_branch)}
 """
     source = "def solve(tx, ty, tz, r0, r1, r2):\n    " + body.replace("UNREACHED", "None, False").replace(
         "ROLL_OUTSIDE", "roll_outside = True; continue"
@@ -589,6 +610,14 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{name} = _minimum(_maximum({name}, {lower!r}), {upper!r})"
         )
 
+    batch_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
+            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
+            fx, fy = {fx}, {fy}
+            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
+            best_distance = _where(better, distance, best_distance)
+            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)"""
     source += f"""
 def solve_batch(tx, ty, tz, r0, r1, r2):
     {head}
@@ -611,15 +640,7 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
         cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
         sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
         knee_angle = _atan2(sin_knee, cos_knee)
-        for knee_sign in (1.0, -1.0):
-            c2, s2 = {cos_knee}, {sin_knee}
-            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
-            fx, fy = {fx}, {fy}
-            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
-            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
-            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
-            best_distance = _where(better, distance, best_distance)
-            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
+        {knee_loop(batch_branch)}
     return best0, best1, best2, best_distance
 """
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}

@@ -218,16 +218,25 @@ class LegSolver:
         columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
         if self._fast_batch is not None:
             with np.errstate(all="ignore"):  # a target on the roll axis or far away: not found here
-                *chosen, best_distance = self._fast_batch(*columns, *seed_columns)
+                *chosen, best_distance, trig = self._fast_batch(*columns, *seed_columns)
             found = np.isfinite(best_distance)
             status[found] = OK
-            for row in np.flatnonzero(~found):  # the rare rows: the scalar path decides
+            redo = ~found  # rows whose residual needs the FK of the angles' own cosines and sines
+            for row in np.flatnonzero(redo):  # the rare rows: the scalar path decides
                 result = self.solve(points[row].tolist(), seeds[row].tolist())
                 for column, angle in zip(chosen, result.angles):
                     column[row] = angle
                 status[row] = result.status
             angles[:] = np.stack(chosen, axis=1)
-            return angles, status, self._column_residuals(chosen, columns)
+            for column, (lower, upper) in zip(chosen, self._limits):
+                if lower != -math.inf:  # an angle clamped onto a limit: its cosine is not the branch's
+                    redo |= (column == lower) | (column == upper)
+            x, y, z = self.leg.position_from_trig(*trig)
+            residuals = np.hypot(np.hypot(x - columns[0], y - columns[1]), z - columns[2])
+            rows_redone = np.flatnonzero(redo)
+            if rows_redone.size:
+                residuals[rows_redone] = self._column_residuals([c[rows_redone] for c in chosen], [c[rows_redone] for c in columns])
+            return angles, status, residuals
         best_distance = np.full(rows, math.inf)
         reachable = np.zeros(rows, dtype=bool)
         chosen = [np.zeros(rows)] * 3
@@ -613,11 +622,14 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     batch_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
             {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
             fx, fy = {fx}, {fy}
-            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
+            along, across = fx * {gx} + fy * {gy}, fx * {gy} - fy * {gx}
+            {representatives("q1", "_atan2(across, along)", 1)}
             distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
             better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
             best_distance = _where(better, distance, best_distance)
-            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)"""
+            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
+            cos0, sin0, cos2, sin2 = _where(better, c0, cos0), _where(better, s0, sin0), _where(better, c2, cos2), _where(better, s2, sin2)
+            x1, y1 = _where(better, along, x1), _where(better, across, y1)"""
     source += f"""
 def solve_batch(tx, ty, tz, r0, r1, r2):
     {head}
@@ -628,7 +640,7 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
     cos_base, sin_base = {a} / radius, {b} / radius
     best_distance = _full(tx.shape, _inf)
-    best0 = best1 = best2 = best_distance
+    best0 = best1 = best2 = cos0 = sin0 = x1 = y1 = cos2 = sin2 = best_distance
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
@@ -641,7 +653,8 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
         sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
         knee_angle = _atan2(sin_knee, cos_knee)
         {knee_loop(batch_branch)}
-    return best0, best1, best2, best_distance
+    norm1 = _hypot(x1, y1)
+    return best0, best1, best2, best_distance, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)
 """
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}>", "exec"), namespace)

@@ -622,15 +622,25 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     batch_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
             {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
             fx, fy = {fx}, {fy}
-            along, across = fx * {gx} + fy * {gy}, fx * {gy} - fy * {gx}
+            along, across = fx * gx + fy * gy, fx * gy - fy * gx
             {representatives("q1", "_atan2(across, along)", 1)}
             distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
-            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
+            better = usable & q1_inside & q2_inside & (distance < best_distance)
             best_distance = _where(better, distance, best_distance)
             best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
             cos0, sin0, cos2, sin2 = _where(better, c0, cos0), _where(better, s0, sin0), _where(better, c2, cos2), _where(better, s2, sin2)
             x1, y1 = _where(better, along, x1), _where(better, across, y1)"""
     source += f"""
+def knee_batch(c0, s0, q0, gx, gy, knee_argument, usable, r0, r1, r2):
+    d0 = (q0 - r0) ** 2
+    cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
+    sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+    knee_angle = _atan2(sin_knee, cos_knee)
+    best_distance = _full(q0.shape, _inf)
+    best0 = best1 = best2 = cos0 = sin0 = x1 = y1 = cos2 = sin2 = best_distance
+    {knee_loop(batch_branch).replace(chr(10) + "    ", chr(10))}
+    return [best0, best1, best2, best_distance, cos0, sin0, x1, y1, cos2, sin2]
+
 def solve_batch(tx, ty, tz, r0, r1, r2):
     {head}
     radius = _hypot({a}, {b})
@@ -639,27 +649,32 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     cos_roll = _minimum(_maximum(roll_argument, -1.0), 1.0)
     sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
     cos_base, sin_base = {a} / radius, {b} / radius
-    best_distance = _full(tx.shape, _inf)
-    best0 = best1 = best2 = cos0 = sin0 = x1 = y1 = cos2 = sin2 = best_distance
+    roll_branches = []
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
         {representatives("q0", "_atan2(s0, c0)", 0, " " * 8)}
         {roll_body}
-        knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
-        roll_usable = roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})
-        d0 = (q0 - r0) ** 2
-        cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
-        sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
-        knee_angle = _atan2(sin_knee, cos_knee)
-        {knee_loop(batch_branch)}
+        gx, gy = {gx}, {gy}
+        knee_argument = (gx * gx + gy * gy - {g.alpha!r}) / {g.kappa!r}
+        roll_branches.append((c0, s0, q0, gx, gy, knee_argument, roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})))
+    first, second = roll_branches
+    # The knee stage once, on the first usable roll branch; again on the rows where both are usable.
+    best = knee_batch(*[_where(first[6], one, other) for one, other in zip(first, second)], r0, r1, r2)
+    both = _flatnonzero(first[6] & second[6])
+    if both.size:
+        other = knee_batch(*[value[both] for value in second], r0[both], r1[both], r2[both])
+        closer = other[3] < best[3][both]  # on a tie the first branch, as the scalar code
+        for column, value in zip(best, other):
+            column[both] = _where(closer, value, column[both])
+    best0, best1, best2, best_distance, cos0, sin0, x1, y1, cos2, sin2 = best
     norm1 = _hypot(x1, y1)
     return best0, best1, best2, best_distance, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)
 """
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}>", "exec"), namespace)
     arrays = {"_hypot": np.hypot, "_sqrt": np.sqrt, "_atan2": np.arctan2, "_inf": math.inf, "_minimum": np.minimum,
-              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor}
+              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor, "_flatnonzero": np.flatnonzero}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}, arrays>", "exec"), arrays)
     fused_body = body.replace("UNREACHED", "None").replace("ROLL_OUTSIDE", "continue")
     return namespace["solve"], arrays["solve_batch"], fused_body

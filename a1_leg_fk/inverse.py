@@ -232,7 +232,8 @@ class LegSolver:
                 if lower != -math.inf:  # an angle clamped onto a limit: its cosine is not the branch's
                     redo |= (column == lower) | (column == upper)
             x, y, z = self.leg.position_from_trig(*trig)
-            residuals = np.hypot(np.hypot(x - columns[0], y - columns[1]), z - columns[2])
+            x, y, z = x - columns[0], y - columns[1], z - columns[2]
+            residuals = np.sqrt(x * x + y * y + z * z)  # found rows: feet in reach, no overflow (others redone)
             rows_redone = np.flatnonzero(redo)
             if rows_redone.size:
                 residuals[rows_redone] = self._column_residuals([c[rows_redone] for c in chosen], [c[rows_redone] for c in columns])
@@ -668,7 +669,7 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
         for column, value in zip(best, other):
             column[both] = _where(closer, value, column[both])
     best0, best1, best2, best_distance, cos0, sin0, x1, y1, cos2, sin2 = best
-    norm1 = _hypot(x1, y1)
+    norm1 = _sqrt(x1 * x1 + y1 * y1)  # a distance in the knee's plane, < 1 m where a branch was found
     return best0, best1, best2, best_distance, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)
 """
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}

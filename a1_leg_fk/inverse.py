@@ -620,6 +620,12 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{name} = _minimum(_maximum({name}, {lower!r}), {upper!r})"
         )
 
+    def select(value: str, previous: str) -> str:
+        """The code choosing ``value`` where this knee branch is the better one: with one knee
+        branch, ``value`` itself (where it is not usable the distance is inf, so the row is
+        decided by the scalar path and its other columns are never read)."""
+        return f"_where(better, {value}, {previous})" if len(knee_signs) == 2 else value
+
     batch_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
             {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
             fx, fy = {fx}, {fy}
@@ -628,9 +634,9 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
             better = usable & q1_inside & q2_inside & (distance < best_distance)
             best_distance = _where(better, distance, best_distance)
-            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
-            cos0, sin0, cos2, sin2 = _where(better, c0, cos0), _where(better, s0, sin0), _where(better, c2, cos2), _where(better, s2, sin2)
-            x1, y1 = _where(better, along, x1), _where(better, across, y1)"""
+            best0, best1, best2 = {select("q0", "best0")}, {select("q1", "best1")}, {select("q2", "best2")}
+            cos0, sin0, cos2, sin2 = {select("c0", "cos0")}, {select("s0", "sin0")}, {select("c2", "cos2")}, {select("s2", "sin2")}
+            x1, y1 = {select("along", "x1")}, {select("across", "y1")}"""
     source += f"""
 def knee_batch(c0, s0, q0, gx, gy, knee_argument, usable, r0, r1, r2):
     d0 = (q0 - r0) ** 2

@@ -505,7 +505,9 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     general path to decide (a target on the roll axis; no solution in the limits and a roll
     angle outside them, whose branch was not followed). Returned with it: ``solve_batch``, the
     same code on (N,) numpy columns (the branch chosen by ``np.where``), returning the three angle
-    columns and the seed distance, ``inf`` in rows without an in-limit solution; and the text of
+    columns, the seed distance (``inf`` in rows without an in-limit solution, whose other columns
+    are then meaningless) and the chosen branch's cosines and sines ``(c0, s0, c1, s1, c2, s2)``
+    (of the angles before any clamping onto a limit); and the text of
     ``solve``'s body for :func:`_fused_solver` (``return None`` wherever ``solve`` would not return
     an in-limit solution, ``best`` the chosen angles or ``None``)."""
     from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module

@@ -44,6 +44,7 @@ above the lower limit.
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from dataclasses import dataclass
@@ -137,7 +138,7 @@ class LegSolver:
         self.geometry = _closed_form_geometry(leg) if use_closed_form else None
         self.closed_form = self.geometry is not None
         generated = None if self.geometry is None else _fast_solver(self.geometry, self._limits, leg.chain.leg)
-        self._fast, self._fast_batch = (None, None) if generated is None else generated
+        self._fast, self._fast_batch, self._fast_body = (None, None, None) if generated is None else generated
 
     # --- public --------------------------------------------------------------------------
 
@@ -217,16 +218,26 @@ class LegSolver:
         columns = np.ascontiguousarray(points.T)  # contiguous rows of x, y, z: faster elementwise math
         if self._fast_batch is not None:
             with np.errstate(all="ignore"):  # a target on the roll axis or far away: not found here
-                *chosen, best_distance = self._fast_batch(*columns, *seed_columns)
+                *chosen, best_distance, trig = self._fast_batch(*columns, *seed_columns)
             found = np.isfinite(best_distance)
             status[found] = OK
-            for row in np.flatnonzero(~found):  # the rare rows: the scalar path decides
+            redo = ~found  # rows whose residual needs the FK of the angles' own cosines and sines
+            for row in np.flatnonzero(redo):  # the rare rows: the scalar path decides
                 result = self.solve(points[row].tolist(), seeds[row].tolist())
                 for column, angle in zip(chosen, result.angles):
                     column[row] = angle
                 status[row] = result.status
             angles[:] = np.stack(chosen, axis=1)
-            return angles, status, self._column_residuals(chosen, columns)
+            for column, (lower, upper) in zip(chosen, self._limits):
+                if lower != -math.inf:  # an angle clamped onto a limit: its cosine is not the branch's
+                    redo |= (column == lower) | (column == upper)
+            x, y, z = self.leg.position_from_trig(*trig)
+            x, y, z = x - columns[0], y - columns[1], z - columns[2]
+            residuals = np.sqrt(x * x + y * y + z * z)  # found rows: feet in reach, no overflow (others redone)
+            rows_redone = np.flatnonzero(redo)
+            if rows_redone.size:
+                residuals[rows_redone] = self._column_residuals([c[rows_redone] for c in chosen], [c[rows_redone] for c in columns])
+            return angles, status, residuals
         best_distance = np.full(rows, math.inf)
         reachable = np.zeros(rows, dtype=bool)
         chosen = [np.zeros(rows)] * 3
@@ -472,6 +483,18 @@ def _branches(g: _Geometry, tx, ty, tz, xp):  # noqa: ANN001, ANN202 (floats, or
 # --- the closed form as generated straight-line code (the common case, fast) --------------------
 
 
+def _knee_branch_can_be_inside(peak: float, sign: float, lower: float, upper: float) -> bool:
+    """Whether the knee branch ``peak + sign * acos(...)`` (the acos in [0, pi]) has any value
+    modulo 2 pi inside ``[lower, upper]`` [rad] (with a margin of 1e-6 rad: a branch kept in doubt
+    only costs time); always for a continuous joint."""
+    if lower == -math.inf:
+        return True
+    start, end = sorted((peak, peak + sign * math.pi))
+    low, high = lower - 1e-6, upper + 1e-6
+    turns = math.ceil((low - end) / TWO_PI)  # the first shift of the interval that ends at or above low
+    return start + TWO_PI * turns <= high
+
+
 def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):  # noqa: ANN202
     """The closed form of :func:`_branches` and the choice of :meth:`LegSolver.solve` as one
     generated function on floats with the leg's constants folded in, as the FK is (see
@@ -482,7 +505,11 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     general path to decide (a target on the roll axis; no solution in the limits and a roll
     angle outside them, whose branch was not followed). Returned with it: ``solve_batch``, the
     same code on (N,) numpy columns (the branch chosen by ``np.where``), returning the three angle
-    columns and the seed distance, ``inf`` in rows without an in-limit solution."""
+    columns, the seed distance (``inf`` in rows without an in-limit solution, whose other columns
+    are then meaningless) and the chosen branch's cosines and sines ``(c0, s0, c1, s1, c2, s2)``
+    (of the angles before any clamping onto a limit); and the text of
+    ``solve``'s body for :func:`_fused_solver` (``return None`` wherever ``solve`` would not return
+    an in-limit solution, ``best`` the chosen angles or ``None``)."""
     from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module
 
     if any(lower != -math.inf and not upper - lower < TWO_PI for lower, upper in limits):
@@ -528,14 +555,29 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{indent}    {name} = {upper!r}\n{indent}elif {name} < {lower!r}:\n{indent}    {name} = {lower!r}"
         )
 
-    source = f"""def solve(tx, ty, tz, r0, r1, r2):
-    {head}
+    knee_signs = tuple(sign for sign in (1.0, -1.0) if _knee_branch_can_be_inside(peak, sign, *limits[2])) or (1.0, -1.0)
+
+    def knee_loop(branch: str) -> str:
+        """The code of one knee branch (``branch``, its lines indented 12) for each knee sign that
+        can give an angle inside the knee's limits: a loop, or the one branch without a loop."""
+        if len(knee_signs) == 2:
+            return f"for knee_sign in {knee_signs!r}:\n            {branch}"
+        return f"knee_sign = {knee_signs[0]!r}\n        " + branch.replace("\n    ", "\n")
+
+    scalar_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
+            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
+            fx, fy = {fx}, {fy}
+            {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            if distance < best_distance:
+                best, best_distance = (q0, q1, q2), distance"""
+    body = f"""{head}
     radius = _hypot({a}, {b})
     if radius == 0.0:
         return None
     roll_argument = {g.lateral_m!r} / radius
     if abs(roll_argument) > {tolerance!r}:
-        return None, False
+        return UNREACHED
     cos_roll = 1.0 if roll_argument > 1.0 else -1.0 if roll_argument < -1.0 else roll_argument
     sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
     cos_base, sin_base = {a} / radius, {b} / radius
@@ -543,7 +585,7 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
-        {representative("q0", "_atan2(s0, c0)", 0, " " * 8, "roll_outside = True; continue")}
+        {representative("q0", "_atan2(s0, c0)", 0, " " * 8, "ROLL_OUTSIDE")}
         {roll_body}
         knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
         if abs(knee_argument) > {tolerance!r}:
@@ -553,15 +595,11 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
         cos_knee = 1.0 if knee_argument > 1.0 else -1.0 if knee_argument < -1.0 else knee_argument
         sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
         knee_angle = _atan2(sin_knee, cos_knee)
-        for knee_sign in (1.0, -1.0):
-            c2, s2 = {cos_knee}, {sin_knee}
-            {representative("q2", f"{peak!r} + knee_sign * knee_angle", 2, " " * 12)}
-            fx, fy = {fx}, {fy}
-            {representative("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1, " " * 12)}
-            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
-            if distance < best_distance:
-                best, best_distance = (q0, q1, q2), distance
-    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
+        {knee_loop(scalar_branch)}
+"""
+    source = "def solve(tx, ty, tz, r0, r1, r2):\n    " + body.replace("UNREACHED", "None, False").replace(
+        "ROLL_OUTSIDE", "roll_outside = True; continue"
+    ) + """    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
         return None
     return best, reachable
 """
@@ -584,7 +622,34 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
             f"{name} = _minimum(_maximum({name}, {lower!r}), {upper!r})"
         )
 
+    def select(value: str, previous: str) -> str:
+        """The code choosing ``value`` where this knee branch is the better one: with one knee
+        branch, ``value`` itself (where it is not usable the distance is inf, so the row is
+        decided by the scalar path and its other columns are never read)."""
+        return f"_where(better, {value}, {previous})" if len(knee_signs) == 2 else value
+
+    batch_branch = f"""c2, s2 = {cos_knee}, {sin_knee}
+            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
+            fx, fy = {fx}, {fy}
+            along, across = fx * gx + fy * gy, fx * gy - fy * gx
+            {representatives("q1", "_atan2(across, along)", 1)}
+            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
+            better = usable & q1_inside & q2_inside & (distance < best_distance)
+            best_distance = _where(better, distance, best_distance)
+            best0, best1, best2 = {select("q0", "best0")}, {select("q1", "best1")}, {select("q2", "best2")}
+            cos0, sin0, cos2, sin2 = {select("c0", "cos0")}, {select("s0", "sin0")}, {select("c2", "cos2")}, {select("s2", "sin2")}
+            x1, y1 = {select("along", "x1")}, {select("across", "y1")}"""
     source += f"""
+def knee_batch(c0, s0, q0, gx, gy, knee_argument, usable, r0, r1, r2):
+    d0 = (q0 - r0) ** 2
+    cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
+    sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
+    knee_angle = _atan2(sin_knee, cos_knee)
+    best_distance = _full(q0.shape, _inf)
+    best0 = best1 = best2 = cos0 = sin0 = x1 = y1 = cos2 = sin2 = best_distance
+    {knee_loop(batch_branch).replace(chr(10) + "    ", chr(10))}
+    return [best0, best1, best2, best_distance, cos0, sin0, x1, y1, cos2, sin2]
+
 def solve_batch(tx, ty, tz, r0, r1, r2):
     {head}
     radius = _hypot({a}, {b})
@@ -593,36 +658,35 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     cos_roll = _minimum(_maximum(roll_argument, -1.0), 1.0)
     sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
     cos_base, sin_base = {a} / radius, {b} / radius
-    best_distance = _full(tx.shape, _inf)
-    best0 = best1 = best2 = best_distance
+    roll_branches = []
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
         {representatives("q0", "_atan2(s0, c0)", 0, " " * 8)}
         {roll_body}
-        knee_argument = ({gx} * {gx} + {gy} * {gy} - {g.alpha!r}) / {g.kappa!r}
-        roll_usable = roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})
-        d0 = (q0 - r0) ** 2
-        cos_knee = _minimum(_maximum(knee_argument, -1.0), 1.0)
-        sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
-        knee_angle = _atan2(sin_knee, cos_knee)
-        for knee_sign in (1.0, -1.0):
-            c2, s2 = {cos_knee}, {sin_knee}
-            {representatives("q2", f"{peak!r} + knee_sign * knee_angle", 2)}
-            fx, fy = {fx}, {fy}
-            {representatives("q1", f"_atan2(fx * {gy} - fy * {gx}, fx * {gx} + fy * {gy})", 1)}
-            distance = d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2
-            better = roll_usable & q1_inside & q2_inside & (distance < best_distance)
-            best_distance = _where(better, distance, best_distance)
-            best0, best1, best2 = _where(better, q0, best0), _where(better, q1, best1), _where(better, q2, best2)
-    return best0, best1, best2, best_distance
+        gx, gy = {gx}, {gy}
+        knee_argument = (gx * gx + gy * gy - {g.alpha!r}) / {g.kappa!r}
+        roll_branches.append((c0, s0, q0, gx, gy, knee_argument, roll_exact & q0_inside & (abs(knee_argument) <= {tolerance!r})))
+    first, second = roll_branches
+    # The knee stage once, on the first usable roll branch; again on the rows where both are usable.
+    best = knee_batch(*[_where(first[6], one, other) for one, other in zip(first, second)], r0, r1, r2)
+    both = _flatnonzero(first[6] & second[6])
+    if both.size:
+        other = knee_batch(*[value[both] for value in second], r0[both], r1[both], r2[both])
+        closer = other[3] < best[3][both]  # on a tie the first branch, as the scalar code
+        for column, value in zip(best, other):
+            column[both] = _where(closer, value, column[both])
+    best0, best1, best2, best_distance, cos0, sin0, x1, y1, cos2, sin2 = best
+    norm1 = _sqrt(x1 * x1 + y1 * y1)  # a distance in the knee's plane, < 1 m where a branch was found
+    return best0, best1, best2, best_distance, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)
 """
     namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}>", "exec"), namespace)
     arrays = {"_hypot": np.hypot, "_sqrt": np.sqrt, "_atan2": np.arctan2, "_inf": math.inf, "_minimum": np.minimum,
-              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor}
+              "_maximum": np.maximum, "_where": np.where, "_full": np.full, "_floor": np.floor, "_flatnonzero": np.flatnonzero}
     exec(compile(source, f"<a1_leg_fk generated IK of leg {leg}, arrays>", "exec"), arrays)
-    return namespace["solve"], arrays["solve_batch"]
+    fused_body = body.replace("UNREACHED", "None").replace("ROLL_OUTSIDE", "continue")
+    return namespace["solve"], arrays["solve_batch"], fused_body
 
 
 # --- damped least squares -------------------------------------------------------------------------
@@ -747,8 +811,54 @@ class IkBatchResult:
     residual_m: np.ndarray
 
 
+@functools.lru_cache(maxsize=16)
+def _fused_solver(solvers: tuple[LegSolver, ...]):  # noqa: ANN202
+    """The generated bodies of every leg's :func:`_fast_solver` in one function, and the default
+    seed (the middles, 12 angles [rad]); ``None`` when a leg has no generated solver.
+
+    ``solve(x0, y0, z0, ..., z3, r0, ..., r11)`` takes the targets [m, base frame] and the seed
+    [rad] in slot order; it returns the 12 angles [rad] and the 4 residuals [m] (the distance from
+    :meth:`CompiledLeg.position` at those angles to the target) as one flat tuple, or ``None``
+    when some leg has no in-limit solution there or needs the general path (:meth:`LegSolver.solve`
+    then decides every leg, as it would have)."""
+    if any(solver._fast_body is None for solver in solvers):
+        return None
+    targets = ", ".join(f"_{axis}{slot}" for slot in range(len(solvers)) for axis in "xyz")
+    seeds = ", ".join(f"_r{joint}" for joint in range(3 * len(solvers)))
+    lines = [f"def solve({targets}, {seeds}):"]
+    namespace = {"_hypot": math.hypot, "_sqrt": math.sqrt, "_atan2": math.atan2, "_inf": math.inf, "_cos": math.cos, "_sin": math.sin}
+    for slot, solver in enumerate(solvers):
+        lines += [
+            f"    tx, ty, tz, r0, r1, r2 = _x{slot}, _y{slot}, _z{slot}, _r{3 * slot}, _r{3 * slot + 1}, _r{3 * slot + 2}",
+            "    " + solver._fast_body,
+            "    if best is None:\n        return None",
+            f"    q0, q1, q2 = _q{3 * slot}, _q{3 * slot + 1}, _q{3 * slot + 2} = best",
+            _position_body(solver.leg.source, "fx, fy, fz"),
+            f"    _e{slot} = _hypot(fx - tx, fy - ty, fz - tz)  # hypot: no overflow",
+        ]
+    outputs = [f"_q{joint}" for joint in range(3 * len(solvers))] + [f"_e{slot}" for slot in range(len(solvers))]
+    lines.append(f"    return ({', '.join(outputs)})\n")
+    exec(compile("\n".join(lines), "<a1_leg_fk generated IK of the legs>", "exec"), namespace)
+    return namespace["solve"], sum((solver._middle for solver in solvers), ())
+
+
+def _position_body(source: str, names: str) -> str:
+    """The body of the generated ``position(q0, q1, q2)`` in a leg's FK ``source`` (see
+    :class:`CompiledLeg`), assigning the foot [m, base frame] to ``names`` instead of returning it."""
+    header = "def position(q0, q1, q2):\n"
+    body, _ = source[source.index(header) + len(header) :].split("\n\n", 1)  # the functions are blank-line separated
+    return body.replace("\n    return ", f"\n    {names} = ")
+
+
 def solve_feet(solvers: Sequence[LegSolver], feet: np.ndarray, seed: Sequence[float] | None) -> IkResult:
     """IK of four legs for (4, 3) checked targets [m] and 12 checked seed angles (or ``None``)."""
+    fused = _fused_solver(tuple(solvers))
+    if fused is not None:  # the common case: every leg has an in-limit solution
+        solve, middle = fused
+        found = solve(*feet.ravel().tolist(), *(middle if seed is None else seed))
+        if found is not None:
+            values = np.array(found)
+            return IkResult(values[: 3 * len(solvers)], ("ok",) * len(solvers), values[3 * len(solvers) :])  # type: ignore[arg-type]
     angles: list[float] = []
     status, residuals = [], []
     targets = feet.tolist()  # floats: Python arithmetic on numpy scalars is several times slower

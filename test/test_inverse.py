@@ -456,3 +456,47 @@ def test_the_generated_closed_form_picks_the_nearest_in_limit_solution(name: str
             np.testing.assert_allclose(batch_angles[row], result.angles, rtol=0.0, atol=1e-12)
             assert abs(batch_residual[row] - result.residual_m) <= 1e-12
         assert counts[inverse.OK] >= 20 and counts[inverse.UNREACHABLE] >= 20, (leg, counts)
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_four_legs_at_once_equal_each_leg_alone(name: str) -> None:
+    """Reference: ``ik_leg`` of each leg (the per-leg path) on the same targets and seeds; ``ik``
+    solves all four legs in one generated function when each has an in-limit solution. Targets:
+    FK of random in-limit configurations, some legs pushed out of reach (then the per-leg path)."""
+    path, feet, _ = ROBOTS[name]
+    quadruped = Quadruped.from_urdf(str(path), foot_links=feet)
+    lower, upper = ranges(quadruped)
+    rng = np.random.default_rng(5)
+    for trial in range(200):
+        targets = quadruped.fk(rng.uniform(lower, upper))
+        if trial % 4 == 3:
+            targets[trial % 16 // 4] += 0.5  # one leg out of reach
+        seed = rng.uniform(lower, upper)
+        result = quadruped.ik(targets, seed)
+        for slot, leg in enumerate(LEGS):
+            alone = quadruped.ik_leg(leg, targets[slot], seed[3 * slot : 3 * slot + 3])
+            assert result.status[slot] == inverse.STATUS_NAMES[alone.status]
+            assert tuple(result.angles[3 * slot : 3 * slot + 3]) == alone.angles
+            assert result.residual_m[slot] == alone.residual_m
+            foot = quadruped.fk(result.angles)[slot]
+            assert abs(result.residual_m[slot] - float(np.linalg.norm(foot - targets[slot]))) <= 1e-12
+
+
+def test_residual_of_an_angle_clamped_onto_its_limit_is_the_fk_distance() -> None:
+    """Targets from angles 5e-11 rad beyond a limit (within LIMIT_TOLERANCE_RAD): the angle is
+    clamped onto the limit, so the foot misses by ~1e-11 m, which the residual must show (the
+    batch takes cosines from the branch, except for such rows). Reference: numpy FK distance."""
+    a1 = Quadruped.from_urdf()
+    lower, upper = ranges(a1)
+    angles = np.tile([0.1, 0.7, -1.5], (6, 4))
+    for row, joint in enumerate(range(3)):
+        angles[2 * row, joint::3] = upper[joint] + 5e-11
+        angles[2 * row + 1, joint::3] = lower[joint] - 5e-11
+    targets = a1.fk_batch(angles)
+    batch = a1.ik_batch(targets)
+    assert (batch.status == inverse.OK).all()
+    distances = np.linalg.norm(a1.fk_batch(batch.angles) - targets, axis=2)
+    assert distances.min() > 1e-13  # the clamping moved the feet
+    np.testing.assert_allclose(batch.residual_m, distances, rtol=0.0, atol=1e-15)
+    for row in range(6):
+        np.testing.assert_allclose(a1.ik(targets[row]).residual_m, batch.residual_m[row], rtol=0.0, atol=1e-15)

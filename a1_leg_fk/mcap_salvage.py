@@ -29,7 +29,8 @@ class Salvaged:
 def salvage(source: Path, target: Path) -> Salvaged | None:
     """Copy the complete records of ``source`` (an MCAP file) to ``target`` with a footer; None
     when ``source`` does not start like an MCAP file or has no complete record after its header.
-    The complete records inside a cut, uncompressed chunk are kept too (as top-level records)."""
+    The complete records inside a cut, uncompressed chunk are kept too (as top-level records).
+    """
     size = source.stat().st_size
     with source.open("rb") as data:
         if data.read(len(MAGIC)) != MAGIC:
@@ -48,7 +49,8 @@ def salvage(source: Path, target: Path) -> Salvaged | None:
 
 def _cut_chunk_records(data, offset: int, size: int) -> tuple[int, int]:  # noqa: ANN001
     """(start, end) of the complete records inside the uncompressed chunk cut at the file's end
-    that starts at ``offset``; (0, 0) if there is none."""
+    that starts at ``offset``; (0, 0) if there is none.
+    """
     if offset + _RECORD.size + _CHUNK_HEAD.size + 4 > size:
         return 0, 0
     data.seek(offset)
@@ -66,7 +68,8 @@ def _cut_chunk_records(data, offset: int, size: int) -> tuple[int, int]:  # noqa
 
 def _complete_records(data, start: int, size: int, top_level: bool = False) -> int:  # noqa: ANN001
     """The offset after the last record from ``start`` on that lies wholly before ``size``; at the
-    top level, stop at the data end record or a footer (the summary after them is not needed)."""
+    top level, stop at the data end record or a footer (the summary after them is not needed).
+    """
     end = offset = start
     while offset + _RECORD.size <= size:
         data.seek(offset)
@@ -88,4 +91,3 @@ def _copy(source, target, length: int) -> None:  # noqa: ANN001 (binary files)
             break
         target.write(block)
         remaining -= len(block)
-

@@ -21,8 +21,8 @@ from a1_leg_fk.recording import (
     FootBlock,
     Recording,
     RecordingSummary,
-    collected,
     close_recording,
+    collected,
     iter_foot_blocks,
     open_recording,
 )
@@ -39,7 +39,8 @@ INFINITE_DURATION = (9223372036, 854775807)  # rosbag2 Jazzy's spelling of an in
 @dataclass
 class _Target:
     """One output: its final path, and the temporary one it is written under: the same name in a
-    hidden folder beside it (so a bag's storage file and metadata carry the final name)."""
+    hidden folder beside it (so a bag's storage file and metadata carry the final name).
+    """
 
     final: Path
 
@@ -82,10 +83,20 @@ class Outputs:
     copy_input: bool
 
     @classmethod
-    def checked(cls, source: Path, *, csv: str | None, bag: str | None, plot: str | None,
-                storage: str = "mcap", copy_input: bool = False, force: bool = False) -> "Outputs":
+    def checked(
+        cls,
+        source: Path,
+        *,
+        csv: str | None,
+        bag: str | None,
+        plot: str | None,
+        storage: str = "mcap",
+        copy_input: bool = False,
+        force: bool = False,
+    ) -> Outputs:
         """:class:`LegFkError` for an output that exists (without ``force``), lies inside the input
-        bag, or sits in a folder that does not exist."""
+        bag, or sits in a folder that does not exist.
+        """
         targets = []
         for option, value in (("--csv", csv), ("--output-bag", bag), ("--plot", plot)):
             if value is None:
@@ -116,9 +127,12 @@ def _check_target(source: Path, path: Path, option: str, force: bool) -> None:
         raise LegFkError(f"{option} {path}: exists already (use --force to replace it)")
 
 
-def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices) -> RecordingSummary:  # noqa: ANN003
+def convert(
+    source: Path, outputs: Outputs, *, progress: bool = False, **choices
+) -> RecordingSummary:  # noqa: ANN003
     """One pass over ``source`` writing every requested output; returns the summary. On any
-    exception (including KeyboardInterrupt) the temporary outputs are removed."""
+    exception (including KeyboardInterrupt) the temporary outputs are removed.
+    """
     recording = open_recording(source, **choices)
     writers: list = []
     try:
@@ -127,11 +141,15 @@ def convert(source: Path, outputs: Outputs, *, progress: bool = False, **choices
         if outputs.csv is not None:
             writers.append(CsvWriter(outputs.csv.temporary, recording))
         if outputs.bag is not None:
-            writers.append(BagWriter(outputs.bag.temporary, recording, outputs.storage, outputs.copy_input))
+            writers.append(
+                BagWriter(outputs.bag.temporary, recording, outputs.storage, outputs.copy_input)
+            )
         blocks: list[FootBlock] = []
         stats = BlockStats()
         copier = writers[-1] if outputs.bag is not None and outputs.copy_input else None
-        for block in iter_foot_blocks(recording, progress=progress, on_message=copier.copy if copier else None):
+        for block in iter_foot_blocks(
+            recording, progress=progress, on_message=copier.copy if copier else None
+        ):
             stats.add(block)
             for writer in writers:
                 writer.write(block)
@@ -163,7 +181,8 @@ class CsvWriter:
     written so that ``float(text)`` gives the same float back (:mod:`a1_leg_fk.csv_text`); empty
     cells for NaN. The velocity columns are there when the recording has foot velocities: decided
     by the first block of rows; should velocities first turn up later, the rows written so far
-    get empty velocity cells (one pass over the file so far)."""
+    get empty velocity cells (one pass over the file so far).
+    """
 
     def __init__(self, path: Path, recording: Recording) -> None:
         self.path = path
@@ -172,8 +191,13 @@ class CsvWriter:
         self.file = open(path, "wb")
 
     def _header(self) -> bytes:
-        columns = ["stamp_ns", "bag_time_ns", *POSITION_COLUMNS, *(VELOCITY_COLUMNS if self.velocity_columns else []),
-                   *(WORLD_COLUMNS if self.world else [])]
+        columns = [
+            "stamp_ns",
+            "bag_time_ns",
+            *POSITION_COLUMNS,
+            *(VELOCITY_COLUMNS if self.velocity_columns else []),
+            *(WORLD_COLUMNS if self.world else []),
+        ]
         return (",".join(columns) + "\n").encode()
 
     def write(self, block: FootBlock) -> None:
@@ -189,7 +213,12 @@ class CsvWriter:
             parts.append(block.velocities.reshape(rows, -1))
         if block.world_positions is not None:
             parts.append(block.world_positions.reshape(rows, -1))
-        self.file.write(format_rows(np.stack([block.stamps_ns, block.bag_times_ns], axis=1), np.concatenate(parts, axis=1)))
+        self.file.write(
+            format_rows(
+                np.stack([block.stamps_ns, block.bag_times_ns], axis=1),
+                np.concatenate(parts, axis=1),
+            )
+        )
 
     def close(self) -> None:
         if self.velocity_columns is None:  # no rows: the header alone
@@ -222,7 +251,8 @@ class CsvWriter:
 class BagWriter:
     """A ROS 2 bag with ``/foot_positions/<leg>``, ``/foot_velocities/<leg>`` (when velocities
     exist) and ``/foot_positions_world/<leg>`` (with a base pose), messages serialized here (CDR)
-    with the JointState's header stamp and bag time; optionally every input message too."""
+    with the JointState's header stamp and bag time; optionally every input message too.
+    """
 
     def __init__(self, path: Path, recording: Recording, storage: str, copy_input: bool) -> None:
         from rosbags.rosbag2 import StoragePlugin, Writer
@@ -234,7 +264,9 @@ class BagWriter:
         self.writer = Writer(path, version=BAG_VERSION, storage_plugin=plugin)
         self.writer.open()
         self.base_frame = recording.quadruped.base_frame
-        self.world_frame = recording.base_pose.world_frame if recording.base_pose is not None else ""
+        self.world_frame = (
+            recording.base_pose.world_frame if recording.base_pose is not None else ""
+        )
         self.topics: dict[str, object] = {}
         self.copied: dict[int, object] = {}
         self.copy_input = copy_input
@@ -244,16 +276,35 @@ class BagWriter:
         connection = self.topics.get(topic)
         if connection is None:
             connection = self.topics[topic] = self.writer.add_connection(
-                topic, msgtype, typestore=typestore or self.typestore, offered_qos_profiles=[default_qos()],
+                topic,
+                msgtype,
+                typestore=typestore or self.typestore,
+                offered_qos_profiles=[default_qos()],
             )
         return connection
 
     def write(self, block: FootBlock) -> None:
-        groups = [("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)]
+        groups = [
+            ("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)
+        ]
         if self.recording.has_velocities:  # already set by this block if it has any
-            groups.append(("/foot_velocities", "geometry_msgs/msg/Vector3Stamped", self.base_frame, block.velocities))
+            groups.append(
+                (
+                    "/foot_velocities",
+                    "geometry_msgs/msg/Vector3Stamped",
+                    self.base_frame,
+                    block.velocities,
+                )
+            )
         if block.world_positions is not None:
-            groups.append(("/foot_positions_world", "geometry_msgs/msg/PointStamped", self.world_frame, block.world_positions))
+            groups.append(
+                (
+                    "/foot_positions_world",
+                    "geometry_msgs/msg/PointStamped",
+                    self.world_frame,
+                    block.world_positions,
+                )
+            )
         stamps, bag_times = block.stamps_ns.tolist(), block.bag_times_ns.tolist()
         for prefix, msgtype, frame, values in groups:
             for leg_slot, leg in enumerate(LEG_NAMES):
@@ -265,23 +316,36 @@ class BagWriter:
                 head = _frame_bytes(frame)
                 for row, (x, y, z) in zip(rows.tolist(), leg_values[rows].tolist()):
                     sec, nanosec = divmod(stamps[row], 1_000_000_000)
-                    self.writer.write(connection, bag_times[row], _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z))
+                    self.writer.write(
+                        connection,
+                        bag_times[row],
+                        _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z),
+                    )
 
     def copy(self, connection, bag_time: int, raw: bytes) -> None:  # noqa: ANN001 (rosbags Connection)
         """Copy one input message (ROS 1 messages converted to CDR)."""
         target = self.copied.get(connection.id)
         # ROS 1 messages are converted with the ROS 2 definitions of their types (std_msgs/Header
         # loses its seq); other bags keep their own definitions.
-        typestore = self.typestore if self.ros1 and connection.msgtype in self.typestore.fielddefs else self.recording.reader.typestore
+        typestore = (
+            self.typestore
+            if self.ros1 and connection.msgtype in self.typestore.fielddefs
+            else self.recording.reader.typestore
+        )
         if target is None:
             target = self.copied[connection.id] = self.writer.add_connection(
-                connection.topic, connection.msgtype, typestore=typestore, offered_qos_profiles=_input_qos(connection),
+                connection.topic,
+                connection.msgtype,
+                typestore=typestore,
+                offered_qos_profiles=_input_qos(connection),
             )
         if self.ros1:
             try:
                 raw = typestore.ros1_to_cdr(raw, connection.msgtype)
             except Exception as error:  # noqa: BLE001 (rosbags: a type it cannot convert)
-                raise LegFkError(f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to ROS 2: {error}") from None
+                raise LegFkError(
+                    f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to ROS 2: {error}"
+                ) from None
         self.writer.write(target, bag_time, raw)
 
     def close(self) -> None:
@@ -301,7 +365,8 @@ _XYZ = struct.Struct("<3d")
 
 def _frame_bytes(frame: str) -> bytes:
     """The CDR ``frame_id`` string after the stamp, padded so the float64s that follow are
-    8-aligned (offsets relative to the 4-byte encapsulation header, which the stamp follows)."""
+    8-aligned (offsets relative to the 4-byte encapsulation header, which the stamp follows).
+    """
     encoded = frame.encode() + b"\0"
     text = struct.pack("<I", len(encoded)) + encoded
     padding = -(8 + len(text)) % 8
@@ -310,11 +375,27 @@ def _frame_bytes(frame: str) -> bytes:
 
 def default_qos():  # noqa: ANN201 (rosbags Qos)
     """The QoS rosbag2 Jazzy records for a default publisher: reliable, volatile, keep last 10."""
-    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+    from rosbags.interfaces import (
+        Qos,
+        QosDurability,
+        QosHistory,
+        QosLiveliness,
+        QosReliability,
+        QosTime,
+    )
 
     infinite = QosTime(*INFINITE_DURATION)
-    return Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE, infinite, infinite,
-               QosLiveliness.AUTOMATIC, infinite, False)
+    return Qos(
+        QosHistory.KEEP_LAST,
+        10,
+        QosReliability.RELIABLE,
+        QosDurability.VOLATILE,
+        infinite,
+        infinite,
+        QosLiveliness.AUTOMATIC,
+        infinite,
+        False,
+    )
 
 
 def _input_qos(connection) -> list:  # noqa: ANN001
@@ -330,7 +411,10 @@ def plot_trajectories(trajectories, path: Path) -> Path:  # noqa: ANN001 (FootTr
     from a1_leg_fk.plots import LEG_COLOURS, _save, pyplot
 
     plt = pyplot()
-    world = trajectories.world_positions is not None and np.isfinite(trajectories.world_positions).any()
+    world = (
+        trajectories.world_positions is not None
+        and np.isfinite(trajectories.world_positions).any()
+    )
     values = trajectories.world_positions if world else trajectories.positions
     frame = trajectories.world_frame if world else trajectories.base_frame
     figure, axes = plt.subplots(3, 1, sharex=True, figsize=(11, 8))
@@ -338,13 +422,19 @@ def plot_trajectories(trajectories, path: Path) -> Path:  # noqa: ANN001 (FootTr
     seconds = (stamps - stamps[0]) / 1e9 if len(stamps) else stamps
     for axis_slot, (axis, name) in enumerate(zip(axes, AXES)):
         for leg_slot, leg in enumerate(LEG_NAMES):
-            axis.plot(seconds, values[:, leg_slot, axis_slot], color=LEG_COLOURS[leg], linewidth=0.8, label=leg)
+            axis.plot(
+                seconds,
+                values[:, leg_slot, axis_slot],
+                color=LEG_COLOURS[leg],
+                linewidth=0.8,
+                label=leg,
+            )
         axis.set_ylabel(f"{name} [m]")
         axis.grid(True, alpha=0.3)
     axes[0].legend(loc="upper right", ncol=4, fontsize="small")
     axes[-1].set_xlabel("time since the first JointState stamp [s]")
     summary = trajectories.summary
-    figure.suptitle(f"Feet in frame '{frame}': {Path(summary.path).name}, {summary.topic}, {summary.rows} rows")
+    figure.suptitle(
+        f"Feet in frame '{frame}': {Path(summary.path).name}, {summary.topic}, {summary.rows} rows"
+    )
     return _save(figure, plt, path)
-
-

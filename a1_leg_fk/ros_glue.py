@@ -1,12 +1,13 @@
 """ROS plumbing shared by ``foot_fk_node`` and ``foot_ik_node``: the spin loop of ``main`` with its
-exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind."""
+exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind.
+"""
 
 from __future__ import annotations
 
 import math
 import sys
 import time
-from typing import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -61,7 +62,8 @@ def run_node(
 
 def _spin_once(executor: Executor) -> None:
     """One turn of the executor; a SIGINT/SIGTERM that shut the context down between the loop's
-    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid"."""
+    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid".
+    """
     try:
         executor.spin_once(timeout_sec=0.1)
     except Exception:
@@ -70,7 +72,7 @@ def _spin_once(executor: Executor) -> None:
 
 
 def make_executor() -> Executor:
-    """rclpy's EventsExecutor where available (the fastest here), else the single-threaded one.
+    """Rclpy's EventsExecutor where available (the fastest here), else the single-threaded one.
 
     Spun with ``spin_once`` in a loop: ``EventsExecutor().spin()`` ignores SIGINT/SIGTERM.
     """
@@ -83,9 +85,10 @@ def make_executor() -> Executor:
 
 
 def _ros_args_error(message: str) -> str:
-    """rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
+    """Rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
     ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
-    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML."""
+    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML.
+    """
     first_line = message.splitlines()[0] if message else message
     if "robot_description:=" not in message:
         return first_line
@@ -106,10 +109,17 @@ class WarnThrottle:
         now = time.monotonic()
         if now - self._last.get(kind, -math.inf) >= WARNING_INTERVAL_S:
             self._last[kind] = now
-            self._logger.warn(text)
+            self._logger.warning(text)
 
 
-def diagnostics(node: Node, name: str, level: bytes, message: str, hardware_id: str, values: Mapping[str, object]) -> DiagnosticArray:
+def diagnostics(
+    node: Node,
+    name: str,
+    level: bytes,
+    message: str,
+    hardware_id: str,
+    values: Mapping[str, object],
+) -> DiagnosticArray:
     """A one-status DiagnosticArray stamped with the node's clock; ``name`` follows the node's name."""
     status = DiagnosticStatus(
         level=level,

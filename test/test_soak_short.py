@@ -13,7 +13,10 @@ from shared import ROOT
 
 SOAK = ROOT / "bench" / "soak.py"
 
-pytestmark = [pytest.mark.slow, pytest.mark.soak]  # slow: it starts processes, as every slow test does
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.soak,
+]  # slow: it starts processes, as every slow test does
 
 
 def test_soak_60_s(tmp_path):

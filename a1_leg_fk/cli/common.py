@@ -15,8 +15,9 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Callable, Sequence, TypeVar
+from typing import TypeVar
 
 PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -71,7 +72,7 @@ def _number(text: str) -> float:
 
 
 def positive(text: str) -> float:
-    """argparse type: a finite number > 0."""
+    """Argparse type: a finite number > 0."""
     value = _number(text)
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
@@ -79,7 +80,7 @@ def positive(text: str) -> float:
 
 
 def non_negative(text: str) -> float:
-    """argparse type: a finite number >= 0."""
+    """Argparse type: a finite number >= 0."""
     value = _number(text)
     if not value >= 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
@@ -158,10 +159,14 @@ class Ros:
         self.rclpy = rclpy
         self.context = rclpy.Context()
         rclpy.init(
-            args=[PROG, *argv], context=self.context, signal_handler_options=SignalHandlerOptions.NO
+            args=[PROG, *argv],
+            context=self.context,
+            signal_handler_options=SignalHandlerOptions.NO,
         )
         try:
-            self.node = rclpy.create_node(f"a1_leg_fk_{command}_{os.getpid()}", context=self.context)
+            self.node = rclpy.create_node(
+                f"a1_leg_fk_{command}_{os.getpid()}", context=self.context
+            )
         except BaseException:
             rclpy.try_shutdown(context=self.context)
             raise
@@ -183,9 +188,12 @@ def start_ros(command: str, argv: Sequence[str]) -> Ros | None:
         return None
 
 
-def with_ros(command: str, argv: Sequence[str], work: Callable[[Ros, threading.Event], T]) -> T | None:
+def with_ros(
+    command: str, argv: Sequence[str], work: Callable[[Ros, threading.Event], T]
+) -> T | None:
     """``work(ros, stop)`` with this tool's node, ``stop`` set by Ctrl-C or SIGTERM; the node is
-    closed afterwards. None (after one line on stderr) when ROS cannot start."""
+    closed afterwards. None (after one line on stderr) when ROS cannot start.
+    """
     with StopSignals() as signals:
         ros = start_ros(command, argv)
         if ros is None:
@@ -201,7 +209,8 @@ def with_ros(command: str, argv: Sequence[str], work: Callable[[Ros, threading.E
 
 def child_command(script: str, module: str) -> list[str]:
     """An installed console script beside this Python (bin/, or lib/a1_leg_fk/ as ``ros2 run``
-    uses), else ``python -m module``."""
+    uses), else ``python -m module``.
+    """
     here = Path(sys.executable).parent
     for candidate in (here / script, Path(sys.prefix) / "lib" / "a1_leg_fk" / script):
         if candidate.is_file() and os.access(candidate, os.X_OK):
@@ -218,7 +227,7 @@ def _die_with_parent(death_signal: int) -> None:
         import ctypes
 
         ctypes.CDLL(None, use_errno=True).prctl(1, death_signal)  # PR_SET_PDEATHSIG = 1
-    except Exception:  # noqa: BLE001, S110 (best effort; other platforms just lack the safety net)
+    except Exception:  # noqa: BLE001 (best effort; other platforms just lack the safety net)
         pass
 
 

@@ -40,6 +40,7 @@ Times are in seconds from the first stamp.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import asdict, dataclass, field
 
@@ -479,15 +480,15 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     intervals = tuple((s.t_on, s.t_off) for s in stances)
     valid = contacts.valid[:, slot]
     in_stance = contacts.stance[:, slot] & valid
-    empty = dict(
-        strides=0,
-        irregular_strides=0,
-        duty_factor=None,
-        stride_period_s=None,
-        stride_frequency_hz=None,
-        step_length_m=None,
-        clearance_m=None,
-    )
+    empty = {
+        "strides": 0,
+        "irregular_strides": 0,
+        "duty_factor": None,
+        "stride_period_s": None,
+        "stride_frequency_hz": None,
+        "step_length_m": None,
+        "clearance_m": None,
+    }
     if not valid.any():
         return LegMetrics(
             leg, "no data", intervals, **empty, reason="no finite position of this foot"
@@ -509,7 +510,7 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
             reason="the foot is in stance in every sample",
         ), []
     strides, stance_times, steps, clearances = [], [], [], []
-    for this, following in zip(stances, stances[1:]):
+    for this, following in itertools.pairwise(stances):
         if this.segment != following.segment or not this.touchdown_observed:
             continue
         strides.append((this.t_on, following.t_on))
@@ -519,7 +520,7 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
             for s in (this, following)
         )
         steps.append(float(np.linalg.norm(end - start)))
-    for this, following in zip(stances, stances[1:]):
+    for this, following in itertools.pairwise(stances):
         if this.segment == following.segment:
             clearances.append(
                 float(np.max(contacts.heights_m[this.last + 1 : following.first, slot]))

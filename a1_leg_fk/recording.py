@@ -336,7 +336,7 @@ def _one_line(error: BaseException) -> str:
 
 def _pick_topic(
     reader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
-):  # noqa: ANN001, ANN202
+):
     """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""
     topics = {connection.topic: connection.msgtype for connection in reader.connections}
     listing = ", ".join(f"{name} ({kind})" for name, kind in sorted(topics.items())) or "none"

@@ -129,7 +129,7 @@ def _check_target(source: Path, path: Path, option: str, force: bool) -> None:
 
 def convert(
     source: Path, outputs: Outputs, *, progress: bool = False, **choices
-) -> RecordingSummary:  # noqa: ANN003
+) -> RecordingSummary:
     """One pass over ``source`` writing every requested output; returns the summary. On any
     exception (including KeyboardInterrupt) the temporary outputs are removed.
     """

@@ -23,6 +23,7 @@ Run:  python bench/soak.py --duration 60        (ROS_DOMAIN_ID: the caller's, el
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import os
@@ -149,7 +150,7 @@ class Stream:
         if kind == "velocity_length":
             return False, names, angles, rates[:5]
         if kind == "duplicate":
-            return False, names + [names[0]], angles + [0.1], []
+            return False, [*names, names[0]], [*angles, 0.1], []
         if kind == "nan":
             return False, names, [math.nan] * 12, rates
         if kind == "one_nan":
@@ -350,7 +351,7 @@ def soak(args: argparse.Namespace) -> int:
     rss_end = samples[-1][1] if samples else math.nan
     rss_max = max((s[1] for s in warm), default=math.nan)
     cpu_per_s = [
-        (b[2] - a[2]) / (b[0] - a[0]) for a, b in zip(samples, samples[1:]) if b[0] > a[0]
+        (b[2] - a[2]) / (b[0] - a[0]) for a, b in itertools.pairwise(samples) if b[0] > a[0]
     ]
     summary = {
         "duration_s": round(elapsed, 1),

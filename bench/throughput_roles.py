@@ -138,10 +138,9 @@ def generator() -> None:
     while not control.stopping:
         command = control.poll()
         if command is None:
-            if warming:
-                if time.perf_counter() >= next_warmup:
-                    send()
-                    next_warmup += 1.0 / WARMUP_RATE_HZ
+            if warming and time.perf_counter() >= next_warmup:
+                send()
+                next_warmup += 1.0 / WARMUP_RATE_HZ
             time.sleep(0.002)
             continue
         if command["op"] != "phase":

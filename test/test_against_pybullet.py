@@ -208,7 +208,7 @@ def test_a1_jacobian_matches_pybullet(a1: Quadruped, a1_robot: PyBulletRobot) ->
 
 
 @pytest.mark.parametrize(
-    "urdf, joints, feet, foot_links",
+    ("urdf", "joints", "feet", "foot_links"),
     [
         ("aliengo/aliengo.urdf", A1_JOINTS, A1_FEET, None),
         (
@@ -359,7 +359,7 @@ def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(
 
 
 @pytest.mark.parametrize(
-    "joint, parent_com_rpy, origin_rpy, child_com_rpy",
+    ("joint", "parent_com_rpy", "origin_rpy", "child_com_rpy"),
     [
         ("FR_mount", (0.2, 0.1, 0.3), (0.1, -0.2, -0.3), (0.2, 0.0, 0.0)),
         ("FR_roll", (0.2, 0.0, 0.0), (0.4, 0.25, -0.6), (0.3, 0.2, 0.1)),

@@ -51,7 +51,7 @@ def test_out_of_reach(capsys) -> None:
 
 
 @pytest.mark.parametrize(
-    "arguments, culprit",
+    ("arguments", "culprit"),
     [
         (["FL", "0.3", "0.13", "nan"], "leg FL"),
         (["FL", "0.3", "0.13", "-0.2", "--seed", "1", "2"], "--seed"),

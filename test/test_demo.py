@@ -128,7 +128,7 @@ def test_stream_rate_stamps_names_and_clean_exit(
     ids=["rate", "naming"],
 )
 def test_bad_parameters_are_refused_with_exit_2(processes, argument: str, message: str) -> None:
-    process = processes.start(DEMO + ["--ros-args", "-p", argument])
+    process = processes.start([*DEMO, "--ros-args", "-p", argument])
     try:
         code = process.wait(20)
     except subprocess.TimeoutExpired:
@@ -141,7 +141,7 @@ def test_bad_parameters_are_refused_with_exit_2(processes, argument: str, messag
 @pytest.mark.slow
 def test_lower_rate_and_integer_parameter(processes, ros) -> None:
     recorder = Recorder(ros, "joint_states")
-    process = processes.start(DEMO + ["--ros-args", "-p", "rate_hz:=100"])
+    process = processes.start([*DEMO, "--ros-args", "-p", "rate_hz:=100"])
     assert ros.spin_until(lambda: len(recorder.samples) > 0), processes.output(process)
     recorder.samples.clear()
     ros.spin_for(1.0)
@@ -158,7 +158,7 @@ def test_the_demo_publishes_the_urdf_it_animates_latched_on_robot_description(
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from std_msgs.msg import String
 
-    processes.start(DEMO + ["--ros-args", "-r", "__ns:=/demo_description"])
+    processes.start([*DEMO, "--ros-args", "-r", "__ns:=/demo_description"])
     heard: list[String] = []
     assert ros.spin_until(
         lambda: ros.node.count_publishers("/demo_description/robot_description") > 0, 20.0

@@ -73,13 +73,13 @@ def test_counts_rate_and_level_through_a_session():
 def test_joints_outside_limits_and_non_finite_values_warn():
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
     tracker.update(
-        NAMES, [0.0, 0.8, 0.0] + STANDING[3:], []
+        NAMES, [0.0, 0.8, 0.0, *STANDING[3:]], []
     )  # FR knee straight: outside its limits
     level, _, values = fk_status(_report(tracker, counter))
     assert level == WARN and values["joints_outside_limits"] == "FR_lower_joint"
     assert values["messages_out_of_limits"] == 1
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
-    tracker.update(NAMES, [math.nan] + STANDING[1:], [])
+    tracker.update(NAMES, [math.nan, *STANDING[1:]], [])
     level, _, values = fk_status(_report(tracker, counter))
     assert level == WARN and values["non_finite_joint_values"] == 1
 

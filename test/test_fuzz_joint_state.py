@@ -361,7 +361,7 @@ def test_name_flood_keeps_memory_bounded():
 
 
 @pytest.mark.parametrize(
-    "names, positions, velocities, outcome",
+    ("names", "positions", "velocities", "outcome"),
     [
         ([], [], [], NO_LEG_JOINTS),
         ([""], [0.0], [], NO_LEG_JOINTS),

@@ -92,7 +92,7 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("gait,rate,speed", CASES)
+@pytest.mark.parametrize(("gait", "rate", "speed"), CASES)
 def test_synthetic_gait(gait: str, rate: int, speed: float) -> None:
     stamps, feet, truth = synthetic(gait, speed, rate, seed=rate + round(10 * speed))
     contacts, report = analyze_gait(stamps, feet)

@@ -86,7 +86,7 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
         state = demo_states.get(stamp_ns(command))
         if state is None:
             continue
-        assert list(command.name)[0].split("_")[0] in LEGS
+        assert next(iter(command.name)).split("_")[0] in LEGS
         expected = dict(zip(state.name, state.position))
         np.testing.assert_allclose(
             command.position, [expected[name] for name in command.name], rtol=0.0, atol=1e-9

@@ -76,7 +76,7 @@ def central_difference(function, q: np.ndarray, step: float = 1e-6) -> np.ndarra
 
 
 @pytest.mark.parametrize(
-    "angles, expected",
+    ("angles", "expected"),
     [
         ((0.0, 0.8, -1.5), (0.1684, -0.1320, -0.2923)),  # standing
         ((0.0, 0.8, -2.697), (0.2290, -0.1320, -0.0753)),  # knee most bent
@@ -207,7 +207,7 @@ def test_batch_accepts_lists_and_float32(a1: Quadruped) -> None:
 @given(any_angles)
 def test_jacobian_equals_central_finite_differences(a1: Quadruped, q: np.ndarray) -> None:
     jacobians = a1.jacobians(q)
-    full = central_difference(lambda x: a1.fk(x), q)  # (4, 3, 12)
+    full = central_difference(a1.fk, q)  # (4, 3, 12)
     for leg in range(4):
         expected = full[leg, :, 3 * leg : 3 * leg + 3]
         scale = np.abs(expected).max()
@@ -396,7 +396,7 @@ def test_nan_from_names_names_the_slot(a1: Quadruped) -> None:
 
 
 @pytest.mark.parametrize(
-    "bad, slot, leg", [(math.nan, 4, "FL"), (math.inf, 11, "RL"), (-math.inf, 0, "FR")]
+    ("bad", "slot", "leg"), [(math.nan, 4, "FL"), (math.inf, 11, "RL"), (-math.inf, 0, "FR")]
 )
 def test_non_finite_angle(a1: Quadruped, bad: float, slot: int, leg: str) -> None:
     q = list(STANDING)

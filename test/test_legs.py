@@ -95,7 +95,7 @@ def test_mini_cheetah_needs_foot_links_and_works_with_them() -> None:
 # --- joint naming -------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("leg_slot, leg", list(enumerate(LEG_NAMES)))
+@pytest.mark.parametrize(("leg_slot", "leg"), list(enumerate(LEG_NAMES)))
 def test_unitree_names_map_to_the_pybullet_data_slots(leg_slot: int, leg: str) -> None:
     index = joint_name_index(find_legs(load_urdf(A1_PATH)))
     first = 3 * leg_slot

@@ -255,7 +255,7 @@ def test_bad_inputs_are_rejected_and_the_next_good_message_is_handled(a1_node):
     client.probe.spin_for(0.5)
     assert not any(client.positions[leg] for leg in LEGS)
     # A NaN for one joint keeps only that leg back.
-    client.send(client.joint_state(PYBULLET_NAMES, [math.nan] + STANDING[1:]))
+    client.send(client.joint_state(PYBULLET_NAMES, [math.nan, *STANDING[1:]]))
     assert client.wait_for_feet(1, legs=["FL", "RR", "RL"])
     client.probe.spin_for(0.3)
     assert not client.positions["FR"]
@@ -282,7 +282,7 @@ def test_bad_inputs_are_rejected_and_the_next_good_message_is_handled(a1_node):
 def test_verify_fk_agrees_with_pybullet_and_reports_limits(a1_node):
     client = a1_node.client
     client.send(
-        client.joint_state(PYBULLET_NAMES, [0.0, 0.8, 0.0] + STANDING[3:])
+        client.joint_state(PYBULLET_NAMES, [0.0, 0.8, 0.0, *STANDING[3:]])
     )  # FR knee straight: out of limits
     assert client.wait_for_feet(1)
     response = client.verify()

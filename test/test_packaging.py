@@ -228,6 +228,7 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ColconI
             "console_cohesion+",
             "summary+",
         ],
+        check=False,
         cwd=workspace,
         env=environment,
         capture_output=True,

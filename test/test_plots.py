@@ -107,7 +107,8 @@ def test_plot_command_writes_both_files(tmp_path: Path) -> None:
     pytest.importorskip("matplotlib")
     out = tmp_path / "plots"
     result = subprocess.run(
-        CLI + ["plot", "--out", str(out), "--leg", "RL"],
+        [*CLI, "plot", "--out", str(out), "--leg", "RL"],
+        check=False,
         capture_output=True,
         text=True,
         timeout=60,
@@ -127,7 +128,7 @@ def test_plot_command_without_matplotlib_says_how_to_install(tmp_path: Path) -> 
         f"sys.exit(main(['plot', '--out', {str(tmp_path)!r}]))\n"
     )
     result = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+        [sys.executable, "-c", script], check=False, capture_output=True, text=True, timeout=60
     )
     assert result.returncode == 1
     assert "pip install matplotlib" in result.stderr and "Traceback" not in result.stderr

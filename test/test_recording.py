@@ -96,7 +96,7 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
 @settings(max_examples=60, deadline=None)
 @given(st.data())
 def test_update_block_equals_update(data) -> None:
-    names = data.draw(st.permutations(NAMES[:6] + ["arm"]))[: data.draw(st.integers(1, 7))]
+    names = data.draw(st.permutations([*NAMES[:6], "arm"]))[: data.draw(st.integers(1, 7))]
     rows = data.draw(st.integers(1, 8))
     value = st.one_of(st.floats(-3, 3), st.sampled_from([math.nan, math.inf]))
     positions = np.array([[data.draw(value) for _ in names] for _ in range(rows)])
@@ -295,7 +295,7 @@ def pose_message(kind: str, stamp: int, position: list[float], yaw: float):
 
 
 @pytest.mark.parametrize(
-    "kind, msgtype",
+    ("kind", "msgtype"),
     [
         ("sqlite3", "nav_msgs/msg/Odometry"),
         ("mcap", "geometry_msgs/msg/PoseStamped"),

@@ -68,7 +68,7 @@ def latest_diagnostics(
         }.get(key, "")
 
     assert client.probe.spin_until(found, timeout_s), (
-        [kv for kv in seen[-1].status[0].values] if seen else "none"
+        list(seen[-1].status[0].values) if seen else "none"
     )
     status = seen[-1].status[0]
     return {

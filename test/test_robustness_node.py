@@ -381,18 +381,18 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     # Losses, split by where they happen: the node's input (best effort), the node, its output.
     received_by_node = int(after["messages_received"]) - int(before["messages_received"])
     published_by_node = int(after["feet_published"]) - int(before["feet_published"])
-    figures = dict(
-        sent=len(sent),
-        publisher_late_s=round(late_s, 3),
-        node_received=received_by_node,
-        node_published_feet=published_by_node,
-        feet_received=sum(len(v) for v in feet.values()),
-        messages_with_all_4_feet=sum(all(s in feet[leg] for leg in LEGS) for s in sent),
-        verify_calls=sum(r["calls"] for r in results),
-        verify_answered=sum(r["answered"] for r in results),
-        verify_slowest_s=round(max(r["slowest_s"] for r in results), 3),
-        verify_warmup_lost=sum(r["warmup_lost"] for r in results),
-    )
+    figures = {
+        "sent": len(sent),
+        "publisher_late_s": round(late_s, 3),
+        "node_received": received_by_node,
+        "node_published_feet": published_by_node,
+        "feet_received": sum(len(v) for v in feet.values()),
+        "messages_with_all_4_feet": sum(all(s in feet[leg] for leg in LEGS) for s in sent),
+        "verify_calls": sum(r["calls"] for r in results),
+        "verify_answered": sum(r["answered"] for r in results),
+        "verify_slowest_s": round(max(r["slowest_s"] for r in results), 3),
+        "verify_warmup_lost": sum(r["warmup_lost"] for r in results),
+    }
     print("\nverify abuse:", json.dumps(figures))
     assert all(r["answered"] == r["calls"] and r["calls"] >= 5 for r in results), results
     assert all(r["succeeded"] == r["answered"] for r in results), results

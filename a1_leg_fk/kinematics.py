@@ -376,8 +376,9 @@ def _checked_configuration(
 
 
 def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
-    """As :func:`_checked_configuration`, but the common case (12 finite Python floats or ints)
-    costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
+    """As :func:`_checked_configuration`, but cheap for 12 finite Python floats or ints.
+
+    The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
     value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0`` here, ratio 0.995.)
     """
     try:

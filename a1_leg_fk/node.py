@@ -319,7 +319,9 @@ class FootFkNode(Node):
             self.destroy_service(self._verify_service)
             self._verify_service = None
 
-    def _on_verify(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+    def _on_verify(
+        self, _request: Trigger.Request, response: Trigger.Response
+    ) -> Trigger.Response:
         response.success, response.message = self._verify()
         self._last_verify = ("passed " if response.success else "failed ") + response.message
         return response

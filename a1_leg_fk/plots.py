@@ -210,7 +210,7 @@ def gait_feet(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(times [s], feet (N, 4, 3) [m, base frame])`` over ``cycles`` periodic trot cycles of the gait."""
     gait = gait or Gait(limits_of(quadruped))
-    count = max(2, int(round(cycles * samples_per_cycle)) + 1)
+    count = max(2, round(cycles * samples_per_cycle) + 1)
     times = gait.periodic_from_s + np.linspace(0.0, cycles * gait.period_s, count)
     angles = np.array([gait.angles(float(t)) for t in times])
     return times, quadruped.fk_batch(angles)

@@ -84,9 +84,11 @@ class RecordingSummary:
             f"file:      {self.path}",
             f"model:     {self.model}",
             f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
-            f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
-            f"{sum(self.rejected.values())} rejected ({rejected}), "
-            f"{self.outcomes.get('no_leg_joints', 0)} without leg joints",
+            (
+                f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
+                f"{sum(self.rejected.values())} rejected ({rejected}), "
+                f"{self.outcomes.get('no_leg_joints', 0)} without leg joints"
+            ),
             f"rows:      {self.rows}",
             f"time span: {span}",
             f"wall time: {self.wall_time_s:.2f} s ({rate:,.0f} messages/s)",
@@ -273,7 +275,7 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage no
         reader = highlevel.AnyReader([opened])
         reader.open()
         return reader, ""
-    except Exception as error:  # rosbags raises several kinds for unreadable files
+    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for unreadable files)
         problem = f"{path}: cannot open as a ROS bag: {_one_line(error)}"
     mcaps = (
         sorted(opened.glob("*.mcap"))

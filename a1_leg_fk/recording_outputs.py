@@ -6,6 +6,7 @@ collects the feet (it draws them all anyway). No ROS; ``rosbags`` and matplotlib
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import struct
@@ -111,9 +112,11 @@ class Outputs:
         return cls(*targets, storage=storage, copy_input=copy_input)
 
     def all(self) -> list[_Target]:
+        """The requested outputs."""
         return [target for target in (self.csv, self.bag, self.plot) if target is not None]
 
     def written(self) -> list[Path]:
+        """The final paths of the outputs that exist."""
         return [target.final for target in self.all() if target.final.exists()]
 
 
@@ -188,7 +191,7 @@ class CsvWriter:
         self.path = path
         self.world = recording.base_pose is not None
         self.velocity_columns: bool | None = None  # not decided before the first rows
-        self.file = open(path, "wb")
+        self.file = open(path, "wb")  # noqa: SIM115 (open until close() or abort())
 
     def _header(self) -> bytes:
         columns = [
@@ -201,6 +204,7 @@ class CsvWriter:
         return (",".join(columns) + "\n").encode()
 
     def write(self, block: FootBlock) -> None:
+        """Append the rows of ``block``."""
         rows = len(block.stamps_ns)
         velocities = bool(np.isfinite(block.velocities).any())
         if self.velocity_columns is None:
@@ -221,12 +225,14 @@ class CsvWriter:
         )
 
     def close(self) -> None:
+        """Finish the file (the header alone when no rows came)."""
         if self.velocity_columns is None:  # no rows: the header alone
             self.velocity_columns = False
             self.file.write(self._header())
         self.file.close()
 
     def abort(self) -> None:
+        """Close the file, unfinished (it is being discarded)."""
         self.file.close()
 
     def _add_velocity_columns(self) -> None:
@@ -242,7 +248,7 @@ class CsvWriter:
                 cells = line.rstrip(b"\n").split(b",")
                 out.write(b",".join(cells[:first] + empty + cells[first:]) + b"\n")
         os.replace(wide, self.path)
-        self.file = open(self.path, "ab")
+        self.file = open(self.path, "ab")  # noqa: SIM115 (open until close() or abort())
 
 
 # --- the output bag ---------------------------------------------------------------------------------
@@ -284,6 +290,7 @@ class BagWriter:
         return connection
 
     def write(self, block: FootBlock) -> None:
+        """Write the feet of ``block`` as PointStamped (and velocity) messages."""
         groups = [
             ("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)
         ]
@@ -349,13 +356,13 @@ class BagWriter:
         self.writer.write(target, bag_time, raw)
 
     def close(self) -> None:
+        """Finish the bag."""
         self.writer.close()
 
     def abort(self) -> None:
-        try:
+        """Close the bag, ignoring errors (it is being discarded anyway)."""
+        with contextlib.suppress(Exception):
             self.writer.close()
-        except Exception:  # noqa: BLE001 (the bag is being discarded anyway)
-            pass
 
 
 _CDR_LE = b"\x00\x01\x00\x00"  # encapsulation header: CDR, little endian

@@ -106,6 +106,7 @@ class WarnThrottle:
         self._last: dict[str, float] = {}  # kind -> time.monotonic() of its last warning
 
     def warn(self, kind: str, text: str) -> None:
+        """Log ``text`` unless a warning of ``kind`` was logged less than the interval ago."""
         now = time.monotonic()
         if now - self._last.get(kind, -math.inf) >= WARNING_INTERVAL_S:
             self._last[kind] = now

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import queue
 import re
@@ -244,8 +245,8 @@ class Scenario:
                 verifier.stop()
             time.sleep(DRAIN_S)
             phase.result = dict(end)
-            for key in cpu0:
-                phase.result[f"cpu_{key}"] = 100 * (cpu1[key] - cpu0[key]) / end["elapsed_s"]
+            for key, start in cpu0.items():
+                phase.result[f"cpu_{key}"] = 100 * (cpu1[key] - start) / end["elapsed_s"]
             ours_cpu = sum(phase.result[f"cpu_{name}"] for name in ours)
             phase.result["cpu_others"] = max(0.0, phase.result["cpu_machine"] - ours_cpu)
             if phase.ramp:
@@ -327,7 +328,7 @@ def max_sustained(phases: list[Phase]) -> tuple[float, bool]:
 
 
 def fmt(value: float, spec: str) -> str:
-    return "-" if value != value else format(value, spec)  # NaN -> "-"
+    return "-" if math.isnan(value) else format(value, spec)
 
 
 def print_report(

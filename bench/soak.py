@@ -204,9 +204,11 @@ def soak(args: argparse.Namespace) -> int:
     diagnostics: list[dict[str, str]] = []
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if status.name.endswith("foot kinematics"):
-                diagnostics.append({kv.key: kv.value for kv in status.values})
+        diagnostics.extend(
+            {kv.key: kv.value for kv in status.values}
+            for status in msg.status
+            if status.name.endswith("foot kinematics")
+        )
 
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, QoSProfile(depth=10))
 

@@ -115,10 +115,10 @@ def exported_quadruped(
     )
     if sensors:
         parts.append(_sensors(root, zero_axis_on_fixed))
-    for leg in LEGS:
-        parts.append(
-            _leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder)
-        )
+    parts.extend(
+        _leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder)
+        for leg in LEGS
+    )
     if gazebo:
         parts.append(_gazebo_and_transmissions(root))
     parts.append("</robot>\n")
@@ -189,8 +189,10 @@ def _leg(
     ]
     if shin_links:  # collision-only links with no <inertial>, the second one a leaf under the calf
         text += [
-            f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
-            '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n',
+            (
+                f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
+                '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n'
+            ),
             _fixed(
                 f"{leg}_calflower_joint",
                 f"{leg}_calf",
@@ -199,8 +201,10 @@ def _leg(
                 "0 0.05 0",
                 zero_axis,
             ),
-            f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
-            '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n',
+            (
+                f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
+                '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n'
+            ),
             _fixed(
                 f"{leg}_calflower1_joint",
                 f"{leg}_calflower",
@@ -301,8 +305,10 @@ def _fixed(
 
 def _gazebo_and_transmissions(root: str) -> str:
     blocks = [
-        '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
-        "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n",
+        (
+            '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
+            "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n"
+        ),
         f'  <gazebo reference="{root}">\n    <material>Gazebo/Green</material>\n  </gazebo>\n',
     ]
     for leg in LEGS:
@@ -311,14 +317,16 @@ def _gazebo_and_transmissions(root: str) -> str:
             f'name="drawForcePlugin">\n        <topicName>{leg}_foot_contact</topicName>\n      </plugin>\n'
             "    </visual>\n  </gazebo>\n"
         )
-        for joint in ("hip", "thigh", "calf"):
-            blocks.append(
+        blocks.extend(
+            (
                 f'  <transmission name="{leg}_{joint}_tran">\n    <type>transmission_interface/SimpleTransmission'
                 f'</type>\n    <joint name="{leg}_{joint}_joint">\n      <hardwareInterface>hardware_interface/'
                 'EffortJointInterface</hardwareInterface>\n    </joint>\n    <actuator name="'
                 f'{leg}_{joint}_motor">\n      <mechanicalReduction>1</mechanicalReduction>\n    </actuator>\n'
                 "  </transmission>\n"
             )
+            for joint in ("hip", "thigh", "calf")
+        )
     return "".join(blocks)
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 import pybullet
@@ -40,7 +41,7 @@ class PyBulletRobot:
         self.joint_index = {info[1].decode(): info[0] for info in self.info}
         self.link_index = {info[12].decode(): info[0] for info in self.info}
 
-    def __enter__(self) -> PyBulletRobot:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *_: object) -> None:

@@ -83,7 +83,7 @@ def test_many_random_bit_patterns_and_foot_like_values() -> None:
 
 def seventeen_digits(value: float) -> str:
     """Python's correctly rounded 17 significant digits, trailing zeros of the fraction dropped."""
-    mantissa, exponent = ("%.16e" % value).split("e")
+    mantissa, exponent = f"{value:.16e}".split("e")
     mantissa = mantissa.rstrip("0")
     return f"{mantissa}0e{exponent}" if mantissa.endswith(".") else f"{mantissa}e{exponent}"
 

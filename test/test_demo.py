@@ -26,7 +26,7 @@ def test_joint_names_for_both_namings() -> None:
     # Either naming maps back to the 12 slots in order.
     for naming in ("pybullet", "unitree"):
         assert [ROBOT.name_to_slot[name] for name in joint_names(ROBOT, naming)] == list(range(12))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="naming must be one of"):
         joint_names(ROBOT, "gazebo")
 
 
@@ -47,11 +47,10 @@ class Recorder:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("naming", "extra_args", "topic", "expected_names", "stop_signal"),
+    ("extra_args", "topic", "expected_names", "stop_signal"),
     [
-        ("pybullet", [], "/joint_states", PYBULLET_NAMES, signal.SIGINT),
+        ([], "/joint_states", PYBULLET_NAMES, signal.SIGINT),
         (
-            "unitree",
             ["-p", "naming:=unitree", "-p", "rate_hz:=500.0", "-r", "__ns:=/robot1"],
             "/robot1/joint_states",
             UNITREE_NAMES,
@@ -61,7 +60,7 @@ class Recorder:
     ids=["pybullet-sigint", "unitree-robot1-sigterm"],
 )
 def test_stream_rate_stamps_names_and_clean_exit(
-    processes, ros, naming, extra_args, topic, expected_names, stop_signal
+    processes, ros, extra_args, topic, expected_names, stop_signal
 ) -> None:
     recorder = Recorder(ros, topic)
     process = processes.start(DEMO + (["--ros-args", *extra_args] if extra_args else []))

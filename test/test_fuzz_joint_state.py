@@ -63,7 +63,7 @@ UNKNOWN_NAMES = [
     "FR_upper",
     "Fr_upper_joint",
     "FR_hip_joint\x00",
-    "ＦR_hip_joint",
+    "ＦR_hip_joint",  # noqa: RUF001 (a fullwidth F on purpose: not a known joint name)
     "FR_hüft_joint",
     "关节",
     "🦿_joint",

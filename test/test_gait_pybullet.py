@@ -71,7 +71,7 @@ def simulate(
         )[3:5]
         to_root = pybullet.invertTransform(inertial_position, inertial_orientation)
         stamps, angles, positions, orientations, contact = [], [], [], [], []
-        for step in range(int(round(SIM_S / STEP_S))):
+        for step in range(round(SIM_S / STEP_S)):
             pybullet.setJointMotorControlArray(
                 body,
                 joints,

@@ -62,7 +62,7 @@ def test_the_settings_follow_accepted_values(node):
 
 
 def test_an_out_of_range_value_at_start_is_a_leg_fk_error_naming_the_parameter(ros):
-    with pytest.raises(LegFkError, match="marker_rate_hz.*out of range"):
+    with pytest.raises(LegFkError, match=r"marker_rate_hz.*out of range"):
         FootFkNode(
             context=ros.context, parameter_overrides=[Parameter("marker_rate_hz", value=0.0)]
         )

@@ -13,7 +13,6 @@ import shutil
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree
@@ -189,7 +188,7 @@ class ColconInstall:
 
 
 @pytest.fixture(scope="module")
-def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ColconInstall]:
+def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> ColconInstall:
     workspace = tmp_path_factory.mktemp("colcon_ws")
     source = workspace / "src" / PACKAGE
     source.mkdir(parents=True)
@@ -238,7 +237,7 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ColconI
     assert result.returncode == 0, f"colcon build failed:\n{result.stdout}\n{result.stderr}"
     assert "1 package finished" in result.stdout, result.stdout
     prefix = workspace / "install" / PACKAGE
-    yield ColconInstall(workspace, prefix, prefix / "lib" / PYTHON_DIR / "site-packages")
+    return ColconInstall(workspace, prefix, prefix / "lib" / PYTHON_DIR / "site-packages")
 
 
 @pytest.mark.slow
@@ -272,7 +271,7 @@ def test_colcon_install_has_what_ros2_run_needs(colcon_install: ColconInstall, m
     assert Path(result.stdout.strip()).is_relative_to(colcon_install.site_packages), result.stdout
 
 
-def _installed_node(colcon_install: ColconInstall) -> str:
+def _installed_node() -> str:
     from ament_index_python.packages import get_package_prefix
 
     prefix = get_package_prefix(PACKAGE)  # with the install's AMENT_PREFIX_PATH (monkeypatched)
@@ -320,7 +319,7 @@ def test_installed_node_publishes_the_fr_foot_and_stops_on_sigint(
 
     environment = colcon_install.environment()
     monkeypatch.setenv("AMENT_PREFIX_PATH", environment["AMENT_PREFIX_PATH"])
-    node = processes.start([_installed_node(colcon_install)], env=environment)
+    node = processes.start([_installed_node()], env=environment)
 
     feet: list[PointStamped] = []
     ros.node.create_subscription(PointStamped, "foot_positions/FR", feet.append, 10)
@@ -368,7 +367,7 @@ def test_installed_node_loads_the_installed_params_file(
 
     params_file = os.path.join(get_package_share_directory(PACKAGE), "config", "params.yaml")
     node = processes.start(
-        [_installed_node(colcon_install), "--ros-args", "--params-file", params_file],
+        [_installed_node(), "--ros-args", "--params-file", params_file],
         env=environment,
     )
     try:

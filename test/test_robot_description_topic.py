@@ -78,9 +78,7 @@ def latest_diagnostics(
     }
 
 
-def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(
-    processes, ros, tmp_path
-):
+def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(processes, ros):
     """A Unitree-style A1 (root base, X_thigh/X_calf joints, X_foot links, package:// meshes)."""
     publisher = publish_description(ros, unitree_style_a1())
     process = processes.start(node_command())
@@ -156,7 +154,7 @@ def test_a_bad_description_on_the_topic_is_rejected_and_the_old_robot_keeps_publ
     )
 
 
-def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros, tmp_path):
+def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros):
     publish_description(ros, exported_quadruped("go2"))
     process = processes.start(node_command("-p", f"urdf_file:={A1_URDF}"))
     client = NodeClient(ros)

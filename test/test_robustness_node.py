@@ -372,7 +372,7 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     results = []
     for abuser in abusers:
         abuser.wait(30)
-        line = next(l for l in processes.output(abuser).splitlines() if l.startswith("RESULT "))
+        line = next(x for x in processes.output(abuser).splitlines() if x.startswith("RESULT "))
         results.append(json.loads(line[len("RESULT ") :]))
     collector.wait(30)
     feet = {

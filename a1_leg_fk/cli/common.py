@@ -7,6 +7,7 @@ never load it.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import os
 import shutil
@@ -17,7 +18,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import Self, TypeVar
 
 PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -127,7 +128,7 @@ class StopSignals:
         self.signal_name = ""
         self._previous: dict[int, object] = {}
 
-    def __enter__(self) -> StopSignals:
+    def __enter__(self) -> Self:
         for number in (signal.SIGINT, signal.SIGTERM):
             self._previous[number] = signal.signal(number, self._handle)
         return self
@@ -174,6 +175,7 @@ class Ros:
         self.executor.add_node(self.node)
 
     def close(self) -> None:
+        """Shut the executor down, destroy the node and shut this context down."""
         self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.context)
@@ -266,10 +268,12 @@ class Child:
                 text=pipes,
                 bufsize=1 if pipes else -1,
                 start_new_session=True,
-                preexec_fn=functools.partial(_die_with_parent, death_signal) if linux else None,
+                # preexec_fn only calls prctl(PR_SET_PDEATHSIG): async-signal-safe, takes no lock.
+                preexec_fn=functools.partial(_die_with_parent, death_signal) if linux else None,  # noqa: PLW1509
             )
 
     def alive(self) -> bool:
+        """Whether the process still runs."""
         return self.process.poll() is None
 
     def stop(self, sig: int = signal.SIGINT, timeout_s: float = CHILD_STOP_TIMEOUT_S) -> int:
@@ -291,10 +295,8 @@ class Child:
         return self.process.returncode
 
     def _signal_group(self, number: int) -> None:
-        try:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.process.pid, number)
-        except (ProcessLookupError, PermissionError):
-            pass
 
     def tail(self, lines: int = 15) -> str:
         """The last ``lines`` lines of its log, indented for a report."""

@@ -88,6 +88,7 @@ class Demo:
         self.ros: Ros | None = None
 
     def run(self) -> int:
+        """Start the demo's processes, show the feet, verify, stop everything; the exit code."""
         options, stop = self.options, self.signals.stop
         say("== a1-leg-fk demo: joint_state_demo -> foot_fk_node -> feet ==")
         if not os.environ.get("ROS_DOMAIN_ID"):

@@ -89,6 +89,8 @@ class FootTable:
         }
 
     def callback(self, leg: str) -> Callable[[object, dict], None]:
+        """The subscription callback of ``leg``'s foot topic: stores the point, counts the rate."""
+
         def on_message(message, info: dict) -> None:  # noqa: ANN001 (geometry_msgs/PointStamped)
             point = message.point
             self.latest[leg] = (point.x, point.y, point.z, message.header.frame_id)
@@ -108,6 +110,7 @@ class FootTable:
 
     @property
     def complete(self) -> bool:
+        """Whether every foot has been received at least once."""
         return all(value is not None for value in self.latest.values())
 
     def rate_hz(self, leg: str, now: float) -> float | None:
@@ -160,6 +163,7 @@ class TableWriter:
         self._height = 0
 
     def write(self, lines: list[str]) -> None:
+        """Print ``lines`` (over the previous table on a terminal)."""
         if self.in_place:
             up = f"\x1b[{self._height}F" if self._height else ""
             self.stream.write(up + "".join(f"{line}\x1b[K\n" for line in lines))
@@ -170,6 +174,7 @@ class TableWriter:
 
 
 def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
+    """Subscribe to the four foot topics under ``namespace``; the table their callbacks fill."""
     from geometry_msgs.msg import PointStamped
     from rclpy.qos import qos_profile_sensor_data
 
@@ -187,7 +192,9 @@ def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
 
 
 def topics_heading(table: FootTable) -> str:
-    common = os.path.commonprefix(table.topics)
+    """The table's heading: the topics as ``<prefix>/<FR|FL|RR|RL>`` when they share a prefix."""
+    # Character-wise on purpose: the common prefix is used only when it ends in "/".
+    common = os.path.commonprefix(table.topics)  # noqa: RUF071
     return (
         f"feet from {common}<{'|'.join(LEG_NAMES)}>"
         if common.endswith("/")

@@ -133,8 +133,10 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
     lines = [
         f"gait:      {report.gait} (fit {report.gait_fit:.2f}; {report.gait_reason})",
         f"phases:    touchdown vs FR: {phases}; mean duty factor {_number(report.duty_factor, '.3f')}",
-        f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
-        f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg",
+        (
+            f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
+            f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg"
+        ),
         f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} {'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}",
     ]
     for leg, metrics in report.legs.items():

@@ -281,7 +281,7 @@ def test_just_inside_and_just_outside_the_a1_reach(
 def test_behind_the_hip_on_the_axis_and_far_away(a1: Quadruped) -> None:
     feet = a1.fk([0.0, 0.8, -1.5] * 4)
     targets = {
-        "behind the hip": [*A1_HIP_PITCH_FR, -0.25, 0.0, 0.05],
+        "behind the hip": A1_HIP_PITCH_FR + np.array([-0.25, 0.0, 0.05]),
         "on the roll axis (singular)": np.array([0.183, -0.047, 0.0]),
         "on the hip-pitch axis (singular: the knee folded flat)": A1_HIP_PITCH_FR,
         "on the roll axis, below": np.array([0.3, -0.047, 0.0]),

@@ -121,7 +121,8 @@ def _scaled(x: np.ndarray, exponent: np.ndarray) -> np.ndarray:
     p_high = p_split - (p_split - power)
     p_low = power - p_high
     error = ((x_high * p_high - product) + x_high * p_low + x_low * p_high) + x_low * p_low
-    return product.astype(np.int64) + np.rint(error).astype(np.int64)
+    scaled: np.ndarray = product.astype(np.int64) + np.rint(error).astype(np.int64)
+    return scaled
 
 
 def _put_text(out: np.ndarray, text: str) -> None:

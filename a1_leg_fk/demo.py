@@ -21,11 +21,15 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Unpack
 
 from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import UNITREE_NAME_PAIRS
 from a1_leg_fk.robot_config import load_robot
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
 
 NODE_NAME = "joint_state_demo"
 TOPIC = "joint_states"
@@ -54,18 +58,20 @@ def joint_names(quadruped: Quadruped, naming: str) -> list[str]:
     return names
 
 
-def _node_class():  # noqa: ANN202 (defined lazily so that importing this module needs no ROS)
+def _node_class() -> type[Node]:
+    """The node's class, defined here so that importing this module needs no ROS."""
     from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
     from rclpy.node import Node
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
 
     from a1_leg_fk.robot_source import DESCRIPTION_QOS
+    from a1_leg_fk.ros_glue import NodeOptions
 
     class JointStateDemo(Node):
         """Publishes the demo gait on ``joint_states`` at ``rate_hz``, paced by the node clock."""
 
-        def __init__(self, **kwargs: object) -> None:
+        def __init__(self, **kwargs: Unpack[NodeOptions]) -> None:
             super().__init__(NODE_NAME, **kwargs)
             rate = self.declare_parameter(
                 "rate_hz",

@@ -16,6 +16,7 @@ from __future__ import annotations
 import sys
 from collections import Counter
 from collections.abc import Callable, Sequence
+from typing import Unpack
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PointStamped
@@ -34,6 +35,7 @@ from a1_leg_fk.robot_source import (
     ParameterSpec,
     RobotSource,
     parameter_value,
+    string_list,
 )
 from a1_leg_fk.urdf import LegFkError
 
@@ -58,7 +60,7 @@ PARAMETERS = (
 class FootIkNode(Node):
     """Joint angles for foot targets, one leg per message."""
 
-    def __init__(self, **node_options: object) -> None:
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
@@ -91,7 +93,7 @@ class FootIkNode(Node):
             for name in ("base_frame", "command_joint_names")
         }
         quadruped = self._model.quadruped
-        names = list(value["command_joint_names"]) or list(quadruped.joint_names)  # type: ignore[call-overload]
+        names = string_list(value["command_joint_names"]) or list(quadruped.joint_names)
         if len(names) != len(quadruped.joint_names):
             raise LegFkError(
                 f"command_joint_names must hold {len(quadruped.joint_names)} names, got {len(names)}: {names}"

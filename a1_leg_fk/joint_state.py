@@ -64,7 +64,7 @@ class TrackerCounts:
     """What the tracker has seen since it was created."""
 
     messages: int = 0
-    outcomes: Counter = field(default_factory=Counter)  # outcome -> messages
+    outcomes: Counter[str] = field(default_factory=Counter)  # outcome -> messages
     non_finite_joints: int = 0  # joint values rejected for NaN/inf (their legs were not published)
     feet: int = 0  # feet returned for publishing
     out_of_limit_messages: int = 0  # messages that left some joint outside its URDF limits

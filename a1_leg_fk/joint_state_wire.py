@@ -12,11 +12,14 @@ No ROS and no ``rosbags`` here; the tests check this decoder against ``rosbags``
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 _UINT32 = {"<": struct.Struct("<I"), ">": struct.Struct(">I")}
+Uint32Reader = Callable[[bytes, int], tuple[int, ...]]
+"""``struct.Struct.unpack_from`` of a uint32 in the message's byte order: ``(raw, offset)``."""
 _STAMP_CDR = {"<": struct.Struct("<iI"), ">": struct.Struct(">iI")}
 _STAMP_ROS1 = struct.Struct("<II")
 _DOUBLES = {"<": np.dtype("<f8"), ">": np.dtype(">f8")}
@@ -152,7 +155,7 @@ def cdr_layout(raw: bytes) -> CdrLayout | None:
     return CdrLayout(spans[0], spans[1], indices)
 
 
-def _cdr_names(raw: bytes, offset: int, u32) -> tuple[list[str], int]:  # noqa: ANN001
+def _cdr_names(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[list[str], int]:
     """The ``sequence<string>`` at ``offset`` (relative to the body): (names, offset after it)."""
     count = u32(raw, 4 + offset)[0]
     offset += 4
@@ -174,7 +177,7 @@ def _check_count(count: int, available: int, what: str) -> None:
         raise WireError(f"{what}: {count} elements cannot fit in {available} bytes")
 
 
-def _cdr_doubles(raw: bytes, offset: int, u32) -> tuple[bytes, int]:  # noqa: ANN001
+def _cdr_doubles(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[bytes, int]:
     """The ``sequence<float64>`` at ``offset`` (relative to the body): (its bytes, offset after)."""
     offset = (offset + 3) & -4
     count = u32(raw, 4 + offset)[0]

@@ -21,8 +21,10 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from a1_leg_fk import inverse
 from a1_leg_fk.legs import (
@@ -35,6 +37,9 @@ from a1_leg_fk.legs import (
     leg_slot,
 )
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
+
+Angles = Sequence[float] | np.ndarray
+"""Joint angles [rad] (or rates [rad/s]): a sequence of numbers or a 1-D numpy array."""
 
 BATCH_CHUNK_ROWS = 4096
 """Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
@@ -96,16 +101,19 @@ class CompiledLeg:
         self.chain = chain
         self.stages, self.foot_offset = _fold_chain(chain)
         self.source = _leg_source(self.stages, self.foot_offset)
-        namespace: dict[str, Callable[..., tuple]] = {"_cos": math.cos, "_sin": math.sin}
-        exec(
+        namespace: dict[str, Any] = {"_cos": math.cos, "_sin": math.sin}
+        exec(  # our own generated source (_leg_source)
             compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace
         )
-        self.position = namespace["position"]
-        self.position_velocity = namespace["position_velocity"]
-        self.position_from_trig = namespace["position_from_trig"]
-        self.jacobian_from_trig = namespace["jacobian_from_trig"]
+        # The generated functions take and return floats (or numpy arrays, the *_from_trig ones).
+        self.position: Callable[..., tuple[float, float, float]] = namespace["position"]
+        self.position_velocity: Callable[..., tuple[float, ...]] = namespace["position_velocity"]
+        self.position_from_trig: Callable[..., tuple[Any, Any, Any]] = namespace[
+            "position_from_trig"
+        ]
+        self.jacobian_from_trig: Callable[..., tuple[Any, ...]] = namespace["jacobian_from_trig"]
 
-    def joint_points(self, angles: Sequence[float]) -> np.ndarray:
+    def joint_points(self, angles: Angles) -> np.ndarray:
         """(4, 3): the three movable joints' origins and the foot [m], root frame, root side first."""
         rotation, origin = np.eye(3), np.zeros(3)
         points = []
@@ -151,7 +159,7 @@ class Quadruped:
         """Load a URDF (path, XML string, or ``None`` for the embedded A1) and compile its legs."""
         return cls(load_urdf(source), foot_links, joint_aliases)
 
-    def fk(self, angles: Sequence[float]) -> np.ndarray:
+    def fk(self, angles: Angles) -> np.ndarray:
         """(4, 3) foot positions [m] in the base frame for 12 joint angles [rad]."""
         q = _quickly_checked_configuration(angles)
         fr, fl, rr, rl = self._leg_positions
@@ -164,7 +172,7 @@ class Quadruped:
             )
         )
 
-    def fk_batch(self, angles: np.ndarray) -> np.ndarray:
+    def fk_batch(self, angles: ArrayLike) -> np.ndarray:
         """(N, 4, 3) foot positions [m] for an (N, 12) array of joint angles [rad]."""
         q = _checked_batch(angles, "angles")
         out = np.empty((q.shape[0], len(LEG_NAMES), 3))
@@ -176,32 +184,36 @@ class Quadruped:
                 out[rows, slot, 0], out[rows, slot, 1], out[rows, slot, 2] = x, y, z
         return out
 
-    def foot_velocities(self, angles: Sequence[float], rates: Sequence[float]) -> np.ndarray:
+    def foot_velocities(self, angles: Angles, rates: Angles) -> np.ndarray:
         """(4, 3) foot velocities [m/s], base frame, relative to the base: ``J(q) q_dot``."""
         q = _checked_configuration(angles)
         dq = _checked_configuration(rates, "joint velocities")
-        out = []
+        out: list[float] = []
         for slot, leg in enumerate(self.legs):
             first = slot * JOINTS_PER_LEG
             out.extend(leg.position_velocity(*q[first : first + 3], *dq[first : first + 3])[3:])
         return np.array(out).reshape(len(LEG_NAMES), 3)
 
-    def foot_velocities_batch(self, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    def foot_velocities_batch(self, angles: ArrayLike, rates: ArrayLike) -> np.ndarray:
         """(N, 4, 3) foot velocities [m/s] for (N, 12) angles [rad] and rates [rad/s]."""
         q = _checked_batch(angles, "angles")
         dq = _checked_batch(rates, "joint velocities")
         if dq.shape != q.shape:
             raise LegFkError(f"joint velocities have shape {dq.shape}, angles {q.shape}")
         jacobians = self.jacobians_batch(q)
-        return np.einsum(
+        velocities: np.ndarray = np.einsum(
             "nlij,nlj->nli", jacobians, dq.reshape(q.shape[0], len(LEG_NAMES), JOINTS_PER_LEG)
         )
+        return velocities
 
-    def jacobians(self, angles: Sequence[float]) -> np.ndarray:
+    def jacobians(self, angles: Angles) -> np.ndarray:
         """(4, 3, 3): per leg, d(foot position [m]) / d(its three angles [rad]), base frame."""
-        return self.jacobians_batch(np.asarray(_checked_configuration(angles))[np.newaxis])[0]
+        jacobians: np.ndarray = self.jacobians_batch(
+            np.asarray(_checked_configuration(angles))[np.newaxis]
+        )[0]
+        return jacobians
 
-    def jacobians_batch(self, angles: np.ndarray) -> np.ndarray:
+    def jacobians_batch(self, angles: ArrayLike) -> np.ndarray:
         """(N, 4, 3, 3) Jacobians for an (N, 12) array of angles [rad]."""
         q = _checked_batch(angles, "angles")
         out = np.empty((q.shape[0], len(LEG_NAMES), 3, JOINTS_PER_LEG))
@@ -227,9 +239,9 @@ class Quadruped:
         missing = [self.joint_names[slot] for slot, value in enumerate(angles) if value is None]
         if missing:
             raise LegFkError(f"joint angles missing for {missing}")
-        return _checked_configuration(angles)  # type: ignore[arg-type]
+        return _checked_configuration(cast("list[float]", angles))  # no None left (checked above)
 
-    def joints_outside_limits(self, angles: Sequence[float]) -> list[LimitViolation]:
+    def joints_outside_limits(self, angles: Angles) -> list[LimitViolation]:
         """The joints whose angle [rad] lies outside their URDF limits (continuous joints have none)."""
         q = _checked_configuration(angles)
         return [
@@ -354,7 +366,7 @@ def _checked_feet(feet: np.ndarray) -> np.ndarray:
 
 
 def _checked_configuration(
-    angles: Sequence[float], what: str = "joint angles", count: int = JOINT_COUNT
+    angles: Angles, what: str = "joint angles", count: int = JOINT_COUNT
 ) -> list[float]:
     """``count`` (12) finite floats, or a LegFkError naming the problem."""
     try:
@@ -375,7 +387,7 @@ def _checked_configuration(
     return q
 
 
-def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
+def _quickly_checked_configuration(angles: Angles) -> list[float]:
     """As :func:`_checked_configuration`, but cheap for 12 finite Python floats or ints.
 
     The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
@@ -390,7 +402,7 @@ def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
     return q if usable else _checked_configuration(angles)
 
 
-def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:
+def _checked_batch(angles: ArrayLike, what: str) -> np.ndarray:
     q = np.asarray(angles, dtype=np.float64)
     if q.ndim != 2 or q.shape[1] != JOINT_COUNT:
         raise LegFkError(f"{what} must have shape (N, {JOINT_COUNT}), got {q.shape}")

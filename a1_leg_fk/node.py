@@ -11,6 +11,7 @@ import math
 import sys
 import time
 from collections.abc import Sequence
+from typing import Unpack
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
@@ -20,6 +21,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.service import Service
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
@@ -116,7 +118,7 @@ PARAMETERS = (
 class FootFkNode(Node):
     """Publishes the four feet of the robot for every JointState; offers ``verify_fk``."""
 
-    def __init__(self, **node_options: object) -> None:
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
@@ -129,7 +131,7 @@ class FootFkNode(Node):
         self._verify_disagreed = (
             False  # the latest verify compared with PyBullet and found a foot off
         )
-        self._verify_service = None
+        self._verify_service: Service | None = None
         self._stamp_jumps_back = 0
         self._last_stamp_ns = 0
         self._last_publish = -math.inf
@@ -356,10 +358,11 @@ class FootFkNode(Node):
     # --- parameters ------------------------------------------------------------------------
 
     def _float(self, name: str) -> float:
-        return self.get_parameter(name).get_parameter_value().double_value
+        # ParameterValue (an untyped message): its double_value field is a float.
+        return float(self.get_parameter(name).get_parameter_value().double_value)
 
     def _bool(self, name: str) -> bool:
-        return self.get_parameter(name).get_parameter_value().bool_value
+        return bool(self.get_parameter(name).get_parameter_value().bool_value)
 
     def _apply_settings(self) -> None:
         """Read the node's parameters; rclpy has checked their types and ranges already."""

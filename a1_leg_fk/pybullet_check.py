@@ -10,11 +10,13 @@ float32, so agreement is ~3e-8 m, not 0.
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from xml.etree import ElementTree
 
 from a1_leg_fk.kinematics import Quadruped
@@ -44,15 +46,14 @@ class VerifyResult:
         return self.max_error_m <= self.tolerance_m
 
 
-def import_pybullet():  # noqa: ANN201 (the module has no type stubs)
+def import_pybullet() -> ModuleType:
     """The ``pybullet`` module, or a :class:`LegFkError` that says how to install it."""
     if os.environ.get("A1_LEG_FK_HIDE_PYBULLET"):  # lets tests and users run as if it were absent
         raise LegFkError(INSTALL_HINT)
     try:
-        import pybullet
+        return importlib.import_module("pybullet")  # untyped: its attributes are Any
     except ImportError as error:
         raise LegFkError(INSTALL_HINT) from error
-    return pybullet
 
 
 class PyBulletFeet:
@@ -110,8 +111,8 @@ class PyBulletFeet:
             with open(path, "w", encoding="utf-8") as file:
                 file.write(kinematic_urdf(urdf_xml))
             try:
-                return self._pybullet.loadURDF(
-                    path, useFixedBase=True, physicsClientId=self._client
+                return int(  # pybullet has no types: its body id, an int
+                    self._pybullet.loadURDF(path, useFixedBase=True, physicsClientId=self._client)
                 )
             except self._pybullet.error as error:
                 raise LegFkError(f"PyBullet could not load the URDF: {error}") from error

@@ -19,8 +19,9 @@ robot_state_publisher does on parameter changes) does not reload.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import cast
 
 from rcl_interfaces.msg import (
     FloatingPointRange,
@@ -88,6 +89,11 @@ def parameter_value(node: Node, name: str) -> object:
         return node.get_parameter(name).value
     except ParameterUninitializedException:
         return []
+
+
+def string_list(value: object) -> list[str]:
+    """A string-array parameter's value (rclpy gives a list of str, ``[]`` when unset) as a list."""
+    return list(cast("Sequence[str]", value))
 
 
 EXPLICIT_PARAMETERS = ("robot_description", "urdf_file")
@@ -188,7 +194,7 @@ class RobotSource:
 
     def _build(self, values: dict[str, object]) -> RobotConfig:
         """The robot for these parameter values and the topic's latest description."""
-        feet, aliases = list(values["foot_links"]), list(values["joint_aliases"])  # type: ignore[call-overload]
+        feet, aliases = string_list(values["foot_links"]), string_list(values["joint_aliases"])
         if self._explicit(values) or not self._topic_text:
             return load_robot(
                 str(values["robot_description"]), str(values["urdf_file"]), feet, aliases
@@ -247,8 +253,8 @@ class RobotSource:
             config = load_robot(
                 text,
                 "",
-                list(values["foot_links"]),
-                list(values["joint_aliases"]),  # type: ignore[call-overload]
+                string_list(values["foot_links"]),
+                string_list(values["joint_aliases"]),
                 description_name=self.topic_name,
             )
         except LegFkError as error:

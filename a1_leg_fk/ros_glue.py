@@ -8,16 +8,34 @@ import math
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
+from typing import TypedDict
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 from a1_leg_fk.urdf import LegFkError
 
 WARNING_INTERVAL_S = 1.0
 """At most one warning a second for each kind of problem."""
+
+
+class NodeOptions(TypedDict, total=False):
+    """The keyword arguments of :class:`rclpy.node.Node` that our nodes pass on."""
+
+    context: Context | None
+    cli_args: list[str] | None
+    namespace: str | None
+    use_global_arguments: bool
+    enable_rosout: bool
+    start_parameter_services: bool
+    parameter_overrides: list[Parameter] | None
+    allow_undeclared_parameters: bool
+    automatically_declare_parameters_from_overrides: bool
+    enable_logger_service: bool
 
 
 def run_node(
@@ -34,7 +52,7 @@ def run_node(
     ``executor_factory`` defaults to :func:`make_executor`.
     """
     try:
-        rclpy.init(args=args)
+        rclpy.init(args=None if args is None else list(args))
     except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
         print(f"{executable}: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
         return 2

@@ -236,7 +236,7 @@ def _vector(
         raise LegFkError(f"{where}: {attribute}='{text}' is not three numbers") from error
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise LegFkError(f"{where}: {attribute}='{text}' is not three finite numbers")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def _unit_axis(axis: Vector3, where: str) -> Vector3:

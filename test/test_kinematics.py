@@ -196,7 +196,7 @@ def test_batch_accepts_lists_and_float32(a1: Quadruped) -> None:
     q = [STANDING, [0.0] * 12]
     np.testing.assert_allclose(a1.fk_batch(q)[1], a1.fk([0.0] * 12), rtol=0.0, atol=1e-12)
     np.testing.assert_allclose(
-        a1.fk_batch(np.array(q, dtype=np.float32))[0], a1.fk(np.float32(STANDING)), atol=1e-12
+        a1.fk_batch(np.array(q, dtype=np.float32))[0], a1.fk(np.array(STANDING, dtype=np.float32)), atol=1e-12
     )
 
 
@@ -446,9 +446,9 @@ def test_wrong_number_of_angles(a1: Quadruped, count: int) -> None:
 
 def test_non_numeric_angles(a1: Quadruped) -> None:
     with raises_leg_fk_error("12 numbers"):
-        a1.fk(["zero"] * 12)
+        a1.fk(["zero"] * 12)  # type: ignore[list-item]  # not numbers, on purpose
     with pytest.raises(LegFkError):
-        a1.fk(None)  # type: ignore[arg-type]
+        a1.fk(None)  # type: ignore[arg-type]  # not a sequence, on purpose
 
 
 @pytest.mark.parametrize("shape", [(5, 11), (12,), (2, 12, 1), (3, 13)])

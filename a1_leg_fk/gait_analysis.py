@@ -43,6 +43,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -165,9 +166,8 @@ class LegMetrics:
     status: str  # "ok", "no data", "never touches down", "never lifts", "too few strides"
     stance_s: tuple[tuple[float, float], ...]
     strides: int  # complete, regular strides the metrics are computed from
-    irregular_strides: (
-        int  # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
-    )
+    # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
+    irregular_strides: int
     duty_factor: float | None
     stride_period_s: float | None
     stride_frequency_hz: float | None
@@ -192,7 +192,7 @@ class GaitReport:
     thresholds: ContactThresholds
     notes: tuple[str, ...] = field(default=())
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a ``reason``)."""
         legs = {}
         for leg, metrics in self.legs.items():
@@ -328,7 +328,7 @@ def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) ->
         # Never past either threshold: the whole run lies between on and off.
         return np.full(heights.size, bool(heights[0] < t.height_off_m))
     last = np.maximum.accumulate(np.where(enter | leave, np.arange(heights.size), -1))
-    state = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
+    state: np.ndarray = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
     return state.astype(bool)
 
 
@@ -480,34 +480,26 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     intervals = tuple((s.t_on, s.t_off) for s in stances)
     valid = contacts.valid[:, slot]
     in_stance = contacts.stance[:, slot] & valid
-    empty = {
-        "strides": 0,
-        "irregular_strides": 0,
-        "duty_factor": None,
-        "stride_period_s": None,
-        "stride_frequency_hz": None,
-        "step_length_m": None,
-        "clearance_m": None,
-    }
+
+    def without_strides(
+        status: str,
+        reason: str,
+        duty_factor: float | None = None,
+        clearance_m: float | None = None,
+    ) -> LegMetrics:
+        return LegMetrics(
+            leg, status, intervals, 0, 0, duty_factor, None, None, None, clearance_m, reason
+        )
+
     if not valid.any():
-        return LegMetrics(
-            leg, "no data", intervals, **empty, reason="no finite position of this foot"
-        ), []
+        return without_strides("no data", "no finite position of this foot"), []
     if not in_stance.any():
-        return LegMetrics(
-            leg,
-            "never touches down",
-            intervals,
-            **{**empty, "duty_factor": 0.0},
-            reason="the foot is never near the ground and still",
+        return without_strides(
+            "never touches down", "the foot is never near the ground and still", duty_factor=0.0
         ), []
     if not (valid & ~in_stance).any():
-        return LegMetrics(
-            leg,
-            "never lifts",
-            intervals,
-            **{**empty, "duty_factor": 1.0},
-            reason="the foot is in stance in every sample",
+        return without_strides(
+            "never lifts", "the foot is in stance in every sample", duty_factor=1.0
         ), []
     strides, stance_times, steps, clearances = [], [], [], []
     for this, following in itertools.pairwise(stances):
@@ -527,12 +519,10 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
             )
     clearance = float(np.mean(clearances)) if clearances else None
     if not strides:
-        return LegMetrics(
-            leg,
+        return without_strides(
             "too few strides",
-            intervals,
-            **{**empty, "clearance_m": clearance},
-            reason="fewer than two touchdowns in one gap-free stretch",
+            "fewer than two touchdowns in one gap-free stretch",
+            clearance_m=clearance,
         ), []
     durations = np.array([b - a for a, b in strides])
     regular = np.abs(durations / np.median(durations) - 1.0) <= IRREGULAR_STRIDE
@@ -567,7 +557,7 @@ def _circular_distance(a: float, b: float) -> float:
 
 def relative_phases(
     contacts: Contacts, fr_strides: list[tuple[float, float]]
-) -> tuple[dict, dict]:
+) -> tuple[dict[str, float | None], dict[str, float | None]]:
     """Touchdown phase of FL, RR, RL within FR's strides (0..1) and its consistency R, ``None`` without data."""
     phases: dict[str, float | None] = {}
     consistency: dict[str, float | None] = {}
@@ -597,8 +587,9 @@ def name_gait(
             f"no touchdown phase for {', '.join(missing)} (needs strides of FR and touchdowns of each leg)",
             {},
         )
-    measured = [phases[leg] for leg in LEG_NAMES[1:]]
-    r = min(consistency.values())
+    # Every phase (and so every consistency) is known from here on.
+    measured = [phase for leg in LEG_NAMES[1:] if (phase := phases[leg]) is not None]
+    r = min(value for value in consistency.values() if value is not None)
     candidates = {}
     for name, template in GAIT_TEMPLATES.items():
         deviation = max(_circular_distance(m, t) for m, t in zip(measured, template))
@@ -631,7 +622,7 @@ def name_gait(
         )
     if not accepted:
         return "unknown", 0.0, "no gait's phase pattern fits within its tolerance", candidates
-    best = max(accepted, key=accepted.get)
+    best = max(accepted, key=accepted.__getitem__)
     return best, accepted[best], "phases match " + best, candidates
 
 
@@ -639,7 +630,9 @@ def gait_metrics(contacts: Contacts) -> GaitReport:
     """Per-leg metrics, phases vs FR and the gait's name from :func:`detect_contacts`'s result."""
     results = [_leg_metrics(contacts, slot) for slot in range(len(LEG_NAMES))]
     legs = {metrics.leg: metrics for metrics, _ in results}
-    duties = [m.duty_factor for m in legs.values() if m.status == "ok"]
+    duties = [
+        m.duty_factor for m in legs.values() if m.status == "ok" and m.duty_factor is not None
+    ]
     duty = float(np.mean(duties)) if duties else None
     phases, consistency = relative_phases(contacts, results[0][1])
     name, fit, reason, candidates = name_gait(phases, consistency, duty)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,7 +18,10 @@ from a1_leg_fk.demo_gait import STAND_POSE, Gait, limits_of
 from a1_leg_fk.gait_analysis import Contacts, GaitReport
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
-from a1_leg_fk.urdf import LegFkError
+from a1_leg_fk.urdf import Joint, LegFkError
+
+if TYPE_CHECKING:  # matplotlib is imported only when a plot is drawn
+    from matplotlib.figure import Figure
 
 INSTALL_HINT = (
     "matplotlib is not installed: pip install matplotlib (or: sudo apt install python3-matplotlib)"
@@ -29,7 +34,7 @@ class MissingMatplotlib(LegFkError):
     """matplotlib cannot be imported; the message says how to install it."""
 
 
-def pyplot():  # noqa: ANN201 (matplotlib.pyplot, untyped here)
+def pyplot() -> ModuleType:
     """``matplotlib.pyplot`` on the Agg backend, or :class:`MissingMatplotlib`."""
     try:
         import matplotlib
@@ -41,7 +46,9 @@ def pyplot():  # noqa: ANN201 (matplotlib.pyplot, untyped here)
     return plt
 
 
-def _limits(joint, fallback: tuple[float, float] = (-math.pi, math.pi)) -> tuple[float, float]:  # noqa: ANN001
+def _limits(
+    joint: Joint, fallback: tuple[float, float] = (-math.pi, math.pi)
+) -> tuple[float, float]:
     if joint.lower is None or joint.upper is None:
         return fallback
     return joint.lower, joint.upper
@@ -99,7 +106,8 @@ def _plane_points(
         raise LegFkError(
             f"leg {LEG_NAMES[slot]}: with hip roll 0 the foot leaves the hip's sagittal plane"
         )
-    return feet[:, [0, 2]] - pitch_origin[[0, 2]]
+    sagittal: np.ndarray = feet[:, [0, 2]] - pitch_origin[[0, 2]]
+    return sagittal
 
 
 def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 250) -> Path:
@@ -252,7 +260,7 @@ def plot_gait_feet(
     return _save(figure, plt, path)
 
 
-def _save(figure, plt, path: str | Path) -> Path:  # noqa: ANN001
+def _save(figure: Figure, plt: ModuleType, path: str | Path) -> Path:
     path = Path(path)
     try:
         figure.tight_layout()

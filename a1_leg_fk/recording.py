@@ -18,6 +18,8 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, TypedDict, cast
 
 import numpy as np
 
@@ -28,6 +30,11 @@ from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.mcap_salvage import salvage
 from a1_leg_fk.robot_config import load_robot
 from a1_leg_fk.urdf import LegFkError
+
+if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import Connection
+    from tqdm import tqdm
 
 ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
 JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
@@ -40,6 +47,17 @@ BASE_POSE_TYPES = (ODOMETRY_TYPE, POSE_TYPE, POSE_COVARIANCE_TYPE, TF_TYPE)
 BLOCK_MESSAGES = 4096
 DEFAULT_MAX_POSE_GAP_S = 0.1
 LEGS = len(LEG_NAMES)
+
+
+class RecordingChoices(TypedDict, total=False):
+    """The choices of :func:`open_recording` (its keyword arguments)."""
+
+    topic: str | None
+    urdf: str | Path | None
+    foot_links: Sequence[str]
+    joint_aliases: Sequence[str]
+    base_pose: str | None
+    max_pose_gap_s: float
 
 
 @dataclass(frozen=True)
@@ -151,9 +169,9 @@ class FootBlock:
 class Recording:
     """An open bag with the choices made for it; iterate with :func:`iter_foot_blocks`."""
 
-    reader: object  # rosbags.highlevel.AnyReader, open
+    reader: AnyReader  # open
     path: Path
-    joint_states: object  # its Connection
+    joint_states: Connection
     quadruped: Quadruped
     model_source: str
     base_pose: BasePoses | None
@@ -168,7 +186,8 @@ class Recording:
 # --- opening --------------------------------------------------------------------------------------
 
 
-def _rosbags():  # noqa: ANN202 (the module, untyped here)
+def _rosbags() -> ModuleType:
+    """``rosbags.highlevel``, or a :class:`LegFkError` that says how to install rosbags."""
     try:
         from rosbags import highlevel
     except ImportError as error:
@@ -256,14 +275,14 @@ def close_recording(recording: Recording) -> None:
     _close_reader(recording.reader)
 
 
-def _close_reader(reader) -> None:  # noqa: ANN001
+def _close_reader(reader: AnyReader) -> None:
     reader.close()
     folder = getattr(reader, "salvage_folder", None)
     if folder is not None:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage note)
+def _open_reader(path: Path) -> tuple[AnyReader, str]:
     """An open reader of the bag at ``path``, and ``""`` or a note on what was salvaged of a
     truncated MCAP file (read from a copy of its complete records).
     """
@@ -290,7 +309,7 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage no
     return salvaged
 
 
-def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
+def _salvaged_reader(highlevel: ModuleType, mcap: Path) -> tuple[AnyReader, str] | None:
     """A reader of the complete records of a truncated MCAP file (copied to a temporary folder,
     removed when the reader closes), or None.
     """
@@ -302,10 +321,10 @@ def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
             reader.open()
     except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
         reader = None
-    if reader is None:
+    if reader is None or kept is None:
         shutil.rmtree(folder, ignore_errors=True)
         return None
-    reader.salvage_folder = folder
+    reader.salvage_folder = folder  # removed by _close_reader
     note = (
         f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
         f"{kept.size:,} bytes (the complete records)"
@@ -337,8 +356,8 @@ def _one_line(error: BaseException) -> str:
 
 
 def _pick_topic(
-    reader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
-):
+    reader: AnyReader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
+) -> Connection:
     """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""
     topics = {connection.topic: connection.msgtype for connection in reader.connections}
     listing = ", ".join(f"{name} ({kind})" for name, kind in sorted(topics.items())) or "none"
@@ -362,7 +381,7 @@ def _pick_topic(
     return next(connection for connection in reader.connections if connection.topic == chosen)
 
 
-def _recorded_description(reader, joint_states) -> tuple[str | None, str]:  # noqa: ANN001
+def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
     """The latest ``robot_description`` message before the first JointState, and its topic."""
     connections = [
         c
@@ -375,7 +394,8 @@ def _recorded_description(reader, joint_states) -> tuple[str | None, str]:  # no
     for connection, _, raw in reader.messages(connections=[*connections, joint_states]):
         if connection is joint_states:
             break
-        latest, topic = reader.deserialize(raw, connection.msgtype).data, connection.topic
+        message: Any = reader.deserialize(raw, connection.msgtype)  # a std_msgs/msg/String
+        latest, topic = message.data, connection.topic
     return latest, topic
 
 
@@ -395,7 +415,9 @@ class BasePoses:
     max_gap_ns: int
 
     @classmethod
-    def read(cls, reader, connection, base_frame: str, max_gap_s: float) -> BasePoses:  # noqa: ANN001
+    def read(
+        cls, reader: AnyReader, connection: Connection, base_frame: str, max_gap_s: float
+    ) -> BasePoses:
         """All poses of one topic (deserialized: a pose stream is small next to the joints')."""
         stamps, values, frames = [], [], []
         for _, _, raw in reader.messages(connections=[connection]):
@@ -447,7 +469,9 @@ class BasePoses:
         return position, rotation
 
 
-def _poses_of(message, msgtype: str, base_frame: str) -> Iterator[tuple[int, str, list[float]]]:  # noqa: ANN001
+def _poses_of(
+    message: Any, msgtype: str, base_frame: str
+) -> Iterator[tuple[int, str, list[float]]]:
     """(stamp [ns], parent frame, [x, y, z, qx, qy, qz, qw]) of each base pose in a message."""
     if msgtype == TF_TYPE:
         for transform in message.transforms:
@@ -464,8 +488,8 @@ def _poses_of(message, msgtype: str, base_frame: str) -> Iterator[tuple[int, str
     yield _stamp(message.header), message.header.frame_id, [p.x, p.y, p.z, r.x, r.y, r.z, r.w]
 
 
-def _stamp(header) -> int:  # noqa: ANN001
-    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+def _stamp(header: Any) -> int:
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -480,7 +504,8 @@ def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     w0 = np.where(close, 1.0 - alpha, np.sin((1.0 - alpha) * theta) / safe)
     w1 = np.where(close, alpha, np.sin(alpha * theta) / safe)
     q = w0[:, None] * q0 + w1[:, None] * q1
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
+    unit: np.ndarray = q / np.linalg.norm(q, axis=1, keepdims=True)
+    return unit
 
 
 def _rotation_matrices(q: np.ndarray) -> np.ndarray:
@@ -503,7 +528,7 @@ def iter_foot_blocks(
     recording: Recording,
     *,
     progress: bool = False,
-    on_message: Callable[[object, int, bytes], None] | None = None,
+    on_message: Callable[[Connection, int, bytes], None] | None = None,
 ) -> Iterator[FootBlock]:
     """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
     called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
@@ -540,7 +565,9 @@ def iter_foot_blocks(
             bar.close()
 
 
-def _raw_messages(reader, connections: list) -> Iterator[tuple[object, int, bytes]]:  # noqa: ANN001
+def _raw_messages(
+    reader: AnyReader, connections: list[Connection]
+) -> Iterator[tuple[Connection, int, bytes]]:
     """(connection, bag time [ns], raw bytes) in bag order; a single bag's reader directly (no
     merge of several).
     """
@@ -550,8 +577,8 @@ def _raw_messages(reader, connections: list) -> Iterator[tuple[object, int, byte
 
 
 def _guarded(
-    recording: Recording, messages: Iterator[tuple[object, int, bytes]]
-) -> Iterator[tuple[object, int, bytes]]:
+    recording: Recording, messages: Iterator[tuple[Connection, int, bytes]]
+) -> Iterator[tuple[Connection, int, bytes]]:
     """``messages`` until the storage cannot be read further (truncated, corrupt): then
     ``recording.stopped`` says where and why, and the iteration ends.
     """
@@ -602,7 +629,9 @@ class _Batch:
             return
         yield from self._one_by_one(raws, bag_times)
 
-    def _vectorised(self, raws: list[bytes], bag_times: list[int]):  # noqa: ANN202 (tuple of arrays or None)
+    def _vectorised(
+        self, raws: list[bytes], bag_times: list[int]
+    ) -> tuple[np.ndarray, ...] | None:
         layout = cdr_layout(bytes(raws[0]))
         if layout is None:
             return None
@@ -752,7 +781,7 @@ def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -
     return out
 
 
-def _progress_bar(total: int, enabled: bool):  # noqa: ANN202 (tqdm or None)
+def _progress_bar(total: int, enabled: bool) -> tqdm[None] | None:
     if not enabled:
         return None
     try:
@@ -771,7 +800,7 @@ def summary_of(
     wall_time_s: float,
 ) -> RecordingSummary:
     """The summary of a finished pass."""
-    counts = recording.tracker.counts
+    counts = cast("FootTracker", recording.tracker).counts  # set by iter_foot_blocks
     return RecordingSummary(
         str(recording.path),
         recording.model_source,

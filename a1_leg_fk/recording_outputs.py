@@ -12,6 +12,7 @@ import shutil
 import struct
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Literal, Unpack
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from a1_leg_fk.recording import (
     BlockStats,
     FootBlock,
     Recording,
+    RecordingChoices,
     RecordingSummary,
     close_recording,
     collected,
@@ -29,11 +31,17 @@ from a1_leg_fk.recording import (
 )
 from a1_leg_fk.urdf import LegFkError
 
+if TYPE_CHECKING:  # rosbags is imported when a bag is written
+    from rosbags.interfaces import Connection, Qos
+    from rosbags.typesys.store import Typestore
+
+    from a1_leg_fk.recording import FootTrajectories
+
 AXES = ("x", "y", "z")
 POSITION_COLUMNS = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in AXES]
 VELOCITY_COLUMNS = [f"{leg}_v{axis}" for leg in LEG_NAMES for axis in AXES]
 WORLD_COLUMNS = [f"{leg}_w{axis}" for leg in LEG_NAMES for axis in AXES]
-BAG_VERSION = 9  # rosbag2 metadata version as Jazzy writes it
+BAG_VERSION: Literal[9] = 9  # rosbag2 metadata version as Jazzy writes it
 INFINITE_DURATION = (9223372036, 854775807)  # rosbag2 Jazzy's spelling of an infinite QoS duration
 
 
@@ -98,7 +106,7 @@ class Outputs:
         """:class:`LegFkError` for an output that exists (without ``force``), lies inside the input
         bag, or sits in a folder that does not exist.
         """
-        targets = []
+        targets: list[_Target | None] = []
         for option, value in (("--csv", csv), ("--output-bag", bag), ("--plot", plot)):
             if value is None:
                 targets.append(None)
@@ -109,7 +117,8 @@ class Outputs:
         finals = [target.final.resolve() for target in targets if target is not None]
         if len(set(finals)) != len(finals):
             raise LegFkError("two outputs name the same path")
-        return cls(*targets, storage=storage, copy_input=copy_input)
+        csv_target, bag_target, plot_target = targets
+        return cls(csv_target, bag_target, plot_target, storage=storage, copy_input=copy_input)
 
     def all(self) -> list[_Target]:
         """The requested outputs."""
@@ -131,25 +140,27 @@ def _check_target(source: Path, path: Path, option: str, force: bool) -> None:
 
 
 def convert(
-    source: Path, outputs: Outputs, *, progress: bool = False, **choices
+    source: Path, outputs: Outputs, *, progress: bool = False, **choices: Unpack[RecordingChoices]
 ) -> RecordingSummary:
     """One pass over ``source`` writing every requested output; returns the summary. On any
     exception (including KeyboardInterrupt) the temporary outputs are removed.
     """
     recording = open_recording(source, **choices)
-    writers: list = []
+    writers: list[CsvWriter | BagWriter] = []
+    bag_writer = None
     try:
         for target in outputs.all():
             target.prepare()
         if outputs.csv is not None:
             writers.append(CsvWriter(outputs.csv.temporary, recording))
         if outputs.bag is not None:
-            writers.append(
-                BagWriter(outputs.bag.temporary, recording, outputs.storage, outputs.copy_input)
+            bag_writer = BagWriter(
+                outputs.bag.temporary, recording, outputs.storage, outputs.copy_input
             )
+            writers.append(bag_writer)
         blocks: list[FootBlock] = []
         stats = BlockStats()
-        copier = writers[-1] if outputs.bag is not None and outputs.copy_input else None
+        copier = bag_writer if outputs.copy_input else None
         for block in iter_foot_blocks(
             recording, progress=progress, on_message=copier.copy if copier else None
         ):
@@ -273,12 +284,14 @@ class BagWriter:
         self.world_frame = (
             recording.base_pose.world_frame if recording.base_pose is not None else ""
         )
-        self.topics: dict[str, object] = {}
-        self.copied: dict[int, object] = {}
+        self.topics: dict[str, Connection] = {}
+        self.copied: dict[int, Connection] = {}
         self.copy_input = copy_input
         self.ros1 = recording.ros1
 
-    def _connection(self, topic: str, msgtype: str, typestore: object = None) -> object:
+    def _connection(
+        self, topic: str, msgtype: str, typestore: Typestore | None = None
+    ) -> Connection:
         connection = self.topics.get(topic)
         if connection is None:
             connection = self.topics[topic] = self.writer.add_connection(
@@ -329,7 +342,7 @@ class BagWriter:
                         _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z),
                     )
 
-    def copy(self, connection, bag_time: int, raw: bytes) -> None:  # noqa: ANN001 (rosbags Connection)
+    def copy(self, connection: Connection, bag_time: int, raw: bytes) -> None:
         """Copy one input message (ROS 1 messages converted to CDR)."""
         target = self.copied.get(connection.id)
         # ROS 1 messages are converted with the ROS 2 definitions of their types (std_msgs/Header
@@ -346,14 +359,15 @@ class BagWriter:
                 typestore=typestore,
                 offered_qos_profiles=_input_qos(connection),
             )
+        data: bytes | memoryview = raw
         if self.ros1:
             try:
-                raw = typestore.ros1_to_cdr(raw, connection.msgtype)
+                data = typestore.ros1_to_cdr(raw, connection.msgtype)
             except Exception as error:  # noqa: BLE001 (rosbags: a type it cannot convert)
                 raise LegFkError(
                     f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to ROS 2: {error}"
                 ) from None
-        self.writer.write(target, bag_time, raw)
+        self.writer.write(target, bag_time, data)
 
     def close(self) -> None:
         """Finish the bag."""
@@ -380,7 +394,7 @@ def _frame_bytes(frame: str) -> bytes:
     return text + b"\0" * padding
 
 
-def default_qos():  # noqa: ANN201 (rosbags Qos)
+def default_qos() -> Qos:
     """The QoS rosbag2 Jazzy records for a default publisher: reliable, volatile, keep last 10."""
     from rosbags.interfaces import (
         Qos,
@@ -405,7 +419,7 @@ def default_qos():  # noqa: ANN201 (rosbags Qos)
     )
 
 
-def _input_qos(connection) -> list:  # noqa: ANN001
+def _input_qos(connection: Connection) -> list[Qos]:
     profiles = getattr(connection.ext, "offered_qos_profiles", None)
     return list(profiles) if profiles else [default_qos()]
 
@@ -413,16 +427,14 @@ def _input_qos(connection) -> list:  # noqa: ANN001
 # --- the plot ---------------------------------------------------------------------------------------
 
 
-def plot_trajectories(trajectories, path: Path) -> Path:  # noqa: ANN001 (FootTrajectories)
+def plot_trajectories(trajectories: FootTrajectories, path: Path) -> Path:
     """x, y, z of each foot over time [s from the first stamp]; world frame when available."""
     from a1_leg_fk.plots import LEG_COLOURS, _save, pyplot
 
     plt = pyplot()
-    world = (
-        trajectories.world_positions is not None
-        and np.isfinite(trajectories.world_positions).any()
-    )
-    values = trajectories.world_positions if world else trajectories.positions
+    world_positions = trajectories.world_positions
+    world = world_positions is not None and bool(np.isfinite(world_positions).any())
+    values = world_positions if world_positions is not None and world else trajectories.positions
     frame = trajectories.world_frame if world else trajectories.base_frame
     figure, axes = plt.subplots(3, 1, sharex=True, figsize=(11, 8))
     stamps = trajectories.stamps_ns

@@ -196,7 +196,9 @@ def test_batch_accepts_lists_and_float32(a1: Quadruped) -> None:
     q = [STANDING, [0.0] * 12]
     np.testing.assert_allclose(a1.fk_batch(q)[1], a1.fk([0.0] * 12), rtol=0.0, atol=1e-12)
     np.testing.assert_allclose(
-        a1.fk_batch(np.array(q, dtype=np.float32))[0], a1.fk(np.array(STANDING, dtype=np.float32)), atol=1e-12
+        a1.fk_batch(np.array(q, dtype=np.float32))[0],
+        a1.fk(np.array(STANDING, dtype=np.float32)),
+        atol=1e-12,
     )
 
 

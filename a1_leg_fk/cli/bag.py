@@ -23,6 +23,7 @@ from a1_leg_fk.cli.common import (
 from a1_leg_fk.recording import (
     DEFAULT_MAX_POSE_GAP_S,
     FootTrajectories,
+    RecordingChoices,
     read_foot_trajectories,
 )
 from a1_leg_fk.urdf import LegFkError
@@ -72,7 +73,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def recording_options(options: argparse.Namespace) -> dict:
+def recording_options(options: argparse.Namespace) -> RecordingChoices:
     """The keyword arguments of :func:`~a1_leg_fk.recording.open_recording` from parsed options."""
     return {
         "topic": options.topic,
@@ -96,7 +97,7 @@ def trajectories_from_options(options: argparse.Namespace) -> FootTrajectories:
     )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``bag`` with the ``a1-leg-fk`` sub-commands."""
     bag = commands.add_parser(
         "bag",

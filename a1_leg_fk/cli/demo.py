@@ -34,7 +34,7 @@ from a1_leg_fk.cli.verify import call_verify
 DEMO_START_TIMEOUT_S = 20.0
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``demo`` with the ``a1-leg-fk`` sub-commands."""
     demo = commands.add_parser(
         "demo",

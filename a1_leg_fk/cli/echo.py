@@ -12,7 +12,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from a1_leg_fk.cli.common import (
     EXIT_NO_ANSWER,
@@ -25,6 +25,9 @@ from a1_leg_fk.cli.common import (
     with_ros,
 )
 from a1_leg_fk.legs import LEG_NAMES
+
+if TYPE_CHECKING:  # imported by subscribe_feet, once ROS is up
+    from geometry_msgs.msg import PointStamped
 
 RATE_WINDOW_S = 2.0
 TTY_INTERVAL_S = 0.2
@@ -44,7 +47,7 @@ def add_interval_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``echo`` with the ``a1-leg-fk`` sub-commands."""
     echo = commands.add_parser(
         "echo",
@@ -88,10 +91,10 @@ class FootTable:
             leg: deque() for leg in LEG_NAMES
         }
 
-    def callback(self, leg: str) -> Callable[[object, dict], None]:
+    def callback(self, leg: str) -> Callable[[PointStamped, dict[str, int]], None]:
         """The subscription callback of ``leg``'s foot topic: stores the point, counts the rate."""
 
-        def on_message(message, info: dict) -> None:  # noqa: ANN001 (geometry_msgs/PointStamped)
+        def on_message(message: PointStamped, info: dict[str, int]) -> None:
             point = message.point
             self.latest[leg] = (point.x, point.y, point.z, message.header.frame_id)
             self.received[leg] += 1
@@ -182,8 +185,13 @@ def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
     table = FootTable(names)
     # Best effort and volatile: matches reliable and best-effort, volatile and transient-local publishers.
     subscriptions = [
+        # rclpy passes the MessageInfo dict to a two-argument callback; its annotation names only
+        # the one-argument form.
         ros.node.create_subscription(
-            PointStamped, name, table.callback(leg), qos_profile_sensor_data
+            PointStamped,
+            name,
+            table.callback(leg),  # type: ignore[arg-type]
+            qos_profile_sensor_data,
         )
         for leg, name in zip(LEG_NAMES, names)
     ]

@@ -42,7 +42,7 @@ THRESHOLD_HELP = {
 }
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``gait`` with the ``a1-leg-fk`` sub-commands."""
     gait = commands.add_parser(
         "gait",

@@ -20,7 +20,9 @@ if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
     from a1_leg_fk.kinematics import Quadruped
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse.ArgumentParser:
     """Register ``ik`` on the ``a1-leg-fk`` command parser."""
     parser = subparsers.add_parser(
         "ik",

@@ -12,7 +12,7 @@ from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``plot`` with the ``a1-leg-fk`` sub-commands."""
     plot = commands.add_parser(
         "plot",

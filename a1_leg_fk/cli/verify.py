@@ -24,7 +24,7 @@ from a1_leg_fk.cli.common import (
 )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``verify`` with the ``a1-leg-fk`` sub-commands."""
     verify = commands.add_parser(
         "verify",

@@ -26,6 +26,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from common import machine
@@ -99,7 +100,7 @@ def peer(path: Path) -> int:
     with AnyReader([path]) as reader:
         connections = [c for c in reader.connections if c.msgtype == JOINT_STATE]
         for connection, _, raw in reader.messages(connections=connections):
-            message = reader.deserialize(raw, connection.msgtype)
+            message: Any = reader.deserialize(raw, connection.msgtype)  # a sensor_msgs JointState
             robot.fk(message.position)
             count += 1
     return count

@@ -55,8 +55,8 @@ def main() -> None:
     ik_seconds = rows["Quadruped.ik(feet)  [closed form]"]
     print("\nfour feet, one call (median of 7 interleaved runs)")
     print(f"  {'method':<40} {'us/call':>9} {'vs ik':>8}")
-    for name, seconds in rows.items():
-        print(f"  {name:<40} {seconds * 1e6:9.2f} {seconds / ik_seconds:7.2f}x")
+    for name, per_call_s in rows.items():
+        print(f"  {name:<40} {per_call_s * 1e6:9.2f} {per_call_s / ik_seconds:7.2f}x")
     print(
         f"  Quadruped.ik: {ik_seconds * 1e6:.1f} us/call (target <= 10 us: {'met' if ik_seconds <= 10e-6 else 'NOT met'})"
     )

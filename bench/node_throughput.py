@@ -104,6 +104,7 @@ class Child(common.Child):
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
+        assert self.process.stdout is not None  # started with pipes=True
         for line in self.process.stdout:
             try:
                 self.events.put(json.loads(line))
@@ -112,6 +113,7 @@ class Child(common.Child):
                     log.write(line)
 
     def send(self, **command: object) -> None:
+        assert self.process.stdin is not None  # started with pipes=True
         try:
             self.process.stdin.write(json.dumps(command) + "\n")
             self.process.stdin.flush()
@@ -170,10 +172,9 @@ class Scenario:
         )
         self.npz = log_dir / f"{target}.npz"
         self.startup_s = float("nan")
-        self.ready_s = float(
-            "nan"
-        )  # process start -> the node's "feet of ..." log line (its init done)
-        self.exit = (None, float("nan"))
+        # process start -> the node's "feet of ..." log line (its init done)
+        self.ready_s = float("nan")
+        self.exit: tuple[int | None, float] = (None, float("nan"))
         self.verify_summary: dict = {}
         self.cpu: dict[str, float] = {}
 
@@ -378,10 +379,10 @@ def print_report(
     print()
     node_max, node_top = max_sustained(node_phases)
     base_max, base_top = max_sustained(base_phases)
-    ratio = node_max / base_max if base_max else float("nan")
+    rate_ratio = node_max / base_max if base_max else float("nan")
     print(
         f"max sustained input rate (< {LOSS_LIMIT:.1%} loss): node {'>=' if node_top else ''}{node_max:.0f} Hz, "
-        f"baseline {'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline {fmt(ratio, '.2f')}"
+        f"baseline {'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline {fmt(rate_ratio, '.2f')}"
     )
     print(
         f"startup (process start -> first published foot): node {node.startup_s:.2f} s"
@@ -433,7 +434,7 @@ def print_report(
         ]
     if base_phases and any(p.ramp and p.result for p in node_phases):
         goals += [
-            ("ramp: node/baseline >= 90 %", ratio >= GOALS["ratio"], fmt(ratio, ".2f")),
+            ("ramp: node/baseline >= 90 %", rate_ratio >= GOALS["ratio"], fmt(rate_ratio, ".2f")),
             ("ramp: node >= 2 kHz", node_max >= GOALS["max_rate_hz"], f"{node_max:.0f} Hz"),
         ]
     if verify_1k:

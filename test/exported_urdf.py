@@ -24,12 +24,26 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypedDict
 
 from pybullet_reference import PyBulletRobot
 from shared import LEGS
 
 FEET = [f"{leg}_foot" for leg in LEGS]
-QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
+
+
+class Quirks(TypedDict, total=False):
+    """Options of :func:`exported_quadruped` that a robot's fixture sets."""
+
+    root: str
+    rotors: bool
+    crlf: bool
+
+
+QUIRKS: dict[str, Quirks] = {
+    "go2": {},
+    "b2": {"root": "base_link", "rotors": True, "crlf": True},
+}
 """The quirks each robot's fixture carries in the tests (Go2: those of its defaults)."""
 
 

@@ -63,6 +63,12 @@ def claim_domain_id() -> tuple[int, IO[str]]:
     )
 
 
+def known(value: float | None) -> float:
+    """``value``, asserted to be known (not ``None``): for the optional metrics of a report."""
+    assert value is not None
+    return value
+
+
 def installed_command(script: str, module: str, *ros_args: str) -> list[str]:
     """The console script ``script`` installed beside this Python (as ``ros2 run`` would start it),
     else ``python -m module``; followed by ``--ros-args ros_args...`` when any are given."""

@@ -10,6 +10,7 @@ import sqlite3
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pybullet_data
@@ -103,7 +104,7 @@ def test_output_bag_read_back(tmp_path: Path, storage: str) -> None:
             assert topics[f"/foot_velocities/{leg}"] == ("geometry_msgs/msg/Vector3Stamped", 30)
             connection = next(c for c in reader.connections if c.topic == f"/foot_positions/{leg}")
             for index, (_, bag_time, raw) in enumerate(reader.messages([connection])):
-                message = reader.deserialize(raw, connection.msgtype)
+                message: Any = reader.deserialize(raw, connection.msgtype)  # a PointStamped
                 assert message.header.frame_id == "trunk"
                 assert (
                     message.header.stamp.sec * 10**9 + message.header.stamp.nanosec
@@ -113,9 +114,10 @@ def test_output_bag_read_back(tmp_path: Path, storage: str) -> None:
                 point = np.array([message.point.x, message.point.y, message.point.z])
                 assert np.abs(point - A1.fk(angles[index])[leg_slot]).max() <= 1e-12
         copied = next(c for c in reader.connections if c.topic == "/chatter")
-        assert [
-            reader.deserialize(raw, copied.msgtype).data for _, _, raw in reader.messages([copied])
-        ] == ["hello"]
+        chatter: list[Any] = [  # std_msgs/msg/String
+            reader.deserialize(raw, copied.msgtype) for _, _, raw in reader.messages([copied])
+        ]
+        assert [message.data for message in chatter] == ["hello"]
 
 
 def test_plot_is_written(tmp_path: Path) -> None:
@@ -449,12 +451,12 @@ def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
             "/pose": "geometry_msgs/msg/PoseStamped",
         }
         copied = next(c for c in reader.connections if c.topic == "/pose")
-        poses = [
+        poses: list[Any] = [
             reader.deserialize(raw, copied.msgtype) for _, _, raw in reader.messages([copied])
         ]
         assert [p.pose.position.x for p in poses] == [1.0 + index for index in range(20)]
         connection = next(c for c in reader.connections if c.topic == "/foot_positions_world/RL")
-        messages = [
+        messages: list[Any] = [
             reader.deserialize(raw, connection.msgtype)
             for _, _, raw in reader.messages([connection])
         ]
@@ -476,15 +478,18 @@ def test_output_mcap_read_by_the_reference_mcap_library(tmp_path: Path) -> None:
         reader = make_reader(stream, validate_crcs=True)
         assert reader.get_header().profile == "ros2"
         summary = reader.get_summary()
+        assert summary is not None and summary.statistics is not None
         assert summary.statistics.message_count == 8 * 25
         seen = {}
         for schema, channel, message in reader.iter_messages(topics=["/foot_positions/RR"]):
+            assert schema is not None
             assert (schema.name, schema.encoding, channel.message_encoding) == (
                 "geometry_msgs/msg/PointStamped",
                 "ros2msg",
                 "cdr",
             )
-            point = TYPESTORE.deserialize_cdr(message.data, schema.name).point
+            decoded: Any = TYPESTORE.deserialize_cdr(message.data, schema.name)  # a PointStamped
+            point = decoded.point
             seen[message.log_time] = (point.x, point.y, point.z)
     assert len(seen) == 25
     for index, q in enumerate(angles):

@@ -96,7 +96,9 @@ SPECIAL_VALUES = [
 ]
 
 ROBOT = Quadruped.from_urdf()
-TOTALS = Counter()  # messages fuzzed per test, reported by test_fuzz_totals_are_reported
+TOTALS: Counter[str] = (
+    Counter()
+)  # messages fuzzed per test, reported by test_fuzz_totals_are_reported
 
 
 class ReferenceTracker:
@@ -261,7 +263,7 @@ def messages(draw) -> tuple[list[str], object, object]:
         velocities = draw(st.lists(values, min_size=velocity_length, max_size=velocity_length))
     # rclpy hands the node array.array('d') for float64[] fields; plain lists must work as well.
     if draw(st.booleans()):
-        positions, velocities = array.array("d", positions), array.array("d", velocities)
+        return names, array.array("d", positions), array.array("d", velocities)
     return names, positions, velocities
 
 

@@ -81,7 +81,7 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
         f"ik node:\n{processes.output(ik)}\nfk node:\n{processes.output(fk)}\ndemo:\n{processes.output(demo)}"
     )
     ros.spin_for(1.0)
-    matched = defaultdict(int)
+    matched: defaultdict[str, int] = defaultdict(int)
     for command in commands.commands:
         state = demo_states.get(stamp_ns(command))
         if state is None:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pybullet_data
 import pytest
+from conftest import Processes
 from diagnostic_msgs.msg import DiagnosticArray
 from node_harness import (
     LEGS,
@@ -74,7 +75,7 @@ def send_random_states(
 class RunningNode:
     process: subprocess.Popen
     client: NodeClient
-    processes: object
+    processes: Processes
 
     def log(self) -> str:
         return self.processes.output(self.process)
@@ -315,13 +316,12 @@ def test_another_urdf_through_robot_description(processes, ros, tmp_path):
     with PyBulletRobot(ALIENGO_URDF) as aliengo:
         robot = Quadruped.from_urdf(str(ALIENGO_URDF))
         angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
-        assert client.probe.spin_until(
-            lambda: bool(
-                client.send(client.joint_state(robot.joint_names, angles))
-                or client.positions["RL"]
-            ),
-            20.0,
-        ), processes.output(process)
+
+        def sent_and_rl_arrived() -> bool:
+            client.send(client.joint_state(robot.joint_names, angles))
+            return bool(client.positions["RL"])
+
+        assert client.probe.spin_until(sent_and_rl_arrived, 20.0), processes.output(process)
         expected = aliengo.feet(list(robot.joint_names), [f"{leg}_toe" for leg in LEGS], angles)
     for slot, leg in enumerate(LEGS):
         assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7
@@ -380,7 +380,8 @@ def test_signal_exits_zero_quickly_without_traceback(a1_node, sig):
 def test_diagnostics_and_markers_reach_subscribers(a1_node):
     client = a1_node.client
     node = client.probe.node
-    diagnostics, markers = [], []
+    diagnostics: list[DiagnosticArray] = []
+    markers: list[MarkerArray] = []
     node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
     node.create_subscription(MarkerArray, "foot_markers", markers.append, 10)
     client.send(client.joint_state(PYBULLET_NAMES, STANDING[:11]))  # rejected
@@ -448,11 +449,13 @@ def test_urdf_file_foot_links_and_joint_aliases_for_the_mini_cheetah(processes, 
     robot = Quadruped.from_urdf(str(urdf), feet)
     names = ["fr_roll", *robot.joint_names[1:]]  # the FR hip roll under its alias
     angles = [0.2, -0.7, 1.4, -0.1, -0.9, 1.2, 0.15, -0.6, 1.6, -0.2, -0.8, 1.1]
+
+    def sent_and_all_arrived() -> bool:
+        client.send(client.joint_state(names, angles))
+        return all(client.positions[leg] for leg in LEGS)
+
     assert client.probe.spin_until(
-        lambda: bool(
-            client.send(client.joint_state(names, angles))
-            or all(client.positions[leg] for leg in LEGS)
-        ),
+        sent_and_all_arrived,
         20.0,
     ), processes.output(process)
     with PyBulletRobot(urdf) as cheetah:

@@ -92,9 +92,10 @@ def test_package_xml_is_format_3_with_every_dependency():
     root = _package_xml()
     assert root.tag == "package" and root.get("format") == "3"
     assert root.findtext("name") == PACKAGE
-    assert re.fullmatch(r"\d+\.\d+\.\d+", root.findtext("version"))
-    assert root.findtext("description").strip()
-    assert root.find("maintainer") is not None and root.find("maintainer").get("email")
+    assert re.fullmatch(r"\d+\.\d+\.\d+", root.findtext("version", ""))
+    assert root.findtext("description", "").strip()
+    maintainer = root.find("maintainer")
+    assert maintainer is not None and maintainer.get("email")
     assert [element.text for element in root.findall("license")] == ["Apache-2.0"]
     assert {element.text for element in root.findall("exec_depend")} >= EXEC_DEPENDS
     assert {element.text for element in root.findall("test_depend")} >= TEST_DEPENDS

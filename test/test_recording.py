@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pybullet_data
@@ -65,6 +66,7 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
         message, "sensor_msgs/msg/JointState", little_endian=False
     )
     ros1 = TYPESTORE.cdr_to_ros1(cdr, "sensor_msgs/msg/JointState")
+    reference: Any  # a deserialized sensor_msgs/msg/JointState
     for raw, decoder, reference in (
         (cdr, JointStateDecoder(), TYPESTORE.deserialize_cdr(cdr, "sensor_msgs/msg/JointState")),
         (
@@ -205,6 +207,7 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
     assert summary.non_finite_joints == 3 + 1 and summary.unknown_names == ("arm_joint", "gripper")
     assert result.stamps_ns.tolist() == [row[0] for row in rows]
     assert result.bag_times_ns.tolist() == [row[1] for row in rows]
+    assert result.velocities is not None
     for got, got_velocity, (_, _, angles, rates) in zip(result.positions, result.velocities, rows):
         for leg in range(4):
             leg_angles = angles[3 * leg : 3 * leg + 3]
@@ -317,7 +320,7 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
             T0 + ms * 1_000_000,
             pose_message(msgtype, T0 + ms * 1_000_000, *pose_of[ms]),
         )
-    expected = []
+    expected: list[np.ndarray | None] = []
     for ms in range(0, 1100, 25):  # JointStates every 25 ms from 0 to 1.075 s
         q = rng.uniform(-1, 1, 12).tolist()
         spec.add_joint_state(
@@ -341,6 +344,7 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
     assert result.world_frame == "odom"
     assert result.summary.rows_without_pose == sum(e is None for e in expected)
     assert result.summary.rows_without_pose == 4 + 11 + 3  # before 0.1 s, in the gap, after 1.0 s
+    assert result.world_positions is not None
     for got, want in zip(result.world_positions, expected, strict=True):
         if want is None:
             assert np.isnan(got).all()

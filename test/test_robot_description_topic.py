@@ -6,6 +6,8 @@ reliable + transient local + depth 1) and, for sim time, a bag replay's ``/clock
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
@@ -58,7 +60,7 @@ def assert_feet(messages, expected) -> None:
 
 def latest_diagnostics(
     client: NodeClient, key: str, contains: str, timeout_s: float = 10.0
-) -> dict[str, object]:
+) -> dict[str, Any]:
     seen: list[DiagnosticArray] = []
     client.probe.node.create_subscription(DiagnosticArray, "/diagnostics", seen.append, 10)
 
@@ -226,5 +228,10 @@ def test_sim_time_stamps_everything_the_node_stamps_itself(processes, ros):
         client.clear()
         assert ros.spin_until(zero_stamped_foot_arrived, 10.0)
         assert stamp_ns(client.positions["FR"][-1]) == sim_ns
-    assert ros.spin_until(lambda: bool(tick()) or stamp_ns(diagnostics[-1]) != 0, 10.0)
+
+    def ticked_and_stamped() -> bool:
+        tick()
+        return stamp_ns(diagnostics[-1]) != 0
+
+    assert ros.spin_until(ticked_and_stamped, 10.0)
     assert stamp_ns(diagnostics[-1]) == sim_ns

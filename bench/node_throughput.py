@@ -543,7 +543,7 @@ def main() -> int:
     args.log_dir = Path(tempfile.mkdtemp(prefix="a1_leg_fk-bench-"))
     children: list[Child] = []
 
-    def on_term(signum: int, frame: object) -> None:  # noqa: ARG001
+    def on_term(_signum: int, _frame: object) -> None:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, on_term)

@@ -69,7 +69,7 @@ class Control:
         signal.signal(signal.SIGTERM, self._on_signal)
         threading.Thread(target=self._read, daemon=True).start()
 
-    def _on_signal(self, signum: int, frame: object) -> None:  # noqa: ARG002
+    def _on_signal(self, _signum: int, _frame: object) -> None:
         self.stopping = True
 
     def _read(self) -> None:

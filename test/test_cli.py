@@ -206,10 +206,10 @@ def test_rate_counts_what_the_publisher_sent() -> None:
     table = FootTable([f"foot_positions/{leg}" for leg in LEGS])
 
     class Point:
-        class header:  # noqa: N801
+        class header:  # noqa: N801 (named as the message's field)
             frame_id = "trunk"
 
-        class point:  # noqa: N801
+        class point:  # noqa: N801 (named as the message's field)
             x, y, z = 0.1, 0.2, 0.3
 
     callback = table.callback("FR")

@@ -172,7 +172,9 @@ def scenario() -> tuple[
         if not all(math.isnan(v) for v in state):
             rows.append((stamp or bag_time, bag_time, list(state), rates))
 
-    q = lambda: rng.uniform(-1.0, 1.0, 12).tolist()  # noqa: E731
+    def q() -> list[float]:
+        return rng.uniform(-1.0, 1.0, 12).tolist()
+
     put(NAMES[:3], q()[:3])  # FR only: partial
     put(["arm_joint", *NAMES[3:9]], [0.5, *q()[3:9]])  # FL + RR and an unknown name
     put(NAMES, q()[:11], outcome="position_length_mismatch")

@@ -18,7 +18,8 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Self, TypeVar
+from types import FrameType
+from typing import Any, Self, TypeVar
 
 PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -126,7 +127,7 @@ class StopSignals:
     def __init__(self) -> None:
         self.stop = threading.Event()
         self.signal_name = ""
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
 
     def __enter__(self) -> Self:
         for number in (signal.SIGINT, signal.SIGTERM):
@@ -135,7 +136,7 @@ class StopSignals:
 
     def __exit__(self, *exc_info: object) -> None:
         for number, handler in self._previous.items():
-            signal.signal(number, handler)  # type: ignore[arg-type]
+            signal.signal(number, handler)
 
     def _handle(self, number: int, _frame: object) -> None:
         self.signal_name = signal.Signals(number).name

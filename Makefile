@@ -2,6 +2,7 @@
 #
 #   make venv       create/refresh $(VENV): pinned requirements + this package (editable)
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
+#   make lint       ruff check, ruff format --check and mypy (config: ruff.toml, setup.cfg)
 #   make test       the whole test suite (node tests pick their own ROS domain)
 #   make bench      bench/fk_speed.py, bench/ik_speed.py, bench/node_throughput.py, bench/bag_speed.py
 #   make soak       bench/soak.py
@@ -32,10 +33,10 @@ PACKAGE_STAMP := $(VENV)/.a1_leg_fk-editable.stamp
 # Two `make test` started together (several people share a tree) must not both install.
 VENV_LOCK := $(or $(TMPDIR),/tmp)/a1_leg_fk-venv-$(shell echo '$(abspath $(VENV))' | sha256sum | cut -c1-16).lock
 
-.PHONY: help venv venv-unlocked demo test bench soak clean distclean
+.PHONY: help venv venv-unlocked demo lint test bench soak clean distclean
 
 help:
-	@sed -n '3,9p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
+	@sed -n '3,10p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
 
 venv:
 	@flock '$(VENV_LOCK)' $(MAKE) --no-print-directory venv-unlocked
@@ -77,6 +78,14 @@ demo: venv
 	  echo "make demo: ROS_DOMAIN_ID=$$ROS_DOMAIN_ID"; fi; \
 	export ROS_AUTOMATIC_DISCOVERY_RANGE=$${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}; \
 	exec $(BIN)/a1-leg-fk demo
+
+# Every tool runs, so one run lists all findings; the target fails if any of them found one.
+lint: venv
+	@status=0; \
+	$(BIN)/ruff check . || status=1; \
+	$(BIN)/ruff format --check . || status=1; \
+	$(BIN)/mypy || status=1; \
+	exit $$status
 
 test: venv
 	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \

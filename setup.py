@@ -3,41 +3,43 @@
 The version is read from package.xml, so that file alone decides it.
 """
 
-from glob import glob
 import os
-import xml.etree.ElementTree as ElementTree
+from glob import glob
+from xml.etree import ElementTree
 
 from setuptools import find_packages, setup
 
-package_name = 'a1_leg_fk'
+package_name = "a1_leg_fk"
 here = os.path.dirname(os.path.abspath(__file__))
-version = ElementTree.parse(os.path.join(here, 'package.xml')).getroot().findtext('version').strip()
+version = (
+    ElementTree.parse(os.path.join(here, "package.xml")).getroot().findtext("version").strip()
+)
 
 setup(
     name=package_name,
     version=version,
-    packages=find_packages(exclude=['test', 'test.*']),
+    packages=find_packages(exclude=["test", "test.*"]),
     data_files=[
-        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
-        ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', sorted(glob('config/*.yaml'))),
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/config", sorted(glob("config/*.yaml"))),
     ],
     # Only setuptools: rclpy and the message packages come from the ROS install (apt, rosdep) or
     # from requirements.txt (PyPI wheels); an apt Jazzy install has no pip metadata for them.
-    install_requires=['setuptools'],
-    extras_require={'test': ['pytest', 'hypothesis']},
+    install_requires=["setuptools"],
+    extras_require={"test": ["pytest", "hypothesis"]},
     zip_safe=True,
-    maintainer='a1_leg_fk maintainers',
-    maintainer_email='maintainer@example.com',
-    description='Forward kinematics of a quadruped\'s feet from a URDF, as a ROS 2 node.',
-    license='Apache-2.0',
-    python_requires='>=3.10',
+    maintainer="a1_leg_fk maintainers",
+    maintainer_email="maintainer@example.com",
+    description="Forward kinematics of a quadruped's feet from a URDF, as a ROS 2 node.",
+    license="Apache-2.0",
+    python_requires=">=3.10",
     entry_points={
-        'console_scripts': [
-            'foot_fk_node = a1_leg_fk.node:main',
-            'foot_ik_node = a1_leg_fk.ik_node:main',
-            'joint_state_demo = a1_leg_fk.demo:main',
-            'a1-leg-fk = a1_leg_fk.cli:main',
+        "console_scripts": [
+            "foot_fk_node = a1_leg_fk.node:main",
+            "foot_ik_node = a1_leg_fk.ik_node:main",
+            "joint_state_demo = a1_leg_fk.demo:main",
+            "a1-leg-fk = a1_leg_fk.cli:main",
         ],
     },
 )

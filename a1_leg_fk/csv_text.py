@@ -19,9 +19,15 @@ _SPLIT = 134217729.0  # 2**27 + 1, Veltkamp's splitting constant
 _LOW, _HIGH = 1e-6, 1e15  # the fast path: 10**k is exact in binary64 for the k this range needs
 _POWERS = 10.0 ** np.arange(0, 23)
 _DIGITS = 17
-_GROUP_TEXT = np.frombuffer("".join(f"{n:04d}" for n in range(10_000)).encode(), dtype=np.uint32)  # "0000".."9999"
-_GROUP_ZEROS = np.array([4 if n == 0 else len(str(n)) - len(str(n).rstrip("0")) for n in range(10_000)])
-_PAIR_TEXT = np.frombuffer("".join(f"{n:02d}" for n in range(100)).encode(), dtype=np.uint16)  # "00".."99"
+_GROUP_TEXT = np.frombuffer(
+    "".join(f"{n:04d}" for n in range(10_000)).encode(), dtype=np.uint32
+)  # "0000".."9999"
+_GROUP_ZEROS = np.array(
+    [4 if n == 0 else len(str(n)) - len(str(n).rstrip("0")) for n in range(10_000)]
+)
+_PAIR_TEXT = np.frombuffer(
+    "".join(f"{n:02d}" for n in range(100)).encode(), dtype=np.uint16
+)  # "00".."99"
 _COLUMNS = np.arange(_DIGITS - 1)
 
 
@@ -66,7 +72,8 @@ def _put_integers(out: np.ndarray, values: np.ndarray) -> None:
 
 def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
     """Every lane is formatted as if in the fast range (others as 1.0), then the lanes outside
-    it are overwritten: cheaper than selecting the fast lanes when nearly all are."""
+    it are overwritten: cheaper than selecting the fast lanes when nearly all are.
+    """
     magnitude = np.abs(values)
     fast = (magnitude >= _LOW) & (magnitude < _HIGH)
     x = np.where(fast, magnitude, 1.0)
@@ -91,7 +98,7 @@ def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
         groups[:, column], groups[:, column + 1] = upper, half - upper * 10_000.0
     fraction = _GROUP_TEXT.take(groups).view(np.uint8)
     keep = np.maximum(_DIGITS - 1 - _trailing_zeros(groups), 1)
-    out[:, 3 : 3 + _DIGITS - 1] = np.where(_COLUMNS < keep[:, None], fraction, SPACE)
+    out[:, 3 : 3 + _DIGITS - 1] = np.where(keep[:, None] > _COLUMNS, fraction, SPACE)
     out[:, 19] = ord("e")
     out[:, 20] = np.where(exponent < 0, ord("-"), ord("+"))
     out[:, 21:23] = _PAIR_TEXT.take(np.abs(exponent)).view(np.uint8).reshape(-1, 2)
@@ -104,7 +111,8 @@ def _put_floats(out: np.ndarray, values: np.ndarray) -> None:
 
 def _scaled(x: np.ndarray, exponent: np.ndarray) -> np.ndarray:
     """round(x * 10**(16 - exponent)) as int64, exactly (x in the fast range, so the power is an
-    exactly representable 10**0 .. 10**22 and the product is >= 2**53, an integer float)."""
+    exactly representable 10**0 .. 10**22 and the product is >= 2**53, an integer float).
+    """
     power = _POWERS[np.clip(_DIGITS - 1 - exponent, 0, len(_POWERS) - 1)]
     product = x * power
     x_split, p_split = _SPLIT * x, _SPLIT * power
@@ -113,7 +121,8 @@ def _scaled(x: np.ndarray, exponent: np.ndarray) -> np.ndarray:
     p_high = p_split - (p_split - power)
     p_low = power - p_high
     error = ((x_high * p_high - product) + x_high * p_low + x_low * p_high) + x_low * p_low
-    return product.astype(np.int64) + np.rint(error).astype(np.int64)
+    scaled: np.ndarray = product.astype(np.int64) + np.rint(error).astype(np.int64)
+    return scaled
 
 
 def _put_text(out: np.ndarray, text: str) -> None:

@@ -20,12 +20,16 @@ Run::
 from __future__ import annotations
 
 import sys
-from typing import Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Unpack
 
 from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import UNITREE_NAME_PAIRS
 from a1_leg_fk.robot_config import load_robot
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
 
 NODE_NAME = "joint_state_demo"
 TOPIC = "joint_states"
@@ -54,18 +58,20 @@ def joint_names(quadruped: Quadruped, naming: str) -> list[str]:
     return names
 
 
-def _node_class():  # noqa: ANN202 (defined lazily so that importing this module needs no ROS)
+def _node_class() -> type[Node]:
+    """The node's class, defined here so that importing this module needs no ROS."""
     from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
     from rclpy.node import Node
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
 
     from a1_leg_fk.robot_source import DESCRIPTION_QOS
+    from a1_leg_fk.ros_glue import NodeOptions
 
     class JointStateDemo(Node):
         """Publishes the demo gait on ``joint_states`` at ``rate_hz``, paced by the node clock."""
 
-        def __init__(self, **kwargs: object) -> None:
+        def __init__(self, **kwargs: Unpack[NodeOptions]) -> None:
             super().__init__(NODE_NAME, **kwargs)
             rate = self.declare_parameter(
                 "rate_hz",
@@ -73,7 +79,9 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
                 ParameterDescriptor(
                     type=ParameterType.PARAMETER_DOUBLE,
                     description=f"Messages per second on {TOPIC} (0 < rate_hz <= {MAX_RATE_HZ:g}).",
-                    floating_point_range=[FloatingPointRange(from_value=0.0, to_value=MAX_RATE_HZ)],
+                    floating_point_range=[
+                        FloatingPointRange(from_value=0.0, to_value=MAX_RATE_HZ)
+                    ],
                     read_only=True,
                     dynamic_typing=True,  # accept rate_hz:=100 as well as 100.0
                 ),
@@ -91,10 +99,18 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
                     read_only=True,
                 ),
             ).value
-            if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0.0 < rate <= MAX_RATE_HZ:
-                raise ValueError(f"parameter rate_hz must be a number in (0, {MAX_RATE_HZ:g}], not {rate!r}")
+            if (
+                isinstance(rate, bool)
+                or not isinstance(rate, (int, float))
+                or not 0.0 < rate <= MAX_RATE_HZ
+            ):
+                raise ValueError(
+                    f"parameter rate_hz must be a number in (0, {MAX_RATE_HZ:g}], not {rate!r}"
+                )
             if naming not in NAMINGS:
-                raise ValueError(f"parameter naming must be one of {list(NAMINGS)}, not {naming!r}")
+                raise ValueError(
+                    f"parameter naming must be one of {list(NAMINGS)}, not {naming!r}"
+                )
             robot = load_robot()
             quadruped = robot.quadruped
             self.gait = Gait(limits_of(quadruped))
@@ -108,7 +124,9 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
             self._message.name = self.names
             self.publisher = self.create_publisher(JointState, TOPIC, 10)
             # As robot_state_publisher does: the description of the robot it animates, latched.
-            self.description_publisher = self.create_publisher(String, DESCRIPTION_TOPIC, DESCRIPTION_QOS)
+            self.description_publisher = self.create_publisher(
+                String, DESCRIPTION_TOPIC, DESCRIPTION_QOS
+            )
             self.description_publisher.publish(String(data=robot.urdf_xml))
             self.start_ns = self.get_clock().now().nanoseconds
             self.timer = self.create_timer(1.0 / self.rate_hz, self._publish_due)
@@ -122,7 +140,9 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
         def _publish_due(self) -> None:
             """Publish every sample due by now (usually one), stamped with its own sample time."""
             now_ns = self.get_clock().now().nanoseconds
-            if now_ns < self.start_ns + (self.sent - 1) * self.period_ns:  # the clock went back: restart
+            if (
+                now_ns < self.start_ns + (self.sent - 1) * self.period_ns
+            ):  # the clock went back: restart
                 self.start_ns, self.sent = now_ns, 0
             due = (now_ns - self.start_ns) // self.period_ns + 1
             if due - self.sent > self.max_behind:
@@ -136,7 +156,9 @@ def _node_class():  # noqa: ANN202 (defined lazily so that importing this module
             while self.sent < due:
                 offset_ns = self.sent * self.period_ns
                 stamp_ns = self.start_ns + offset_ns
-                message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+                message.header.stamp.sec, message.header.stamp.nanosec = divmod(
+                    stamp_ns, 1_000_000_000
+                )
                 message.position, message.velocity = self.gait.state(offset_ns * 1e-9)
                 self.publisher.publish(message)
                 self.sent += 1
@@ -151,7 +173,11 @@ def main(args: Sequence[str] | None = None) -> int:
 
     from a1_leg_fk import ros_glue
 
-    usage_errors = (ValueError, ParameterException, NameValidationException)  # a bad parameter or name
+    usage_errors = (
+        ValueError,
+        ParameterException,
+        NameValidationException,
+    )  # a bad parameter or name
     return ros_glue.run_node(NODE_NAME, _node_class(), args, usage_errors, SingleThreadedExecutor)
 
 

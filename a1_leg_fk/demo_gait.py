@@ -29,8 +29,9 @@ of the model it was built for (read from the URDF, never typed here), raising
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING
 
 from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
@@ -71,7 +72,9 @@ class Gait:
 
     def __init__(self, limits: Limits, parameters: GaitParameters = GaitParameters()) -> None:
         if len(limits) != JOINT_COUNT:
-            raise LegFkError(f"a gait needs {JOINT_COUNT} (lower, upper) limits, got {len(limits)}")
+            raise LegFkError(
+                f"a gait needs {JOINT_COUNT} (lower, upper) limits, got {len(limits)}"
+            )
         if parameters.stand_s <= 0 or parameters.ramp_s <= 0 or parameters.trot_hz <= 0:
             raise LegFkError(f"gait durations and frequency must be positive: {parameters}")
         self.limits = [tuple(pair) for pair in limits]
@@ -82,8 +85,14 @@ class Gait:
         for leg_slot in range(len(LEG_NAMES)):
             knee_lower, knee_upper = self.limits[leg_slot * JOINTS_PER_LEG + 2]
             stand = STAND_POSE
-            if knee_lower is not None and knee_upper is not None and knee_upper < knee_lower + 2 * parameters.crouch_margin:
-                raise LegFkError(f"leg {LEG_NAMES[leg_slot]}: knee range [{knee_lower}, {knee_upper}] is too small")
+            if (
+                knee_lower is not None
+                and knee_upper is not None
+                and knee_upper < knee_lower + 2 * parameters.crouch_margin
+            ):
+                raise LegFkError(
+                    f"leg {LEG_NAMES[leg_slot]}: knee range [{knee_lower}, {knee_upper}] is too small"
+                )
             # The most-bent end of the knee range is the one farther from the straight leg (0).
             if knee_lower is None or knee_upper is None:
                 crouch_knee = -2.5
@@ -133,7 +142,7 @@ class Gait:
             # Stand up: s = (1 - cos(pi u)) / 2 for u = t / stand_s in [0, 1].
             u = min(max(t / p.stand_s, 0.0), 1.0)
             blend = 0.5 * (1.0 - math.cos(math.pi * u))
-            blend_rate = 0.5 * math.pi / p.stand_s * math.sin(math.pi * u) if 0.0 < t else 0.0
+            blend_rate = 0.5 * math.pi / p.stand_s * math.sin(math.pi * u) if t > 0.0 else 0.0
             angles = [c + blend * (s - c) for c, s in zip(self.crouch, self.stand)]
             rates = [blend_rate * (s - c) for c, s in zip(self.crouch, self.stand)]
             return angles, rates
@@ -147,10 +156,14 @@ class Gait:
             for joint_slot in range(JOINTS_PER_LEG):
                 slot = leg_slot * JOINTS_PER_LEG + joint_slot
                 angles.append(self.stand[slot] + envelope * offsets[joint_slot])
-                rates.append(envelope_rate * offsets[joint_slot] + envelope * offset_rates[joint_slot])
+                rates.append(
+                    envelope_rate * offsets[joint_slot] + envelope * offset_rates[joint_slot]
+                )
         return angles, rates
 
-    def _trot_offsets(self, phase: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    def _trot_offsets(
+        self, phase: float
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """Offsets from the stand pose [rad] and their rates [rad/s] for one leg at ``phase``."""
         p = self.parameters
         sin, cos = math.sin(phase), math.cos(phase)
@@ -175,7 +188,9 @@ class Gait:
             offset_low, offset_high = (roll_range, pitch_range, knee_range)[slot % JOINTS_PER_LEG]
             low = min(self.crouch[slot], self.stand[slot] + min(offset_low, 0.0))
             high = max(self.crouch[slot], self.stand[slot] + max(offset_high, 0.0))
-            if (lower is not None and low < lower + p.limit_margin) or (upper is not None and high > upper - p.limit_margin):
+            if (lower is not None and low < lower + p.limit_margin) or (
+                upper is not None and high > upper - p.limit_margin
+            ):
                 raise LegFkError(
                     f"the gait moves slot {slot} (leg {LEG_NAMES[slot // JOINTS_PER_LEG]}, joint {slot % JOINTS_PER_LEG}) "
                     f"over [{low:.3f}, {high:.3f}] rad, outside its limits [{lower}, {upper}] less a "
@@ -186,4 +201,3 @@ class Gait:
 def limits_of(quadruped: Quadruped) -> list[tuple[float | None, float | None]]:
     """The 12 ``(lower, upper)`` joint limits [rad] of a :class:`a1_leg_fk.kinematics.Quadruped`."""
     return [(joint.lower, joint.upper) for joint in quadruped.joints]
-

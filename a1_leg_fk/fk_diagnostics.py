@@ -8,8 +8,8 @@ rejections since the previous report. The node wraps the result in a DiagnosticA
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from a1_leg_fk.joint_state import REJECTIONS, TrackerCounts
 
@@ -41,7 +41,8 @@ class PeriodCounter:
 @dataclass(frozen=True)
 class FkReport:
     """What the node knows at one report. ``period_s`` [s] is the time between reports;
-    ``received_in_period``/``rejected_in_period`` come from :meth:`PeriodCounter.take`."""
+    ``received_in_period``/``rejected_in_period`` come from :meth:`PeriodCounter.take`.
+    """
 
     counts: TrackerCounts
     received_in_period: int
@@ -60,7 +61,8 @@ class FkReport:
 def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
     """(level, summary, values) of the report. ERROR when verify_fk disagreed with PyBullet; else
     WARN for a rejected robot description, no joint state yet, or rejected messages in the
-    period, non-finite values or joints outside limits; else OK."""
+    period, non-finite values or joints outside limits; else OK.
+    """
     counts = report.counts
     outside = report.joints_outside_limits
     level, summary = OK, "feet published"

@@ -17,23 +17,30 @@ LINE_WIDTH_M = 0.015
 COLOR_RGBA = (0.1, 0.6, 1.0, 1.0)
 
 
-def foot_markers(quadruped: Quadruped, angles: Sequence[float], frame_id: str, stamp: Time) -> MarkerArray:
+def foot_markers(
+    quadruped: Quadruped, angles: Sequence[float], frame_id: str, stamp: Time
+) -> MarkerArray:
     """Markers of the legs whose three ``angles`` [rad] (12, slot order) are known (not NaN):
     ids ``2 * leg_slot`` (the foot, a sphere) and ``2 * leg_slot + 1`` (root-side joint origins
-    to the foot, a line strip), namespace ``feet/<leg>``, points [m] in ``frame_id``."""
+    to the foot, a line strip), namespace ``feet/<leg>``, points [m] in ``frame_id``.
+    """
     markers = MarkerArray()
     for slot, leg in enumerate(quadruped.legs):
         leg_angles = angles[JOINTS_PER_LEG * slot : JOINTS_PER_LEG * (slot + 1)]
         if any(math.isnan(a) for a in leg_angles):
             continue
-        points = [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in leg.joint_points(leg_angles)]
+        points = [
+            Point(x=float(x), y=float(y), z=float(z)) for x, y, z in leg.joint_points(leg_angles)
+        ]
         header = (frame_id, stamp, leg.chain.leg)
         markers.markers.append(_marker(*header, 2 * slot, Marker.SPHERE, points[-1:]))
         markers.markers.append(_marker(*header, 2 * slot + 1, Marker.LINE_STRIP, points))
     return markers
 
 
-def _marker(frame_id: str, stamp: Time, leg: str, marker_id: int, kind: int, points: list[Point]) -> Marker:
+def _marker(
+    frame_id: str, stamp: Time, leg: str, marker_id: int, kind: int, points: list[Point]
+) -> Marker:
     marker = Marker(ns=f"feet/{leg}", id=marker_id, type=kind, action=Marker.ADD)
     marker.header.frame_id = frame_id
     marker.header.stamp = stamp

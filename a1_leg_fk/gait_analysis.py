@@ -40,8 +40,10 @@ Times are in seconds from the first stamp.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -92,7 +94,9 @@ class ContactThresholds:
     def __post_init__(self) -> None:
         for name, value in asdict(self).items():
             if not math.isfinite(value) or value < 0:
-                raise LegFkError(f"contact threshold {name} must be a finite number >= 0, got {value}")
+                raise LegFkError(
+                    f"contact threshold {name} must be a finite number >= 0, got {value}"
+                )
         if self.height_off_m < self.height_on_m or self.speed_off_mps < self.speed_on_mps:
             raise LegFkError(
                 f"hysteresis needs off >= on: height {self.height_on_m} / {self.height_off_m} m, "
@@ -119,7 +123,9 @@ class GroundPlane:
         """Height [m] of ``points`` (..., 3) above the plane, along z."""
         x0, y0 = self.origin_xy
         gx, gy = self.slope
-        return points[..., 2] - (self.level_m + gx * (points[..., 0] - x0) + gy * (points[..., 1] - y0))
+        return points[..., 2] - (
+            self.level_m + gx * (points[..., 0] - x0) + gy * (points[..., 1] - y0)
+        )
 
 
 @dataclass(frozen=True)
@@ -160,7 +166,8 @@ class LegMetrics:
     status: str  # "ok", "no data", "never touches down", "never lifts", "too few strides"
     stance_s: tuple[tuple[float, float], ...]
     strides: int  # complete, regular strides the metrics are computed from
-    irregular_strides: int  # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
+    # touchdown-to-touchdown spans off the median period by more than half (e.g. a pause)
+    irregular_strides: int
     duty_factor: float | None
     stride_period_s: float | None
     stride_frequency_hz: float | None
@@ -185,7 +192,7 @@ class GaitReport:
     thresholds: ContactThresholds
     notes: tuple[str, ...] = field(default=())
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a ``reason``)."""
         legs = {}
         for leg, metrics in self.legs.items():
@@ -204,8 +211,11 @@ class GaitReport:
             "phase_vs_FR": self.phase_vs_fr,
             "phase_consistency": self.phase_consistency,
             "ground_level_m": self.ground.level_m,
-            "ground_plane": {"origin_xy_m": list(self.ground.origin_xy), "slope_dz_dxy": list(self.ground.slope),
-                             "slope_deg": self.ground.slope_deg},
+            "ground_plane": {
+                "origin_xy_m": list(self.ground.origin_xy),
+                "slope_dz_dxy": list(self.ground.slope),
+                "slope_deg": self.ground.slope_deg,
+            },
             "thresholds": asdict(self.thresholds),
             "notes": list(self.notes),
         }
@@ -214,7 +224,9 @@ class GaitReport:
 # --- input -------------------------------------------------------------------------------------
 
 
-def prepare(stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort") -> tuple[np.ndarray, np.ndarray, list[str]]:
+def prepare(
+    stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort"
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """``(stamps, feet, notes)`` checked, sorted by time (``unsorted="sort"``) or refused (``"reject"``).
 
     Rows with a repeated stamp keep the first; the notes say what was sorted or dropped.
@@ -222,7 +234,9 @@ def prepare(stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort"
     stamps = np.asarray(stamps_s, dtype=float)
     feet = np.asarray(world_feet, dtype=float)
     if stamps.ndim != 1 or feet.shape != (stamps.size, len(LEG_NAMES), 3):
-        raise LegFkError(f"expected stamps (N,) and world feet (N, 4, 3), got {stamps.shape} and {feet.shape}")
+        raise LegFkError(
+            f"expected stamps (N,) and world feet (N, 4, 3), got {stamps.shape} and {feet.shape}"
+        )
     if not np.isfinite(stamps).all():
         raise LegFkError(f"{int((~np.isfinite(stamps)).sum())} stamps are not finite")
     notes: list[str] = []
@@ -230,19 +244,25 @@ def prepare(stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort"
     if backwards:
         if unsorted == "reject":
             first = int(np.argmax(np.diff(stamps) < 0)) + 1
-            raise LegFkError(f"stamps not increasing: {backwards} go back in time (first at row {first}); rejected")
+            raise LegFkError(
+                f"stamps not increasing: {backwards} go back in time (first at row {first}); rejected"
+            )
         order = np.argsort(stamps, kind="stable")
         stamps, feet = stamps[order], feet[order]
         notes.append(f"stamps not increasing: {backwards} rows went back in time; sorted by stamp")
     repeated = np.concatenate(([False], np.diff(stamps) == 0))
     if repeated.any():
         if unsorted == "reject":
-            raise LegFkError(f"stamps not increasing: {int(repeated.sum())} repeat the previous stamp; rejected")
+            raise LegFkError(
+                f"stamps not increasing: {int(repeated.sum())} repeat the previous stamp; rejected"
+            )
         stamps, feet = stamps[~repeated], feet[~repeated]
         notes.append(f"{int(repeated.sum())} rows repeated a stamp; the first of each was kept")
     valid_rows = int(np.isfinite(feet).all(axis=2).any(axis=1).sum())
     if valid_rows < MIN_SAMPLES:
-        raise LegFkError(f"too few samples: {valid_rows} rows with a finite foot, need at least {MIN_SAMPLES}")
+        raise LegFkError(
+            f"too few samples: {valid_rows} rows with a finite foot, need at least {MIN_SAMPLES}"
+        )
     return stamps, feet, notes
 
 
@@ -291,7 +311,11 @@ def fit_ground(points: np.ndarray, percentile: float) -> GroundPlane:
         residuals = points[:, 2] - design @ coefficients
         keep = residuals <= np.median(residuals)
     level = coefficients[0] + float(np.percentile(residuals, percentile))
-    return GroundPlane(float(level), (float(origin[0]), float(origin[1])), (float(coefficients[1]), float(coefficients[2])))
+    return GroundPlane(
+        float(level),
+        (float(origin[0]), float(origin[1])),
+        (float(coefficients[1]), float(coefficients[2])),
+    )
 
 
 def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) -> np.ndarray:
@@ -304,7 +328,7 @@ def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) ->
         # Never past either threshold: the whole run lies between on and off.
         return np.full(heights.size, bool(heights[0] < t.height_off_m))
     last = np.maximum.accumulate(np.where(enter | leave, np.arange(heights.size), -1))
-    state = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
+    state: np.ndarray = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
     return state.astype(bool)
 
 
@@ -329,7 +353,7 @@ def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float)
         for first, last, run_value in _runs(stance):
             interior = first > 0 and last < stance.size - 1
             if run_value == value and interior and _run_duration(times, first, last) < min_phase_s:
-                stance[first:last + 1] = not value
+                stance[first : last + 1] = not value
     return stance
 
 
@@ -339,14 +363,18 @@ def trim_edges(heights: np.ndarray, stance: np.ndarray, tolerance_m: float) -> n
     for first, last, value in _runs(stance):
         if not value:
             continue
-        low = np.flatnonzero(heights[first:last + 1] <= np.median(heights[first:last + 1]) + tolerance_m)
-        stance[first:first + low[0]] = False
-        stance[first + low[-1] + 1:last + 1] = False
+        low = np.flatnonzero(
+            heights[first : last + 1] <= np.median(heights[first : last + 1]) + tolerance_m
+        )
+        stance[first : first + low[0]] = False
+        stance[first + low[-1] + 1 : last + 1] = False
     return stance
 
 
 def detect_contacts(
-    stamps_s: np.ndarray, world_feet: np.ndarray, thresholds: ContactThresholds = ContactThresholds(),
+    stamps_s: np.ndarray,
+    world_feet: np.ndarray,
+    thresholds: ContactThresholds = ContactThresholds(),
     unsorted: str = "sort",
 ) -> Contacts:
     """Stance/swing of each foot from world-frame feet; see the module docstring for the method.
@@ -364,7 +392,9 @@ def detect_contacts(
         for segment in range(segments[:, slot].max() + 1):
             rows = np.flatnonzero(segments[:, slot] == segment)
             if rows.size >= 2:
-                speeds[rows, slot] = still_speeds(times[rows], feet[rows, slot], thresholds.speed_window_s)
+                speeds[rows, slot] = still_speeds(
+                    times[rows], feet[rows, slot], thresholds.speed_window_s
+                )
     with np.errstate(invalid="ignore"):
         still = valid & (speeds < thresholds.speed_on_mps)
     if still.sum() < 3:
@@ -379,10 +409,16 @@ def detect_contacts(
         for segment in range(segments[:, slot].max() + 1):
             rows = np.flatnonzero(segments[:, slot] == segment)
             stance[rows, slot] = drop_short_phases(
-                times[rows], hysteresis(heights[rows, slot], speeds[rows, slot], thresholds), thresholds.min_phase_s
+                times[rows],
+                hysteresis(heights[rows, slot], speeds[rows, slot], thresholds),
+                thresholds.min_phase_s,
             )
     stance_heights = heights[stance]
-    deviation = 1.4826 * float(np.median(np.abs(stance_heights - np.median(stance_heights)))) if stance_heights.size else 0.0
+    deviation = (
+        1.4826 * float(np.median(np.abs(stance_heights - np.median(stance_heights))))
+        if stance_heights.size
+        else 0.0
+    )
     tolerance = max(EDGE_NOISE_DEVIATIONS * deviation, EDGE_NOISE_FLOOR_M)
     for slot in range(legs):
         for segment in range(segments[:, slot].max() + 1):
@@ -391,8 +427,22 @@ def detect_contacts(
     stances = tuple(_stances(times, stance[:, slot], segments[:, slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:
-        notes.append(f"{gaps} rows with a missing foot (no pose there, a gap): phases are split at them")
-    return Contacts(times, feet, valid, heights, speeds, stance, segments, stances, ground, thresholds, tuple(notes))
+        notes.append(
+            f"{gaps} rows with a missing foot (no pose there, a gap): phases are split at them"
+        )
+    return Contacts(
+        times,
+        feet,
+        valid,
+        heights,
+        speeds,
+        stance,
+        segments,
+        stances,
+        ground,
+        thresholds,
+        tuple(notes),
+    )
 
 
 def _stances(times: np.ndarray, stance: np.ndarray, segments: np.ndarray) -> tuple[Stance, ...]:
@@ -406,7 +456,17 @@ def _stances(times: np.ndarray, stance: np.ndarray, segments: np.ndarray) -> tup
             start_seen, end_seen = first > 0, last < rows.size - 1
             t_on = 0.5 * (local[first - 1] + local[first]) if start_seen else local[first]
             t_off = 0.5 * (local[last] + local[last + 1]) if end_seen else local[last]
-            out.append(Stance(float(t_on), float(t_off), int(rows[first]), int(rows[last]), start_seen, end_seen, segment))
+            out.append(
+                Stance(
+                    float(t_on),
+                    float(t_off),
+                    int(rows[first]),
+                    int(rows[last]),
+                    start_seen,
+                    end_seen,
+                    segment,
+                )
+            )
     return tuple(out)
 
 
@@ -420,38 +480,66 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     intervals = tuple((s.t_on, s.t_off) for s in stances)
     valid = contacts.valid[:, slot]
     in_stance = contacts.stance[:, slot] & valid
-    empty = dict(strides=0, irregular_strides=0, duty_factor=None, stride_period_s=None, stride_frequency_hz=None, step_length_m=None, clearance_m=None)
+
+    def without_strides(
+        status: str,
+        reason: str,
+        duty_factor: float | None = None,
+        clearance_m: float | None = None,
+    ) -> LegMetrics:
+        return LegMetrics(
+            leg, status, intervals, 0, 0, duty_factor, None, None, None, clearance_m, reason
+        )
+
     if not valid.any():
-        return LegMetrics(leg, "no data", intervals, **empty, reason="no finite position of this foot"), []
+        return without_strides("no data", "no finite position of this foot"), []
     if not in_stance.any():
-        return LegMetrics(leg, "never touches down", intervals, **{**empty, "duty_factor": 0.0},
-                          reason="the foot is never near the ground and still"), []
+        return without_strides(
+            "never touches down", "the foot is never near the ground and still", duty_factor=0.0
+        ), []
     if not (valid & ~in_stance).any():
-        return LegMetrics(leg, "never lifts", intervals, **{**empty, "duty_factor": 1.0},
-                          reason="the foot is in stance in every sample"), []
+        return without_strides(
+            "never lifts", "the foot is in stance in every sample", duty_factor=1.0
+        ), []
     strides, stance_times, steps, clearances = [], [], [], []
-    for this, following in zip(stances, stances[1:]):
+    for this, following in itertools.pairwise(stances):
         if this.segment != following.segment or not this.touchdown_observed:
             continue
         strides.append((this.t_on, following.t_on))
         stance_times.append(this.t_off - this.t_on)
-        start, end = (np.median(contacts.positions_m[s.first:s.last + 1, slot, :2], axis=0) for s in (this, following))
+        start, end = (
+            np.median(contacts.positions_m[s.first : s.last + 1, slot, :2], axis=0)
+            for s in (this, following)
+        )
         steps.append(float(np.linalg.norm(end - start)))
-    for this, following in zip(stances, stances[1:]):
+    for this, following in itertools.pairwise(stances):
         if this.segment == following.segment:
-            clearances.append(float(np.max(contacts.heights_m[this.last + 1:following.first, slot])))
+            clearances.append(
+                float(np.max(contacts.heights_m[this.last + 1 : following.first, slot]))
+            )
     clearance = float(np.mean(clearances)) if clearances else None
     if not strides:
-        return LegMetrics(leg, "too few strides", intervals, **{**empty, "clearance_m": clearance},
-                          reason="fewer than two touchdowns in one gap-free stretch"), []
+        return without_strides(
+            "too few strides",
+            "fewer than two touchdowns in one gap-free stretch",
+            clearance_m=clearance,
+        ), []
     durations = np.array([b - a for a, b in strides])
     regular = np.abs(durations / np.median(durations) - 1.0) <= IRREGULAR_STRIDE
     kept = [stride for stride, keep in zip(strides, regular) if keep]
     stride_time = float(durations[regular].sum())
     period = stride_time / len(kept)
     metrics = LegMetrics(
-        leg, "ok", intervals, len(kept), int((~regular).sum()), float(np.array(stance_times)[regular].sum() / stride_time),
-        period, 1.0 / period, float(np.array(steps)[regular].mean()), clearance,
+        leg,
+        "ok",
+        intervals,
+        len(kept),
+        int((~regular).sum()),
+        float(np.array(stance_times)[regular].sum() / stride_time),
+        period,
+        1.0 / period,
+        float(np.array(steps)[regular].mean()),
+        clearance,
     )
     return metrics, kept
 
@@ -467,7 +555,9 @@ def _circular_distance(a: float, b: float) -> float:
     return min(d, 1.0 - d)
 
 
-def relative_phases(contacts: Contacts, fr_strides: list[tuple[float, float]]) -> tuple[dict, dict]:
+def relative_phases(
+    contacts: Contacts, fr_strides: list[tuple[float, float]]
+) -> tuple[dict[str, float | None], dict[str, float | None]]:
     """Touchdown phase of FL, RR, RL within FR's strides (0..1) and its consistency R, ``None`` without data."""
     phases: dict[str, float | None] = {}
     consistency: dict[str, float | None] = {}
@@ -485,30 +575,54 @@ def relative_phases(contacts: Contacts, fr_strides: list[tuple[float, float]]) -
     return phases, consistency
 
 
-def name_gait(phases: dict[str, float | None], consistency: dict[str, float | None], duty: float | None) -> tuple[str, float, str, dict[str, float]]:
+def name_gait(
+    phases: dict[str, float | None], consistency: dict[str, float | None], duty: float | None
+) -> tuple[str, float, str, dict[str, float]]:
     """``(name, fit 0..1, reason, fit of every candidate)`` from the phases vs FR and the duty factor."""
     if any(value is None for value in phases.values()):
         missing = [leg for leg, value in phases.items() if value is None]
-        return "unknown", 0.0, f"no touchdown phase for {', '.join(missing)} (needs strides of FR and touchdowns of each leg)", {}
-    measured = [phases[leg] for leg in LEG_NAMES[1:]]
-    r = min(consistency.values())
+        return (
+            "unknown",
+            0.0,
+            f"no touchdown phase for {', '.join(missing)} (needs strides of FR and touchdowns of each leg)",
+            {},
+        )
+    # Every phase (and so every consistency) is known from here on.
+    measured = [phase for leg in LEG_NAMES[1:] if (phase := phases[leg]) is not None]
+    r = min(value for value in consistency.values() if value is not None)
     candidates = {}
     for name, template in GAIT_TEMPLATES.items():
         deviation = max(_circular_distance(m, t) for m, t in zip(measured, template))
         candidates[name] = round(max(0.0, 1.0 - deviation / NO_MATCH_DEVIATION) * r, 4)
     all_phases = [0.0, *measured]
-    separation = min(_circular_distance(a, b) for i, a in enumerate(all_phases) for b in all_phases[i + 1:])
-    candidates["walk"] = round(min(1.0, separation / 0.25) * r, 4) if duty is not None and duty > WALK_MIN_DUTY else 0.0
+    separation = min(
+        _circular_distance(a, b) for i, a in enumerate(all_phases) for b in all_phases[i + 1 :]
+    )
+    candidates["walk"] = (
+        round(min(1.0, separation / 0.25) * r, 4)
+        if duty is not None and duty > WALK_MIN_DUTY
+        else 0.0
+    )
     accepted = {
-        name: fit for name, fit in candidates.items()
+        name: fit
+        for name, fit in candidates.items()
         if (name == "walk" and separation >= WALK_MIN_SEPARATION and fit > 0)
-        or (name != "walk" and max(_circular_distance(m, t) for m, t in zip(measured, GAIT_TEMPLATES[name])) <= PHASE_TOLERANCE)
+        or (
+            name != "walk"
+            and max(_circular_distance(m, t) for m, t in zip(measured, GAIT_TEMPLATES[name]))
+            <= PHASE_TOLERANCE
+        )
     }
     if r < MIN_CONSISTENCY:
-        return "unknown", 0.0, f"touchdown phases are not consistent (R = {r:.2f} < {MIN_CONSISTENCY})", candidates
+        return (
+            "unknown",
+            0.0,
+            f"touchdown phases are not consistent (R = {r:.2f} < {MIN_CONSISTENCY})",
+            candidates,
+        )
     if not accepted:
         return "unknown", 0.0, "no gait's phase pattern fits within its tolerance", candidates
-    best = max(accepted, key=accepted.get)
+    best = max(accepted, key=accepted.__getitem__)
     return best, accepted[best], "phases match " + best, candidates
 
 
@@ -516,16 +630,31 @@ def gait_metrics(contacts: Contacts) -> GaitReport:
     """Per-leg metrics, phases vs FR and the gait's name from :func:`detect_contacts`'s result."""
     results = [_leg_metrics(contacts, slot) for slot in range(len(LEG_NAMES))]
     legs = {metrics.leg: metrics for metrics, _ in results}
-    duties = [m.duty_factor for m in legs.values() if m.status == "ok"]
+    duties = [
+        m.duty_factor for m in legs.values() if m.status == "ok" and m.duty_factor is not None
+    ]
     duty = float(np.mean(duties)) if duties else None
     phases, consistency = relative_phases(contacts, results[0][1])
     name, fit, reason, candidates = name_gait(phases, consistency, duty)
-    return GaitReport(name, fit, reason, candidates, legs, phases, consistency, duty, contacts.ground,
-                      contacts.thresholds, contacts.notes)
+    return GaitReport(
+        name,
+        fit,
+        reason,
+        candidates,
+        legs,
+        phases,
+        consistency,
+        duty,
+        contacts.ground,
+        contacts.thresholds,
+        contacts.notes,
+    )
 
 
 def analyze_gait(
-    stamps_s: np.ndarray, world_feet: np.ndarray, thresholds: ContactThresholds = ContactThresholds(),
+    stamps_s: np.ndarray,
+    world_feet: np.ndarray,
+    thresholds: ContactThresholds = ContactThresholds(),
     unsorted: str = "sort",
 ) -> tuple[Contacts, GaitReport]:
     """:func:`detect_contacts` then :func:`gait_metrics`: contacts and the gait report in one call."""

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import sys
 from collections import Counter
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import Unpack
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PointStamped
@@ -29,7 +30,13 @@ from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.node import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.robot_config import RobotConfig
-from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource, parameter_value
+from a1_leg_fk.robot_source import (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec,
+    RobotSource,
+    parameter_value,
+    string_list,
+)
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_ik"
@@ -38,9 +45,13 @@ TARGETS_QOS = JOINT_STATES_QOS  # best effort, deep: hears reliable and best-eff
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
-    ParameterSpec("command_joint_names", None, ParameterType.PARAMETER_STRING_ARRAY,
-                  "12 joint names for joint_commands in FR, FL, RR, RL x root-to-foot order "
-                  "(e.g. FR_hip_joint, FR_thigh_joint, FR_calf_joint, ...); empty = the URDF's names"),
+    ParameterSpec(
+        "command_joint_names",
+        None,
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "12 joint names for joint_commands in FR, FL, RR, RL x root-to-foot order "
+        "(e.g. FR_hip_joint, FR_thigh_joint, FR_calf_joint, ...); empty = the URDF's names",
+    ),
 )
 """The node's own parameters; the model parameters are :class:`RobotSource`'s. Targets must be in
 ``base_frame`` (or have an empty frame_id)."""
@@ -49,7 +60,7 @@ PARAMETERS = (
 class FootIkNode(Node):
     """Joint angles for foot targets, one leg per message."""
 
-    def __init__(self, **node_options: object) -> None:
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
@@ -66,7 +77,9 @@ class FootIkNode(Node):
         self._commands = self.create_publisher(JointState, "joint_commands", OUTPUT_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         for slot, leg in enumerate(LEG_NAMES):
-            self.create_subscription(PointStamped, f"foot_targets/{leg}", self._on_target_of(slot), TARGETS_QOS)
+            self.create_subscription(
+                PointStamped, f"foot_targets/{leg}", self._on_target_of(slot), TARGETS_QOS
+            )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.get_logger().info(
             f"joint angles of {self._model.source} for targets in frame '{self._base_frame}' from "
@@ -75,12 +88,20 @@ class FootIkNode(Node):
 
     def _settings(self, changes: dict[str, object]) -> tuple[str, list[list[str]]]:
         """(accepted target frame, command names per leg) for the parameters with ``changes``."""
-        value = {name: changes.get(name, parameter_value(self, name)) for name in ("base_frame", "command_joint_names")}
+        value = {
+            name: changes.get(name, parameter_value(self, name))
+            for name in ("base_frame", "command_joint_names")
+        }
         quadruped = self._model.quadruped
-        names = list(value["command_joint_names"]) or list(quadruped.joint_names)  # type: ignore[call-overload]
+        names = string_list(value["command_joint_names"]) or list(quadruped.joint_names)
         if len(names) != len(quadruped.joint_names):
-            raise LegFkError(f"command_joint_names must hold {len(quadruped.joint_names)} names, got {len(names)}: {names}")
-        per_leg = [names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG] for slot in range(len(LEG_NAMES))]
+            raise LegFkError(
+                f"command_joint_names must hold {len(quadruped.joint_names)} names, got {len(names)}: {names}"
+            )
+        per_leg = [
+            names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG]
+            for slot in range(len(LEG_NAMES))
+        ]
         return str(value["base_frame"]) or quadruped.base_frame, per_leg
 
     def _apply_settings(self, settings: tuple[str, list[list[str]]]) -> None:
@@ -118,22 +139,33 @@ class FootIkNode(Node):
         frame = msg.header.frame_id
         if frame not in ("", self._base_frame):
             self._counts["rejected_frame"] += 1
-            self._warnings.warn(f"frame/{leg}", f"leg {leg}: ignoring a target in frame '{frame}': only '{self._base_frame}' "
-                       f"(or empty) is accepted, there is no TF here ({self._counts['rejected_frame']} so far)")
+            self._warnings.warn(
+                f"frame/{leg}",
+                f"leg {leg}: ignoring a target in frame '{frame}': only '{self._base_frame}' "
+                f"(or empty) is accepted, there is no TF here ({self._counts['rejected_frame']} so far)",
+            )
             return
         point = msg.point
         try:
-            result = self._model.quadruped.ik_leg(leg, (point.x, point.y, point.z), self._seeds[slot])
+            result = self._model.quadruped.ik_leg(
+                leg, (point.x, point.y, point.z), self._seeds[slot]
+            )
         except LegFkError as error:
             self._counts["rejected_non_finite"] += 1
-            self._warnings.warn(f"non_finite/{leg}", f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)")
+            self._warnings.warn(
+                f"non_finite/{leg}",
+                f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)",
+            )
             return
         status = STATUS_NAMES[result.status]
         self._counts[f"{leg}_{status}"] += 1
         self._last_status[slot] = f"{status} ({result.residual_m:.3g} m)"
         if result.status != OK:
-            self._warnings.warn(f"status/{leg}", f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
-                       f"publishing the nearest in-limit angles, {result.residual_m:.4f} m from it")
+            self._warnings.warn(
+                f"status/{leg}",
+                f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
+                f"publishing the nearest in-limit angles, {result.residual_m:.4f} m from it",
+            )
         self._seeds[slot] = list(result.angles)
         command = JointState(name=self._command_names[slot], position=list(result.angles))
         command.header.stamp = msg.header.stamp
@@ -148,14 +180,29 @@ class FootIkNode(Node):
         level, summary = DiagnosticStatus.OK, "joint commands published"
         if not counts["targets_received"]:
             level, summary = DiagnosticStatus.WARN, "no foot targets received yet"
-        elif any(counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES[1:]) or counts["rejected_frame"]:
-            level, summary = DiagnosticStatus.WARN, "some targets out of reach, outside the limits, or rejected"
+        elif (
+            any(counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES[1:])
+            or counts["rejected_frame"]
+        ):
+            level, summary = (
+                DiagnosticStatus.WARN,
+                "some targets out of reach, outside the limits, or rejected",
+            )
         if self._robot.topic_rejected:
-            level, summary = DiagnosticStatus.WARN, f"robot description on {self._robot.topic_name} rejected"
+            level, summary = (
+                DiagnosticStatus.WARN,
+                f"robot description on {self._robot.topic_name} rejected",
+            )
         values = {
             "targets_received": counts["targets_received"],
-            **{f"{leg}_{status}": counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES},
-            **{f"{leg}_last_status": self._last_status[slot] for slot, leg in enumerate(LEG_NAMES)},
+            **{
+                f"{leg}_{status}": counts[f"{leg}_{status}"]
+                for leg in LEG_NAMES
+                for status in STATUS_NAMES
+            },
+            **{
+                f"{leg}_last_status": self._last_status[slot] for slot, leg in enumerate(LEG_NAMES)
+            },
             "rejected_frame": counts["rejected_frame"],
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
@@ -163,7 +210,9 @@ class FootIkNode(Node):
             "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
         }
         hardware_id = self._model.quadruped.model.name
-        array = ros_glue.diagnostics(self, "foot inverse kinematics", level, summary, hardware_id, values)
+        array = ros_glue.diagnostics(
+            self, "foot inverse kinematics", level, summary, hardware_id, values
+        )
         self._diagnostics.publish(array)
 
 

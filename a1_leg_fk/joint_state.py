@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
@@ -26,14 +26,20 @@ POSITION_LENGTH_MISMATCH = "position_length_mismatch"
 VELOCITY_LENGTH_MISMATCH = "velocity_length_mismatch"
 DUPLICATE_NAMES = "duplicate_names"
 ALL_POSITIONS_NON_FINITE = "all_positions_non_finite"
-REJECTIONS = (POSITION_LENGTH_MISMATCH, VELOCITY_LENGTH_MISMATCH, DUPLICATE_NAMES, ALL_POSITIONS_NON_FINITE)
+REJECTIONS = (
+    POSITION_LENGTH_MISMATCH,
+    VELOCITY_LENGTH_MISMATCH,
+    DUPLICATE_NAMES,
+    ALL_POSITIONS_NON_FINITE,
+)
 MAX_REMEMBERED_UNKNOWN_NAMES = 1000  # a flood of new names must not grow memory
 
 
 @dataclass(frozen=True)
 class Foot:
     """One leg's foot from one message: position [m] and, if the message had the leg's three
-    joint velocities, velocity [m/s]; base frame, relative to the base."""
+    joint velocities, velocity [m/s]; base frame, relative to the base.
+    """
 
     leg_slot: int
     position: tuple[float, float, float]
@@ -45,7 +51,8 @@ class BlockResult:
     """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;
     ``angles`` (K, 12) [rad], the merged state after each message (NaN for joints not yet known);
     ``rates`` (K, 12) [rad/s], the message's joint velocities where the node publishes that leg's
-    velocity for it, NaN elsewhere."""
+    velocity for it, NaN elsewhere.
+    """
 
     accepted: np.ndarray
     angles: np.ndarray
@@ -57,7 +64,7 @@ class TrackerCounts:
     """What the tracker has seen since it was created."""
 
     messages: int = 0
-    outcomes: Counter = field(default_factory=Counter)  # outcome -> messages
+    outcomes: Counter[str] = field(default_factory=Counter)  # outcome -> messages
     non_finite_joints: int = 0  # joint values rejected for NaN/inf (their legs were not published)
     feet: int = 0  # feet returned for publishing
     out_of_limit_messages: int = 0  # messages that left some joint outside its URDF limits
@@ -103,7 +110,9 @@ class FootTracker:
             if not math.isnan(angle) and not self._lower[slot] <= angle <= self._upper[slot]
         ]
 
-    def update(self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float]) -> list[Foot]:
+    def update(
+        self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float]
+    ) -> list[Foot]:
         """Merge one message; return the feet to publish (possibly none). Never raises on bad data.
 
         ``names``, ``positions`` [rad] and ``velocities`` [rad/s] are the JointState fields;
@@ -142,7 +151,9 @@ class FootTracker:
         ]
         return self._finish(ACCEPTED, feet)
 
-    def update_block(self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray) -> BlockResult:
+    def update_block(
+        self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray
+    ) -> BlockResult:
         """:meth:`update` for K consecutive messages that share one name list, as arrays.
 
         ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] is (K, len(names)) or
@@ -154,7 +165,11 @@ class FootTracker:
         layout = self._layout
         if names != layout.names:
             layout = self._layout = self._describe(list(names))
-        result = BlockResult(np.zeros(rows, bool), np.empty((rows, JOINT_COUNT)), np.full((rows, JOINT_COUNT), math.nan))
+        result = BlockResult(
+            np.zeros(rows, bool),
+            np.empty((rows, JOINT_COUNT)),
+            np.full((rows, JOINT_COUNT), math.nan),
+        )
         outcome = self._check(layout, len(names), positions.shape[1], velocities.shape[1])
         if outcome is not None:
             self.counts.messages += rows
@@ -186,7 +201,14 @@ class FootTracker:
                 row += 1
         return result
 
-    def _merge_finite(self, layout: _NameLayout, values: np.ndarray, slots: np.ndarray, result: BlockResult, rows: slice) -> None:
+    def _merge_finite(
+        self,
+        layout: _NameLayout,
+        values: np.ndarray,
+        slots: np.ndarray,
+        result: BlockResult,
+        rows: slice,
+    ) -> None:
         """Merge messages whose leg joints are all finite (``values`` (n, pairs) [rad])."""
         count = values.shape[0]
         angles = result.angles[rows]
@@ -196,9 +218,13 @@ class FootTracker:
         self.angles = angles[-1].tolist()
         lower, upper = np.array(self._lower)[slots], np.array(self._upper)[slots]
         self.counts.messages += count
-        self.counts.out_of_limit_messages += int(((values < lower) | (values > upper)).any(axis=1).sum())
+        self.counts.out_of_limit_messages += int(
+            ((values < lower) | (values > upper)).any(axis=1).sum()
+        )
         per_leg = angles.reshape(count, len(self._legs), JOINTS_PER_LEG)
-        feet = sum(int((~np.isnan(per_leg[:, leg_slot]).any(axis=1)).sum()) for leg_slot in layout.legs)
+        feet = sum(
+            int((~np.isnan(per_leg[:, leg_slot]).any(axis=1)).sum()) for leg_slot in layout.legs
+        )
         self.last_problem = ""
         self._finish_many(ACCEPTED, count, feet)
 
@@ -218,7 +244,9 @@ class FootTracker:
         self.counts.feet += len(feet)
         return feet
 
-    def _check(self, layout: _NameLayout, names: int, positions: int, velocities: int) -> str | None:
+    def _check(
+        self, layout: _NameLayout, names: int, positions: int, velocities: int
+    ) -> str | None:
         """The message's rejection (setting :attr:`last_problem`), NO_LEG_JOINTS, or None if usable."""
         if positions != names:
             self.last_problem = f"{names} names but {positions} positions"
@@ -245,11 +273,15 @@ class FootTracker:
         if rates is None:
             return Foot(leg_slot, leg.position(q0, q1, q2), None)
         x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
-        finite = math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)  # huge rates can overflow
+        finite = (
+            math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)
+        )  # huge rates can overflow
         return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
 
     @staticmethod
-    def _leg_rates(leg_slot: int, layout: _NameLayout, velocities: Sequence[float]) -> list[float] | None:
+    def _leg_rates(
+        leg_slot: int, layout: _NameLayout, velocities: Sequence[float]
+    ) -> list[float] | None:
         """The leg's three joint velocities from this message, or None unless all are finite."""
         rates = [math.nan] * JOINTS_PER_LEG
         first = leg_slot * JOINTS_PER_LEG
@@ -273,7 +305,6 @@ class FootTracker:
         self._remember_unknown(unknown)
         legs = tuple(sorted({slot // JOINTS_PER_LEG for _, slot in pairs}))
         return _NameLayout(names, tuple(pairs), legs, tuple(unknown), tuple(duplicates))
-
 
     def _remember_unknown(self, names: list[str]) -> None:
         known_unknown = self.counts.unknown_names

@@ -12,11 +12,14 @@ No ROS and no ``rosbags`` here; the tests check this decoder against ``rosbags``
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 _UINT32 = {"<": struct.Struct("<I"), ">": struct.Struct(">I")}
+Uint32Reader = Callable[[bytes, int], tuple[int, ...]]
+"""``struct.Struct.unpack_from`` of a uint32 in the message's byte order: ``(raw, offset)``."""
 _STAMP_CDR = {"<": struct.Struct("<iI"), ">": struct.Struct(">iI")}
 _STAMP_ROS1 = struct.Struct("<II")
 _DOUBLES = {"<": np.dtype("<f8"), ">": np.dtype(">f8")}
@@ -30,7 +33,8 @@ class WireError(ValueError):
 class WireJointState:
     """One message's fields: stamp [ns] (header, 0 when unset), names (``None`` when the name
     bytes equal the previous message's), positions [rad] and velocities [rad/s] as float64 arrays
-    (views of the message bytes in their byte order)."""
+    (views of the message bytes in their byte order).
+    """
 
     stamp_ns: int
     names: list[str] | None
@@ -56,12 +60,16 @@ class JointStateDecoder:
         stamp_ns, changed, order, positions, velocities = self.fields(raw)
         dtype = _DOUBLES[order]
         return WireJointState(
-            stamp_ns, self._names if changed else None, np.frombuffer(positions, dtype), np.frombuffer(velocities, dtype)
+            stamp_ns,
+            self._names if changed else None,
+            np.frombuffer(positions, dtype),
+            np.frombuffer(velocities, dtype),
         )
 
     def fields(self, raw: bytes | memoryview) -> tuple[int, bool, str, bytes, bytes]:
         """``(stamp [ns], names changed, byte order "<" or ">", position bytes, velocity bytes)``:
-        the arrays as raw float64 bytes in that byte order, for callers that batch them."""
+        the arrays as raw float64 bytes in that byte order, for callers that batch them.
+        """
         raw = bytes(raw)
         try:
             return self._fields_ros1(raw) if self.ros1 else self._fields_cdr(raw)
@@ -115,7 +123,8 @@ class JointStateDecoder:
 class CdrLayout:
     """Where a CDR (little endian) JointState keeps its fields, for messages of the same length
     and layout: byte offsets in the serialized message; ``fixed`` lists the bytes that define the
-    layout (header, lengths, the name list), which all such messages must share."""
+    layout (header, lengths, the name list), which all such messages must share.
+    """
 
     positions: slice
     velocities: slice
@@ -130,7 +139,7 @@ def cdr_layout(raw: bytes) -> CdrLayout | None:
     try:
         names_start = (12 + u32(raw, 12)[0] + 3) & -4
         _, names_end = _cdr_names(raw, names_start, u32)
-        spans, fixed = [], [range(0, 4), range(12, 16), range(4 + names_start, 4 + names_end)]
+        spans, fixed = [], [range(4), range(12, 16), range(4 + names_start, 4 + names_end)]
         offset = names_end
         for _ in range(3):  # position, velocity, effort
             offset = (offset + 3) & -4
@@ -146,7 +155,7 @@ def cdr_layout(raw: bytes) -> CdrLayout | None:
     return CdrLayout(spans[0], spans[1], indices)
 
 
-def _cdr_names(raw: bytes, offset: int, u32) -> tuple[list[str], int]:  # noqa: ANN001
+def _cdr_names(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[list[str], int]:
     """The ``sequence<string>`` at ``offset`` (relative to the body): (names, offset after it)."""
     count = u32(raw, 4 + offset)[0]
     offset += 4
@@ -168,7 +177,7 @@ def _check_count(count: int, available: int, what: str) -> None:
         raise WireError(f"{what}: {count} elements cannot fit in {available} bytes")
 
 
-def _cdr_doubles(raw: bytes, offset: int, u32) -> tuple[bytes, int]:  # noqa: ANN001
+def _cdr_doubles(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[bytes, int]:
     """The ``sequence<float64>`` at ``offset`` (relative to the body): (its bytes, offset after)."""
     offset = (offset + 3) & -4
     count = u32(raw, 4 + offset)[0]
@@ -177,7 +186,9 @@ def _cdr_doubles(raw: bytes, offset: int, u32) -> tuple[bytes, int]:  # noqa: AN
         offset = (offset + 7) & -8
     end = offset + 8 * count
     if 4 + end > len(raw):
-        raise WireError(f"float64 sequence of {count} elements runs past the message ({len(raw)} bytes)")
+        raise WireError(
+            f"float64 sequence of {count} elements runs past the message ({len(raw)} bytes)"
+        )
     return raw[4 + offset : 4 + end], end
 
 
@@ -185,5 +196,7 @@ def _packed_doubles(raw: bytes, offset: int) -> tuple[bytes, int]:
     count = _UINT32["<"].unpack_from(raw, offset)[0]
     end = offset + 4 + 8 * count
     if end > len(raw):
-        raise WireError(f"float64 array of {count} elements runs past the message ({len(raw)} bytes)")
+        raise WireError(
+            f"float64 array of {count} elements runs past the message ({len(raw)} bytes)"
+        )
     return raw[offset + 4 : end], end

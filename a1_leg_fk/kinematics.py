@@ -18,15 +18,28 @@ side first (hip roll, hip pitch, knee for the A1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Callable, Mapping, Sequence
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from a1_leg_fk import inverse
-from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, LegChain, find_legs, joint_name_index, leg_slot
+from a1_leg_fk.legs import (
+    JOINT_COUNT,
+    JOINTS_PER_LEG,
+    LEG_NAMES,
+    LegChain,
+    find_legs,
+    joint_name_index,
+    leg_slot,
+)
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
+
+Angles = Sequence[float] | np.ndarray
+"""Joint angles [rad] (or rates [rad/s]): a sequence of numbers or a 1-D numpy array."""
 
 BATCH_CHUNK_ROWS = 4096
 """Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
@@ -88,14 +101,19 @@ class CompiledLeg:
         self.chain = chain
         self.stages, self.foot_offset = _fold_chain(chain)
         self.source = _leg_source(self.stages, self.foot_offset)
-        namespace: dict[str, Callable[..., tuple]] = {"_cos": math.cos, "_sin": math.sin}
-        exec(compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace)
-        self.position = namespace["position"]
-        self.position_velocity = namespace["position_velocity"]
-        self.position_from_trig = namespace["position_from_trig"]
-        self.jacobian_from_trig = namespace["jacobian_from_trig"]
+        namespace: dict[str, Any] = {"_cos": math.cos, "_sin": math.sin}
+        exec(  # our own generated source (_leg_source)
+            compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace
+        )
+        # The generated functions take and return floats (or numpy arrays, the *_from_trig ones).
+        self.position: Callable[..., tuple[float, float, float]] = namespace["position"]
+        self.position_velocity: Callable[..., tuple[float, ...]] = namespace["position_velocity"]
+        self.position_from_trig: Callable[..., tuple[Any, Any, Any]] = namespace[
+            "position_from_trig"
+        ]
+        self.jacobian_from_trig: Callable[..., tuple[Any, ...]] = namespace["jacobian_from_trig"]
 
-    def joint_points(self, angles: Sequence[float]) -> np.ndarray:
+    def joint_points(self, angles: Angles) -> np.ndarray:
         """(4, 3): the three movable joints' origins and the foot [m], root frame, root side first."""
         rotation, origin = np.eye(3), np.zeros(3)
         points = []
@@ -127,7 +145,9 @@ class Quadruped:
         self._leg_positions = tuple(leg.position for leg in self.legs)
         self.joints: tuple[Joint, ...] = tuple(j for leg in self.legs for j in leg.chain.movable)
         self.joint_names = tuple(joint.name for joint in self.joints)
-        self.name_to_slot: Mapping[str, int] = joint_name_index(tuple(leg.chain for leg in self.legs), joint_aliases)
+        self.name_to_slot: Mapping[str, int] = joint_name_index(
+            tuple(leg.chain for leg in self.legs), joint_aliases
+        )
 
     @classmethod
     def from_urdf(
@@ -135,17 +155,24 @@ class Quadruped:
         source: str | None = None,
         foot_links: Mapping[str, str] | None = None,
         joint_aliases: Mapping[str, str] | None = None,
-    ) -> "Quadruped":
+    ) -> Quadruped:
         """Load a URDF (path, XML string, or ``None`` for the embedded A1) and compile its legs."""
         return cls(load_urdf(source), foot_links, joint_aliases)
 
-    def fk(self, angles: Sequence[float]) -> np.ndarray:
+    def fk(self, angles: Angles) -> np.ndarray:
         """(4, 3) foot positions [m] in the base frame for 12 joint angles [rad]."""
         q = _quickly_checked_configuration(angles)
         fr, fl, rr, rl = self._leg_positions
-        return np.array((fr(q[0], q[1], q[2]), fl(q[3], q[4], q[5]), rr(q[6], q[7], q[8]), rl(q[9], q[10], q[11])))
+        return np.array(
+            (
+                fr(q[0], q[1], q[2]),
+                fl(q[3], q[4], q[5]),
+                rr(q[6], q[7], q[8]),
+                rl(q[9], q[10], q[11]),
+            )
+        )
 
-    def fk_batch(self, angles: np.ndarray) -> np.ndarray:
+    def fk_batch(self, angles: ArrayLike) -> np.ndarray:
         """(N, 4, 3) foot positions [m] for an (N, 12) array of joint angles [rad]."""
         q = _checked_batch(angles, "angles")
         out = np.empty((q.shape[0], len(LEG_NAMES), 3))
@@ -157,30 +184,36 @@ class Quadruped:
                 out[rows, slot, 0], out[rows, slot, 1], out[rows, slot, 2] = x, y, z
         return out
 
-    def foot_velocities(self, angles: Sequence[float], rates: Sequence[float]) -> np.ndarray:
+    def foot_velocities(self, angles: Angles, rates: Angles) -> np.ndarray:
         """(4, 3) foot velocities [m/s], base frame, relative to the base: ``J(q) q_dot``."""
         q = _checked_configuration(angles)
         dq = _checked_configuration(rates, "joint velocities")
-        out = []
+        out: list[float] = []
         for slot, leg in enumerate(self.legs):
             first = slot * JOINTS_PER_LEG
             out.extend(leg.position_velocity(*q[first : first + 3], *dq[first : first + 3])[3:])
         return np.array(out).reshape(len(LEG_NAMES), 3)
 
-    def foot_velocities_batch(self, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    def foot_velocities_batch(self, angles: ArrayLike, rates: ArrayLike) -> np.ndarray:
         """(N, 4, 3) foot velocities [m/s] for (N, 12) angles [rad] and rates [rad/s]."""
         q = _checked_batch(angles, "angles")
         dq = _checked_batch(rates, "joint velocities")
         if dq.shape != q.shape:
             raise LegFkError(f"joint velocities have shape {dq.shape}, angles {q.shape}")
         jacobians = self.jacobians_batch(q)
-        return np.einsum("nlij,nlj->nli", jacobians, dq.reshape(q.shape[0], len(LEG_NAMES), JOINTS_PER_LEG))
+        velocities: np.ndarray = np.einsum(
+            "nlij,nlj->nli", jacobians, dq.reshape(q.shape[0], len(LEG_NAMES), JOINTS_PER_LEG)
+        )
+        return velocities
 
-    def jacobians(self, angles: Sequence[float]) -> np.ndarray:
+    def jacobians(self, angles: Angles) -> np.ndarray:
         """(4, 3, 3): per leg, d(foot position [m]) / d(its three angles [rad]), base frame."""
-        return self.jacobians_batch(np.asarray(_checked_configuration(angles))[np.newaxis])[0]
+        jacobians: np.ndarray = self.jacobians_batch(
+            np.asarray(_checked_configuration(angles))[np.newaxis]
+        )[0]
+        return jacobians
 
-    def jacobians_batch(self, angles: np.ndarray) -> np.ndarray:
+    def jacobians_batch(self, angles: ArrayLike) -> np.ndarray:
         """(N, 4, 3, 3) Jacobians for an (N, 12) array of angles [rad]."""
         q = _checked_batch(angles, "angles")
         out = np.empty((q.shape[0], len(LEG_NAMES), 3, JOINTS_PER_LEG))
@@ -199,56 +232,73 @@ class Quadruped:
         for name, value in positions.items():
             slot = self.name_to_slot.get(name)
             if slot is None:
-                raise LegFkError(f"unknown joint name '{name}': not a leg joint of {self.model.source}")
+                raise LegFkError(
+                    f"unknown joint name '{name}': not a leg joint of {self.model.source}"
+                )
             angles[slot] = value
         missing = [self.joint_names[slot] for slot, value in enumerate(angles) if value is None]
         if missing:
             raise LegFkError(f"joint angles missing for {missing}")
-        return _checked_configuration(angles)  # type: ignore[arg-type]
+        return _checked_configuration(cast("list[float]", angles))  # no None left (checked above)
 
-    def joints_outside_limits(self, angles: Sequence[float]) -> list[LimitViolation]:
+    def joints_outside_limits(self, angles: Angles) -> list[LimitViolation]:
         """The joints whose angle [rad] lies outside their URDF limits (continuous joints have none)."""
         q = _checked_configuration(angles)
         return [
             LimitViolation(joint.name, value, joint.lower, joint.upper)
             for joint, value in zip(self.joints, q)
-            if joint.lower is not None and joint.upper is not None and not joint.lower <= value <= joint.upper
+            if joint.lower is not None
+            and joint.upper is not None
+            and not joint.lower <= value <= joint.upper
         ]
 
     @cached_property
     def _ik_solvers(self) -> tuple[inverse.LegSolver, ...]:
         return tuple(inverse.LegSolver(leg) for leg in self.legs)
 
-    def ik(self, feet: np.ndarray, seed: Sequence[float] | None = None) -> inverse.IkResult:
+    def ik(self, feet: np.ndarray, seed: Angles | None = None) -> inverse.IkResult:
         """Joint angles [rad] putting the four feet at ``feet`` ((4, 3) [m], base frame), with a
         status (``ok``, ``outside_limits``, ``unreachable``) and residual [m] per leg; ``seed``
-        (12 angles [rad]) picks the solution nearest it (see :mod:`a1_leg_fk.inverse`)."""
+        (12 angles [rad]) picks the solution nearest it (see :mod:`a1_leg_fk.inverse`).
+        """
         checked_seed = None if seed is None else _checked_configuration(seed, "seed")
         return inverse.solve_feet(self._ik_solvers, _checked_feet(feet), checked_seed)
 
     def ik_batch(self, feet: np.ndarray, seed: np.ndarray | None = None) -> inverse.IkBatchResult:
         """:meth:`ik` for (N, 4, 3) targets [m] and (N, 12) seeds [rad]: (N, 12) angles, (N, 4)
-        status codes (:data:`a1_leg_fk.inverse.OK` ...), (N, 4) residuals [m]."""
+        status codes (:data:`a1_leg_fk.inverse.OK` ...), (N, 4) residuals [m].
+        """
         targets = np.asarray(feet, dtype=np.float64)
         if targets.ndim != 3 or targets.shape[1:] != (len(LEG_NAMES), 3):
             raise LegFkError(f"feet must have shape (N, {len(LEG_NAMES)}, 3), got {targets.shape}")
         bad = ~np.isfinite(targets).all(axis=2)
         if bad.any():
             row, slot = (int(i) for i in np.argwhere(bad)[0])
-            raise LegFkError(f"feet: leg {LEG_NAMES[slot]} of row {row} is not finite ({bad.sum()} such targets)")
+            raise LegFkError(
+                f"feet: leg {LEG_NAMES[slot]} of row {row} is not finite ({bad.sum()} such targets)"
+            )
         seeds = None if seed is None else _checked_batch(seed, "seed")
         if seeds is not None and seeds.shape[0] != targets.shape[0]:
             raise LegFkError(f"seed has {seeds.shape[0]} rows, feet {targets.shape[0]}")
         return inverse.solve_feet_batch(self._ik_solvers, targets, seeds)
 
-    def ik_leg(self, leg: str, point: Sequence[float], seed: Sequence[float] | None = None) -> inverse.LegIk:
+    def ik_leg(
+        self, leg: str, point: Sequence[float], seed: Angles | None = None
+    ) -> inverse.LegIk:
         """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or ``None``."""
-        checked_seed = None if seed is None else _checked_configuration(seed, f"seed of leg {leg}", JOINTS_PER_LEG)
-        return self._ik_solvers[leg_slot(leg)].solve(inverse.checked_point(point, leg), checked_seed)
+        checked_seed = (
+            None
+            if seed is None
+            else _checked_configuration(seed, f"seed of leg {leg}", JOINTS_PER_LEG)
+        )
+        return self._ik_solvers[leg_slot(leg)].solve(
+            inverse.checked_point(point, leg), checked_seed
+        )
 
     def ik_solutions(self, leg: str, point: Sequence[float]) -> list[inverse.Solution]:
         """Every exact IK solution of ``leg`` for ``point`` [m, base frame] (for the A1 topology:
-        up to two roll x two knee branches), each with whether it is inside the URDF limits."""
+        up to two roll x two knee branches), each with whether it is inside the URDF limits.
+        """
         return self._ik_solvers[leg_slot(leg)].solutions(inverse.checked_point(point, leg))
 
     def reach(self, leg: str) -> Reach:
@@ -259,7 +309,9 @@ class Quadruped:
         compiled = self.legs[leg_slot(leg)]
         pitch, knee = compiled.stages[1], compiled.stages[2]
         if abs(abs(float(pitch.axis @ knee.rotation @ knee.axis)) - 1.0) > 1e-9:
-            raise LegFkError(f"leg {leg}: knee axis is not parallel to the hip-pitch axis; reach is not defined")
+            raise LegFkError(
+                f"leg {leg}: knee axis is not parallel to the hip-pitch axis; reach is not defined"
+            )
         # Foot in the pitch joint's frame: u + cos(q) v + sin(q) w; its distance to the pitch axis
         # squared is alpha + beta cos(q) + gamma sin(q) (the cos^2, sin^2, cos*sin terms cancel).
         project = np.eye(3) - np.outer(pitch.axis, pitch.axis)
@@ -283,7 +335,15 @@ class Quadruped:
         ]
         knee_at_min = min(candidates, key=distance)
         knee_at_max = max(candidates, key=distance)
-        return Reach(leg, distance(knee_at_min), knee_at_min, distance(knee_at_max), knee_at_max, distance(peak), peak)
+        return Reach(
+            leg,
+            distance(knee_at_min),
+            knee_at_min,
+            distance(knee_at_max),
+            knee_at_max,
+            distance(peak),
+            peak,
+        )
 
 
 def _checked_feet(feet: np.ndarray) -> np.ndarray:
@@ -293,15 +353,21 @@ def _checked_feet(feet: np.ndarray) -> np.ndarray:
     except (TypeError, ValueError) as error:
         raise LegFkError(f"feet must be {len(LEG_NAMES)} x 3 numbers: {error}") from error
     if targets.shape != (len(LEG_NAMES), 3):
-        raise LegFkError(f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}")
-    total = sum(targets.ravel().tolist())  # a NaN or infinity makes it non-finite (cheaper than isfinite)
+        raise LegFkError(
+            f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}"
+        )
+    total = sum(
+        targets.ravel().tolist()
+    )  # a NaN or infinity makes it non-finite (cheaper than isfinite)
     if total - total != 0.0:
         for slot, leg in enumerate(LEG_NAMES):
             inverse.checked_point(targets[slot], leg)
     return targets
 
 
-def _checked_configuration(angles: Sequence[float], what: str = "joint angles", count: int = JOINT_COUNT) -> list[float]:
+def _checked_configuration(
+    angles: Angles, what: str = "joint angles", count: int = JOINT_COUNT
+) -> list[float]:
     """``count`` (12) finite floats, or a LegFkError naming the problem."""
     try:
         q = [float(value) for value in angles]
@@ -315,14 +381,18 @@ def _checked_configuration(angles: Sequence[float], what: str = "joint angles", 
             raise LegFkError(f"{what}: joint {slot} is {value}")
         if not math.isfinite(value):
             leg = LEG_NAMES[slot // JOINTS_PER_LEG]
-            raise LegFkError(f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}")
+            raise LegFkError(
+                f"{what}: slot {slot} (leg {leg}, joint {slot % JOINTS_PER_LEG}) is {value}"
+            )
     return q
 
 
-def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
-    """As :func:`_checked_configuration`, but the common case (12 finite Python floats or ints)
-    costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
-    value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0`` here, ratio 0.995.)"""
+def _quickly_checked_configuration(angles: Angles) -> list[float]:
+    """As :func:`_checked_configuration`, but cheap for 12 finite Python floats or ints.
+
+    The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
+    value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0`` here, ratio 0.995.)
+    """
     try:
         q = angles.tolist() if isinstance(angles, np.ndarray) else list(angles)
         total = sum(q)
@@ -332,7 +402,7 @@ def _quickly_checked_configuration(angles: Sequence[float]) -> list[float]:
     return q if usable else _checked_configuration(angles)
 
 
-def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:
+def _checked_batch(angles: ArrayLike, what: str) -> np.ndarray:
     q = np.asarray(angles, dtype=np.float64)
     if q.ndim != 2 or q.shape[1] != JOINT_COUNT:
         raise LegFkError(f"{what} must have shape (N, {JOINT_COUNT}), got {q.shape}")
@@ -343,12 +413,17 @@ def _checked_batch(angles: np.ndarray, what: str) -> np.ndarray:
 
 
 def _row_blocks(rows: int) -> list[slice]:
-    return [slice(start, min(start + BATCH_CHUNK_ROWS, rows)) for start in range(0, rows, BATCH_CHUNK_ROWS)]
+    return [
+        slice(start, min(start + BATCH_CHUNK_ROWS, rows))
+        for start in range(0, rows, BATCH_CHUNK_ROWS)
+    ]
 
 
 def _leg_trig(cos: np.ndarray, sin: np.ndarray, slot: int) -> list[np.ndarray]:
     first = slot * JOINTS_PER_LEG
-    return [array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)]
+    return [
+        array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)
+    ]
 
 
 # --- folding a chain into stages -----------------------------------------------------------
@@ -357,7 +432,14 @@ def _leg_trig(cos: np.ndarray, sin: np.ndarray, slot: int) -> list[np.ndarray]:
 def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     """URDF ``rpy`` [rad] -> rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     roll, pitch, yaw = rpy
-    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw), math.sin(yaw))
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(roll),
+        math.sin(roll),
+        math.cos(pitch),
+        math.sin(pitch),
+        math.cos(yaw),
+        math.sin(yaw),
+    )
     return np.array(
         [
             [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
@@ -466,19 +548,43 @@ def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
         velocity = velocity_code.assign(
             [
                 _sum(
-                    [("", _rotate_row(terms, axis, velocity, cos, sin)), (rate, _derivative_row(terms, axis, point, cos, sin))]
+                    [
+                        ("", _rotate_row(terms, axis, velocity, cos, sin)),
+                        (rate, _derivative_row(terms, axis, point, cos, sin)),
+                    ]
                 )
                 for axis in range(3)
             ]
         )
-        tangents = [jacobian_code.assign([_rotate_row(terms, axis, t, cos, sin) for axis in range(3)]) for t in tangents]
-        tangents.insert(0, jacobian_code.assign([_derivative_row(terms, axis, jacobian_point, cos, sin) for axis in range(3)]))
-        new_point = [_sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, point, cos, sin))]) for axis in range(3)]
+        tangents = [
+            jacobian_code.assign([_rotate_row(terms, axis, t, cos, sin) for axis in range(3)])
+            for t in tangents
+        ]
+        tangents.insert(
+            0,
+            jacobian_code.assign(
+                [_derivative_row(terms, axis, jacobian_point, cos, sin) for axis in range(3)]
+            ),
+        )
+        new_point = [
+            _sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, point, cos, sin))])
+            for axis in range(3)
+        ]
         point = position_code.assign(new_point)
-        velocity_code.lines.extend(f"{name} = {expr}" for name, expr in zip(point, new_point) if isinstance(name, str))
+        velocity_code.lines.extend(
+            f"{name} = {expr}" for name, expr in zip(point, new_point) if isinstance(name, str)
+        )
         if slot > 0:  # the root-side stage's point is not needed by any column
             jacobian_point = jacobian_code.assign(
-                [_sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, jacobian_point, cos, sin))]) for axis in range(3)]
+                [
+                    _sum(
+                        [
+                            ("", float(offset[axis])),
+                            ("", _rotate_row(terms, axis, jacobian_point, cos, sin)),
+                        ]
+                    )
+                    for axis in range(3)
+                ]
             )
     trig = "c0, s0, c1, s1, c2, s2"
     from_angles = [f"c{i} = _cos(q{i})\n    s{i} = _sin(q{i})" for i in range(len(stages))]
@@ -486,7 +592,9 @@ def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
     return "\n".join(
         [
             f"def position_from_trig({trig}):\n    {body}\n    return ({_tuple(point)})\n",
-            "def position(q0, q1, q2):\n    " + "\n    ".join(from_angles) + f"\n    {body}\n    return ({_tuple(point)})\n",
+            "def position(q0, q1, q2):\n    "
+            + "\n    ".join(from_angles)
+            + f"\n    {body}\n    return ({_tuple(point)})\n",
             "def position_velocity(q0, q1, q2, dq0, dq1, dq2):\n    "
             + "\n    ".join(from_angles + velocity_code.lines)
             + f"\n    return ({_tuple(point)}, {_tuple(velocity)})\n",
@@ -497,13 +605,23 @@ def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
     )
 
 
-def _rotate_row(terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str) -> Term:
+def _rotate_row(
+    terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str
+) -> Term:
     """Row ``axis`` of ``(C0 + cos C1 + sin C2) vector``."""
     c0, c1, c2 = terms
-    return _sum([("", _linear(c0[axis], vector)), (cos, _linear(c1[axis], vector)), (sin, _linear(c2[axis], vector))])
+    return _sum(
+        [
+            ("", _linear(c0[axis], vector)),
+            (cos, _linear(c1[axis], vector)),
+            (sin, _linear(c2[axis], vector)),
+        ]
+    )
 
 
-def _derivative_row(terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str) -> Term:
+def _derivative_row(
+    terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str
+) -> Term:
     """Row ``axis`` of ``d/dq (C0 + cos C1 + sin C2) vector = (cos C2 - sin C1) vector``."""
     _, c1, c2 = terms
     return _sum([(f"-{sin}", _linear(c1[axis], vector)), (cos, _linear(c2[axis], vector))])

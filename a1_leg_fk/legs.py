@@ -6,10 +6,10 @@ joint names mean which URDF joint.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
-from a1_leg_fk.urdf import Joint, RobotModel, LegFkError
+from a1_leg_fk.urdf import Joint, LegFkError, RobotModel
 
 LEG_NAMES: tuple[str, ...] = ("FR", "FL", "RR", "RL")
 """Leg order everywhere in the package: front-right, front-left, rear-right, rear-left."""
@@ -25,6 +25,7 @@ def leg_slot(leg: str) -> int:
         return LEG_NAMES.index(leg)
     except ValueError:
         raise LegFkError(f"unknown leg '{leg}': legs are {list(LEG_NAMES)}") from None
+
 
 FOOT_NAME_SUFFIXES: tuple[str, ...] = ("foot", "toe", "foot_link", "toe_link")
 """Where several leaf links of a leg qualify as its foot, the one named ``<leg>_<suffix>`` with one
@@ -54,7 +55,9 @@ class LegChain:
         return tuple(joint for joint in self.joints if joint.movable)
 
 
-def find_legs(model: RobotModel, foot_links: Mapping[str, str] | None = None) -> tuple[LegChain, ...]:
+def find_legs(
+    model: RobotModel, foot_links: Mapping[str, str] | None = None
+) -> tuple[LegChain, ...]:
     """The four legs in :data:`LEG_NAMES` order.
 
     ``foot_links`` maps leg name -> foot link name; without it, the feet are the leaf links whose
@@ -78,11 +81,13 @@ def find_legs(model: RobotModel, foot_links: Mapping[str, str] | None = None) ->
 
 def _discover_feet(model: RobotModel) -> dict[str, str]:
     """Each leg's foot: its one leaf link with three movable joints above it, or, of several, the
-    one named like a foot (:data:`FOOT_NAME_SUFFIXES`)."""
+    one named like a foot (:data:`FOOT_NAME_SUFFIXES`).
+    """
     candidates = [
         link
         for link in model.links
-        if not model.child_links(link) and sum(j.movable for j in _chain_or_empty(model, link)) == JOINTS_PER_LEG
+        if not model.child_links(link)
+        and sum(j.movable for j in _chain_or_empty(model, link)) == JOINTS_PER_LEG
     ]
     feet: dict[str, str] = {}
     for leg in LEG_NAMES:
@@ -109,7 +114,9 @@ def _named_like_a_foot(leg: str, link: str) -> bool:
 def _explain_missing_foot(model: RobotModel, leg: str) -> None:
     """Raise the chain error (e.g. a prismatic knee) of the leg's deepest leaf link, if it has one."""
     leaves = [
-        link for link in model.links if link.upper().startswith(leg) and link != model.root and not model.child_links(link)
+        link
+        for link in model.links
+        if link.upper().startswith(leg) and link != model.root and not model.child_links(link)
     ]
     if leaves:
         _leg_chain(model, leg, max(leaves, key=lambda link: len(model.chain_to(link))))
@@ -138,7 +145,9 @@ def _leg_chain(model: RobotModel, leg: str, foot_link: str) -> LegChain:
     return LegChain(leg, foot_link, chain)
 
 
-def joint_name_index(legs: tuple[LegChain, ...], aliases: Mapping[str, str] | None = None) -> dict[str, int]:
+def joint_name_index(
+    legs: tuple[LegChain, ...], aliases: Mapping[str, str] | None = None
+) -> dict[str, int]:
     """Map every accepted incoming joint name to its slot 0..11 (leg-major, root side first).
 
     Accepted: the URDF names, their Unitree/pybullet_data equivalents (see
@@ -154,7 +163,9 @@ def joint_name_index(legs: tuple[LegChain, ...], aliases: Mapping[str, str] | No
             index.setdefault(equivalent, slot)
     for incoming, urdf_name in (aliases or {}).items():
         if urdf_name not in index:
-            raise LegFkError(f"joint alias '{incoming}={urdf_name}': '{urdf_name}' is not a leg joint of the model")
+            raise LegFkError(
+                f"joint alias '{incoming}={urdf_name}': '{urdf_name}' is not a leg joint of the model"
+            )
         index[incoming] = index[urdf_name]
     return index
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD = struct.Struct("<BQ")  # opcode, content length
@@ -29,7 +30,8 @@ class Salvaged:
 def salvage(source: Path, target: Path) -> Salvaged | None:
     """Copy the complete records of ``source`` (an MCAP file) to ``target`` with a footer; None
     when ``source`` does not start like an MCAP file or has no complete record after its header.
-    The complete records inside a cut, uncompressed chunk are kept too (as top-level records)."""
+    The complete records inside a cut, uncompressed chunk are kept too (as top-level records).
+    """
     size = source.stat().st_size
     with source.open("rb") as data:
         if data.read(len(MAGIC)) != MAGIC:
@@ -46,9 +48,10 @@ def salvage(source: Path, target: Path) -> Salvaged | None:
     return Salvaged(target, inner_end if inner_end > inner_start else end, size)
 
 
-def _cut_chunk_records(data, offset: int, size: int) -> tuple[int, int]:  # noqa: ANN001
+def _cut_chunk_records(data: BinaryIO, offset: int, size: int) -> tuple[int, int]:
     """(start, end) of the complete records inside the uncompressed chunk cut at the file's end
-    that starts at ``offset``; (0, 0) if there is none."""
+    that starts at ``offset``; (0, 0) if there is none.
+    """
     if offset + _RECORD.size + _CHUNK_HEAD.size + 4 > size:
         return 0, 0
     data.seek(offset)
@@ -64,9 +67,10 @@ def _cut_chunk_records(data, offset: int, size: int) -> tuple[int, int]:  # noqa
     return (start, end) if end > start else (0, 0)
 
 
-def _complete_records(data, start: int, size: int, top_level: bool = False) -> int:  # noqa: ANN001
+def _complete_records(data: BinaryIO, start: int, size: int, top_level: bool = False) -> int:
     """The offset after the last record from ``start`` on that lies wholly before ``size``; at the
-    top level, stop at the data end record or a footer (the summary after them is not needed)."""
+    top level, stop at the data end record or a footer (the summary after them is not needed).
+    """
     end = offset = start
     while offset + _RECORD.size <= size:
         data.seek(offset)
@@ -80,7 +84,7 @@ def _complete_records(data, start: int, size: int, top_level: bool = False) -> i
     return end
 
 
-def _copy(source, target, length: int) -> None:  # noqa: ANN001 (binary files)
+def _copy(source: BinaryIO, target: BinaryIO, length: int) -> None:
     remaining = length
     while remaining:
         block = source.read(min(remaining, 1 << 20))
@@ -88,4 +92,3 @@ def _copy(source, target, length: int) -> None:  # noqa: ANN001 (binary files)
             break
         target.write(block)
         remaining -= len(block)
-

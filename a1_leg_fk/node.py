@@ -10,7 +10,8 @@ from __future__ import annotations
 import math
 import sys
 import time
-from typing import Sequence
+from collections.abc import Sequence
+from typing import Unpack
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
@@ -20,6 +21,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.service import Service
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
@@ -31,7 +33,12 @@ from a1_leg_fk.joint_state import REJECTIONS, Foot, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.pybullet_check import PyBulletFeet
 from a1_leg_fk.robot_config import RobotConfig
-from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource, parameter_value
+from a1_leg_fk.robot_source import (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec,
+    RobotSource,
+    parameter_value,
+)
 from a1_leg_fk.serialized_output import SerializedStamped
 from a1_leg_fk.urdf import LegFkError
 
@@ -56,24 +63,54 @@ VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
-    ParameterSpec("publish_velocities", True, ParameterType.PARAMETER_BOOL,
-                  "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities"),
-    ParameterSpec("publish_markers", True, ParameterType.PARAMETER_BOOL,
-                  "Publish foot_markers (MarkerArray) while someone subscribes"),
-    ParameterSpec("marker_rate_hz", 30.0, ParameterType.PARAMETER_DOUBLE,
-                  f"Highest rate of foot_markers [Hz], in {MARKER_RATE_RANGE_HZ}", value_range=MARKER_RATE_RANGE_HZ),
-    ParameterSpec("max_publish_rate_hz", 0.0, ParameterType.PARAMETER_DOUBLE,
-                  "Highest rate of foot positions/velocities [Hz], in "
-                  f"{PUBLISH_RATE_RANGE_HZ}; 0 = one set per joint state (no throttling)",
-                  value_range=PUBLISH_RATE_RANGE_HZ),
-    ParameterSpec("enable_verify", True, ParameterType.PARAMETER_BOOL,
-                  "Offer the verify_fk service (compares the FK with PyBullet's)"),
-    ParameterSpec("verify_tolerance_m", 1e-6, ParameterType.PARAMETER_DOUBLE,
-                  "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, in "
-                  f"{VERIFY_TOLERANCE_RANGE_M}", value_range=VERIFY_TOLERANCE_RANGE_M),
-    ParameterSpec("preserialized_output", True, ParameterType.PARAMETER_BOOL,
-                  "Publish the foot messages as bytes patched into a pre-serialized message (the same "
-                  "messages, cheaper); false = as message objects"),
+    ParameterSpec(
+        "publish_velocities",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities",
+    ),
+    ParameterSpec(
+        "publish_markers",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish foot_markers (MarkerArray) while someone subscribes",
+    ),
+    ParameterSpec(
+        "marker_rate_hz",
+        30.0,
+        ParameterType.PARAMETER_DOUBLE,
+        f"Highest rate of foot_markers [Hz], in {MARKER_RATE_RANGE_HZ}",
+        value_range=MARKER_RATE_RANGE_HZ,
+    ),
+    ParameterSpec(
+        "max_publish_rate_hz",
+        0.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "Highest rate of foot positions/velocities [Hz], in "
+        f"{PUBLISH_RATE_RANGE_HZ}; 0 = one set per joint state (no throttling)",
+        value_range=PUBLISH_RATE_RANGE_HZ,
+    ),
+    ParameterSpec(
+        "enable_verify",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Offer the verify_fk service (compares the FK with PyBullet's)",
+    ),
+    ParameterSpec(
+        "verify_tolerance_m",
+        1e-6,
+        ParameterType.PARAMETER_DOUBLE,
+        "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, in "
+        f"{VERIFY_TOLERANCE_RANGE_M}",
+        value_range=VERIFY_TOLERANCE_RANGE_M,
+    ),
+    ParameterSpec(
+        "preserialized_output",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish the foot messages as bytes patched into a pre-serialized message (the same "
+        "messages, cheaper); false = as message objects",
+    ),
 )
 """The node's own parameters; the model parameters are :class:`a1_leg_fk.robot_source.RobotSource`'s."""
 
@@ -81,7 +118,7 @@ PARAMETERS = (
 class FootFkNode(Node):
     """Publishes the four feet of the robot for every JointState; offers ``verify_fk``."""
 
-    def __init__(self, **node_options: object) -> None:
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
@@ -91,8 +128,10 @@ class FootFkNode(Node):
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
         self._last_verify = "not called"
-        self._verify_disagreed = False  # the latest verify compared with PyBullet and found a foot off
-        self._verify_service = None
+        self._verify_disagreed = (
+            False  # the latest verify compared with PyBullet and found a foot off
+        )
+        self._verify_service: Service | None = None
         self._stamp_jumps_back = 0
         self._last_stamp_ns = 0
         self._last_publish = -math.inf
@@ -104,8 +143,14 @@ class FootFkNode(Node):
         self._position_msgs = [PointStamped() for _ in LEG_NAMES]
         self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
         self._set_frame_ids()
-        self._position_pubs = [self.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS) for leg in LEG_NAMES]
-        self._velocity_pubs = [self.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS) for leg in LEG_NAMES]
+        self._position_pubs = [
+            self.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS)
+            for leg in LEG_NAMES
+        ]
+        self._velocity_pubs = [
+            self.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
+            for leg in LEG_NAMES
+        ]
         self._marker_pub = self.create_publisher(MarkerArray, "foot_markers", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self._load_verifier()
@@ -163,7 +208,9 @@ class FootFkNode(Node):
                 vector.x, vector.y, vector.z = foot.velocity
                 self._velocity_pubs[foot.leg_slot].publish(velocity_msg)
 
-    def _publish_serialized(self, writer: SerializedStamped, feet: list[Foot], sec: int, nanosec: int) -> None:
+    def _publish_serialized(
+        self, writer: SerializedStamped, feet: list[Foot], sec: int, nanosec: int
+    ) -> None:
         """Publish the feet as pre-serialized bytes (same messages, cheaper than message objects)."""
         serialized = writer.serialized
         velocities = self._publish_velocities
@@ -208,18 +255,26 @@ class FootFkNode(Node):
 
     def _warn_unknown_names(self) -> None:
         names = self._tracker.take_new_unknown_names()
-        self.get_logger().warn(f"ignoring joint names not in the model (warned once per name): {names[:20]}")
+        self.get_logger().warn(
+            f"ignoring joint names not in the model (warned once per name): {names[:20]}"
+        )
 
     # --- markers and diagnostics ----------------------------------------------------------
 
     def _check_subscribers(self) -> None:
-        self._markers_wanted = self._publish_markers_enabled and self._marker_pub.get_subscription_count() > 0
+        self._markers_wanted = (
+            self._publish_markers_enabled and self._marker_pub.get_subscription_count() > 0
+        )
 
     def _publish_markers(self, stamp: Time) -> None:
-        self._marker_pub.publish(foot_markers(self._model.quadruped, self._tracker.angles, self._base_frame, stamp))
+        self._marker_pub.publish(
+            foot_markers(self._model.quadruped, self._tracker.angles, self._base_frame, stamp)
+        )
 
     def _publish_diagnostics(self) -> None:
-        received, rejected = self._period.take(self._tracker.counts)  # the period runs unobserved too
+        received, rejected = self._period.take(
+            self._tracker.counts
+        )  # the period runs unobserved too
         if self._diagnostics_pub.get_subscription_count() == 0:
             return
         robot = self._robot
@@ -239,7 +294,9 @@ class FootFkNode(Node):
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
-        self._diagnostics_pub.publish(ros_glue.diagnostics(self, "foot kinematics", level, summary, hardware_id, values))
+        self._diagnostics_pub.publish(
+            ros_glue.diagnostics(self, "foot kinematics", level, summary, hardware_id, values)
+        )
 
     # --- verify_fk -------------------------------------------------------------------------
 
@@ -264,14 +321,20 @@ class FootFkNode(Node):
             self.destroy_service(self._verify_service)
             self._verify_service = None
 
-    def _on_verify(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+    def _on_verify(
+        self, _request: Trigger.Request, response: Trigger.Response
+    ) -> Trigger.Response:
         response.success, response.message = self._verify()
         self._last_verify = ("passed " if response.success else "failed ") + response.message
         return response
 
     def _verify(self) -> tuple[bool, str]:
         if not self._tracker.complete:
-            missing = [name for name, a in zip(self._model.quadruped.joint_names, self._tracker.angles) if math.isnan(a)]
+            missing = [
+                name
+                for name, a in zip(self._model.quadruped.joint_names, self._tracker.angles)
+                if math.isnan(a)
+            ]
             return False, f"no complete joint state yet: missing {','.join(missing)}"
         if self._verifier is None:
             if not self._verifier_error:  # enabled after a failure or first use
@@ -295,14 +358,17 @@ class FootFkNode(Node):
     # --- parameters ------------------------------------------------------------------------
 
     def _float(self, name: str) -> float:
-        return self.get_parameter(name).get_parameter_value().double_value
+        # ParameterValue (an untyped message): its double_value field is a float.
+        return float(self.get_parameter(name).get_parameter_value().double_value)
 
     def _bool(self, name: str) -> bool:
-        return self.get_parameter(name).get_parameter_value().bool_value
+        return bool(self.get_parameter(name).get_parameter_value().bool_value)
 
     def _apply_settings(self) -> None:
         """Read the node's parameters; rclpy has checked their types and ranges already."""
-        self._base_frame = str(parameter_value(self, "base_frame")) or self._model.quadruped.base_frame
+        self._base_frame = (
+            str(parameter_value(self, "base_frame")) or self._model.quadruped.base_frame
+        )
         self._publish_velocities = self._bool("publish_velocities")
         self._publish_markers_enabled = self._bool("publish_markers")
         self._marker_interval_s = 1.0 / self._float("marker_rate_hz")
@@ -314,7 +380,8 @@ class FootFkNode(Node):
 
     def _set_frame_ids(self) -> None:
         """Stamp the output messages with the base frame; the pre-serialized writer is None when
-        ``preserialized_output`` is off or the rmw's CDR is not the one it patches."""
+        ``preserialized_output`` is off or the rmw's CDR is not the one it patches.
+        """
         for msg in (*self._position_msgs, *self._velocity_msgs):
             msg.header.frame_id = self._base_frame
         writer = SerializedStamped(self._base_frame) if self._preserialized_output else None

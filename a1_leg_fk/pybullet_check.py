@@ -10,18 +10,22 @@ float32, so agreement is ~3e-8 m, not 0.
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
 import tempfile
-import xml.etree.ElementTree as ElementTree
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from types import ModuleType
+from xml.etree import ElementTree
 
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
-INSTALL_HINT = "pybullet is not installed: pip install pybullet (or apt/rosdep key python3-pybullet-pip)"
+INSTALL_HINT = (
+    "pybullet is not installed: pip install pybullet (or apt/rosdep key python3-pybullet-pip)"
+)
 
 
 @dataclass(frozen=True)
@@ -42,15 +46,14 @@ class VerifyResult:
         return self.max_error_m <= self.tolerance_m
 
 
-def import_pybullet():  # noqa: ANN201 (the module has no type stubs)
+def import_pybullet() -> ModuleType:
     """The ``pybullet`` module, or a :class:`LegFkError` that says how to install it."""
     if os.environ.get("A1_LEG_FK_HIDE_PYBULLET"):  # lets tests and users run as if it were absent
         raise LegFkError(INSTALL_HINT)
     try:
-        import pybullet
+        return importlib.import_module("pybullet")  # untyped: its attributes are Any
     except ImportError as error:
         raise LegFkError(INSTALL_HINT) from error
-    return pybullet
 
 
 class PyBulletFeet:
@@ -64,8 +67,13 @@ class PyBulletFeet:
         try:
             self._body = self._load(urdf_xml)
             self._joint_index, self._link_index = self._index_joints_and_links()
-            self._foot_links = [self._lookup(self._link_index, leg.chain.foot_link, "link") for leg in quadruped.legs]
-            self._movable_joints = [self._lookup(self._joint_index, name, "joint") for name in quadruped.joint_names]
+            self._foot_links = [
+                self._lookup(self._link_index, leg.chain.foot_link, "link")
+                for leg in quadruped.legs
+            ]
+            self._movable_joints = [
+                self._lookup(self._joint_index, name, "joint") for name in quadruped.joint_names
+            ]
         except BaseException:
             self.close()
             raise
@@ -76,7 +84,11 @@ class PyBulletFeet:
         for joint, angle in zip(self._movable_joints, angles):
             pybullet.resetJointState(self._body, joint, angle, physicsClientId=client)
         return [
-            tuple(pybullet.getLinkState(self._body, link, computeForwardKinematics=True, physicsClientId=client)[4])
+            tuple(
+                pybullet.getLinkState(
+                    self._body, link, computeForwardKinematics=True, physicsClientId=client
+                )[4]
+            )
             for link in self._foot_links
         ]
 
@@ -99,7 +111,9 @@ class PyBulletFeet:
             with open(path, "w", encoding="utf-8") as file:
                 file.write(kinematic_urdf(urdf_xml))
             try:
-                return self._pybullet.loadURDF(path, useFixedBase=True, physicsClientId=self._client)
+                return int(  # pybullet has no types: its body id, an int
+                    self._pybullet.loadURDF(path, useFixedBase=True, physicsClientId=self._client)
+                )
             except self._pybullet.error as error:
                 raise LegFkError(f"PyBullet could not load the URDF: {error}") from error
 

@@ -15,19 +15,26 @@ import math
 import shutil
 import tempfile
 import time
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, TypedDict, cast
 
 import numpy as np
 
-from a1_leg_fk.joint_state import FootTracker, REJECTIONS
+from a1_leg_fk.joint_state import REJECTIONS, FootTracker
 from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.mcap_salvage import salvage
 from a1_leg_fk.robot_config import load_robot
 from a1_leg_fk.urdf import LegFkError
+
+if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import Connection
+    from tqdm import tqdm
 
 ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
 JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
@@ -40,6 +47,17 @@ BASE_POSE_TYPES = (ODOMETRY_TYPE, POSE_TYPE, POSE_COVARIANCE_TYPE, TF_TYPE)
 BLOCK_MESSAGES = 4096
 DEFAULT_MAX_POSE_GAP_S = 0.1
 LEGS = len(LEG_NAMES)
+
+
+class RecordingChoices(TypedDict, total=False):
+    """The choices of :func:`open_recording` (its keyword arguments)."""
+
+    topic: str | None
+    urdf: str | Path | None
+    foot_links: Sequence[str]
+    joint_aliases: Sequence[str]
+    base_pose: str | None
+    max_pose_gap_s: float
 
 
 @dataclass(frozen=True)
@@ -64,12 +82,16 @@ class RecordingSummary:
     @property
     def rejected(self) -> dict[str, int]:
         """Rejection reason -> messages, for the reasons that occurred."""
-        return {reason: self.outcomes[reason] for reason in REJECTIONS if self.outcomes.get(reason)}
+        return {
+            reason: self.outcomes[reason] for reason in REJECTIONS if self.outcomes.get(reason)
+        }
 
     def lines(self) -> list[str]:
         """The human summary, one fact per line."""
         rate = self.messages / self.wall_time_s if self.wall_time_s > 0 else math.inf
-        rejected = ", ".join(f"{reason} {count}" for reason, count in self.rejected.items()) or "none"
+        rejected = (
+            ", ".join(f"{reason} {count}" for reason, count in self.rejected.items()) or "none"
+        )
         span = (
             f"{(self.last_stamp_ns - self.first_stamp_ns) / 1e9:.3f} s "
             f"({_seconds(self.first_stamp_ns)} .. {_seconds(self.last_stamp_ns)})"
@@ -80,19 +102,25 @@ class RecordingSummary:
             f"file:      {self.path}",
             f"model:     {self.model}",
             f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
-            f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
-            f"{sum(self.rejected.values())} rejected ({rejected}), "
-            f"{self.outcomes.get('no_leg_joints', 0)} without leg joints",
+            (
+                f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
+                f"{sum(self.rejected.values())} rejected ({rejected}), "
+                f"{self.outcomes.get('no_leg_joints', 0)} without leg joints"
+            ),
             f"rows:      {self.rows}",
             f"time span: {span}",
             f"wall time: {self.wall_time_s:.2f} s ({rate:,.0f} messages/s)",
         ]
         if self.non_finite_joints:
-            lines.insert(4, f"non-finite joint values: {self.non_finite_joints} (their legs held back)")
+            lines.insert(
+                4, f"non-finite joint values: {self.non_finite_joints} (their legs held back)"
+            )
         if self.unknown_names:
             lines.insert(4, f"ignored names: {list(self.unknown_names[:20])}")
         if self.base_pose_topic:
-            lines.append(f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a pose (outside its time range or in a gap)")
+            lines.append(
+                f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a pose (outside its time range or in a gap)"
+            )
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -108,11 +136,17 @@ def _seconds(stamp_ns: int) -> str:
 class FootTrajectories:
     """The feet over a recording (see :func:`read_foot_trajectories`). Legs FR, FL, RR, RL."""
 
-    stamps_ns: np.ndarray  # (N,) int64: JointState header stamps (bag time where the stamp is zero)
+    stamps_ns: (
+        np.ndarray
+    )  # (N,) int64: JointState header stamps (bag time where the stamp is zero)
     bag_times_ns: np.ndarray  # (N,) int64
     positions: np.ndarray  # (N, 4, 3) [m], base frame, NaN for legs not yet known
-    velocities: np.ndarray | None  # (N, 4, 3) [m/s] (NaN where none), None without joint velocities
-    world_positions: np.ndarray | None  # (N, 4, 3) [m] in world_frame, NaN where no pose; None without base_pose
+    velocities: (
+        np.ndarray | None
+    )  # (N, 4, 3) [m/s] (NaN where none), None without joint velocities
+    world_positions: (
+        np.ndarray | None
+    )  # (N, 4, 3) [m] in world_frame, NaN where no pose; None without base_pose
     base_frame: str
     world_frame: str | None
     summary: RecordingSummary
@@ -121,7 +155,8 @@ class FootTrajectories:
 @dataclass(frozen=True)
 class FootBlock:
     """Rows of consecutive accepted messages: like :class:`FootTrajectories`, velocities always
-    an array (NaN where the message gives none)."""
+    an array (NaN where the message gives none).
+    """
 
     stamps_ns: np.ndarray
     bag_times_ns: np.ndarray
@@ -134,12 +169,12 @@ class FootBlock:
 class Recording:
     """An open bag with the choices made for it; iterate with :func:`iter_foot_blocks`."""
 
-    reader: object  # rosbags.highlevel.AnyReader, open
+    reader: AnyReader  # open
     path: Path
-    joint_states: object  # its Connection
+    joint_states: Connection
     quadruped: Quadruped
     model_source: str
-    base_pose: "BasePoses | None"
+    base_pose: BasePoses | None
     base_pose_topic: str | None
     ros1: bool
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
@@ -151,7 +186,8 @@ class Recording:
 # --- opening --------------------------------------------------------------------------------------
 
 
-def _rosbags():  # noqa: ANN202 (the module, untyped here)
+def _rosbags() -> ModuleType:
+    """``rosbags.highlevel``, or a :class:`LegFkError` that says how to install rosbags."""
     try:
         from rosbags import highlevel
     except ImportError as error:
@@ -170,35 +206,65 @@ def open_recording(
     max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
 ) -> Recording:
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
-    problem for bad input. Close with :func:`close_recording`."""
+    problem for bad input. Close with :func:`close_recording`.
+    """
     path = Path(path)
     reader, salvage_note = _open_reader(path)
     try:
-        joint_states = _pick_topic(reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState")
+        joint_states = _pick_topic(
+            reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
+        )
         try:
-            description, description_topic = (None, "") if urdf else _recorded_description(reader, joint_states)
+            description, description_topic = (
+                (None, "") if urdf else _recorded_description(reader, joint_states)
+            )
         except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
-            raise LegFkError(f"{path}: cannot read its robot_description topic: {_one_line(error)}") from None
+            raise LegFkError(
+                f"{path}: cannot read its robot_description topic: {_one_line(error)}"
+            ) from None
         if urdf:
-            robot = load_robot(urdf_file=str(urdf), foot_links=foot_links, joint_aliases=joint_aliases)
+            robot = load_robot(
+                urdf_file=str(urdf), foot_links=foot_links, joint_aliases=joint_aliases
+            )
             source = f"--urdf {urdf}"
         elif description is not None:
             name = f"robot_description topic {description_topic} in {path}"
-            robot = load_robot(description, foot_links=foot_links, joint_aliases=joint_aliases, description_name=name)
+            robot = load_robot(
+                description,
+                foot_links=foot_links,
+                joint_aliases=joint_aliases,
+                description_name=name,
+            )
             source = name
         else:
             robot = load_robot(foot_links=foot_links, joint_aliases=joint_aliases)
             source = f"embedded A1 ({robot.source})"
         poses = None
         if base_pose:
-            pose_connection = _pick_topic(reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose")
+            pose_connection = _pick_topic(
+                reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose"
+            )
             try:
-                poses = BasePoses.read(reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s)
+                poses = BasePoses.read(
+                    reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s
+                )
             except LegFkError:
                 raise
             except Exception as error:  # noqa: BLE001 (rosbags: a corrupt pose message or storage)
-                raise LegFkError(f"--base-pose {base_pose}: cannot read it: {_one_line(error)}") from None
-        return Recording(reader, path, joint_states, robot.quadruped, source, poses, base_pose, not reader.is2, salvage_note=salvage_note)
+                raise LegFkError(
+                    f"--base-pose {base_pose}: cannot read it: {_one_line(error)}"
+                ) from None
+        return Recording(
+            reader,
+            path,
+            joint_states,
+            robot.quadruped,
+            source,
+            poses,
+            base_pose,
+            not reader.is2,
+            salvage_note=salvage_note,
+        )
     except BaseException:
         _close_reader(reader)
         raise
@@ -209,16 +275,17 @@ def close_recording(recording: Recording) -> None:
     _close_reader(recording.reader)
 
 
-def _close_reader(reader) -> None:  # noqa: ANN001
+def _close_reader(reader: AnyReader) -> None:
     reader.close()
     folder = getattr(reader, "salvage_folder", None)
     if folder is not None:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage note)
+def _open_reader(path: Path) -> tuple[AnyReader, str]:
     """An open reader of the bag at ``path``, and ``""`` or a note on what was salvaged of a
-    truncated MCAP file (read from a copy of its complete records)."""
+    truncated MCAP file (read from a copy of its complete records).
+    """
     highlevel = _rosbags()
     if not path.exists():
         raise LegFkError(f"{path}: no such file or directory")
@@ -227,18 +294,25 @@ def _open_reader(path: Path):  # noqa: ANN202 (rosbags AnyReader, the salvage no
         reader = highlevel.AnyReader([opened])
         reader.open()
         return reader, ""
-    except Exception as error:  # rosbags raises several kinds for unreadable files
+    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for unreadable files)
         problem = f"{path}: cannot open as a ROS bag: {_one_line(error)}"
-    mcaps = sorted(opened.glob("*.mcap")) if opened.is_dir() else [opened] if opened.suffix == ".mcap" else []
+    mcaps = (
+        sorted(opened.glob("*.mcap"))
+        if opened.is_dir()
+        else [opened]
+        if opened.suffix == ".mcap"
+        else []
+    )
     salvaged = _salvaged_reader(highlevel, mcaps[0]) if len(mcaps) == 1 else None
     if salvaged is None:
         raise LegFkError(problem)
     return salvaged
 
 
-def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
+def _salvaged_reader(highlevel: ModuleType, mcap: Path) -> tuple[AnyReader, str] | None:
     """A reader of the complete records of a truncated MCAP file (copied to a temporary folder,
-    removed when the reader closes), or None."""
+    removed when the reader closes), or None.
+    """
     folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_salvage_"))
     try:
         kept = salvage(mcap, folder / mcap.name)
@@ -247,25 +321,32 @@ def _salvaged_reader(highlevel, mcap: Path):  # noqa: ANN001, ANN202
             reader.open()
     except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
         reader = None
-    if reader is None:
+    if reader is None or kept is None:
         shutil.rmtree(folder, ignore_errors=True)
         return None
-    reader.salvage_folder = folder
-    note = (f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
-            f"{kept.size:,} bytes (the complete records)")
+    reader.salvage_folder = folder  # removed by _close_reader
+    note = (
+        f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
+        f"{kept.size:,} bytes (the complete records)"
+    )
     return reader, note
 
 
 def _storage_file(directory: Path) -> Path:
     """What to open for a bag directory: itself when it has ``metadata.yaml``, else its one
-    storage file (``.mcap`` or ``.db3``)."""
+    storage file (``.mcap`` or ``.db3``).
+    """
     if (directory / "metadata.yaml").exists():
         return directory
     storage = sorted(child for child in directory.iterdir() if child.suffix in (".db3", ".mcap"))
     if not storage:
-        raise LegFkError(f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file)")
+        raise LegFkError(
+            f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file)"
+        )
     if len(storage) > 1:
-        raise LegFkError(f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: {', '.join(p.name for p in storage)}")
+        raise LegFkError(
+            f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: {', '.join(p.name for p in storage)}"
+        )
     return storage[0]
 
 
@@ -274,7 +355,9 @@ def _one_line(error: BaseException) -> str:
     return text[:300]
 
 
-def _pick_topic(reader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str):  # noqa: ANN001, ANN202
+def _pick_topic(
+    reader: AnyReader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
+) -> Connection:
     """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""
     topics = {connection.topic: connection.msgtype for connection in reader.connections}
     listing = ", ".join(f"{name} ({kind})" for name, kind in sorted(topics.items())) or "none"
@@ -282,28 +365,37 @@ def _pick_topic(reader, path: Path, wanted: str | None, types: Sequence[str], op
         if wanted not in topics:
             raise LegFkError(f"{option} {wanted}: no such topic in {path}; topics: {listing}")
         if topics[wanted] not in types:
-            raise LegFkError(f"{option} {wanted} is {topics[wanted]}, expected {' or '.join(types)}")
+            raise LegFkError(
+                f"{option} {wanted} is {topics[wanted]}, expected {' or '.join(types)}"
+            )
         chosen = wanted
     else:
         candidates = sorted(name for name, kind in topics.items() if kind in types)
         if not candidates:
             raise LegFkError(f"{path}: no {' or '.join(types)} topic; topics: {listing}")
         if len(candidates) > 1:
-            raise LegFkError(f"{path}: several {what} topics, choose one with {option}: {', '.join(candidates)}")
+            raise LegFkError(
+                f"{path}: several {what} topics, choose one with {option}: {', '.join(candidates)}"
+            )
         chosen = candidates[0]
     return next(connection for connection in reader.connections if connection.topic == chosen)
 
 
-def _recorded_description(reader, joint_states) -> tuple[str | None, str]:  # noqa: ANN001
+def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
     """The latest ``robot_description`` message before the first JointState, and its topic."""
-    connections = [c for c in reader.connections if c.msgtype == DESCRIPTION_TYPE and c.topic.split("/")[-1] == "robot_description"]
+    connections = [
+        c
+        for c in reader.connections
+        if c.msgtype == DESCRIPTION_TYPE and c.topic.split("/")[-1] == "robot_description"
+    ]
     if not connections:
         return None, ""
     latest, topic = None, ""
     for connection, _, raw in reader.messages(connections=[*connections, joint_states]):
         if connection is joint_states:
             break
-        latest, topic = reader.deserialize(raw, connection.msgtype).data, connection.topic
+        message: Any = reader.deserialize(raw, connection.msgtype)  # a std_msgs/msg/String
+        latest, topic = message.data, connection.topic
     return latest, topic
 
 
@@ -313,7 +405,8 @@ def _recorded_description(reader, joint_states) -> tuple[str | None, str]:  # no
 @dataclass(frozen=True)
 class BasePoses:
     """The base's pose over time: stamps [ns] sorted, positions (M, 3) [m], unit quaternions
-    (M, 4) x, y, z, w, in ``world_frame``; interpolated at query stamps (linear / slerp)."""
+    (M, 4) x, y, z, w, in ``world_frame``; interpolated at query stamps (linear / slerp).
+    """
 
     stamps_ns: np.ndarray
     positions: np.ndarray
@@ -322,34 +415,53 @@ class BasePoses:
     max_gap_ns: int
 
     @classmethod
-    def read(cls, reader, connection, base_frame: str, max_gap_s: float) -> "BasePoses":  # noqa: ANN001
+    def read(
+        cls, reader: AnyReader, connection: Connection, base_frame: str, max_gap_s: float
+    ) -> BasePoses:
         """All poses of one topic (deserialized: a pose stream is small next to the joints')."""
         stamps, values, frames = [], [], []
         for _, _, raw in reader.messages(connections=[connection]):
             message = reader.deserialize(raw, connection.msgtype)
-            for stamp, frame, pose in _poses_of(message, connection.msgtype, base_frame.lstrip("/")):
+            for stamp, frame, pose in _poses_of(
+                message, connection.msgtype, base_frame.lstrip("/")
+            ):
                 stamps.append(stamp)
                 frames.append(frame)
                 values.append(pose)
         if not stamps:
-            raise LegFkError(f"--base-pose {connection.topic}: no pose of the base frame '{base_frame}' in it")
+            raise LegFkError(
+                f"--base-pose {connection.topic}: no pose of the base frame '{base_frame}' in it"
+            )
         order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
         data = np.array(values)[order]
         quaternions = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
-        return cls(np.array(stamps, dtype=np.int64)[order], data[:, :3], quaternions, frames[0], round(max_gap_s * 1e9))
+        return cls(
+            np.array(stamps, dtype=np.int64)[order],
+            data[:, :3],
+            quaternions,
+            frames[0],
+            round(max_gap_s * 1e9),
+        )
 
     def at(self, stamps_ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(positions (N, 3) [m], rotation matrices (N, 3, 3)) at ``stamps_ns``; NaN where a stamp
-        lies outside the poses' time range or between two poses further apart than the gap."""
+        lies outside the poses' time range or between two poses further apart than the gap.
+        """
         stamps = self.stamps_ns
         lower = np.clip(np.searchsorted(stamps, stamps_ns, side="right") - 1, 0, len(stamps) - 1)
         upper = np.minimum(lower + 1, len(stamps) - 1)
         t0, t1 = stamps[lower], stamps[upper]
         exact = t0 == stamps_ns
         span = t1 - t0
-        inside = (stamps_ns >= stamps[0]) & (stamps_ns <= stamps[-1]) & (exact | (span <= self.max_gap_ns))
+        inside = (
+            (stamps_ns >= stamps[0])
+            & (stamps_ns <= stamps[-1])
+            & (exact | (span <= self.max_gap_ns))
+        )
         alpha = np.where(exact | (span == 0), 0.0, (stamps_ns - t0) / np.where(span > 0, span, 1))
-        position = self.positions[lower] + alpha[:, None] * (self.positions[upper] - self.positions[lower])
+        position = self.positions[lower] + alpha[:, None] * (
+            self.positions[upper] - self.positions[lower]
+        )
         quaternion = _slerp(self.quaternions[lower], self.quaternions[upper], alpha)
         rotation = _rotation_matrices(quaternion)
         position[~inside] = math.nan
@@ -357,21 +469,27 @@ class BasePoses:
         return position, rotation
 
 
-def _poses_of(message, msgtype: str, base_frame: str) -> Iterator[tuple[int, str, list[float]]]:  # noqa: ANN001
+def _poses_of(
+    message: Any, msgtype: str, base_frame: str
+) -> Iterator[tuple[int, str, list[float]]]:
     """(stamp [ns], parent frame, [x, y, z, qx, qy, qz, qw]) of each base pose in a message."""
     if msgtype == TF_TYPE:
         for transform in message.transforms:
             if transform.child_frame_id.lstrip("/") == base_frame:
                 t, r = transform.transform.translation, transform.transform.rotation
-                yield _stamp(transform.header), transform.header.frame_id.lstrip("/"), [t.x, t.y, t.z, r.x, r.y, r.z, r.w]
+                yield (
+                    _stamp(transform.header),
+                    transform.header.frame_id.lstrip("/"),
+                    [t.x, t.y, t.z, r.x, r.y, r.z, r.w],
+                )
         return
     pose = message.pose if msgtype == POSE_TYPE else message.pose.pose
     p, r = pose.position, pose.orientation
     yield _stamp(message.header), message.header.frame_id, [p.x, p.y, p.z, r.x, r.y, r.z, r.w]
 
 
-def _stamp(header) -> int:  # noqa: ANN001
-    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+def _stamp(header: Any) -> int:
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -386,7 +504,8 @@ def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     w0 = np.where(close, 1.0 - alpha, np.sin((1.0 - alpha) * theta) / safe)
     w1 = np.where(close, alpha, np.sin(alpha * theta) / safe)
     q = w0[:, None] * q0 + w1[:, None] * q1
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
+    unit: np.ndarray = q / np.linalg.norm(q, axis=1, keepdims=True)
+    return unit
 
 
 def _rotation_matrices(q: np.ndarray) -> np.ndarray:
@@ -409,7 +528,7 @@ def iter_foot_blocks(
     recording: Recording,
     *,
     progress: bool = False,
-    on_message: Callable[[object, int, bytes], None] | None = None,
+    on_message: Callable[[Connection, int, bytes], None] | None = None,
 ) -> Iterator[FootBlock]:
     """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
     called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
@@ -446,17 +565,23 @@ def iter_foot_blocks(
             bar.close()
 
 
-def _raw_messages(reader, connections: list) -> Iterator[tuple[object, int, bytes]]:  # noqa: ANN001
+def _raw_messages(
+    reader: AnyReader, connections: list[Connection]
+) -> Iterator[tuple[Connection, int, bytes]]:
     """(connection, bag time [ns], raw bytes) in bag order; a single bag's reader directly (no
-    merge of several)."""
+    merge of several).
+    """
     if len(reader.readers) == 1:
         return reader.readers[0].messages(connections=connections)
     return reader.messages(connections=connections)
 
 
-def _guarded(recording: Recording, messages: Iterator[tuple[object, int, bytes]]) -> Iterator[tuple[object, int, bytes]]:
+def _guarded(
+    recording: Recording, messages: Iterator[tuple[Connection, int, bytes]]
+) -> Iterator[tuple[Connection, int, bytes]]:
     """``messages`` until the storage cannot be read further (truncated, corrupt): then
-    ``recording.stopped`` says where and why, and the iteration ends."""
+    ``recording.stopped`` says where and why, and the iteration ends.
+    """
     bag_time = None
     try:
         for item in messages:
@@ -473,9 +598,12 @@ class _Corrupt(Exception):
 class _Batch:
     """Consecutive JointState messages of one length, as raw bytes. A steady stream (same name
     list, lengths and layout, little-endian CDR) is decoded with numpy for the whole batch;
-    anything else message by message."""
+    anything else message by message.
+    """
 
-    def __init__(self, recording: Recording, tracker: FootTracker, decoder: JointStateDecoder) -> None:
+    def __init__(
+        self, recording: Recording, tracker: FootTracker, decoder: JointStateDecoder
+    ) -> None:
         self.recording, self.tracker, self.decoder = recording, tracker, decoder
         self.raws: list[bytes] = []
         self.bag_times: list[int] = []
@@ -489,7 +617,8 @@ class _Batch:
 
     def blocks(self) -> Iterator[FootBlock]:
         """The rows of the batch's messages; empties the batch. :class:`_Corrupt` after the rows
-        before a message that cannot be decoded."""
+        before a message that cannot be decoded.
+        """
         raws, bag_times = self.raws, self.bag_times
         self.raws, self.bag_times = [], []
         if not raws:
@@ -500,7 +629,9 @@ class _Batch:
             return
         yield from self._one_by_one(raws, bag_times)
 
-    def _vectorised(self, raws: list[bytes], bag_times: list[int]):  # noqa: ANN202 (tuple of arrays or None)
+    def _vectorised(
+        self, raws: list[bytes], bag_times: list[int]
+    ) -> tuple[np.ndarray, ...] | None:
         layout = cdr_layout(bytes(raws[0]))
         if layout is None:
             return None
@@ -509,8 +640,10 @@ class _Batch:
         if not (matrix[:, layout.fixed] == template).all():
             return None
         self.decoder.fields(raws[0])  # the names, for the rules (and the next message's check)
-        stamps = (np.ascontiguousarray(matrix[:, 4:8]).view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
-                  + np.ascontiguousarray(matrix[:, 8:12]).view("<u4")[:, 0])
+        stamps = (
+            np.ascontiguousarray(matrix[:, 4:8]).view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
+            + np.ascontiguousarray(matrix[:, 8:12]).view("<u4")[:, 0]
+        )
         bag_times_ns = np.array(bag_times, dtype=np.int64)
         stamps = np.where(stamps == 0, bag_times_ns, stamps)
         positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
@@ -526,8 +659,12 @@ class _Batch:
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
-            if pending.count and (changed or order != pending.order or len(positions) != pending.position_bytes
-                                  or len(velocities) != pending.velocity_bytes):
+            if pending.count and (
+                changed
+                or order != pending.order
+                or len(positions) != pending.position_bytes
+                or len(velocities) != pending.velocity_bytes
+            ):
                 yield from pending.finish(self)
                 pending = _Pending()
             if not pending.count:
@@ -553,7 +690,9 @@ class _Pending:
         self.positions: list[bytes] = []
         self.velocities: list[bytes] = []
 
-    def start(self, names: list[str], order: str, position_bytes: int, velocity_bytes: int) -> None:
+    def start(
+        self, names: list[str], order: str, position_bytes: int, velocity_bytes: int
+    ) -> None:
         self.names, self.order = names, order
         self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
 
@@ -562,18 +701,35 @@ class _Pending:
         if not self.count:
             return
         dtype = np.dtype(f"{self.order}f8")
-        positions = np.frombuffer(b"".join(self.positions), dtype).reshape(self.count, self.position_bytes // 8)
-        velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(self.count, self.velocity_bytes // 8)
+        positions = np.frombuffer(b"".join(self.positions), dtype).reshape(
+            self.count, self.position_bytes // 8
+        )
+        velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
+            self.count, self.velocity_bytes // 8
+        )
         yield from _finish(
-            batch.recording, batch.tracker, self.names, np.array(self.stamps, dtype=np.int64),
-            np.array(self.bag_times, dtype=np.int64), positions.astype(np.float64), velocities.astype(np.float64),
+            batch.recording,
+            batch.tracker,
+            self.names,
+            np.array(self.stamps, dtype=np.int64),
+            np.array(self.bag_times, dtype=np.int64),
+            positions.astype(np.float64),
+            velocities.astype(np.float64),
         )
 
 
-def _finish(recording: Recording, tracker: FootTracker, names: list[str], stamps: np.ndarray, bag_times: np.ndarray,
-            positions: np.ndarray, velocities: np.ndarray) -> Iterator[FootBlock]:
+def _finish(
+    recording: Recording,
+    tracker: FootTracker,
+    names: list[str],
+    stamps: np.ndarray,
+    bag_times: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
-    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length)."""
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length).
+    """
     result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
     feet = feet_of(recording.quadruped, angles)
@@ -608,18 +764,24 @@ def feet_of(quadruped: Quadruped, angles: np.ndarray) -> np.ndarray:
 def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
     """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all finite."""
     out = np.full((angles.shape[0], LEGS, 3), math.nan)
-    usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
+    usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(
+        angles
+    ).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
     rows = usable.any(axis=1)
     if rows.any():
         jacobians = quadruped.jacobians_batch(np.nan_to_num(angles[rows]))
-        velocity = np.einsum("nlij,nlj->nli", jacobians, np.nan_to_num(rates[rows]).reshape(-1, LEGS, JOINTS_PER_LEG))
+        velocity = np.einsum(
+            "nlij,nlj->nli",
+            jacobians,
+            np.nan_to_num(rates[rows]).reshape(-1, LEGS, JOINTS_PER_LEG),
+        )
         with np.errstate(invalid="ignore"):
             velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan
         out[rows] = velocity
     return out
 
 
-def _progress_bar(total: int, enabled: bool):  # noqa: ANN202 (tqdm or None)
+def _progress_bar(total: int, enabled: bool) -> tqdm[None] | None:
     if not enabled:
         return None
     try:
@@ -629,13 +791,30 @@ def _progress_bar(total: int, enabled: bool):  # noqa: ANN202 (tqdm or None)
     return tqdm(total=total, unit="msg", unit_scale=True, mininterval=0.5, smoothing=0.1)
 
 
-def summary_of(recording: Recording, rows: int, rows_without_pose: int, first: int | None, last: int | None, wall_time_s: float) -> RecordingSummary:
+def summary_of(
+    recording: Recording,
+    rows: int,
+    rows_without_pose: int,
+    first: int | None,
+    last: int | None,
+    wall_time_s: float,
+) -> RecordingSummary:
     """The summary of a finished pass."""
-    counts = recording.tracker.counts
+    counts = cast("FootTracker", recording.tracker).counts  # set by iter_foot_blocks
     return RecordingSummary(
-        str(recording.path), recording.model_source, recording.joint_states.topic, recording.base_pose_topic,
-        counts.messages, dict(counts.outcomes), counts.non_finite_joints, tuple(sorted(counts.unknown_names)),
-        rows, rows_without_pose, first, last, wall_time_s,
+        str(recording.path),
+        recording.model_source,
+        recording.joint_states.topic,
+        recording.base_pose_topic,
+        counts.messages,
+        dict(counts.outcomes),
+        counts.non_finite_joints,
+        tuple(sorted(counts.unknown_names)),
+        rows,
+        rows_without_pose,
+        first,
+        last,
+        wall_time_s,
         "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
     )
 
@@ -661,7 +840,14 @@ class BlockStats:
         self.last = high if self.last is None else max(self.last, high)
 
     def summary(self, recording: Recording) -> RecordingSummary:
-        return summary_of(recording, self.rows, self.rows_without_pose, self.first, self.last, time.perf_counter() - self.started)
+        return summary_of(
+            recording,
+            self.rows,
+            self.rows_without_pose,
+            self.first,
+            self.last,
+            time.perf_counter() - self.started,
+        )
 
 
 # --- the notebook API -----------------------------------------------------------------------------
@@ -692,8 +878,13 @@ def read_foot_trajectories(
     read, with ``summary.stopped`` saying why.
     """
     recording = open_recording(
-        path, topic=topic, urdf=urdf, foot_links=foot_links, joint_aliases=joint_aliases,
-        base_pose=base_pose, max_pose_gap_s=max_pose_gap_s,
+        path,
+        topic=topic,
+        urdf=urdf,
+        foot_links=foot_links,
+        joint_aliases=joint_aliases,
+        base_pose=base_pose,
+        max_pose_gap_s=max_pose_gap_s,
     )
     try:
         stats = BlockStats()
@@ -707,7 +898,9 @@ def read_foot_trajectories(
     return collected(blocks, recording, summary)
 
 
-def collected(blocks: list[FootBlock], recording: Recording, summary: RecordingSummary) -> FootTrajectories:
+def collected(
+    blocks: list[FootBlock], recording: Recording, summary: RecordingSummary
+) -> FootTrajectories:
     """The blocks of one pass over ``recording`` as one :class:`FootTrajectories`."""
 
     def joined(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarray:
@@ -728,6 +921,13 @@ def collected(blocks: list[FootBlock], recording: Recording, summary: RecordingS
 
 
 __all__ = [
-    "FootTrajectories", "RecordingSummary", "FootBlock", "read_foot_trajectories", "open_recording",
-    "iter_foot_blocks", "close_recording", "collected", "BasePoses",
+    "BasePoses",
+    "FootBlock",
+    "FootTrajectories",
+    "RecordingSummary",
+    "close_recording",
+    "collected",
+    "iter_foot_blocks",
+    "open_recording",
+    "read_foot_trajectories",
 ]

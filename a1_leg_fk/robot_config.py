@@ -7,8 +7,8 @@ a description is read, capped and validated the same way wherever it comes from.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.urdf import LegFkError, checked_urdf_text, parse_urdf, read_urdf_text
@@ -17,7 +17,8 @@ from a1_leg_fk.urdf import LegFkError, checked_urdf_text, parse_urdf, read_urdf_
 @dataclass(frozen=True)
 class RobotConfig:
     """A compiled robot with the URDF text it came from (for the PyBullet twin) and its source:
-    ``"robot_description"``, a file path, or the embedded A1's path."""
+    ``"robot_description"``, a file path, or the embedded A1's path.
+    """
 
     quadruped: Quadruped
     urdf_xml: str
@@ -51,7 +52,8 @@ def load_robot(
 
 def key_values(entries: Sequence[str], setting: str) -> Mapping[str, str]:
     """``["A=b", ...]`` -> ``{"A": "b"}`` (white space around keys and values removed); empty
-    entries are skipped. ``setting`` names the list in the error for a malformed entry."""
+    entries are skipped. ``setting`` names the list in the error for a malformed entry.
+    """
     pairs = {}
     for entry in entries:
         if not entry:

@@ -19,10 +19,16 @@ robot_state_publisher does on parameter changes) does not reload.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable
+from typing import cast
 
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType, SetParametersResult
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    ParameterDescriptor,
+    ParameterType,
+    SetParametersResult,
+)
 from rclpy.exceptions import InvalidParameterValueException, ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -47,7 +53,8 @@ class ParameterSpec:
     """A parameter a node declares: name, default (``None``: a string array with no value until
     one is given, since ROS cannot type ``[]``), type, description, whether it is read-only, and
     for a double the inclusive ``(lowest, highest)`` range rclpy enforces on every value (NaN is
-    outside every range); the description should state the range."""
+    outside every range); the description should state the range.
+    """
 
     name: str
     default: object
@@ -58,11 +65,14 @@ class ParameterSpec:
 
     def declare(self, node: Node) -> None:
         """Declare the parameter on ``node``; a value given at start (``-p``, a params file) that
-        is out of range raises :class:`LegFkError` with rclpy's reason."""
+        is out of range raises :class:`LegFkError` with rclpy's reason.
+        """
         descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
         if self.value_range is not None:
             lowest, highest = self.value_range
-            descriptor.floating_point_range = [FloatingPointRange(from_value=lowest, to_value=highest)]
+            descriptor.floating_point_range = [
+                FloatingPointRange(from_value=lowest, to_value=highest)
+            ]
         if self.default is None:
             node.declare_parameter(self.name, Parameter.Type.STRING_ARRAY, descriptor)
             return
@@ -81,26 +91,53 @@ def parameter_value(node: Node, name: str) -> object:
         return []
 
 
+def string_list(value: object) -> list[str]:
+    """A string-array parameter's value (rclpy gives a list of str, ``[]`` when unset) as a list."""
+    return list(cast("Sequence[str]", value))
+
+
 EXPLICIT_PARAMETERS = ("robot_description", "urdf_file")
 MODEL_PARAMETERS = (*EXPLICIT_PARAMETERS, "foot_links", "joint_aliases")
 PARAMETERS = (
-    ParameterSpec("robot_description", "", ParameterType.PARAMETER_STRING,
-                  "URDF XML of the robot; when set (or urdf_file is), the robot_description topic is ignored"),
-    ParameterSpec("urdf_file", "", ParameterType.PARAMETER_STRING,
-                  "Path of a URDF file, used when robot_description is empty; when set, the topic is ignored"),
-    ParameterSpec("foot_links", None, ParameterType.PARAMETER_STRING_ARRAY,
-                  "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = each leg's leaf link FR..., FL..., "
-                  "RR..., RL... with three movable joints above it, or of several such leaves the one named "
-                  f"<leg>_<{'|'.join(FOOT_NAME_SUFFIXES)}> (case-insensitive)"),
-    ParameterSpec("joint_aliases", None, ParameterType.PARAMETER_STRING_ARRAY,
-                  "Extra incoming joint names as incoming=urdf_joint_name"),
-    ParameterSpec("robot_description_topic", "robot_description", ParameterType.PARAMETER_STRING,
-                  "Topic of the robot description (std_msgs/String, transient local, as robot_state_publisher "
-                  "publishes it) followed when neither robot_description nor urdf_file is set; empty = none",
-                  read_only=True),
+    ParameterSpec(
+        "robot_description",
+        "",
+        ParameterType.PARAMETER_STRING,
+        "URDF XML of the robot; when set (or urdf_file is), the robot_description topic is ignored",
+    ),
+    ParameterSpec(
+        "urdf_file",
+        "",
+        ParameterType.PARAMETER_STRING,
+        "Path of a URDF file, used when robot_description is empty; when set, the topic is ignored",
+    ),
+    ParameterSpec(
+        "foot_links",
+        None,
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = each leg's leaf link FR..., FL..., "
+        "RR..., RL... with three movable joints above it, or of several such leaves the one named "
+        f"<leg>_<{'|'.join(FOOT_NAME_SUFFIXES)}> (case-insensitive)",
+    ),
+    ParameterSpec(
+        "joint_aliases",
+        None,
+        ParameterType.PARAMETER_STRING_ARRAY,
+        "Extra incoming joint names as incoming=urdf_joint_name",
+    ),
+    ParameterSpec(
+        "robot_description_topic",
+        "robot_description",
+        ParameterType.PARAMETER_STRING,
+        "Topic of the robot description (std_msgs/String, transient local, as robot_state_publisher "
+        "publishes it) followed when neither robot_description nor urdf_file is set; empty = none",
+        read_only=True,
+    ),
 )
 BASE_FRAME_PARAMETER = ParameterSpec(
-    "base_frame", "", ParameterType.PARAMETER_STRING,
+    "base_frame",
+    "",
+    ParameterType.PARAMETER_STRING,
     "frame_id of the feet; empty = the URDF's root link (trunk for the embedded A1, base for Unitree's)",
 )
 
@@ -124,7 +161,9 @@ class RobotSource:
         self._ignored_logged = False
         topic = str(parameter_value(node, "robot_description_topic"))
         self.topic_name = node.resolve_topic_name(topic) if topic else ""
-        self.topic_status = "not followed (robot_description_topic is empty)" if not topic else "nothing received"
+        self.topic_status = (
+            "not followed (robot_description_topic is empty)" if not topic else "nothing received"
+        )
         self.topic_rejected = False  # the latest description from the topic was refused
         self.config = self._build(self._values({}))
         node.add_on_set_parameters_callback(self._check_parameters)
@@ -144,7 +183,9 @@ class RobotSource:
     # --- parameters ------------------------------------------------------------------------
 
     def _values(self, changes: dict[str, object]) -> dict[str, object]:
-        return {name: changes.get(name, parameter_value(self._node, name)) for name in MODEL_PARAMETERS}
+        return {
+            name: changes.get(name, parameter_value(self._node, name)) for name in MODEL_PARAMETERS
+        }
 
     @staticmethod
     def _explicit(values: dict[str, object]) -> str:
@@ -153,9 +194,11 @@ class RobotSource:
 
     def _build(self, values: dict[str, object]) -> RobotConfig:
         """The robot for these parameter values and the topic's latest description."""
-        feet, aliases = list(values["foot_links"]), list(values["joint_aliases"])  # type: ignore[call-overload]
+        feet, aliases = string_list(values["foot_links"]), string_list(values["joint_aliases"])
         if self._explicit(values) or not self._topic_text:
-            return load_robot(str(values["robot_description"]), str(values["urdf_file"]), feet, aliases)
+            return load_robot(
+                str(values["robot_description"]), str(values["urdf_file"]), feet, aliases
+            )
         return load_robot(self._topic_text, "", feet, aliases, description_name=self.topic_name)
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
@@ -164,13 +207,22 @@ class RobotSource:
         if not changes:
             return SetParametersResult(successful=True)
         description = changes.get("robot_description", "")
-        if isinstance(description, str) and len(description) > MAX_URDF_CHARS:  # refused before it is parsed
-            return SetParametersResult(successful=False, reason=f"robot_description: more than the {MAX_URDF_CHARS} "
-                                       "characters accepted for a robot description")
+        if (
+            isinstance(description, str) and len(description) > MAX_URDF_CHARS
+        ):  # refused before it is parsed
+            return SetParametersResult(
+                successful=False,
+                reason=f"robot_description: more than the {MAX_URDF_CHARS} "
+                "characters accepted for a robot description",
+            )
         try:
-            self._pending = self._build(self._values(changes))  # applied once rclpy stored the values
+            self._pending = self._build(
+                self._values(changes)
+            )  # applied once rclpy stored the values
         except LegFkError as error:
-            self._node.get_logger().warn(f"parameter change rejected, keeping {self.config.source}: {error}")
+            self._node.get_logger().warn(
+                f"parameter change rejected, keeping {self.config.source}: {error}"
+            )
             return SetParametersResult(successful=False, reason=str(error))
         return SetParametersResult(successful=True)
 
@@ -198,12 +250,19 @@ class RobotSource:
             return
         values = self._values({})
         try:
-            config = load_robot(text, "", list(values["foot_links"]), list(values["joint_aliases"]),  # type: ignore[call-overload]
-                                description_name=self.topic_name)
+            config = load_robot(
+                text,
+                "",
+                string_list(values["foot_links"]),
+                string_list(values["joint_aliases"]),
+                description_name=self.topic_name,
+            )
         except LegFkError as error:
             self.topic_rejected = True
             self.topic_status = f"rejected: {error}"
-            self._node.get_logger().warn(f"description on {self.topic_name} rejected, keeping {self.config.source}: {error}")
+            self._node.get_logger().warn(
+                f"description on {self.topic_name} rejected, keeping {self.config.source}: {error}"
+            )
             return
         self._topic_text = text
         self.topic_rejected = False

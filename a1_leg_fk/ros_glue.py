@@ -1,22 +1,41 @@
 """ROS plumbing shared by ``foot_fk_node`` and ``foot_ik_node``: the spin loop of ``main`` with its
-exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind."""
+exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind.
+"""
 
 from __future__ import annotations
 
 import math
 import sys
 import time
-from typing import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import TypedDict
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 from a1_leg_fk.urdf import LegFkError
 
 WARNING_INTERVAL_S = 1.0
 """At most one warning a second for each kind of problem."""
+
+
+class NodeOptions(TypedDict, total=False):
+    """The keyword arguments of :class:`rclpy.node.Node` that our nodes pass on."""
+
+    context: Context | None
+    cli_args: list[str] | None
+    namespace: str | None
+    use_global_arguments: bool
+    enable_rosout: bool
+    start_parameter_services: bool
+    parameter_overrides: list[Parameter] | None
+    allow_undeclared_parameters: bool
+    automatically_declare_parameters_from_overrides: bool
+    enable_logger_service: bool
 
 
 def run_node(
@@ -33,7 +52,7 @@ def run_node(
     ``executor_factory`` defaults to :func:`make_executor`.
     """
     try:
-        rclpy.init(args=args)
+        rclpy.init(args=None if args is None else list(args))
     except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
         print(f"{executable}: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
         return 2
@@ -61,7 +80,8 @@ def run_node(
 
 def _spin_once(executor: Executor) -> None:
     """One turn of the executor; a SIGINT/SIGTERM that shut the context down between the loop's
-    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid"."""
+    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid".
+    """
     try:
         executor.spin_once(timeout_sec=0.1)
     except Exception:
@@ -70,7 +90,7 @@ def _spin_once(executor: Executor) -> None:
 
 
 def make_executor() -> Executor:
-    """rclpy's EventsExecutor where available (the fastest here), else the single-threaded one.
+    """Rclpy's EventsExecutor where available (the fastest here), else the single-threaded one.
 
     Spun with ``spin_once`` in a loop: ``EventsExecutor().spin()`` ignores SIGINT/SIGTERM.
     """
@@ -83,9 +103,10 @@ def make_executor() -> Executor:
 
 
 def _ros_args_error(message: str) -> str:
-    """rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
+    """Rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
     ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
-    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML."""
+    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML.
+    """
     first_line = message.splitlines()[0] if message else message
     if "robot_description:=" not in message:
         return first_line
@@ -103,13 +124,21 @@ class WarnThrottle:
         self._last: dict[str, float] = {}  # kind -> time.monotonic() of its last warning
 
     def warn(self, kind: str, text: str) -> None:
+        """Log ``text`` unless a warning of ``kind`` was logged less than the interval ago."""
         now = time.monotonic()
         if now - self._last.get(kind, -math.inf) >= WARNING_INTERVAL_S:
             self._last[kind] = now
-            self._logger.warn(text)
+            self._logger.warning(text)
 
 
-def diagnostics(node: Node, name: str, level: bytes, message: str, hardware_id: str, values: Mapping[str, object]) -> DiagnosticArray:
+def diagnostics(
+    node: Node,
+    name: str,
+    level: bytes,
+    message: str,
+    hardware_id: str,
+    values: Mapping[str, object],
+) -> DiagnosticArray:
     """A one-status DiagnosticArray stamped with the node's clock; ``name`` follows the node's name."""
     status = DiagnosticStatus(
         level=level,

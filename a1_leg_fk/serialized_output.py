@@ -25,7 +25,9 @@ class SerializedStamped:
     """
 
     _PROBE = (1.25, -2.5, 3.75)
-    _STAMP = struct.Struct("<iI")  # builtin_interfaces/Time right after the 4-byte encapsulation header
+    _STAMP = struct.Struct(
+        "<iI"
+    )  # builtin_interfaces/Time right after the 4-byte encapsulation header
     _VALUES = struct.Struct("<3d")
 
     def __init__(self, frame_id: str) -> None:
@@ -44,7 +46,9 @@ class SerializedStamped:
             and len(data[0]) == len(data[1]) == self._offset + self._VALUES.size
         )
         self._buffer = bytearray(data[0])
-        self._buffer[string_end : self._offset] = bytes(self._offset - string_end)  # zero the padding
+        self._buffer[string_end : self._offset] = bytes(
+            self._offset - string_end
+        )  # zero the padding
 
     def serialized(self, sec: int, nanosec: int, values: tuple[float, float, float]) -> bytes:
         """The message's bytes with this stamp (s, ns) and these three values [m or m/s]."""

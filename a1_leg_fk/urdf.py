@@ -11,11 +11,11 @@ laughs") fails at once instead of expanding; a URDF never needs them.
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ElementTree
 import xml.parsers.expat
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping
+from xml.etree import ElementTree
 
 Vector3 = tuple[float, float, float]
 
@@ -24,7 +24,9 @@ AXIS_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic"})
 """The joint types that move along their ``<axis>``; on every other type (fixed, floating, planar)
 the axis is not read at all, as urdfdom, robot_state_publisher and PyBullet do: CAD exporters write
 ``<axis xyz="0 0 0"/>`` on fixed joints (Unitree's Go2 and B2 descriptions)."""
-KNOWN_JOINT_TYPES = frozenset({"revolute", "continuous", "prismatic", "fixed", "floating", "planar"})
+KNOWN_JOINT_TYPES = frozenset(
+    {"revolute", "continuous", "prismatic", "fixed", "floating", "planar"}
+)
 DEFAULT_AXIS: Vector3 = (1.0, 0.0, 0.0)  # the URDF specification's default
 MAX_URDF_CHARS = 16 * 1024 * 1024
 """The largest robot description accepted [characters]: far above any real robot (Go2's is
@@ -137,7 +139,9 @@ def checked_urdf_text(text: str, name: str) -> str:
     refuses); text that does not start with ``<`` is refused.
     """
     if len(text) > MAX_URDF_CHARS:
-        raise LegFkError(f"{name}: more than the {MAX_URDF_CHARS} characters accepted for a robot description")
+        raise LegFkError(
+            f"{name}: more than the {MAX_URDF_CHARS} characters accepted for a robot description"
+        )
     text = text.lstrip()
     if not text.startswith("<"):
         raise LegFkError(f"{name}: not URDF XML")
@@ -171,7 +175,9 @@ def _parse_xml(xml_text: str, source: str) -> ElementTree.Element:
     parser = xml.parsers.expat.ParserCreate()
 
     def refuse_entity(name: str, *_: object) -> None:
-        raise LegFkError(f"{source}: XML entity declarations are not allowed in a URDF (entity '{name}')")
+        raise LegFkError(
+            f"{source}: XML entity declarations are not allowed in a URDF (entity '{name}')"
+        )
 
     parser.EntityDeclHandler = refuse_entity
     parser.StartElementHandler = builder.start
@@ -218,7 +224,9 @@ def _link_reference(joint: ElementTree.Element, tag: str, where: str) -> str:
     return _required_attribute(element, "link", where)
 
 
-def _vector(element: ElementTree.Element | None, attribute: str, default: Vector3, where: str) -> Vector3:
+def _vector(
+    element: ElementTree.Element | None, attribute: str, default: Vector3, where: str
+) -> Vector3:
     text = None if element is None else element.get(attribute)
     if text is None:
         return default
@@ -228,7 +236,7 @@ def _vector(element: ElementTree.Element | None, attribute: str, default: Vector
         raise LegFkError(f"{where}: {attribute}='{text}' is not three numbers") from error
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise LegFkError(f"{where}: {attribute}='{text}' is not three finite numbers")
-    return values  # type: ignore[return-value]
+    return values
 
 
 def _unit_axis(axis: Vector3, where: str) -> Vector3:
@@ -238,7 +246,9 @@ def _unit_axis(axis: Vector3, where: str) -> Vector3:
     return (axis[0] / norm, axis[1] / norm, axis[2] / norm)
 
 
-def _limits(element: ElementTree.Element, joint_type: str, where: str) -> tuple[float | None, float | None]:
+def _limits(
+    element: ElementTree.Element, joint_type: str, where: str
+) -> tuple[float | None, float | None]:
     """(lower, upper) [rad] for revolute joints; (None, None) for every other type."""
     if joint_type != "revolute":
         return None, None
@@ -262,7 +272,9 @@ def _check_tree(links: tuple[str, ...], joints: Mapping[str, Joint], source: str
     for joint in joints.values():
         for role, link in (("parent", joint.parent), ("child", joint.child)):
             if link not in known:
-                raise LegFkError(f"{source}: joint '{joint.name}' names {role} link '{link}', which does not exist")
+                raise LegFkError(
+                    f"{source}: joint '{joint.name}' names {role} link '{link}', which does not exist"
+                )
         if joint.child in parent_of:
             raise LegFkError(f"{source}: link '{joint.child}' is the child of more than one joint")
         parent_of[joint.child] = joint.parent

@@ -26,6 +26,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from common import machine
@@ -49,13 +50,21 @@ def generate(path: Path, messages: int, storage: str, velocities: bool = False) 
     names = list(Quadruped.from_urdf().joint_names)
     header = types["std_msgs/msg/Header"](types["builtin_interfaces/msg/Time"](0, 0), "")
     marks_q, marks_dq = np.arange(1.0, 13.0), np.arange(101.0, 113.0)  # found in the bytes below
-    template = bytearray(typestore.serialize_cdr(
-        types[JOINT_STATE](header, names, marks_q, marks_dq if velocities else np.zeros(0), np.zeros(0)), JOINT_STATE))
+    template = bytearray(
+        typestore.serialize_cdr(
+            types[JOINT_STATE](
+                header, names, marks_q, marks_dq if velocities else np.zeros(0), np.zeros(0)
+            ),
+            JOINT_STATE,
+        )
+    )
     positions_at = bytes(template).index(marks_q.astype("<f8").tobytes())
     velocities_at = bytes(template).index(marks_dq.astype("<f8").tobytes()) if velocities else 0
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     base = np.array([0.05, 0.8, -1.5] * 4)
-    phase = np.array([0.0, 0.0, 0.0, math.pi, math.pi, math.pi, math.pi, math.pi, math.pi, 0.0, 0.0, 0.0])
+    phase = np.array(
+        [0.0, 0.0, 0.0, math.pi, math.pi, math.pi, math.pi, math.pi, math.pi, 0.0, 0.0, 0.0]
+    )
     with Writer(path, version=9, storage_plugin=plugin) as writer:
         connection = writer.add_connection("/joint_states", JOINT_STATE, typestore=typestore)
         for index in range(messages):
@@ -75,7 +84,12 @@ def floor(path: Path) -> int:
     from rosbags.highlevel import AnyReader
 
     with AnyReader([path]) as reader:
-        return sum(1 for _ in reader.messages(connections=[c for c in reader.connections if c.msgtype == JOINT_STATE]))
+        return sum(
+            1
+            for _ in reader.messages(
+                connections=[c for c in reader.connections if c.msgtype == JOINT_STATE]
+            )
+        )
 
 
 def peer(path: Path) -> int:
@@ -86,7 +100,7 @@ def peer(path: Path) -> int:
     with AnyReader([path]) as reader:
         connections = [c for c in reader.connections if c.msgtype == JOINT_STATE]
         for connection, _, raw in reader.messages(connections=connections):
-            message = reader.deserialize(raw, connection.msgtype)
+            message: Any = reader.deserialize(raw, connection.msgtype)  # a sensor_msgs JointState
             robot.fk(message.position)
             count += 1
     return count
@@ -99,7 +113,7 @@ def command(arguments: list[str]) -> int:
     return 0
 
 
-def timed(function, *arguments) -> float:  # noqa: ANN001
+def timed(function, *arguments) -> float:
     started = time.perf_counter()
     function(*arguments)
     return time.perf_counter() - started
@@ -108,14 +122,28 @@ def timed(function, *arguments) -> float:  # noqa: ANN001
 def speed(options: argparse.Namespace, folder: Path) -> None:
     bag = folder / "bench_bag"
     content = "names, positions and velocities" if options.velocities else "names and positions"
-    print(f"generating {options.messages:,} JointState messages at 1 kHz ({content}; {options.storage}) ...", flush=True)
+    print(
+        f"generating {options.messages:,} JointState messages at 1 kHz ({content}; {options.storage}) ...",
+        flush=True,
+    )
     generation = timed(generate, bag, options.messages, options.storage, options.velocities)
     print(f"  written in {generation:.1f} s ({options.messages / generation:,.0f} messages/s)")
     rows = [
         ("(a) floor: rosbags raw read, no deserialization", timed(floor, bag)),
         ("(b) peer: rosbags deserialize + Quadruped.fk", timed(peer, bag)),
-        ("(c) a1-leg-fk bag --csv", timed(command, ["bag", str(bag), "--csv", str(folder / "feet.csv"), "--quiet", "--force"])),
-        ("(d) a1-leg-fk bag --output-bag (MCAP)", timed(command, ["bag", str(bag), "--output-bag", str(folder / "feet_bag"), "--quiet", "--force"])),
+        (
+            "(c) a1-leg-fk bag --csv",
+            timed(
+                command, ["bag", str(bag), "--csv", str(folder / "feet.csv"), "--quiet", "--force"]
+            ),
+        ),
+        (
+            "(d) a1-leg-fk bag --output-bag (MCAP)",
+            timed(
+                command,
+                ["bag", str(bag), "--output-bag", str(folder / "feet_bag"), "--quiet", "--force"],
+            ),
+        ),
     ]
     peer_rate = options.messages / rows[1][1]
     print("\n| | messages/s | time [s] | ratio to (b) |\n| --- | --- | --- | --- |")
@@ -135,26 +163,46 @@ PEAK_RSS_CHILD = (
 
 def peak_rss_mb(arguments: list[str]) -> float:
     """Peak RSS [MB] of ``a1-leg-fk`` run with ``arguments`` in a process of its own."""
-    result = subprocess.run([sys.executable, "-c", PEAK_RSS_CHILD, *arguments], check=True, capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-c", PEAK_RSS_CHILD, *arguments],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return int(result.stdout.split("peak_rss_kb")[-1]) / 1024
 
 
 def long_run(options: argparse.Namespace, folder: Path) -> None:
-    print("| bag | messages | --csv peak RSS [MB] | --output-bag peak RSS [MB] |\n| --- | --- | --- | --- |")
+    print(
+        "| bag | messages | --csv peak RSS [MB] | --output-bag peak RSS [MB] |\n| --- | --- | --- | --- |"
+    )
     for minutes in (3, 30):
         messages = minutes * 60 * 1000
         bag = generate(folder / f"bag_{minutes}min", messages, options.storage)
-        csv_rss = peak_rss_mb(["bag", str(bag), "--csv", str(folder / f"{minutes}.csv"), "--quiet"])
-        bag_rss = peak_rss_mb(["bag", str(bag), "--output-bag", str(folder / f"{minutes}_out"), "--quiet"])
-        print(f"| {minutes} min at 1 kHz | {messages:,} | {csv_rss:.0f} | {bag_rss:.0f} |", flush=True)
+        csv_rss = peak_rss_mb(
+            ["bag", str(bag), "--csv", str(folder / f"{minutes}.csv"), "--quiet"]
+        )
+        bag_rss = peak_rss_mb(
+            ["bag", str(bag), "--output-bag", str(folder / f"{minutes}_out"), "--quiet"]
+        )
+        print(
+            f"| {minutes} min at 1 kHz | {messages:,} | {csv_rss:.0f} | {bag_rss:.0f} |",
+            flush=True,
+        )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--messages", type=int, default=300_000)
     parser.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap")
-    parser.add_argument("--velocities", action="store_true", help="give the joint velocities too (12 more CSV columns)")
-    parser.add_argument("--long", action="store_true", help="peak RSS over a 3-minute and a 30-minute bag instead")
+    parser.add_argument(
+        "--velocities",
+        action="store_true",
+        help="give the joint velocities too (12 more CSV columns)",
+    )
+    parser.add_argument(
+        "--long", action="store_true", help="peak RSS over a 3-minute and a 30-minute bag instead"
+    )
     options = parser.parse_args()
     print(machine())
     with tempfile.TemporaryDirectory(prefix="a1_leg_fk_bag_bench_") as folder:

@@ -14,12 +14,14 @@ import platform
 import statistics
 import sys
 import timeit
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
-from typing import Callable
 
 ROOT = Path(__file__).resolve().parent.parent
-if importlib.util.find_spec("a1_leg_fk") is None:  # a source checkout without the package installed
+if (
+    importlib.util.find_spec("a1_leg_fk") is None
+):  # a source checkout without the package installed
     sys.path.insert(0, str(ROOT))
 sys.path.append(str(ROOT / "test"))  # appended: nothing in test/ may shadow an installed module
 
@@ -44,7 +46,11 @@ def _version(distribution: str) -> str:
 def machine() -> str:
     """Two lines on what a result was measured on: CPUs, model, load; Python and the libraries."""
     model = next(
-        (line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")),
+        (
+            line.split(":", 1)[1].strip()
+            for line in Path("/proc/cpuinfo").read_text().splitlines()
+            if line.startswith("model name")
+        ),
         platform.processor() or platform.machine(),
     )
     load = " ".join(f"{average:.2f}" for average in os.getloadavg())
@@ -56,7 +62,9 @@ def machine() -> str:
     )
 
 
-def median_seconds_per_call(functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05) -> dict[str, float]:
+def median_seconds_per_call(
+    functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05
+) -> dict[str, float]:
     """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
 
     The runs are interleaved (one run of every function per round), so a slow spell of the

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import statistics
 import timeit
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared
@@ -54,7 +54,9 @@ def ry_math(angle: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-def numpy_reference(quadruped: Quadruped, rot_x=rx, rot_y=ry) -> Callable[[list[float]], np.ndarray]:
+def numpy_reference(
+    quadruped: Quadruped, rot_x=rx, rot_y=ry
+) -> Callable[[list[float]], np.ndarray]:
     """Per-leg numpy FK with the URDF numbers read from the model (A1 joint names)."""
     joints = quadruped.model.joints
     legs = []
@@ -99,7 +101,10 @@ class PyBulletFk:
         p, body, client = self.p, self.body, self.client
         for index, angle in zip(self.joints, q):
             p.resetJointState(body, index, angle, physicsClientId=client)
-        return [p.getLinkState(body, foot, computeForwardKinematics=True, physicsClientId=client)[4] for foot in self.feet]
+        return [
+            p.getLinkState(body, foot, computeForwardKinematics=True, physicsClientId=client)[4]
+            for foot in self.feet
+        ]
 
     def close(self) -> None:
         self.robot.close()
@@ -130,7 +135,9 @@ def main() -> None:
     pybullet_fk = None
     try:
         pybullet_fk = PyBulletFk(quadruped)
-        assert np.abs(np.array(pybullet_fk.fk(q)) - expected).max() <= 1e-7, "PyBullet disagrees with fk"
+        assert np.abs(np.array(pybullet_fk.fk(q)) - expected).max() <= 1e-7, (
+            "PyBullet disagrees with fk"
+        )
     except ImportError:
         pass
 
@@ -159,7 +166,12 @@ def main() -> None:
 
     batch = np.random.default_rng(0).uniform(-math.pi, math.pi, size=(BATCH_ROWS, 12))
     sample = slice(0, BATCH_ROWS, 9973)
-    np.testing.assert_allclose(quadruped.fk_batch(batch[sample]), [quadruped.fk(row) for row in batch[sample]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        quadruped.fk_batch(batch[sample]),
+        [quadruped.fk(row) for row in batch[sample]],
+        rtol=0,
+        atol=1e-12,
+    )
 
     def trig_only() -> None:
         np.sin(batch)
@@ -171,10 +183,14 @@ def main() -> None:
         trig_runs.append(timeit.timeit(trig_only, number=1))
     batch_seconds, trig_seconds = statistics.median(batch_runs), statistics.median(trig_runs)
     throughput = BATCH_ROWS / batch_seconds / 1e6
-    print(f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} interleaved runs)")
+    print(
+        f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} interleaved runs)"
+    )
     print(f"  {'method':<52} {'s':>9} {'M configs/s':>12}")
     print(f"  {'Quadruped.fk_batch':<52} {batch_seconds:9.3f} {throughput:12.2f}")
-    print(f"  {'np.sin + np.cos alone (the floor)':<52} {trig_seconds:9.3f} {BATCH_ROWS / trig_seconds / 1e6:12.2f}")
+    print(
+        f"  {'np.sin + np.cos alone (the floor)':<52} {trig_seconds:9.3f} {BATCH_ROWS / trig_seconds / 1e6:12.2f}"
+    )
     print(
         f"  fk_batch / trig floor = {batch_seconds / trig_seconds:.2f}x; "
         f"throughput {throughput:.2f} M/s (target >= 1.3 M/s: {'met' if throughput >= 1.3 else 'NOT met'})"

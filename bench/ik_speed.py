@@ -32,32 +32,43 @@ def main() -> None:
     quadruped = Quadruped.from_urdf()
     feet = quadruped.fk(SPEED_POSE)
     result = quadruped.ik(feet)
-    assert result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
+    assert (
+        result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
+    )
     searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
     searched = inverse.solve_feet(searching, feet, None)
-    assert searched.status == ("ok",) * 4 and np.abs(quadruped.fk(searched.angles) - feet).max() <= 1e-9
+    assert (
+        searched.status == ("ok",) * 4
+        and np.abs(quadruped.fk(searched.angles) - feet).max() <= 1e-9
+    )
 
     rows = median_seconds_per_call(
         {
             "Quadruped.ik(feet)  [closed form]": lambda: quadruped.ik(feet),
             "Quadruped.fk(q)": lambda: quadruped.fk(SPEED_POSE),
-            "damped least squares, same targets": lambda: inverse.solve_feet(searching, feet, None),
+            "damped least squares, same targets": lambda: inverse.solve_feet(
+                searching, feet, None
+            ),
         },
         repeats=7,
     )
     ik_seconds = rows["Quadruped.ik(feet)  [closed form]"]
     print("\nfour feet, one call (median of 7 interleaved runs)")
     print(f"  {'method':<40} {'us/call':>9} {'vs ik':>8}")
-    for name, seconds in rows.items():
-        print(f"  {name:<40} {seconds * 1e6:9.2f} {seconds / ik_seconds:7.2f}x")
-    print(f"  Quadruped.ik: {ik_seconds * 1e6:.1f} us/call (target <= 10 us: {'met' if ik_seconds <= 10e-6 else 'NOT met'})")
+    for name, per_call_s in rows.items():
+        print(f"  {name:<40} {per_call_s * 1e6:9.2f} {per_call_s / ik_seconds:7.2f}x")
+    print(
+        f"  Quadruped.ik: {ik_seconds * 1e6:.1f} us/call (target <= 10 us: {'met' if ik_seconds <= 10e-6 else 'NOT met'})"
+    )
 
     lower = np.array([joint.lower for joint in quadruped.joints])
     upper = np.array([joint.upper for joint in quadruped.joints])
     angles = np.random.default_rng(0).uniform(lower, upper, size=(BATCH_ROWS, 12))
     targets = quadruped.fk_batch(angles)
     check = quadruped.ik_batch(targets)
-    assert (check.status == inverse.OK).all() and np.abs(quadruped.fk_batch(check.angles) - targets).max() <= 1e-9
+    assert (check.status == inverse.OK).all() and np.abs(
+        quadruped.fk_batch(check.angles) - targets
+    ).max() <= 1e-9
 
     def trig_only() -> None:
         np.sin(angles)
@@ -70,11 +81,17 @@ def main() -> None:
         runs["trig"].append(timeit.timeit(trig_only, number=1))
     seconds = {name: statistics.median(values) for name, values in runs.items()}
     throughput = BATCH_ROWS / seconds["ik_batch"] / 1e6
-    print(f"\nbatch of {BATCH_ROWS:,} in-limit configurations' feet, (N, 4, 3) (median of {BATCH_REPEATS} interleaved runs)")
+    print(
+        f"\nbatch of {BATCH_ROWS:,} in-limit configurations' feet, (N, 4, 3) (median of {BATCH_REPEATS} interleaved runs)"
+    )
     print(f"  {'method':<40} {'s':>9} {'M configs/s':>12}")
     print(f"  {'Quadruped.ik_batch':<40} {seconds['ik_batch']:9.3f} {throughput:12.2f}")
-    print(f"  {'Quadruped.fk_batch (of the angles)':<40} {seconds['fk_batch']:9.3f} {BATCH_ROWS / seconds['fk_batch'] / 1e6:12.2f}")
-    print(f"  {'np.sin + np.cos alone (the floor)':<40} {seconds['trig']:9.3f} {BATCH_ROWS / seconds['trig'] / 1e6:12.2f}")
+    print(
+        f"  {'Quadruped.fk_batch (of the angles)':<40} {seconds['fk_batch']:9.3f} {BATCH_ROWS / seconds['fk_batch'] / 1e6:12.2f}"
+    )
+    print(
+        f"  {'np.sin + np.cos alone (the floor)':<40} {seconds['trig']:9.3f} {BATCH_ROWS / seconds['trig'] / 1e6:12.2f}"
+    )
     print(
         f"  ik_batch / fk_batch = {seconds['ik_batch'] / seconds['fk_batch']:.2f}x, / trig floor = "
         f"{seconds['ik_batch'] / seconds['trig']:.2f}x; throughput {throughput:.2f} M/s "

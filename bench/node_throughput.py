@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import queue
 import re
@@ -58,7 +59,14 @@ CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 LOSS_LIMIT = 0.001  # a ramp step passes below 0.1 % input and foot loss
 RATE_KEPT = 0.97  # ... and when the generator achieved 97 % of the step's rate
 DRAIN_S = 0.4  # after a phase, for the last outputs to arrive
-GOALS = {"p50_ms": 1.0, "p99_ms": 5.0, "cpu_pct": 40.0, "ratio": 0.90, "max_rate_hz": 2000.0, "startup_s": 2.0}
+GOALS = {
+    "p50_ms": 1.0,
+    "p99_ms": 5.0,
+    "cpu_pct": 40.0,
+    "ratio": 0.90,
+    "max_rate_hz": 2000.0,
+    "startup_s": 2.0,
+}
 
 
 @dataclass
@@ -84,11 +92,19 @@ class Child(common.Child):
     def __init__(self, name: str, command: list[str], env: dict[str, str], log_dir: Path) -> None:
         self.events: queue.Queue[dict] = queue.Queue()
         self.started_ns = time.time_ns()
-        super().__init__(name, command, log_dir / f"{name}.log", env=env, cwd=env["PYTHONPATH"].split(os.pathsep)[0],
-                         pipes=True, death_signal=signal.SIGKILL)
+        super().__init__(
+            name,
+            command,
+            log_dir / f"{name}.log",
+            env=env,
+            cwd=env["PYTHONPATH"].split(os.pathsep)[0],
+            pipes=True,
+            death_signal=signal.SIGKILL,
+        )
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
+        assert self.process.stdout is not None  # started with pipes=True
         for line in self.process.stdout:
             try:
                 self.events.put(json.loads(line))
@@ -97,6 +113,7 @@ class Child(common.Child):
                     log.write(line)
 
     def send(self, **command: object) -> None:
+        assert self.process.stdin is not None  # started with pipes=True
         try:
             self.process.stdin.write(json.dumps(command) + "\n")
             self.process.stdin.flush()
@@ -108,9 +125,13 @@ class Child(common.Child):
         while True:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
-                raise TimeoutError(f"{self.name}: no '{kind}' within {timeout:.0f} s (log: {self.log})")
+                raise TimeoutError(
+                    f"{self.name}: no '{kind}' within {timeout:.0f} s (log: {self.log})"
+                )
             if self.process.poll() is not None and self.events.empty():
-                raise RuntimeError(f"{self.name} exited with {self.process.returncode} (log: {self.log})")
+                raise RuntimeError(
+                    f"{self.name} exited with {self.process.returncode} (log: {self.log})"
+                )
             try:
                 event = self.events.get(timeout=min(remaining, 0.2))
             except queue.Empty:
@@ -134,13 +155,26 @@ class Child(common.Child):
 class Scenario:
     """receiver + generator + (node or baseline) [+ verify caller] on one domain, phases in order."""
 
-    def __init__(self, target: str, args: argparse.Namespace, env: dict[str, str], log_dir: Path,
-                 children: list[Child]) -> None:
-        self.target, self.args, self.env, self.log_dir, self.children = target, args, env, log_dir, children
+    def __init__(
+        self,
+        target: str,
+        args: argparse.Namespace,
+        env: dict[str, str],
+        log_dir: Path,
+        children: list[Child],
+    ) -> None:
+        self.target, self.args, self.env, self.log_dir, self.children = (
+            target,
+            args,
+            env,
+            log_dir,
+            children,
+        )
         self.npz = log_dir / f"{target}.npz"
         self.startup_s = float("nan")
-        self.ready_s = float("nan")  # process start -> the node's "feet of ..." log line (its init done)
-        self.exit = (None, float("nan"))
+        # process start -> the node's "feet of ..." log line (its init done)
+        self.ready_s = float("nan")
+        self.exit: tuple[int | None, float] = (None, float("nan"))
         self.verify_summary: dict = {}
         self.cpu: dict[str, float] = {}
 
@@ -151,10 +185,14 @@ class Scenario:
 
     def _ready_s(self) -> float:
         """Process start -> the node's start-up log line, from its log (NaN for the baseline)."""
-        found = re.search(r"\[INFO\] \[(\d+)\.(\d+)\] \[[^]]*\]: feet of", self.under_test.log.read_text())
+        found = re.search(
+            r"\[INFO\] \[(\d+)\.(\d+)\] \[[^]]*\]: feet of", self.under_test.log.read_text()
+        )
         if not found:
             return float("nan")
-        return (int(found[1]) + int(found[2]) / 10 ** len(found[2]) - self.under_test.started_ns / 1e9)
+        return (
+            int(found[1]) + int(found[2]) / 10 ** len(found[2]) - self.under_test.started_ns / 1e9
+        )
 
     def run(self, phases: list[Phase]) -> None:
         python = sys.executable
@@ -186,9 +224,15 @@ class Scenario:
                 break
             if phase.verify and verifier is not None:
                 verifier.send(op="go")
-            self.generator.send(op="phase", rate=phase.rate, duration=phase.duration, name=phase.name)
+            self.generator.send(
+                op="phase", rate=phase.rate, duration=phase.duration, name=phase.name
+            )
             self.generator.wait_event("phase_start", 10)
-            ours = {"under_test": self.under_test, "receiver": self.receiver, "generator": self.generator}
+            ours = {
+                "under_test": self.under_test,
+                "receiver": self.receiver,
+                "generator": self.generator,
+            }
             if phase.verify and verifier is not None:
                 ours["verifier"] = verifier
             cpu0 = {name: child.cpu_s() for name, child in ours.items()}
@@ -202,14 +246,17 @@ class Scenario:
                 verifier.stop()
             time.sleep(DRAIN_S)
             phase.result = dict(end)
-            for key in cpu0:
-                phase.result[f"cpu_{key}"] = 100 * (cpu1[key] - cpu0[key]) / end["elapsed_s"]
+            for key, start in cpu0.items():
+                phase.result[f"cpu_{key}"] = 100 * (cpu1[key] - start) / end["elapsed_s"]
             ours_cpu = sum(phase.result[f"cpu_{name}"] for name in ours)
             phase.result["cpu_others"] = max(0.0, phase.result["cpu_machine"] - ours_cpu)
             if phase.ramp:
                 self.receiver.send(op="count", first=end["first_stamp"], last=end["last_stamp"])
                 answered = self.receiver.wait_event("count", 10)["answered"]
-                ok = answered >= end["sent"] * (1 - LOSS_LIMIT) and end["rate_hz"] >= phase.rate * RATE_KEPT
+                ok = (
+                    answered >= end["sent"] * (1 - LOSS_LIMIT)
+                    and end["rate_hz"] >= phase.rate * RATE_KEPT
+                )
                 failures = 0 if ok else failures + 1
         self.generator.send(op="stop")
         self.generator.stop(signal.SIGTERM)
@@ -238,7 +285,11 @@ def analyse(phases: list[Phase], data: np.lib.npyio.NpzFile) -> None:
             if not n:
                 continue
             in_seq = seq[inside]
-            count = int(in_seq.max() - in_seq.min() + 1) if in_seq.min() > 0 else len(np.unique(stamps[inside]))
+            count = (
+                int(in_seq.max() - in_seq.min() + 1)
+                if in_seq.min() > 0
+                else len(np.unique(stamps[inside]))
+            )
             published += count
             received += n
             if topic == "foot_positions_FR":
@@ -251,8 +302,10 @@ def analyse(phases: list[Phase], data: np.lib.npyio.NpzFile) -> None:
             input_loss=1 - answered_fr / sent if sent else float("nan"),
             foot_loss=1 - received / published if published else float("nan"),
             out_hz=answered_fr / elapsed,
-            p50=float(np.percentile(lat, 50)), p95=float(np.percentile(lat, 95)),
-            p99=float(np.percentile(lat, 99)), max=float(np.max(lat)),
+            p50=float(np.percentile(lat, 50)),
+            p95=float(np.percentile(lat, 95)),
+            p99=float(np.percentile(lat, 99)),
+            max=float(np.max(lat)),
         )
 
 
@@ -261,7 +314,11 @@ def max_sustained(phases: list[Phase]) -> tuple[float, bool]:
     best, failures, ran = 0.0, 0, [p for p in phases if p.ramp and p.result]
     for phase in ran:
         r = phase.result
-        ok = r["input_loss"] < LOSS_LIMIT and r["foot_loss"] < LOSS_LIMIT and r["rate_hz"] >= phase.rate * RATE_KEPT
+        ok = (
+            r["input_loss"] < LOSS_LIMIT
+            and r["foot_loss"] < LOSS_LIMIT
+            and r["rate_hz"] >= phase.rate * RATE_KEPT
+        )
         if ok and failures < 2:
             best = max(best, phase.rate)
         failures = 0 if ok else failures + 1
@@ -272,25 +329,34 @@ def max_sustained(phases: list[Phase]) -> tuple[float, bool]:
 
 
 def fmt(value: float, spec: str) -> str:
-    return "-" if value != value else format(value, spec)  # NaN -> "-"
+    return "-" if math.isnan(value) else format(value, spec)
 
 
-def print_report(node: Scenario, base: Scenario | None, node_phases: list[Phase], base_phases: list[Phase],
-                 args: argparse.Namespace) -> None:
+def print_report(
+    node: Scenario,
+    base: Scenario | None,
+    node_phases: list[Phase],
+    base_phases: list[Phase],
+    args: argparse.Namespace,
+) -> None:
     print()
     print(machine())
     print(f"ROS_DOMAIN_ID {args.domain}, executor '{args.executor}'")
-    header = (f"{'scenario':<30} {'in Hz':>7} {'out Hz':>7} {'in loss':>8} {'foot loss':>9} "
-              f"{'p50 ms':>7} {'p95 ms':>7} {'p99 ms':>7} {'max ms':>7} {'CPU %':>6} {'us/in':>6} {'rx CPU%':>7} "
-              f"{'others%':>7} {'ratio':>6}")
+    header = (
+        f"{'scenario':<30} {'in Hz':>7} {'out Hz':>7} {'in loss':>8} {'foot loss':>9} "
+        f"{'p50 ms':>7} {'p95 ms':>7} {'p99 ms':>7} {'max ms':>7} {'CPU %':>6} {'us/in':>6} {'rx CPU%':>7} "
+        f"{'others%':>7} {'ratio':>6}"
+    )
     print(header)
     print("-" * len(header))
     base_1k = next((p.result for p in base_phases if not p.ramp and p.result), {})
 
     def row(label: str, r: dict, ratio: str = "") -> None:
-        print(f"{label:<30} {r['rate_hz']:>7.0f} {r['out_hz']:>7.0f} {r['input_loss']:>8.2%} {r['foot_loss']:>9.2%} "
-              f"{r['p50']:>7.2f} {r['p95']:>7.2f} {r['p99']:>7.2f} {r['max']:>7.1f} {r['cpu_under_test']:>6.1f} "
-              f"{1e4 * r['cpu_under_test'] / r['rate_hz']:>6.0f} {r['cpu_receiver']:>7.1f} {r['cpu_others']:>7.0f} {ratio:>6}")
+        print(
+            f"{label:<30} {r['rate_hz']:>7.0f} {r['out_hz']:>7.0f} {r['input_loss']:>8.2%} {r['foot_loss']:>9.2%} "
+            f"{r['p50']:>7.2f} {r['p95']:>7.2f} {r['p99']:>7.2f} {r['max']:>7.1f} {r['cpu_under_test']:>6.1f} "
+            f"{1e4 * r['cpu_under_test'] / r['rate_hz']:>6.0f} {r['cpu_receiver']:>7.1f} {r['cpu_others']:>7.0f} {ratio:>6}"
+        )
 
     for phase in node_phases:
         if phase.result and not phase.ramp:
@@ -305,48 +371,91 @@ def print_report(node: Scenario, base: Scenario | None, node_phases: list[Phase]
         for phase in phases:
             if phase.result and phase.ramp:
                 row(f"{label} ramp {phase.rate:.0f} Hz", phase.result)
-    print("(CPU % of one core; us/in: CPU us per input; rx: the receiver; others: CPU % used by processes outside"
-          " this benchmark (the machine's total from /proc/stat minus ours), a sign of a noisy measurement;"
-          " ratio on a 1 kHz row: node CPU / baseline CPU)")
+    print(
+        "(CPU % of one core; us/in: CPU us per input; rx: the receiver; others: CPU % used by processes outside"
+        " this benchmark (the machine's total from /proc/stat minus ours), a sign of a noisy measurement;"
+        " ratio on a 1 kHz row: node CPU / baseline CPU)"
+    )
     print()
     node_max, node_top = max_sustained(node_phases)
     base_max, base_top = max_sustained(base_phases)
-    ratio = node_max / base_max if base_max else float("nan")
-    print(f"max sustained input rate (< {LOSS_LIMIT:.1%} loss): node {'>=' if node_top else ''}{node_max:.0f} Hz, "
-          f"baseline {'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline {fmt(ratio, '.2f')}")
-    print(f"startup (process start -> first published foot): node {node.startup_s:.2f} s"
-          + (f", baseline {base.startup_s:.2f} s" if base else "")
-          + f"; the node's own start-up (process start -> its start-up log line) {fmt(node.ready_s, '.2f')} s,"
-          " the rest is DDS discovery of the already running publisher")
+    rate_ratio = node_max / base_max if base_max else float("nan")
+    print(
+        f"max sustained input rate (< {LOSS_LIMIT:.1%} loss): node {'>=' if node_top else ''}{node_max:.0f} Hz, "
+        f"baseline {'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline {fmt(rate_ratio, '.2f')}"
+    )
+    print(
+        f"startup (process start -> first published foot): node {node.startup_s:.2f} s"
+        + (f", baseline {base.startup_s:.2f} s" if base else "")
+        + f"; the node's own start-up (process start -> its start-up log line) {fmt(node.ready_s, '.2f')} s,"
+        " the rest is DDS discovery of the already running publisher"
+    )
     if node.verify_summary:
         v = node.verify_summary
-        print(f"verify_fk: {v['sent']} calls, {v['answered']} answered, {v['passed']} passed, "
-              f"latency p50 {fmt(v['p50_ms'], '.1f')} ms, max {fmt(v['max_ms'], '.1f')} ms")
+        print(
+            f"verify_fk: {v['sent']} calls, {v['answered']} answered, {v['passed']} passed, "
+            f"latency p50 {fmt(v['p50_ms'], '.1f')} ms, max {fmt(v['max_ms'], '.1f')} ms"
+        )
     code, seconds = node.exit
     print(f"node exit on SIGINT: code {code} after {seconds:.2f} s")
     print()
-    main_1k = next((p.result for p in node_phases if not p.ramp and not p.verify and p.result), None)
+    main_1k = next(
+        (p.result for p in node_phases if not p.ramp and not p.verify and p.result), None
+    )
     verify_1k = next((p.result for p in node_phases if p.verify and p.result), None)
     goals = []
     if main_1k:
         goals += [
-            ("1 kHz: no input loss (< 0.1 %)", main_1k["input_loss"] < LOSS_LIMIT, f"{main_1k['input_loss']:.3%}"),
-            ("1 kHz: no foot loss (< 0.1 %)", main_1k["foot_loss"] < LOSS_LIMIT, f"{main_1k['foot_loss']:.3%}"),
-            ("1 kHz: latency p50 <= 1 ms", main_1k["p50"] <= GOALS["p50_ms"], f"{main_1k['p50']:.2f} ms"),
-            ("1 kHz: latency p99 <= 5 ms", main_1k["p99"] <= GOALS["p99_ms"], f"{main_1k['p99']:.2f} ms"),
-            ("1 kHz: node CPU <= 40 % of a core", main_1k["cpu_under_test"] <= GOALS["cpu_pct"],
-             f"{main_1k['cpu_under_test']:.1f} %"),
+            (
+                "1 kHz: no input loss (< 0.1 %)",
+                main_1k["input_loss"] < LOSS_LIMIT,
+                f"{main_1k['input_loss']:.3%}",
+            ),
+            (
+                "1 kHz: no foot loss (< 0.1 %)",
+                main_1k["foot_loss"] < LOSS_LIMIT,
+                f"{main_1k['foot_loss']:.3%}",
+            ),
+            (
+                "1 kHz: latency p50 <= 1 ms",
+                main_1k["p50"] <= GOALS["p50_ms"],
+                f"{main_1k['p50']:.2f} ms",
+            ),
+            (
+                "1 kHz: latency p99 <= 5 ms",
+                main_1k["p99"] <= GOALS["p99_ms"],
+                f"{main_1k['p99']:.2f} ms",
+            ),
+            (
+                "1 kHz: node CPU <= 40 % of a core",
+                main_1k["cpu_under_test"] <= GOALS["cpu_pct"],
+                f"{main_1k['cpu_under_test']:.1f} %",
+            ),
         ]
     if base_phases and any(p.ramp and p.result for p in node_phases):
         goals += [
-            ("ramp: node/baseline >= 90 %", ratio >= GOALS["ratio"], fmt(ratio, ".2f")),
+            ("ramp: node/baseline >= 90 %", rate_ratio >= GOALS["ratio"], fmt(rate_ratio, ".2f")),
             ("ramp: node >= 2 kHz", node_max >= GOALS["max_rate_hz"], f"{node_max:.0f} Hz"),
         ]
     if verify_1k:
         ok = verify_1k["input_loss"] < LOSS_LIMIT and node.verify_summary.get("answered", 0) > 0
-        goals.append(("verify_fk at 20 Hz during 1 kHz: no input loss", ok, f"{verify_1k['input_loss']:.3%}"))
-    goals.append(("startup <= 2 s", node.startup_s <= GOALS["startup_s"], f"{node.startup_s:.2f} s"))
-    goals.append(("node exits 0 within 2 s of SIGINT", code == 0 and seconds <= 2.0, f"code {code}, {seconds:.2f} s"))
+        goals.append(
+            (
+                "verify_fk at 20 Hz during 1 kHz: no input loss",
+                ok,
+                f"{verify_1k['input_loss']:.3%}",
+            )
+        )
+    goals.append(
+        ("startup <= 2 s", node.startup_s <= GOALS["startup_s"], f"{node.startup_s:.2f} s")
+    )
+    goals.append(
+        (
+            "node exits 0 within 2 s of SIGINT",
+            code == 0 and seconds <= 2.0,
+            f"code {code}, {seconds:.2f} s",
+        )
+    )
     for label, ok, value in goals:
         print(f"  [{'met' if ok else 'MISSED'}] {label}: {value}")
     print(f"goals met: {sum(ok for _, ok, _ in goals)}/{len(goals)}")
@@ -354,22 +463,50 @@ def print_report(node: Scenario, base: Scenario | None, node_phases: list[Phase]
 
 def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--duration", type=float, default=60.0, help="main 1 kHz run [s] (default 60)")
-    parser.add_argument("--verify-duration", type=float, default=None, help="1 kHz + verify_fk run [s] (default duration/3)")
-    parser.add_argument("--baseline-duration", type=float, default=None, help="baseline 1 kHz run [s] (default duration/3)")
-    parser.add_argument("--ramp", default="500,1000,1500,2000,2500,3000,4000,5000,6000", help="ramp rates [Hz]")
+    parser.add_argument(
+        "--duration", type=float, default=60.0, help="main 1 kHz run [s] (default 60)"
+    )
+    parser.add_argument(
+        "--verify-duration",
+        type=float,
+        default=None,
+        help="1 kHz + verify_fk run [s] (default duration/3)",
+    )
+    parser.add_argument(
+        "--baseline-duration",
+        type=float,
+        default=None,
+        help="baseline 1 kHz run [s] (default duration/3)",
+    )
+    parser.add_argument(
+        "--ramp", default="500,1000,1500,2000,2500,3000,4000,5000,6000", help="ramp rates [Hz]"
+    )
     parser.add_argument("--step", type=float, default=5.0, help="ramp step [s]")
     parser.add_argument("--quick", action="store_true", help="smoke test, about 30 s")
-    parser.add_argument("--executor", default="node", choices=("node", "events", "single", "multi"),
-                        help="node: the node's own choice; else force one for node and baseline alike")
+    parser.add_argument(
+        "--executor",
+        default="node",
+        choices=("node", "events", "single", "multi"),
+        help="node: the node's own choice; else force one for node and baseline alike",
+    )
     parser.add_argument("--no-baseline", action="store_true", help="skip the baseline (no ratio)")
     parser.add_argument("--no-ramp", action="store_true", help="skip both ramps")
     parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
-    parser.add_argument("--package-root", type=Path, default=ROOT,
-                        help="directory holding the a1_leg_fk to run (e.g. a saved copy, for before/after)")
-    parser.add_argument("--discovery-range", default="LOCALHOST", choices=("LOCALHOST", "SUBNET", "SYSTEM_DEFAULT"),
-                        help="ROS_AUTOMATIC_DISCOVERY_RANGE of every process (default LOCALHOST)")
-    parser.add_argument("--keep-logs", action="store_true", help="keep the processes' logs and records")
+    parser.add_argument(
+        "--package-root",
+        type=Path,
+        default=ROOT,
+        help="directory holding the a1_leg_fk to run (e.g. a saved copy, for before/after)",
+    )
+    parser.add_argument(
+        "--discovery-range",
+        default="LOCALHOST",
+        choices=("LOCALHOST", "SUBNET", "SYSTEM_DEFAULT"),
+        help="ROS_AUTOMATIC_DISCOVERY_RANGE of every process (default LOCALHOST)",
+    )
+    parser.add_argument(
+        "--keep-logs", action="store_true", help="keep the processes' logs and records"
+    )
     args = parser.parse_args()
     if args.quick:
         args.duration, args.step, args.ramp = 6.0, 2.0, "1000,2000,3000"
@@ -385,21 +522,36 @@ def parse_args() -> argparse.Namespace:
 def main() -> int:
     args = parse_args()
     rates = [float(r) for r in args.ramp.split(",") if r] if not args.no_ramp else []
-    node_phases = [Phase("1 kHz", 1000, args.duration), Phase("1 kHz + verify_fk 20 Hz", 1000, args.verify_duration, verify=True)]
+    node_phases = [
+        Phase("1 kHz", 1000, args.duration),
+        Phase("1 kHz + verify_fk 20 Hz", 1000, args.verify_duration, verify=True),
+    ]
     node_phases += [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates]
     base_phases = [] if args.no_baseline else [Phase("1 kHz", 1000, args.baseline_duration)]
-    base_phases += [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates] if base_phases else []
-    env = dict(os.environ, ROS_DOMAIN_ID=str(args.domain), ROS_AUTOMATIC_DISCOVERY_RANGE=args.discovery_range,
-               PYTHONUNBUFFERED="1", PYTHONPATH=os.pathsep.join(filter(None, [str(args.package_root), os.environ.get("PYTHONPATH")])))
+    base_phases += (
+        [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates] if base_phases else []
+    )
+    env = dict(
+        os.environ,
+        ROS_DOMAIN_ID=str(args.domain),
+        ROS_AUTOMATIC_DISCOVERY_RANGE=args.discovery_range,
+        PYTHONUNBUFFERED="1",
+        PYTHONPATH=os.pathsep.join(
+            filter(None, [str(args.package_root), os.environ.get("PYTHONPATH")])
+        ),
+    )
     args.log_dir = Path(tempfile.mkdtemp(prefix="a1_leg_fk-bench-"))
     children: list[Child] = []
 
-    def on_term(signum: int, frame: object) -> None:  # noqa: ARG001
+    def on_term(_signum: int, _frame: object) -> None:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, on_term)
     total = sum(p.duration for p in node_phases + base_phases)
-    print(f"node_throughput: about {total + 15 + 1.4 * len(rates) * 2:.0f} s on ROS_DOMAIN_ID={args.domain}", flush=True)
+    print(
+        f"node_throughput: about {total + 15 + 1.4 * len(rates) * 2:.0f} s on ROS_DOMAIN_ID={args.domain}",
+        flush=True,
+    )
     node = base = None
     keep_logs = False
     try:

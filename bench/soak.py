@@ -23,6 +23,7 @@ Run:  python bench/soak.py --duration 60        (ROS_DOMAIN_ID: the caller's, el
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import os
@@ -59,9 +60,11 @@ def collect(out: str, stop: str) -> int:
     node = rclpy.create_node("soak_foot_collector")
     stamps: dict[str, list[int]] = {}
 
-    def recorder(leg: str):  # noqa: ANN202
+    def recorder(leg: str):
         received = stamps[leg] = []
-        return lambda msg: received.append(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
+        return lambda msg: received.append(
+            msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        )
 
     topics = [f"foot_positions/{leg}" for leg in shared.LEGS]
     for leg, topic in zip(shared.LEGS, topics):
@@ -120,18 +123,34 @@ class Stream:
         rates = [rng.uniform(-5.0, 5.0) for _ in range(12)]
         if rng.random() >= self.bad_fraction:
             return True, shared.PYBULLET_NAMES, angles, rates
-        kind = rng.choice(["partial", "position_length", "velocity_length", "duplicate", "nan", "one_nan", "unknown", "empty"])
+        kind = rng.choice(
+            [
+                "partial",
+                "position_length",
+                "velocity_length",
+                "duplicate",
+                "nan",
+                "one_nan",
+                "unknown",
+                "empty",
+            ]
+        )
         self.kinds[kind] = self.kinds.get(kind, 0) + 1
         names = list(rng.choice([shared.PYBULLET_NAMES, shared.UNITREE_NAMES]))
         if kind == "partial":
             keep = sorted(rng.sample(range(12), rng.randint(1, 11)))
-            return False, [names[i] for i in keep], [angles[i] for i in keep], [rates[i] for i in keep]
+            return (
+                False,
+                [names[i] for i in keep],
+                [angles[i] for i in keep],
+                [rates[i] for i in keep],
+            )
         if kind == "position_length":
             return False, names, angles[: rng.randint(0, 11)], rates
         if kind == "velocity_length":
             return False, names, angles, rates[:5]
         if kind == "duplicate":
-            return False, names + [names[0]], angles + [0.1], []
+            return False, [*names, names[0]], [*angles, 0.1], []
         if kind == "nan":
             return False, names, [math.nan] * 12, rates
         if kind == "one_nan":
@@ -145,7 +164,7 @@ class Stream:
 # --- the soak ----------------------------------------------------------------------------------
 
 
-def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure)
+def soak(args: argparse.Namespace) -> int:
     domain_lock = use_a_free_domain()  # noqa: F841 (held until exit)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     import rclpy
@@ -163,10 +182,19 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
         children.append(Child(name, command, log))
         return children[-1].process
 
-    print(f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
-          f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}", flush=True)
-    node_process = start("foot_fk_node", shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log)
-    collector = start("collector", [sys.executable, __file__, "--collect", str(feet_file), str(stop)], folder / "collector.log")
+    print(
+        f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
+        f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}",
+        flush=True,
+    )
+    node_process = start(
+        "foot_fk_node", shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log
+    )
+    collector = start(
+        "collector",
+        [sys.executable, __file__, "--collect", str(feet_file), str(stop)],
+        folder / "collector.log",
+    )
 
     rclpy.init()
     node = rclpy.create_node("soak_driver")
@@ -176,13 +204,15 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
     diagnostics: list[dict[str, str]] = []
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if status.name.endswith("foot kinematics"):
-                diagnostics.append({kv.key: kv.value for kv in status.values})
+        diagnostics.extend(
+            {kv.key: kv.value for kv in status.values}
+            for status in msg.status
+            if status.name.endswith("foot kinematics")
+        )
 
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, QoSProfile(depth=10))
 
-    def spin_until(condition, timeout_s: float) -> bool:  # noqa: ANN001
+    def spin_until(condition, timeout_s: float) -> bool:
         deadline = time.monotonic() + timeout_s
         while not condition():
             if time.monotonic() > deadline or node_process.poll() is not None:
@@ -196,14 +226,20 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             raise RuntimeError("no /diagnostics from the node")
         return diagnostics[-1]
 
-    def message(names, positions, velocities) -> JointState:  # noqa: ANN001
-        msg = JointState(name=list(names), position=[float(v) for v in positions], velocity=[float(v) for v in velocities])
+    def message(names, positions, velocities) -> JointState:
+        msg = JointState(
+            name=list(names),
+            position=[float(v) for v in positions],
+            velocity=[float(v) for v in velocities],
+        )
         msg.header.stamp = node.get_clock().now().to_msg()
         return msg
 
     failures: list[str] = []
     try:
-        if not verify.wait_for_service(timeout_sec=30.0) or not spin_until(lambda: publisher.get_subscription_count() > 0, 30.0):
+        if not verify.wait_for_service(timeout_sec=30.0) or not spin_until(
+            lambda: publisher.get_subscription_count() > 0, 30.0
+        ):
             raise RuntimeError("the node did not come up")
         if not spin_until(lambda: "ready" in (folder / "collector.log").read_text(), 60.0):
             raise RuntimeError("the foot collector did not come up")
@@ -220,7 +256,11 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
         pending = None  # (future, sent at)
         period = 1.0 / args.rate
         start_time = time.monotonic()
-        next_due, next_sample, next_verify = start_time, start_time, start_time + args.verify_period
+        next_due, next_sample, next_verify = (
+            start_time,
+            start_time,
+            start_time + args.verify_period,
+        )
         end_time = start_time + args.duration
         last_stamp = 0
         while next_due < end_time:
@@ -246,7 +286,13 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
             if now >= next_sample:
                 if node_process.poll() is not None:
                     raise RuntimeError(f"the node exited with {node_process.returncode}")
-                samples.append((now - start_time, shared.rss_mb(node_process.pid), cpu_seconds(node_process.pid)))
+                samples.append(
+                    (
+                        now - start_time,
+                        shared.rss_mb(node_process.pid),
+                        cpu_seconds(node_process.pid),
+                    )
+                )
                 next_sample += 1.0
             if pending is not None:
                 future, asked = pending
@@ -299,12 +345,16 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
     node_published = int(after["feet_published"]) - int(before["feet_published"])
     input_lost = sent - node_received
     output_lost = node_published - feet_received
-    lost_by_node = max(0, missing - input_lost) + partial  # good messages received but not (fully) published
+    lost_by_node = (
+        max(0, missing - input_lost) + partial
+    )  # good messages received but not (fully) published
     warm = [s for s in samples if s[0] >= args.warmup_fraction * elapsed]
     rss_warm = warm[0][1] if warm else math.nan
     rss_end = samples[-1][1] if samples else math.nan
     rss_max = max((s[1] for s in warm), default=math.nan)
-    cpu_per_s = [(b[2] - a[2]) / (b[0] - a[0]) for a, b in zip(samples, samples[1:]) if b[0] > a[0]]
+    cpu_per_s = [
+        (b[2] - a[2]) / (b[0] - a[0]) for a, b in itertools.pairwise(samples) if b[0] > a[0]
+    ]
     summary = {
         "duration_s": round(elapsed, 1),
         "rate_hz": args.rate,
@@ -330,18 +380,29 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
         "verify_failed": verify_failed,
         "stamp_jumps_back": after.get("stamp_jumps_back"),
     }
-    print("soak summary:\n" + "\n".join(f"  {key}: {value}" for key, value in summary.items()), flush=True)
+    print(
+        "soak summary:\n" + "\n".join(f"  {key}: {value}" for key, value in summary.items()),
+        flush=True,
+    )
     if args.json:
         Path(args.json).write_text(json.dumps(summary, indent=1))
     if rss_end > rss_warm * (1.0 + args.max_rss_growth):
-        failures.append(f"RSS grew {rss_warm:.1f} -> {rss_end:.1f} MB after warm-up (> {100 * args.max_rss_growth:g} %)")
+        failures.append(
+            f"RSS grew {rss_warm:.1f} -> {rss_end:.1f} MB after warm-up (> {100 * args.max_rss_growth:g} %)"
+        )
     if lost_by_node or output_lost:
-        failures.append(f"feet lost: {lost_by_node} good messages by the node, {output_lost} feet after it")
+        failures.append(
+            f"feet lost: {lost_by_node} good messages by the node, {output_lost} feet after it"
+        )
     if input_lost > args.max_input_loss * sent:
-        failures.append(f"the node's best-effort input lost {input_lost} of {sent} messages (> {100 * args.max_input_loss:g} %)")
+        failures.append(
+            f"the node's best-effort input lost {input_lost} of {sent} messages (> {100 * args.max_input_loss:g} %)"
+        )
     elif input_lost:
-        print(f"soak: note: {input_lost} of {sent} messages ({100 * input_lost / sent:.2f} %) never reached the node "
-              "(best-effort input under load; not counted as lost by the node)")
+        print(
+            f"soak: note: {input_lost} of {sent} messages ({100 * input_lost / sent:.2f} %) never reached the node "
+            "(best-effort input under load; not counted as lost by the node)"
+        )
     for failure in failures[:10]:
         print(f"soak: FAIL: {failure}", file=sys.stderr)
     print("soak: " + ("FAILED" if failures else "passed"), flush=True)
@@ -350,13 +411,30 @@ def soak(args: argparse.Namespace) -> int:  # noqa: C901 (one straight procedure
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--duration", type=float, default=600.0, help="seconds of streaming (default 600)")
-    parser.add_argument("--rate", type=float, default=1000.0, help="joint states per second (default 1000)")
-    parser.add_argument("--bad-fraction", type=float, default=0.05, help="share of bad/partial messages (0.05)")
-    parser.add_argument("--verify-period", type=float, default=1.0, help="seconds between verify_fk calls (1)")
-    parser.add_argument("--warmup-fraction", type=float, default=0.1, help="share of the run before RSS is judged")
-    parser.add_argument("--max-rss-growth", type=float, default=0.05, help="allowed RSS growth after warm-up (0.05)")
-    parser.add_argument("--max-input-loss", type=float, default=0.01, help="allowed best-effort input loss (0.01)")
+    parser.add_argument(
+        "--duration", type=float, default=600.0, help="seconds of streaming (default 600)"
+    )
+    parser.add_argument(
+        "--rate", type=float, default=1000.0, help="joint states per second (default 1000)"
+    )
+    parser.add_argument(
+        "--bad-fraction", type=float, default=0.05, help="share of bad/partial messages (0.05)"
+    )
+    parser.add_argument(
+        "--verify-period", type=float, default=1.0, help="seconds between verify_fk calls (1)"
+    )
+    parser.add_argument(
+        "--warmup-fraction", type=float, default=0.1, help="share of the run before RSS is judged"
+    )
+    parser.add_argument(
+        "--max-rss-growth",
+        type=float,
+        default=0.05,
+        help="allowed RSS growth after warm-up (0.05)",
+    )
+    parser.add_argument(
+        "--max-input-loss", type=float, default=0.01, help="allowed best-effort input loss (0.01)"
+    )
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", help="also write the summary to this file")
     parser.add_argument("--collect", nargs=2, metavar=("OUT", "STOP"), help=argparse.SUPPRESS)

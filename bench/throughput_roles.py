@@ -46,7 +46,9 @@ from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from sensor_msgs.msg import JointState
 
-OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in shared.LEGS] + [f"foot_velocities/{leg}" for leg in shared.LEGS]
+OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in shared.LEGS] + [
+    f"foot_velocities/{leg}" for leg in shared.LEGS
+]
 WARMUP_RATE_HZ = 100.0
 POSES = 250  # distinct pre-built messages the generator cycles through
 
@@ -67,7 +69,7 @@ class Control:
         signal.signal(signal.SIGTERM, self._on_signal)
         threading.Thread(target=self._read, daemon=True).start()
 
-    def _on_signal(self, signum: int, frame: object) -> None:  # noqa: ARG002
+    def _on_signal(self, _signum: int, _frame: object) -> None:
         self.stopping = True
 
     def _read(self) -> None:
@@ -101,7 +103,9 @@ def _poses() -> list[JointState]:
         phase = 2 * math.pi * i / POSES
         positions = [a + 0.2 * math.sin(phase + k) for k, a in enumerate(shared.STANDING)]
         velocities = [0.2 * 2 * math.pi * math.cos(phase + k) for k in range(len(shared.STANDING))]
-        messages.append(JointState(name=list(shared.PYBULLET_NAMES), position=positions, velocity=velocities))
+        messages.append(
+            JointState(name=list(shared.PYBULLET_NAMES), position=positions, velocity=velocities)
+        )
     return messages
 
 
@@ -134,10 +138,9 @@ def generator() -> None:
     while not control.stopping:
         command = control.poll()
         if command is None:
-            if warming:
-                if time.perf_counter() >= next_warmup:
-                    send()
-                    next_warmup += 1.0 / WARMUP_RATE_HZ
+            if warming and time.perf_counter() >= next_warmup:
+                send()
+                next_warmup += 1.0 / WARMUP_RATE_HZ
             time.sleep(0.002)
             continue
         if command["op"] != "phase":
@@ -166,8 +169,16 @@ def generator() -> None:
             if wait > 0.00015:
                 time.sleep(wait - 0.0001)
         elapsed = time.perf_counter() - t0
-        emit(event="phase_end", name=command.get("name", ""), sent=sent, first_stamp=first_stamp, last_stamp=last,
-             elapsed_s=elapsed, rate_hz=sent / elapsed if elapsed > 0 else 0.0, worst_burst=worst_behind + 1)
+        emit(
+            event="phase_end",
+            name=command.get("name", ""),
+            sent=sent,
+            first_stamp=first_stamp,
+            last_stamp=last,
+            elapsed_s=elapsed,
+            rate_hz=sent / elapsed if elapsed > 0 else 0.0,
+            worst_burst=worst_behind + 1,
+        )
     node.destroy_node()
     rclpy.try_shutdown()
 
@@ -183,12 +194,20 @@ def receiver(output: str) -> None:
     node = Node("bench_receiver")
     qos = QoSProfile(depth=1000)  # reliable, as the node publishes; deep enough for any burst
     subscriptions = [
-        node.create_subscription(PointStamped if "positions" in topic else Vector3Stamped, topic, lambda _: None, qos, raw=True)
+        node.create_subscription(
+            PointStamped if "positions" in topic else Vector3Stamped,
+            topic,
+            lambda _: None,
+            qos,
+            raw=True,
+        )
         for topic in OUTPUT_TOPICS
     ]
     handles = [s.handle for s in subscriptions]
     types = [s.msg_type for s in subscriptions]
-    records: list[tuple[list[int], list[int], list[int], list[int]]] = [([], [], [], []) for _ in subscriptions]
+    records: list[tuple[list[int], list[int], list[int], list[int]]] = [
+        ([], [], [], []) for _ in subscriptions
+    ]
     context = rclpy.get_default_context()
     wait_set = _rclpy.WaitSet(len(handles), 0, 0, 0, 0, 0, context.handle)
     unpack = struct.Struct("<iI").unpack_from
@@ -215,7 +234,13 @@ def receiver(output: str) -> None:
                 sequence.append(info["publication_sequence_number"])
             if stamps and not first_seen[index]:
                 first_seen[index] = True
-                emit(event="first", topic=OUTPUT_TOPICS[index], stamp=stamps[0], received=received[0], source=sources[0])
+                emit(
+                    event="first",
+                    topic=OUTPUT_TOPICS[index],
+                    stamp=stamps[0],
+                    received=received[0],
+                    source=sources[0],
+                )
         if not ready and all(first_seen):
             ready = True
             emit(event="ready")
@@ -226,12 +251,12 @@ def receiver(output: str) -> None:
             emit(event="count", answered=answered)
     import numpy as np
 
-    arrays = {}
+    arrays: dict[str, np.ndarray] = {}
     for index, topic in enumerate(OUTPUT_TOPICS):
         key = topic.replace("/", "_")
         for name, values in zip(("stamp", "received", "source", "seq"), records[index]):
             arrays[f"{key}_{name}"] = np.asarray(values, dtype=np.int64)
-    np.savez(output, **arrays)
+    np.savez(output, **arrays)  # type: ignore[arg-type]  # numpy's stub matches **kwds to allow_pickle
     emit(event="done", messages=sum(len(r[0]) for r in records))
     node.destroy_node()
     rclpy.try_shutdown()
@@ -249,8 +274,14 @@ def baseline(executor_name: str) -> None:
     velocity_msgs = [Vector3Stamped() for _ in shared.LEGS]
     for msg in (*position_msgs, *velocity_msgs):
         msg.header.frame_id = "trunk"
-    position_pubs = [node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS) for leg in shared.LEGS]
-    velocity_pubs = [node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS) for leg in shared.LEGS]
+    position_pubs = [
+        node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS)
+        for leg in shared.LEGS
+    ]
+    velocity_pubs = [
+        node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
+        for leg in shared.LEGS
+    ]
 
     def on_joint_state(msg: JointState) -> None:
         stamp = msg.header.stamp
@@ -260,13 +291,21 @@ def baseline(executor_name: str) -> None:
             position_msg = position_msgs[slot]
             position_msg.header.stamp = stamp
             point = position_msg.point
-            point.x, point.y, point.z = positions[first], positions[first + 1], positions[first + 2]
+            point.x, point.y, point.z = (
+                positions[first],
+                positions[first + 1],
+                positions[first + 2],
+            )
             position_pubs[slot].publish(position_msg)
             if len(velocities) == len(positions):
                 velocity_msg = velocity_msgs[slot]
                 velocity_msg.header.stamp = stamp
                 vector = velocity_msg.vector
-                vector.x, vector.y, vector.z = velocities[first], velocities[first + 1], velocities[first + 2]
+                vector.x, vector.y, vector.z = (
+                    velocities[first],
+                    velocities[first + 1],
+                    velocities[first + 2],
+                )
                 velocity_pubs[slot].publish(velocity_msg)
 
     node.create_subscription(JointState, "joint_states", on_joint_state, JOINT_STATES_QOS)
@@ -330,7 +369,7 @@ def verifier(rate_hz: float) -> None:
     latencies: list[float] = []
     next_call = time.perf_counter()
 
-    def done(future, started: float) -> None:  # noqa: ANN001
+    def done(future, started: float) -> None:
         nonlocal answered, passed
         answered += 1
         latencies.append(time.perf_counter() - started)
@@ -346,11 +385,18 @@ def verifier(rate_hz: float) -> None:
             future.add_done_callback(lambda f, started=now: done(f, started))
             sent += 1
             next_call += 1.0 / rate_hz
-        executor.spin_once(timeout_sec=max(0.0, min(0.01, next_call - time.perf_counter())) if calling else 0.05)
+        executor.spin_once(
+            timeout_sec=max(0.0, min(0.01, next_call - time.perf_counter())) if calling else 0.05
+        )
     latencies.sort()
-    emit(event="verify_done", sent=sent, answered=answered, passed=passed,
-         p50_ms=1e3 * latencies[len(latencies) // 2] if latencies else math.nan,
-         max_ms=1e3 * latencies[-1] if latencies else math.nan)
+    emit(
+        event="verify_done",
+        sent=sent,
+        answered=answered,
+        passed=passed,
+        p50_ms=1e3 * latencies[len(latencies) // 2] if latencies else math.nan,
+        max_ms=1e3 * latencies[-1] if latencies else math.nan,
+    )
     node.destroy_node()
     rclpy.try_shutdown()
 

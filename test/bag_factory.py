@@ -3,13 +3,14 @@ messages given as plain tuples, and any other typed messages."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 from rosbags.rosbag1 import Writer as Writer1
-from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
+from rosbags.rosbag2 import StoragePlugin
+from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_typestore
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
@@ -28,16 +29,24 @@ class JointStateMsg:
     frame_id: str = ""
 
 
-def joint_state(message: JointStateMsg):  # noqa: ANN201
-    header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(message.stamp_ns, 1_000_000_000)), message.frame_id)
+def joint_state(message: JointStateMsg):
+    header = T["std_msgs/msg/Header"](
+        T["builtin_interfaces/msg/Time"](*divmod(message.stamp_ns, 1_000_000_000)),
+        message.frame_id,
+    )
     return T["sensor_msgs/msg/JointState"](
-        header, list(message.names), np.array(message.positions, dtype=float),
-        np.array(message.velocities, dtype=float), np.array([], dtype=float),
+        header,
+        list(message.names),
+        np.array(message.positions, dtype=float),
+        np.array(message.velocities, dtype=float),
+        np.array([], dtype=float),
     )
 
 
-def header(stamp_ns: int, frame: str):  # noqa: ANN201
-    return T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(stamp_ns, 1_000_000_000)), frame)
+def header(stamp_ns: int, frame: str):
+    return T["std_msgs/msg/Header"](
+        T["builtin_interfaces/msg/Time"](*divmod(stamp_ns, 1_000_000_000)), frame
+    )
 
 
 @dataclass
@@ -61,7 +70,9 @@ def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
             connections = {}
             for topic, msgtype, stamp, message in entries:
                 if topic not in connections:
-                    connections[topic] = writer.add_connection(topic, msgtype, typestore=ROS1_TYPESTORE)
+                    connections[topic] = writer.add_connection(
+                        topic, msgtype, typestore=ROS1_TYPESTORE
+                    )
                 ros2 = TYPESTORE.serialize_cdr(message, msgtype)
                 writer.write(connections[topic], stamp, TYPESTORE.cdr_to_ros1(ros2, msgtype))
         return path

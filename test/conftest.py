@@ -10,8 +10,8 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Callable, Iterator
 
 import pytest
 from shared import claim_domain_id
@@ -125,7 +125,7 @@ class RosProbe:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.02)
 
-    def call(self, client, request, timeout_s: float = DEFAULT_WAIT_S, attempt_s: float = 3.0):  # noqa: ANN001, ANN201
+    def call(self, client, request, timeout_s: float = DEFAULT_WAIT_S, attempt_s: float = 3.0):
         """Call a service and return its response, asking again every ``attempt_s`` seconds.
 
         A request can reach a server before the server has matched the client's response reader;
@@ -133,7 +133,9 @@ class RosProbe:
         tests send are idempotent, so asking again is safe.
         """
         deadline = time.monotonic() + timeout_s
-        assert self.spin_until(client.service_is_ready, timeout_s), f"service {client.srv_name} not offered"
+        assert self.spin_until(client.service_is_ready, timeout_s), (
+            f"service {client.srv_name} not offered"
+        )
         while time.monotonic() < deadline:
             future = client.call_async(request)
             if self.spin_until(future.done, min(attempt_s, max(0.0, deadline - time.monotonic()))):

@@ -24,12 +24,26 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypedDict
 
 from pybullet_reference import PyBulletRobot
 from shared import LEGS
 
 FEET = [f"{leg}_foot" for leg in LEGS]
-QUIRKS = {"go2": {}, "b2": {"root": "base_link", "rotors": True, "crlf": True}}
+
+
+class Quirks(TypedDict, total=False):
+    """Options of :func:`exported_quadruped` that a robot's fixture sets."""
+
+    root: str
+    rotors: bool
+    crlf: bool
+
+
+QUIRKS: dict[str, Quirks] = {
+    "go2": {},
+    "b2": {"root": "base_link", "rotors": True, "crlf": True},
+}
 """The quirks each robot's fixture carries in the tests (Go2: those of its defaults)."""
 
 
@@ -50,10 +64,30 @@ class LegGeometry:
 
 
 ROBOTS = {
-    "go2": LegGeometry(0.1934, 0.0465, 0.0955, 0.213, 0.213, 0.0, (-1.0472, 1.0472), (-1.5708, 3.4907),
-                       (-0.5236, 4.5379), (-2.7227, -0.83776)),
-    "b2": LegGeometry(0.3285, 0.072, 0.11973, 0.35, 0.35, -8.6984e-05, (-0.87, 0.87), (-0.94, 4.69),
-                      (-0.94, 4.69), (-2.82, -0.43)),
+    "go2": LegGeometry(
+        0.1934,
+        0.0465,
+        0.0955,
+        0.213,
+        0.213,
+        0.0,
+        (-1.0472, 1.0472),
+        (-1.5708, 3.4907),
+        (-0.5236, 4.5379),
+        (-2.7227, -0.83776),
+    ),
+    "b2": LegGeometry(
+        0.3285,
+        0.072,
+        0.11973,
+        0.35,
+        0.35,
+        -8.6984e-05,
+        (-0.87, 0.87),
+        (-0.94, 4.69),
+        (-0.94, 4.69),
+        (-2.82, -0.43),
+    ),
 }
 
 HEADER = """<?xml version="1.0" encoding="utf-8"?>
@@ -85,11 +119,20 @@ def exported_quadruped(
     """
     geometry = ROBOTS[robot]
     parts = [HEADER if header else "", f'<robot\n  name="{robot}_like_description">\n']
-    parts.append(_link(root, _box_visual(meshes, mesh_folder, "base"), mass="6.921", com="0.021112 0 -0.005366"))
+    parts.append(
+        _link(
+            root,
+            _box_visual(meshes, mesh_folder, "base"),
+            mass="6.921",
+            com="0.021112 0 -0.005366",
+        )
+    )
     if sensors:
         parts.append(_sensors(root, zero_axis_on_fixed))
-    for leg in LEGS:
-        parts.append(_leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder))
+    parts.extend(
+        _leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder)
+        for leg in LEGS
+    )
     if gazebo:
         parts.append(_gazebo_and_transmissions(root))
     parts.append("</robot>\n")
@@ -97,35 +140,93 @@ def exported_quadruped(
     return text.replace("\n", "\r\n") if crlf else text
 
 
-def _leg(leg: str, root: str, g: LegGeometry, zero_axis: bool, shin_links: bool, rotors: bool, meshes: bool,
-         mesh_folder: str) -> str:
+def _leg(
+    leg: str,
+    root: str,
+    g: LegGeometry,
+    zero_axis: bool,
+    shin_links: bool,
+    rotors: bool,
+    meshes: bool,
+    mesh_folder: str,
+) -> str:
     front, left = leg[0] == "F", leg[1] == "L"
     x, y = (g.hip_x if front else -g.hip_x), (g.hip_y if left else -g.hip_y)
     side = 1.0 if left else -1.0
     thigh_limits = g.front_thigh_limits if front else g.rear_thigh_limits
     text = [
-        _link(f"{leg}_hip", _box_visual(meshes, mesh_folder, "hip"), mass="0.678", com="-0.0054 0.00194 -0.000105"),
+        _link(
+            f"{leg}_hip",
+            _box_visual(meshes, mesh_folder, "hip"),
+            mass="0.678",
+            com="-0.0054 0.00194 -0.000105",
+        ),
         _revolute(f"{leg}_hip_joint", root, f"{leg}_hip", f"{x!r} {y!r} 0", "1 0 0", g.hip_limits),
-        _link(f"{leg}_thigh", _box_visual(meshes, mesh_folder, "thigh"), mass="1.152", com="-0.00374 -0.0223 -0.0327"),
-        _revolute(f"{leg}_thigh_joint", f"{leg}_hip", f"{leg}_thigh", f"0 {side * g.thigh_y!r} 0", "0 1 0",
-                  thigh_limits),
-        _link(f"{leg}_calf", _box_visual(meshes, mesh_folder, "calf"), mass="0.154", com="0.00548 -0.000975 -0.115"),
-        _revolute(f"{leg}_calf_joint", f"{leg}_thigh", f"{leg}_calf", f"0 {g.calf_y!r} {-g.thigh_length!r}",
-                  "0 1 0", g.calf_limits),
+        _link(
+            f"{leg}_thigh",
+            _box_visual(meshes, mesh_folder, "thigh"),
+            mass="1.152",
+            com="-0.00374 -0.0223 -0.0327",
+        ),
+        _revolute(
+            f"{leg}_thigh_joint",
+            f"{leg}_hip",
+            f"{leg}_thigh",
+            f"0 {side * g.thigh_y!r} 0",
+            "0 1 0",
+            thigh_limits,
+        ),
+        _link(
+            f"{leg}_calf",
+            _box_visual(meshes, mesh_folder, "calf"),
+            mass="0.154",
+            com="0.00548 -0.000975 -0.115",
+        ),
+        _revolute(
+            f"{leg}_calf_joint",
+            f"{leg}_thigh",
+            f"{leg}_calf",
+            f"0 {g.calf_y!r} {-g.thigh_length!r}",
+            "0 1 0",
+            g.calf_limits,
+        ),
         _link(f"{leg}_foot", _box_visual(meshes, mesh_folder, "foot"), mass="0.04", com="0 0 0"),
-        _fixed(f"{leg}_foot_joint", f"{leg}_calf", f"{leg}_foot", f"0 0 {-g.calf_length!r}", "0 0 0", zero_axis,
-               dont_collapse=True),
+        _fixed(
+            f"{leg}_foot_joint",
+            f"{leg}_calf",
+            f"{leg}_foot",
+            f"0 0 {-g.calf_length!r}",
+            "0 0 0",
+            zero_axis,
+            dont_collapse=True,
+        ),
     ]
     if shin_links:  # collision-only links with no <inertial>, the second one a leaf under the calf
         text += [
-            f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
-            '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n',
-            _fixed(f"{leg}_calflower_joint", f"{leg}_calf", f"{leg}_calflower", "0.020 0 -0.148", "0 0.05 0",
-                   zero_axis),
-            f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
-            '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n',
-            _fixed(f"{leg}_calflower1_joint", f"{leg}_calflower", f"{leg}_calflower1", "-0.01 0 -0.04",
-                   "0 0.48 0", zero_axis),
+            (
+                f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
+                '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n'
+            ),
+            _fixed(
+                f"{leg}_calflower_joint",
+                f"{leg}_calf",
+                f"{leg}_calflower",
+                "0.020 0 -0.148",
+                "0 0.05 0",
+                zero_axis,
+            ),
+            (
+                f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
+                '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n'
+            ),
+            _fixed(
+                f"{leg}_calflower1_joint",
+                f"{leg}_calflower",
+                f"{leg}_calflower1",
+                "-0.01 0 -0.04",
+                "0 0.48 0",
+                zero_axis,
+            ),
         ]
     if rotors:  # fixed leaves with 0, 1 and 2 movable joints above them; written with no <axis>
         for rotor, parent, origin in (
@@ -133,13 +234,17 @@ def _leg(leg: str, root: str, g: LegGeometry, zero_axis: bool, shin_links: bool,
             ("thigh", f"{leg}_hip", f"0 {-side * 0.008!r} 0"),
             ("calf", f"{leg}_thigh", f"0 {-side * 0.058!r} 0"),
         ):
-            text.append(f'  <link name="{leg}_{rotor}_rotor">\n    <inertial>\n      <origin rpy="0 0 0" '
-                        'xyz="0.0 0.0 0.0"/>\n      <mass value="0.2734"/>\n      <inertia ixx="0.000144463" '
-                        'ixy="0.0" ixz="0.0" iyy="0.000144463" iyz="0.0" izz="0.000263053"/>\n    </inertial>\n'
-                        '  </link>\n')
-            text.append(f'  <joint name="{leg}_{rotor}_rotor_joint" type="fixed">\n    <origin rpy="0 0 0" '
-                        f'xyz="{origin}"/>\n    <parent link="{parent}"/>\n    <child link="{leg}_{rotor}_rotor"/>\n'
-                        '  </joint>\n')
+            text.append(
+                f'  <link name="{leg}_{rotor}_rotor">\n    <inertial>\n      <origin rpy="0 0 0" '
+                'xyz="0.0 0.0 0.0"/>\n      <mass value="0.2734"/>\n      <inertia ixx="0.000144463" '
+                'ixy="0.0" ixz="0.0" iyy="0.000144463" iyz="0.0" izz="0.000263053"/>\n    </inertial>\n'
+                "  </link>\n"
+            )
+            text.append(
+                f'  <joint name="{leg}_{rotor}_rotor_joint" type="fixed">\n    <origin rpy="0 0 0" '
+                f'xyz="{origin}"/>\n    <parent link="{parent}"/>\n    <child link="{leg}_{rotor}_rotor"/>\n'
+                "  </joint>\n"
+            )
     return "".join(text)
 
 
@@ -151,7 +256,9 @@ def _sensors(root: str, zero_axis: bool) -> str:
         ("lidar_link", "0.34218 0 0.17851", "0 0 0", "4.19E-15"),
         ("f_dc_link", "0.41251 0.024997 0.04765", "-2.3562 0 -1.5708", "4.19E-15"),
     ):
-        links.append(_link(name, "", mass=mass, com="0 0 0", inertia="0" if mass == "0" else "1.68E-27"))
+        links.append(
+            _link(name, "", mass=mass, com="0 0 0", inertia="0" if mass == "0" else "1.68E-27")
+        )
         links.append(_fixed(f"{name}_joint", root, name, origin, rpy, zero_axis))
     return "".join(links)
 
@@ -166,8 +273,11 @@ def _link(name: str, visual: str, mass: str, com: str, inertia: str = "9.6e-06")
 
 
 def _box_visual(meshes: bool, mesh_folder: str, part: str) -> str:
-    geometry = (f'<mesh\n          filename="{mesh_folder}/{part}.dae" />' if meshes
-                else '<box size="0.02 0.02 0.02" />')
+    geometry = (
+        f'<mesh\n          filename="{mesh_folder}/{part}.dae" />'
+        if meshes
+        else '<box size="0.02 0.02 0.02" />'
+    )
     collision = geometry if meshes else '<sphere radius="0.01" />'
     return (
         '    <visual>\n      <origin\n        xyz="0 0 0"\n        rpy="0 0 0" />\n      <geometry>\n'
@@ -178,7 +288,9 @@ def _box_visual(meshes: bool, mesh_folder: str, part: str) -> str:
     )
 
 
-def _revolute(name: str, parent: str, child: str, xyz: str, axis: str, limits: tuple[float, float]) -> str:
+def _revolute(
+    name: str, parent: str, child: str, xyz: str, axis: str, limits: tuple[float, float]
+) -> str:
     return (
         f'  <joint\n    name="{name}"\n    type="revolute">\n    <origin\n      xyz="{xyz}"\n      rpy="0 0 0" />\n'
         f'    <parent\n      link="{parent}" />\n    <child\n      link="{child}" />\n    <axis\n      xyz="{axis}" />\n'
@@ -187,7 +299,15 @@ def _revolute(name: str, parent: str, child: str, xyz: str, axis: str, limits: t
     )
 
 
-def _fixed(name: str, parent: str, child: str, xyz: str, rpy: str, zero_axis: bool, dont_collapse: bool = False) -> str:
+def _fixed(
+    name: str,
+    parent: str,
+    child: str,
+    xyz: str,
+    rpy: str,
+    zero_axis: bool,
+    dont_collapse: bool = False,
+) -> str:
     collapse = ' dont_collapse="true"' if dont_collapse else ""
     axis = '    <axis\n      xyz="0 0 0" />\n' if zero_axis else ""
     return (
@@ -199,8 +319,10 @@ def _fixed(name: str, parent: str, child: str, xyz: str, rpy: str, zero_axis: bo
 
 def _gazebo_and_transmissions(root: str) -> str:
     blocks = [
-        '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
-        "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n",
+        (
+            '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
+            "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n"
+        ),
         f'  <gazebo reference="{root}">\n    <material>Gazebo/Green</material>\n  </gazebo>\n',
     ]
     for leg in LEGS:
@@ -209,14 +331,16 @@ def _gazebo_and_transmissions(root: str) -> str:
             f'name="drawForcePlugin">\n        <topicName>{leg}_foot_contact</topicName>\n      </plugin>\n'
             "    </visual>\n  </gazebo>\n"
         )
-        for joint in ("hip", "thigh", "calf"):
-            blocks.append(
+        blocks.extend(
+            (
                 f'  <transmission name="{leg}_{joint}_tran">\n    <type>transmission_interface/SimpleTransmission'
                 f'</type>\n    <joint name="{leg}_{joint}_joint">\n      <hardwareInterface>hardware_interface/'
                 'EffortJointInterface</hardwareInterface>\n    </joint>\n    <actuator name="'
                 f'{leg}_{joint}_motor">\n      <mechanicalReduction>1</mechanicalReduction>\n    </actuator>\n'
                 "  </transmission>\n"
             )
+            for joint in ("hip", "thigh", "calf")
+        )
     return "".join(blocks)
 
 
@@ -238,6 +362,8 @@ def unitree_style_a1(mesh_folder: str = "package://a1_description/meshes") -> st
         text = text.replace(ours, theirs)
     text = text.replace('filename="meshes/', f'filename="{mesh_folder}/')
     robot_start = text.index(">", text.index("<robot")) + 1
-    root = ('\n  <link name="base"/>\n  <joint name="floating_base" type="fixed">\n    <origin rpy="0 0 0" '
-            'xyz="0 0 0"/>\n    <parent link="base"/>\n    <child link="trunk"/>\n  </joint>')
+    root = (
+        '\n  <link name="base"/>\n  <joint name="floating_base" type="fixed">\n    <origin rpy="0 0 0" '
+        'xyz="0 0 0"/>\n    <parent link="base"/>\n    <child link="trunk"/>\n  </joint>'
+    )
     return text[:robot_start] + root + text[robot_start:]

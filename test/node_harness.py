@@ -45,19 +45,33 @@ class NodeClient:
         self.velocities: dict[str, list[Vector3Stamped]] = defaultdict(list)
         for leg in LEGS:
             node.create_subscription(
-                PointStamped, f"{prefix}foot_positions/{leg}", self.positions[leg].append, QoSProfile(depth=1000)
+                PointStamped,
+                f"{prefix}foot_positions/{leg}",
+                self.positions[leg].append,
+                QoSProfile(depth=1000),
             )
             node.create_subscription(
-                Vector3Stamped, f"{prefix}foot_velocities/{leg}", self.velocities[leg].append, QoSProfile(depth=1000)
+                Vector3Stamped,
+                f"{prefix}foot_velocities/{leg}",
+                self.velocities[leg].append,
+                QoSProfile(depth=1000),
             )
         self.publisher = node.create_publisher(
             JointState, joint_states_topic or f"{prefix}joint_states", QoSProfile(depth=1000)
         )
         self.verify_client = node.create_client(Trigger, f"{prefix}verify_fk")
-        self.parameters_client = node.create_client(SetParameters, f"{prefix}a1_leg_fk/set_parameters")
+        self.parameters_client = node.create_client(
+            SetParameters, f"{prefix}a1_leg_fk/set_parameters"
+        )
 
-    def joint_state(self, names, positions, velocities=(), stamp_ns: int | None = None) -> JointState:
-        msg = JointState(name=list(names), position=[float(v) for v in positions], velocity=[float(v) for v in velocities])
+    def joint_state(
+        self, names, positions, velocities=(), stamp_ns: int | None = None
+    ) -> JointState:
+        msg = JointState(
+            name=list(names),
+            position=[float(v) for v in positions],
+            velocity=[float(v) for v in velocities],
+        )
         stamp_ns = self.probe.node.get_clock().now().nanoseconds if stamp_ns is None else stamp_ns
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
         return msg
@@ -85,19 +99,27 @@ class NodeClient:
                 received.clear()
 
     def wait_for_feet(self, count_per_leg: int = 1, legs=LEGS, timeout_s: float = 10.0) -> bool:
-        return self.probe.spin_until(lambda: all(len(self.positions[leg]) >= count_per_leg for leg in legs), timeout_s)
+        return self.probe.spin_until(
+            lambda: all(len(self.positions[leg]) >= count_per_leg for leg in legs), timeout_s
+        )
 
     def verify(self, timeout_s: float = 10.0) -> Trigger.Response:
         return self.probe.call(self.verify_client, Trigger.Request(), timeout_s)
 
     def set_string_parameter(self, name: str, value: str, timeout_s: float = 20.0):
-        return self.set_parameter(name, ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value), timeout_s)
+        return self.set_parameter(
+            name,
+            ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=value),
+            timeout_s,
+        )
 
     def set_parameter(self, name: str, value: ParameterValue, timeout_s: float = 20.0):
         """SetParameters on the node; returns the SetParametersResult."""
         request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
         # A long first attempt: the request may be large (the robustness tests send 50 MB).
-        return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[0]
+        return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[
+            0
+        ]
 
 
 def parse_tokens(message: str) -> dict[str, str]:
@@ -105,11 +127,11 @@ def parse_tokens(message: str) -> dict[str, str]:
     return dict(token.split("=", 1) for token in message.split() if "=" in token)
 
 
-def stamp_ns(msg) -> int:  # noqa: ANN001
+def stamp_ns(msg) -> int:
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
-def distance(point, xyz) -> float:  # noqa: ANN001
+def distance(point, xyz) -> float:
     return math.dist((point.x, point.y, point.z), tuple(xyz))
 
 

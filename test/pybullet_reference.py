@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 import pybullet
@@ -23,18 +24,24 @@ class PyBulletRobot:
         self.client = pybullet.connect(pybullet.DIRECT)
         try:
             self.body = pybullet.loadURDF(
-                str(urdf_path), basePosition=[0, 0, 0], baseOrientation=[0, 0, 0, 1], useFixedBase=True,
+                str(urdf_path),
+                basePosition=[0, 0, 0],
+                baseOrientation=[0, 0, 0, 1],
+                useFixedBase=True,
                 physicsClientId=self.client,
             )
             count = pybullet.getNumJoints(self.body, physicsClientId=self.client)
-            self.info = [pybullet.getJointInfo(self.body, j, physicsClientId=self.client) for j in range(count)]
+            self.info = [
+                pybullet.getJointInfo(self.body, j, physicsClientId=self.client)
+                for j in range(count)
+            ]
         except BaseException:
             pybullet.disconnect(self.client)
             raise
         self.joint_index = {info[1].decode(): info[0] for info in self.info}
         self.link_index = {info[12].decode(): info[0] for info in self.info}
 
-    def __enter__(self) -> "PyBulletRobot":
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *_: object) -> None:
@@ -52,10 +59,17 @@ class PyBulletRobot:
 
     def set_joints(self, joint_names: list[str], angles) -> None:
         for name, angle in zip(joint_names, angles):
-            pybullet.resetJointState(self.body, self.joint_index[name], float(angle), physicsClientId=self.client)
+            pybullet.resetJointState(
+                self.body, self.joint_index[name], float(angle), physicsClientId=self.client
+            )
 
     def link_state(self, link: str) -> tuple:
-        return pybullet.getLinkState(self.body, self.link_index[link], computeForwardKinematics=True, physicsClientId=self.client)
+        return pybullet.getLinkState(
+            self.body,
+            self.link_index[link],
+            computeForwardKinematics=True,
+            physicsClientId=self.client,
+        )
 
     def link_frame(self, link: str) -> np.ndarray:
         """Origin of the link's URDF frame [m], world = base frame."""

@@ -58,7 +58,15 @@ def claim_domain_id() -> tuple[int, IO[str]]:
             lock.close()
             continue
         return domain_id, lock
-    raise RuntimeError(f"every ROS domain id {DOMAIN_IDS.start}..{DOMAIN_IDS.stop - 1} is held by another run")
+    raise RuntimeError(
+        f"every ROS domain id {DOMAIN_IDS.start}..{DOMAIN_IDS.stop - 1} is held by another run"
+    )
+
+
+def known(value: float | None) -> float:
+    """``value``, asserted to be known (not ``None``): for the optional metrics of a report."""
+    assert value is not None
+    return value
 
 
 def installed_command(script: str, module: str, *ros_args: str) -> list[str]:

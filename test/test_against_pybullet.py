@@ -29,7 +29,11 @@ CHEETAH_LEGS = ("fr", "fl", "hr", "hl")
 CHEETAH_JOINTS = [
     name
     for leg in CHEETAH_LEGS
-    for name in (f"torso_to_abduct_{leg}_j", f"abduct_{leg}_to_thigh_{leg}_j", f"thigh_{leg}_to_knee_{leg}_j")
+    for name in (
+        f"torso_to_abduct_{leg}_j",
+        f"abduct_{leg}_to_thigh_{leg}_j",
+        f"thigh_{leg}_to_knee_{leg}_j",
+    )
 ]
 CHEETAH_FEET = [f"toe_{leg}" for leg in CHEETAH_LEGS]
 
@@ -82,7 +86,9 @@ class PyBulletRobot(pybullet_reference.PyBulletRobot):
             parent_com_position, parent_com_orientation = pybullet.getDynamicsInfo(
                 self.body, info[16], physicsClientId=self.client
             )[3:5]
-            child_com_orientation = pybullet.getDynamicsInfo(self.body, index, physicsClientId=self.client)[4]
+            child_com_orientation = pybullet.getDynamicsInfo(
+                self.body, index, physicsClientId=self.client
+            )[4]
             position = position + rotation @ np.array(parent_com_position)
             rotation = rotation @ quaternion_matrix(parent_com_orientation)
             position = position + rotation @ np.array(info[14])
@@ -114,17 +120,25 @@ def axis_angle_matrix(axis, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
 
 
-def random_configurations(robot: PyBulletRobot, joint_names: list[str], count: int, seed: int) -> np.ndarray:
+def random_configurations(
+    robot: PyBulletRobot, joint_names: list[str], count: int, seed: int
+) -> np.ndarray:
     lower, upper = robot.limits(joint_names)
     return np.random.default_rng(seed).uniform(lower, upper, size=(count, len(joint_names)))
 
 
-def max_error_against_pybullet(quadruped: Quadruped, robot: PyBulletRobot, joints, feet, configurations) -> float:
+def max_error_against_pybullet(
+    quadruped: Quadruped, robot: PyBulletRobot, joints, feet, configurations
+) -> float:
     worst = 0.0
     batch = quadruped.fk_batch(configurations)
     for q, batch_feet in zip(configurations, batch):
         reference = robot.feet(joints, feet, q)
-        worst = max(worst, float(np.abs(quadruped.fk(q) - reference).max()), float(np.abs(batch_feet - reference).max()))
+        worst = max(
+            worst,
+            float(np.abs(quadruped.fk(q) - reference).max()),
+            float(np.abs(batch_feet - reference).max()),
+        )
         for leg_slot, leg in enumerate(quadruped.legs):
             generated = leg.position(*q[3 * leg_slot : 3 * leg_slot + 3])
             worst = max(worst, float(np.abs(np.array(generated) - reference[leg_slot]).max()))
@@ -145,7 +159,9 @@ def a1() -> Quadruped:
     return Quadruped.from_urdf()
 
 
-def test_a1_matches_pybullet_on_2000_random_in_limit_configurations(a1: Quadruped, a1_robot: PyBulletRobot) -> None:
+def test_a1_matches_pybullet_on_2000_random_in_limit_configurations(
+    a1: Quadruped, a1_robot: PyBulletRobot
+) -> None:
     configurations = random_configurations(a1_robot, A1_JOINTS, 2000, seed=2)
     lower, upper = a1_robot.limits(A1_JOINTS)
     assert upper[2] == pytest.approx(-0.916297857297) and lower[1] == pytest.approx(-1.0471975512)
@@ -154,7 +170,9 @@ def test_a1_matches_pybullet_on_2000_random_in_limit_configurations(a1: Quadrupe
     assert error <= TOLERANCE_M, f"max error {error:.3e} m"
 
 
-def test_a1_matches_pybullet_outside_the_limits_too(a1: Quadruped, a1_robot: PyBulletRobot) -> None:
+def test_a1_matches_pybullet_outside_the_limits_too(
+    a1: Quadruped, a1_robot: PyBulletRobot
+) -> None:
     configurations = np.random.default_rng(5).uniform(-math.pi, math.pi, size=(300, 12))
     error = max_error_against_pybullet(a1, a1_robot, A1_JOINTS, A1_FEET, configurations)
     assert error <= TOLERANCE_M, f"max error {error:.3e} m"
@@ -165,22 +183,40 @@ def test_a1_jacobian_matches_pybullet(a1: Quadruped, a1_robot: PyBulletRobot) ->
     movable = [info[0] for info in a1_robot.info if info[2] != pybullet.JOINT_FIXED]
     for q in random_configurations(a1_robot, A1_JOINTS, 20, seed=9):
         a1_robot.set_joints(A1_JOINTS, q)
-        positions = [pybullet.getJointState(a1_robot.body, j, physicsClientId=a1_robot.client)[0] for j in movable]
+        positions = [
+            pybullet.getJointState(a1_robot.body, j, physicsClientId=a1_robot.client)[0]
+            for j in movable
+        ]
         ours = a1.jacobians(q)
         for leg_slot, foot in enumerate(A1_FEET):
             linear, _ = pybullet.calculateJacobian(
-                a1_robot.body, a1_robot.link_index[foot], [0.0, 0.0, 0.0], positions, [0.0] * len(movable), [0.0] * len(movable),
+                a1_robot.body,
+                a1_robot.link_index[foot],
+                [0.0, 0.0, 0.0],
+                positions,
+                [0.0] * len(movable),
+                [0.0] * len(movable),
                 physicsClientId=a1_robot.client,
             )
-            columns = [movable.index(a1_robot.joint_index[name]) for name in A1_JOINTS[3 * leg_slot : 3 * leg_slot + 3]]
-            np.testing.assert_allclose(ours[leg_slot], np.array(linear)[:, columns], rtol=0.0, atol=1e-6)
+            columns = [
+                movable.index(a1_robot.joint_index[name])
+                for name in A1_JOINTS[3 * leg_slot : 3 * leg_slot + 3]
+            ]
+            np.testing.assert_allclose(
+                ours[leg_slot], np.array(linear)[:, columns], rtol=0.0, atol=1e-6
+            )
 
 
 @pytest.mark.parametrize(
-    "urdf, joints, feet, foot_links",
+    ("urdf", "joints", "feet", "foot_links"),
     [
         ("aliengo/aliengo.urdf", A1_JOINTS, A1_FEET, None),
-        ("mini_cheetah/mini_cheetah.urdf", CHEETAH_JOINTS, CHEETAH_FEET, dict(zip(LEGS, CHEETAH_FEET))),
+        (
+            "mini_cheetah/mini_cheetah.urdf",
+            CHEETAH_JOINTS,
+            CHEETAH_FEET,
+            dict(zip(LEGS, CHEETAH_FEET)),
+        ),
     ],
     ids=["aliengo", "mini_cheetah"],
 )
@@ -197,7 +233,9 @@ def test_mini_cheetah_has_minus_y_axes_and_continuous_joints() -> None:
     with PyBulletRobot(DATA / "mini_cheetah" / "mini_cheetah.urdf") as robot:
         for name in CHEETAH_JOINTS:
             info = robot.info[robot.joint_index[name]]
-            assert info[8] > info[9], f"{name} has limits {info[8]}..{info[9]}"  # PyBullet's "no limit"
+            assert info[8] > info[9], (
+                f"{name} has limits {info[8]}..{info[9]}"
+            )  # PyBullet's "no limit"
         assert robot.info[robot.joint_index["abduct_fr_to_thigh_fr_j"]][13] == (0.0, -1.0, 0.0)
         assert robot.info[robot.joint_index["thigh_fr_to_knee_fr_j"]][13] == (0.0, -1.0, 0.0)
 
@@ -211,8 +249,10 @@ def synthetic_leg(leg: str, x: float, y: float) -> str:
     limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
 
     def inertial(xyz: str, rpy: str) -> str:
-        return (f'<inertial><origin xyz="{xyz}" rpy="{rpy}"/><mass value="0.5"/>'
-                '<inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>')
+        return (
+            f'<inertial><origin xyz="{xyz}" rpy="{rpy}"/><mass value="0.5"/>'
+            '<inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>'
+        )
 
     return f"""
   <joint name="{leg}_mount" type="fixed"><parent link="base"/><child link="{leg}_mount"/>
@@ -236,7 +276,15 @@ SYNTHETIC_URDF = (
     '<?xml version="1.0"?>\n<robot name="synthetic">\n'
     '  <link name="base"><inertial><origin xyz="0.05 -0.02 0.03" rpy="0.2 0.1 0.3"/><mass value="5"/>'
     '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
-    + "".join(synthetic_leg(leg, x, y) for leg, x, y in (("FR", 0.2, -0.05), ("FL", 0.2, 0.05), ("RR", -0.2, -0.05), ("RL", -0.2, 0.05)))
+    + "".join(
+        synthetic_leg(leg, x, y)
+        for leg, x, y in (
+            ("FR", 0.2, -0.05),
+            ("FL", 0.2, 0.05),
+            ("RR", -0.2, -0.05),
+            ("RL", -0.2, 0.05),
+        )
+    )
     + "\n</robot>\n"
 )
 SYNTHETIC_JOINTS = [f"{leg}_{part}" for leg in LEGS for part in ("roll", "pitch", "knee")]
@@ -255,7 +303,9 @@ def test_full_rpy_origins_and_non_unit_axes_match_pybullet(synthetic_robot: PyBu
     quadruped = Quadruped.from_urdf(SYNTHETIC_URDF)  # the same text, as an XML string
     assert list(quadruped.joint_names) == SYNTHETIC_JOINTS
     configurations = random_configurations(synthetic_robot, SYNTHETIC_JOINTS, 300, seed=13)
-    error = max_error_against_pybullet(quadruped, synthetic_robot, SYNTHETIC_JOINTS, SYNTHETIC_FEET, configurations)
+    error = max_error_against_pybullet(
+        quadruped, synthetic_robot, SYNTHETIC_JOINTS, SYNTHETIC_FEET, configurations
+    )
     assert error <= TOLERANCE_M, f"max error {error:.3e} m"
 
 
@@ -272,7 +322,9 @@ def test_the_synthetic_robot_really_rotates(synthetic_robot: PyBulletRobot) -> N
 # --- PyBullet's traps, documented ---------------------------------------------------------
 
 
-def test_summing_parent_frame_pos_is_7_to_14_cm_off_and_the_com_offset_fixes_it(a1_robot: PyBulletRobot) -> None:
+def test_summing_parent_frame_pos_is_7_to_14_cm_off_and_the_com_offset_fixes_it(
+    a1_robot: PyBulletRobot,
+) -> None:
     """getJointInfo()[14] (parentFramePos) is relative to the parent's CoM, not its link frame.
 
     Chaining it as if it were the URDF origin is off by 69..141 mm over uniform in-limit poses
@@ -291,7 +343,9 @@ def test_summing_parent_frame_pos_is_7_to_14_cm_off_and_the_com_offset_fixes_it(
     assert max(corrected) <= TOLERANCE_M, f"corrected error {max(corrected):.3e} m"
 
 
-def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(synthetic_robot: PyBulletRobot) -> None:
+def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(
+    synthetic_robot: PyBulletRobot,
+) -> None:
     """Evidence for corrected_chain's reading of the fields: rotated inertial frames, rpy, non-unit axes."""
     naive, corrected = [], []
     for q in random_configurations(synthetic_robot, SYNTHETIC_JOINTS, 100, seed=19):
@@ -305,7 +359,7 @@ def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(synthetic
 
 
 @pytest.mark.parametrize(
-    "joint, parent_com_rpy, origin_rpy, child_com_rpy",
+    ("joint", "parent_com_rpy", "origin_rpy", "child_com_rpy"),
     [
         ("FR_mount", (0.2, 0.1, 0.3), (0.1, -0.2, -0.3), (0.2, 0.0, 0.0)),
         ("FR_roll", (0.2, 0.0, 0.0), (0.4, 0.25, -0.6), (0.3, 0.2, 0.1)),
@@ -316,6 +370,7 @@ def test_parent_frame_orn_is_the_inverse_com_to_com_rotation(
     synthetic_robot: PyBulletRobot, joint: str, parent_com_rpy, origin_rpy, child_com_rpy
 ) -> None:
     """getJointInfo()[15] = conj(parent_com^-1 * origin * child_com), rpy values typed from SYNTHETIC_URDF."""
+
     def matrix(rpy) -> np.ndarray:
         return quaternion_matrix(pybullet.getQuaternionFromEuler(rpy))
 
@@ -344,15 +399,24 @@ def test_reset_joint_state_does_not_enforce_limits(a1: Quadruped, a1_robot: PyBu
     assert not lower[0] <= 0.0 <= upper[0]
     q = [0.0] * 12
     feet = a1_robot.feet(A1_JOINTS, A1_FEET, q)
-    assert pybullet.getJointState(a1_robot.body, a1_robot.joint_index["FR_lower_joint"], physicsClientId=a1_robot.client)[0] == 0.0
+    assert (
+        pybullet.getJointState(
+            a1_robot.body, a1_robot.joint_index["FR_lower_joint"], physicsClientId=a1_robot.client
+        )[0]
+        == 0.0
+    )
     np.testing.assert_allclose(feet[0], (0.183, -0.13205, -0.4), rtol=0.0, atol=TOLERANCE_M)
     assert "FR_lower_joint" in [violation.joint for violation in a1.joints_outside_limits(q)]
 
 
 def test_pybullet_places_the_urdf_root_frame_at_the_origin(a1_robot: PyBulletRobot) -> None:
     """The base *CoM* sits at the trunk's inertial xyz (0.012731 0.002186 0.000515): world = base frame."""
-    position, orientation = pybullet.getBasePositionAndOrientation(a1_robot.body, physicsClientId=a1_robot.client)
+    position, orientation = pybullet.getBasePositionAndOrientation(
+        a1_robot.body, physicsClientId=a1_robot.client
+    )
     np.testing.assert_allclose(position, (0.012731, 0.002186, 0.000515), atol=1e-7)
     np.testing.assert_allclose(orientation, (0.0, 0.0, 0.0, 1.0), atol=1e-12)
     a1_robot.set_joints(A1_JOINTS, [0.3, 0.8, -1.5] * 4)
-    np.testing.assert_allclose(a1_robot.link_frame("FR_hip"), (0.183, -0.047, 0.0), atol=TOLERANCE_M)
+    np.testing.assert_allclose(
+        a1_robot.link_frame("FR_hip"), (0.183, -0.047, 0.0), atol=TOLERANCE_M
+    )

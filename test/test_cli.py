@@ -68,19 +68,23 @@ def assert_table(output: str, expected: dict[str, tuple[float, float, float]]) -
     assert set(values) == set(LEGS), output
     for leg in LEGS:
         for got, want in zip(values[leg], expected[leg]):
-            assert abs(got - want) <= 0.06, f"{leg}: table {values[leg]} mm, expected {expected[leg]} mm\n{output}"
+            assert abs(got - want) <= 0.06, (
+                f"{leg}: table {values[leg]} mm, expected {expected[leg]} mm\n{output}"
+            )
 
 
 class JointStatePublisher:
     """Publishes one configurable joint state at 20 Hz from the test's own node (while it spins)."""
 
-    def __init__(self, ros, topic: str = "joint_states") -> None:  # noqa: ANN001 (conftest.RosProbe)
+    def __init__(self, ros, topic: str = "joint_states") -> None:
         from sensor_msgs.msg import JointState
 
         self.angles: tuple[float, ...] = STAND * 4
         self._ros = ros
         self._message = JointState()
-        self._message.name = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+        self._message.name = [
+            f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")
+        ]
         self._publisher = ros.node.create_publisher(JointState, topic, 10)
         ros.node.create_timer(0.05, self._publish)
 
@@ -90,18 +94,20 @@ class JointStatePublisher:
         self._publisher.publish(self._message)
 
 
-def run_cli(processes, ros, arguments: list[str], timeout_s: float = 25.0) -> tuple[int, str]:  # noqa: ANN001
+def run_cli(processes, ros, arguments: list[str], timeout_s: float = 25.0) -> tuple[int, str]:
     """Run a1-leg-fk to completion while the test's node spins (publishing); (exit code, output)."""
     process = processes.start(CLI + arguments)
     if not ros.spin_until(lambda: process.poll() is not None, timeout_s):
         process.kill()
-        pytest.fail(f"a1-leg-fk {' '.join(arguments)} still running after {timeout_s} s:\n{processes.output(process)}")
+        pytest.fail(
+            f"a1-leg-fk {' '.join(arguments)} still running after {timeout_s} s:\n{processes.output(process)}"
+        )
     output = processes.output(process)
     assert "Traceback" not in output, output
     return process.returncode, output
 
 
-def start_node(processes, ros, namespace: str = "/"):  # noqa: ANN001, ANN201
+def start_node(processes, ros, namespace: str = "/"):
     """foot_fk_node in ``namespace``, with its verify_fk service discovered by the test's node."""
     from std_srvs.srv import Trigger
 
@@ -118,20 +124,41 @@ def start_node(processes, ros, namespace: str = "/"):  # noqa: ANN001, ANN201
 
 
 def test_help_lists_the_subcommands() -> None:
-    result = subprocess.run(CLI + ["--help"], capture_output=True, text=True, timeout=30)
+    result = subprocess.run(
+        [*CLI, "--help"], check=False, capture_output=True, text=True, timeout=30
+    )
     assert result.returncode == 0
     for subcommand in ("echo", "verify", "plot", "demo"):
         assert re.search(rf"^\s+{subcommand}\s+\S", result.stdout, re.MULTILINE), result.stdout
     assert "--ros-args" in result.stdout
-    for subcommand, option in (("echo", "--once"), ("verify", "--timeout"), ("plot", "--out"), ("demo", "--duration")):
-        sub = subprocess.run(CLI + [subcommand, "--help"], capture_output=True, text=True, timeout=30)
+    for subcommand, option in (
+        ("echo", "--once"),
+        ("verify", "--timeout"),
+        ("plot", "--out"),
+        ("demo", "--duration"),
+    ):
+        sub = subprocess.run(
+            [*CLI, subcommand, "--help"], check=False, capture_output=True, text=True, timeout=30
+        )
         assert sub.returncode == 0 and option in sub.stdout and len(sub.stdout.splitlines()) > 5
-    assert subprocess.run(CLI + ["fly"], capture_output=True, timeout=30).returncode == 2
+    assert (
+        subprocess.run([*CLI, "fly"], check=False, capture_output=True, timeout=30).returncode == 2
+    )
 
 
 def test_ros_arguments_are_split_off() -> None:
     assert our_arguments(["echo", "--once"]) == ["echo", "--once"]
-    argv = ["verify", "--ros-args", "-r", "__ns:=/r1", "-p", "use_sim_time:=false", "--", "--timeout", "1"]
+    argv = [
+        "verify",
+        "--ros-args",
+        "-r",
+        "__ns:=/r1",
+        "-p",
+        "use_sim_time:=false",
+        "--",
+        "--timeout",
+        "1",
+    ]
     assert our_arguments(argv) == ["verify", "--timeout", "1"]
     options = build_parser().parse_args(our_arguments(argv))
     assert options.command == "verify" and options.timeout == 1.0 and options.namespace == ""
@@ -147,7 +174,20 @@ def test_ros_arguments_are_split_off() -> None:
 
 def test_ros_arguments_reach_rclpy_whole() -> None:
     """rclpy.init gets the whole command line: it applies the remaps and ignores our options."""
-    ros = Ros("verify", ["verify", "--ros-args", "-r", "__ns:=/r1", "-r", "verify_fk:=check", "--", "--timeout", "1"])
+    ros = Ros(
+        "verify",
+        [
+            "verify",
+            "--ros-args",
+            "-r",
+            "__ns:=/r1",
+            "-r",
+            "verify_fk:=check",
+            "--",
+            "--timeout",
+            "1",
+        ],
+    )
     try:
         assert ros.node.get_namespace() == "/r1"
         assert ros.node.resolve_service_name("verify_fk") == "/r1/check"
@@ -155,7 +195,7 @@ def test_ros_arguments_reach_rclpy_whole() -> None:
         ros.close()
 
 
-def test_bad_ros_arguments_are_one_line_and_exit_2(capsys) -> None:  # noqa: ANN001
+def test_bad_ros_arguments_are_one_line_and_exit_2(capsys) -> None:
     assert main(["ik", "FR", "0.2", "-0.13", "-0.3", "--ros-args", "-r"]) == 2
     captured = capsys.readouterr()
     assert not captured.out and len(captured.err.strip().splitlines()) == 1
@@ -166,10 +206,10 @@ def test_rate_counts_what_the_publisher_sent() -> None:
     table = FootTable([f"foot_positions/{leg}" for leg in LEGS])
 
     class Point:
-        class header:  # noqa: N801
+        class header:  # noqa: N801 (named as the message's field)
             frame_id = "trunk"
 
-        class point:  # noqa: N801
+        class point:  # noqa: N801 (named as the message's field)
             x, y, z = 0.1, 0.2, 0.3
 
     callback = table.callback("FR")
@@ -183,13 +223,18 @@ def test_rate_counts_what_the_publisher_sent() -> None:
     assert rate == pytest.approx(2 * arrivals_hz, rel=1e-6)  # ...of 99 sent in the same time
     assert table.rate_hz("FL", now) is None and not table.complete
     rows = table.lines("feet")
-    assert rows[0] == "feet, frame trunk" and rows[2].split()[:4] == ["FR", "100.0", "200.0", "300.0"]
+    assert rows[0] == "feet, frame trunk" and rows[2].split()[:4] == [
+        "FR",
+        "100.0",
+        "200.0",
+        "300.0",
+    ]
     assert "no message yet" in rows[3]
 
 
 @pytest.mark.slow
-def test_verify_exits_2_without_a_node(processes) -> None:  # noqa: ANN001
-    process = processes.start(CLI + ["verify", "--timeout", "1"])
+def test_verify_exits_2_without_a_node(processes) -> None:
+    process = processes.start([*CLI, "verify", "--timeout", "1"])
     assert process.wait(20) == 2
     output = processes.output(process)
     assert "no service /verify_fk within 1 s" in output and "Traceback" not in output
@@ -198,8 +243,12 @@ def test_verify_exits_2_without_a_node(processes) -> None:  # noqa: ANN001
 @pytest.mark.slow
 def test_echo_refreshes_in_place_on_a_terminal() -> None:
     controller, terminal = os.openpty()
-    process = subprocess.Popen(CLI + ["echo", "--duration", "1.0", "--interval", "0.3"], stdout=terminal,
-                               stderr=terminal, start_new_session=True)
+    process = subprocess.Popen(
+        [*CLI, "echo", "--duration", "1.0", "--interval", "0.3"],
+        stdout=terminal,
+        stderr=terminal,
+        start_new_session=True,
+    )
     os.close(terminal)
     output = b""
     try:
@@ -224,7 +273,9 @@ def test_echo_refreshes_in_place_on_a_terminal() -> None:
         os.close(controller)
     text = output.decode(errors="replace")
     assert text.count("rate [Hz]") >= 3, text
-    assert "\x1b[6F" in text and "\x1b[K" in text  # cursor up over the 6-line table, clear to end of line
+    assert (
+        "\x1b[6F" in text and "\x1b[K" in text
+    )  # cursor up over the 6-line table, clear to end of line
     assert "no message yet" in text and "Traceback" not in text
 
 
@@ -232,7 +283,7 @@ def test_echo_refreshes_in_place_on_a_terminal() -> None:
 
 
 @pytest.mark.slow
-def test_verify_and_echo_against_the_node(processes, ros) -> None:  # noqa: ANN001
+def test_verify_and_echo_against_the_node(processes, ros) -> None:
     start_node(processes, ros)
     # Node up, no joint state yet: verify fails (1) and says why.
     code, output = run_cli(processes, ros, ["verify", "--timeout", "10"])
@@ -243,7 +294,9 @@ def test_verify_and_echo_against_the_node(processes, ros) -> None:  # noqa: ANN0
     code, output = run_cli(processes, ros, ["echo", "--once", "--timeout", "15"])
     assert code == 0, output
     assert_table(output, {leg: stand_by_hand_mm(leg) for leg in LEGS})
-    assert re.search(r"^FR\s+168\.4\s+-132\.[01]\s+-292\.3\s", output, re.MULTILINE), output  # as in the brief
+    assert re.search(r"^FR\s+168\.4\s+-132\.[01]\s+-292\.3\s", output, re.MULTILINE), (
+        output
+    )  # as in the brief
     assert "frame trunk" in output and output.count("rate [Hz]") == 1
 
     code, output = run_cli(processes, ros, ["verify", "--timeout", "10"])
@@ -258,20 +311,27 @@ def test_verify_and_echo_against_the_node(processes, ros) -> None:  # noqa: ANN0
     assert code == 0, output
     assert_table(output, pybullet_feet_mm(TWISTED))
 
-    process = processes.start(CLI + ["echo", "--interval", "0.3"])
+    process = processes.start([*CLI, "echo", "--interval", "0.3"])
 
     def fr_rates() -> list[float]:
-        return [float(r) for r in re.findall(r"^FR\s+\S+\s+\S+\s+\S+\s+(\d+\.\d)$", processes.output(process), re.MULTILINE)]
+        return [
+            float(r)
+            for r in re.findall(
+                r"^FR\s+\S+\s+\S+\s+\S+\s+(\d+\.\d)$", processes.output(process), re.MULTILINE
+            )
+        ]
 
     # A table every 0.3 s; the rate (over the last 2 s) settles once messages flow for a while.
     assert ros.spin_until(lambda: len(fr_rates()) >= 4), processes.output(process)
-    assert 12.0 <= fr_rates()[-1] <= 28.0, processes.output(process)  # our 20 Hz stream (its timer lags under load)
+    assert 12.0 <= fr_rates()[-1] <= 28.0, processes.output(
+        process
+    )  # our 20 Hz stream (its timer lags under load)
     assert processes.interrupt(process) == 0  # Ctrl-C is the normal way to stop echo
     assert "Traceback" not in processes.output(process)
 
 
 @pytest.mark.slow
-def test_namespace_option_and_ros_namespace_remap(processes, ros) -> None:  # noqa: ANN001
+def test_namespace_option_and_ros_namespace_remap(processes, ros) -> None:
     start_node(processes, ros, "/robot1")
     JointStatePublisher(ros, "/robot1/joint_states")
     expected = {leg: stand_by_hand_mm(leg) for leg in LEGS}
@@ -294,8 +354,10 @@ def test_namespace_option_and_ros_namespace_remap(processes, ros) -> None:  # no
 
 
 @pytest.mark.slow
-def test_demo_runs_the_pipeline_and_verifies(processes, tmp_path: Path) -> None:  # noqa: ANN001
-    process = processes.start(CLI + ["demo", "--duration", "2", "--interval", "0.7", "--log-dir", str(tmp_path / "logs")])
+def test_demo_runs_the_pipeline_and_verifies(processes, tmp_path: Path) -> None:
+    process = processes.start(
+        [*CLI, "demo", "--duration", "2", "--interval", "0.7", "--log-dir", str(tmp_path / "logs")]
+    )
     assert process.wait(60) == 0, processes.output(process)
     output = processes.output(process)
     assert f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} (from the environment)" in output
@@ -303,16 +365,32 @@ def test_demo_runs_the_pipeline_and_verifies(processes, tmp_path: Path) -> None:
         assert heading in output
     assert re.search(r"^FR\s+-?\d+\.\d", output, re.MULTILINE), output
     assert "OK, the node's FK agrees with PyBullet" in output and "max_error_m=" in output
-    assert "foot_fk_node stopped (exit code 0)" in output and "joint_state_demo stopped (exit code 0)" in output
+    assert (
+        "foot_fk_node stopped (exit code 0)" in output
+        and "joint_state_demo stopped (exit code 0)" in output
+    )
     assert "demo finished: OK" in output and "Traceback" not in output
-    assert (tmp_path / "logs" / "foot_fk_node.log").stat().st_size > 0  # the children's output went there
+    assert (
+        tmp_path / "logs" / "foot_fk_node.log"
+    ).stat().st_size > 0  # the children's output went there
     for pid in map(int, re.findall(r"pid (\d+):", output)):
         assert not _running(pid)
 
 
 @pytest.mark.slow
-def test_demo_ctrl_c_stops_everything(processes, tmp_path: Path) -> None:  # noqa: ANN001
-    process = processes.start(CLI + ["demo", "--duration", "60", "--interval", "0.3", "--log-dir", str(tmp_path / "logs")])
+def test_demo_ctrl_c_stops_everything(processes, tmp_path: Path) -> None:
+    process = processes.start(
+        [
+            *CLI,
+            "demo",
+            "--duration",
+            "60",
+            "--interval",
+            "0.3",
+            "--log-dir",
+            str(tmp_path / "logs"),
+        ]
+    )
     deadline = time.monotonic() + 30
     while not re.search(r"^FR\s+-?\d+\.\d", processes.output(process), re.MULTILINE):
         assert time.monotonic() < deadline and process.poll() is None, processes.output(process)
@@ -322,7 +400,10 @@ def test_demo_ctrl_c_stops_everything(processes, tmp_path: Path) -> None:  # noq
     assert processes.interrupt(process, timeout_s=15) == 130
     output = processes.output(process)
     assert "SIGINT: stopping" in output and "Traceback" not in output
-    assert "foot_fk_node stopped (exit code 0)" in output and "joint_state_demo stopped (exit code 0)" in output
+    assert (
+        "foot_fk_node stopped (exit code 0)" in output
+        and "joint_state_demo stopped (exit code 0)" in output
+    )
     for pid in pids:
         assert not _running(pid), f"child {pid} outlived the demo"
 

@@ -46,12 +46,14 @@ def test_out_of_reach(capsys) -> None:
     code, out, _ = run(capsys, "FL", "0.3", "0.13", "-0.9")
     assert code == 0
     assert "status: unreachable" in out and "exact solutions: 0" in out
-    residual = float(re.search(r"residual: ([0-9.e+-]+) m", out).group(1))
+    found = re.search(r"residual: ([0-9.e+-]+) m", out)
+    assert found is not None, out
+    residual = float(found.group(1))
     assert residual > 0.4  # at least 0.9 - 0.4 - (hip height): the leg is 0.4 m long
 
 
 @pytest.mark.parametrize(
-    "arguments, culprit",
+    ("arguments", "culprit"),
     [
         (["FL", "0.3", "0.13", "nan"], "leg FL"),
         (["FL", "0.3", "0.13", "-0.2", "--seed", "1", "2"], "--seed"),

@@ -11,23 +11,39 @@ from a1_leg_fk.fk_diagnostics import ERROR, OK, WARN, FkReport, PeriodCounter, f
 from a1_leg_fk.joint_state import FootTracker
 from a1_leg_fk.kinematics import Quadruped
 
-NAMES = [f"{leg}_{joint}_joint" for leg in ("FR", "FL", "RR", "RL") for joint in ("hip", "upper", "lower")]
+NAMES = [
+    f"{leg}_{joint}_joint"
+    for leg in ("FR", "FL", "RR", "RL")
+    for joint in ("hip", "upper", "lower")
+]
 STANDING = [0.0, 0.8, -1.5] * 4
 
 
 def _report(tracker: FootTracker, counter: PeriodCounter, **changes: object) -> FkReport:
     received, rejected = counter.take(tracker.counts)
     report = FkReport(
-        counts=tracker.counts, received_in_period=received, rejected_in_period=rejected, period_s=0.5,
-        joints_outside_limits=tracker.joints_outside_limits(), stamp_jumps_back=0, model="a1.urdf",
-        description_topic="/robot_description", description_status="nothing received",
-        description_rejected=False, last_verify="not called", verify_disagreed=False,
+        counts=tracker.counts,
+        received_in_period=received,
+        rejected_in_period=rejected,
+        period_s=0.5,
+        joints_outside_limits=tracker.joints_outside_limits(),
+        stamp_jumps_back=0,
+        model="a1.urdf",
+        description_topic="/robot_description",
+        description_status="nothing received",
+        description_rejected=False,
+        last_verify="not called",
+        verify_disagreed=False,
     )
-    return dataclasses.replace(report, **changes)
+    return dataclasses.replace(report, **changes)  # type: ignore[arg-type]  # fields by name
 
 
 def test_levels_are_the_diagnostic_msgs_constants():
-    assert (OK, WARN, ERROR) == (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR)
+    assert (OK, WARN, ERROR) == (
+        DiagnosticStatus.OK,
+        DiagnosticStatus.WARN,
+        DiagnosticStatus.ERROR,
+    )
 
 
 def test_counts_rate_and_level_through_a_session():
@@ -42,7 +58,9 @@ def test_counts_rate_and_level_through_a_session():
     tracker.update(["arm_joint"], [0.1], [])
     level, summary, values = fk_status(_report(tracker, counter))
     assert level == WARN and "rejected" in summary
-    assert values["messages_received"] == 5 and values["input_rate_hz"] == "10.0"  # 5 messages in 0.5 s
+    assert (
+        values["messages_received"] == 5 and values["input_rate_hz"] == "10.0"
+    )  # 5 messages in 0.5 s
     assert values["messages_accepted"] == 3 and values["messages_position_length_mismatch"] == 1
     assert values["messages_no_leg_joints"] == 1 and values["unknown_joint_names"] == "arm_joint"
     assert values["feet_published"] == 12 and values["joints_outside_limits"] == "none"
@@ -54,12 +72,14 @@ def test_counts_rate_and_level_through_a_session():
 
 def test_joints_outside_limits_and_non_finite_values_warn():
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
-    tracker.update(NAMES, [0.0, 0.8, 0.0] + STANDING[3:], [])  # FR knee straight: outside its limits
+    tracker.update(
+        NAMES, [0.0, 0.8, 0.0, *STANDING[3:]], []
+    )  # FR knee straight: outside its limits
     level, _, values = fk_status(_report(tracker, counter))
     assert level == WARN and values["joints_outside_limits"] == "FR_lower_joint"
     assert values["messages_out_of_limits"] == 1
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
-    tracker.update(NAMES, [math.nan] + STANDING[1:], [])
+    tracker.update(NAMES, [math.nan, *STANDING[1:]], [])
     level, _, values = fk_status(_report(tracker, counter))
     assert level == WARN and values["non_finite_joint_values"] == 1
 
@@ -67,11 +87,19 @@ def test_joints_outside_limits_and_non_finite_values_warn():
 def test_a_rejected_description_warns_and_a_verify_disagreement_is_an_error():
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
     tracker.update(NAMES, STANDING, [])
-    level, summary, values = fk_status(_report(tracker, counter, description_rejected=True,
-                                               description_status="rejected: malformed XML"))
+    level, summary, values = fk_status(
+        _report(
+            tracker,
+            counter,
+            description_rejected=True,
+            description_status="rejected: malformed XML",
+        )
+    )
     assert (level, summary) == (WARN, "robot description on /robot_description rejected")
     assert values["robot_description_topic"] == "/robot_description: rejected: malformed XML"
-    level, summary, _ = fk_status(_report(tracker, counter, description_rejected=True, verify_disagreed=True))
+    level, summary, _ = fk_status(
+        _report(tracker, counter, description_rejected=True, verify_disagreed=True)
+    )
     assert level == ERROR and summary.startswith("verify_fk")
     _, _, values = fk_status(_report(tracker, counter, description_topic=""))
     assert values["robot_description_topic"] == "none: nothing received"

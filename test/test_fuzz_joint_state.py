@@ -46,19 +46,59 @@ from a1_leg_fk.joint_state import (
 from a1_leg_fk.kinematics import Quadruped
 
 # The names (test/shared.py) are written from the naming conventions, independently of legs.joint_name_index.
-SLOT_OF = {**{n: i for i, n in enumerate(PYBULLET_NAMES)}, **{n: i for i, n in enumerate(UNITREE_NAMES)}}
+SLOT_OF = {
+    **{n: i for i, n in enumerate(PYBULLET_NAMES)},
+    **{n: i for i, n in enumerate(UNITREE_NAMES)},
+}
 UNKNOWN_NAMES = [
-    "", " ", "arm_joint_1", "gripper", "fr_hip_joint", "FR_hip_joint ", " FR_hip_joint", "FR_HIP_JOINT",
-    "FR_knee_joint", "FR_upper", "Fr_upper_joint", "FR_hip_joint\x00", "ＦR_hip_joint", "FR_hüft_joint",
-    "关节", "🦿_joint", "RR_calf_joint\n", "RL_lower_joint\t", "trunk", "FR_toe", "imu_joint", "x" * 300,
+    "",
+    " ",
+    "arm_joint_1",
+    "gripper",
+    "fr_hip_joint",
+    "FR_hip_joint ",
+    " FR_hip_joint",
+    "FR_HIP_JOINT",
+    "FR_knee_joint",
+    "FR_upper",
+    "Fr_upper_joint",
+    "FR_hip_joint\x00",
+    "ＦR_hip_joint",  # noqa: RUF001 (a fullwidth F on purpose: not a known joint name)
+    "FR_hüft_joint",
+    "关节",
+    "🦿_joint",
+    "RR_calf_joint\n",
+    "RL_lower_joint\t",
+    "trunk",
+    "FR_toe",
+    "imu_joint",
+    "x" * 300,
 ]
 SPECIAL_VALUES = [
-    math.nan, -math.nan, math.inf, -math.inf, 1e308, -1e308, 1.7976931348623157e308, 5e-324, -5e-324,
-    2.2250738585072014e-308, 0.0, -0.0, math.pi, -math.pi, 1e-300, 1e16, -1e16, 2.0**53 + 1,
+    math.nan,
+    -math.nan,
+    math.inf,
+    -math.inf,
+    1e308,
+    -1e308,
+    1.7976931348623157e308,
+    5e-324,
+    -5e-324,
+    2.2250738585072014e-308,
+    0.0,
+    -0.0,
+    math.pi,
+    -math.pi,
+    1e-300,
+    1e16,
+    -1e16,
+    2.0**53 + 1,
 ]
 
 ROBOT = Quadruped.from_urdf()
-TOTALS = Counter()  # messages fuzzed per test, reported by test_fuzz_totals_are_reported
+TOTALS: Counter[str] = (
+    Counter()
+)  # messages fuzzed per test, reported by test_fuzz_totals_are_reported
 
 
 class ReferenceTracker:
@@ -96,7 +136,11 @@ class ReferenceTracker:
         for leg in sorted({slot // 3 for _, slot in known} - bad_legs):
             if any(math.isnan(a) for a in self.state[3 * leg : 3 * leg + 3]):
                 continue
-            rates = {slot: velocities[i] for i, slot in known if slot // 3 == leg} if velocities else {}
+            rates = (
+                {slot: velocities[i] for i, slot in known if slot // 3 == leg}
+                if velocities
+                else {}
+            )
             ordered = [rates.get(3 * leg + k, math.nan) for k in range(3)]
             legs[leg] = tuple(ordered) if all(math.isfinite(r) for r in ordered) else None
         return ACCEPTED, legs
@@ -106,11 +150,17 @@ def filled_state(state: list[float]) -> list[float]:
     return [0.0 if math.isnan(a) else a for a in state]
 
 
-def check_message(tracker: FootTracker, model: ReferenceTracker, names, positions, velocities) -> None:
+def check_message(
+    tracker: FootTracker, model: ReferenceTracker, names, positions, velocities
+) -> None:
     """Send one message to both; assert every per-message property."""
     feet = tracker.update(names, positions, velocities)
     outcome, legs = model.update(names, positions, velocities)
-    assert tracker.last_outcome == outcome, (names[:20], list(positions)[:20], list(velocities)[:20])
+    assert tracker.last_outcome == outcome, (
+        names[:20],
+        list(positions)[:20],
+        list(velocities)[:20],
+    )
     # The merged state equals the model's (NaN where never known), bit for bit.
     for got, want in zip(tracker.angles, model.state):
         assert (math.isnan(got) and math.isnan(want)) or got == want
@@ -121,7 +171,9 @@ def check_message(tracker: FootTracker, model: ReferenceTracker, names, position
     jacobians = None
     for foot in feet:
         assert all(math.isfinite(v) for v in foot.position), foot
-        assert max(abs(a - b) for a, b in zip(foot.position, expected[foot.leg_slot])) <= 1e-12, foot
+        assert max(abs(a - b) for a, b in zip(foot.position, expected[foot.leg_slot])) <= 1e-12, (
+            foot
+        )
         rates = legs[foot.leg_slot]
         if rates is None:
             assert foot.velocity is None, foot
@@ -133,10 +185,17 @@ def check_message(tracker: FootTracker, model: ReferenceTracker, names, position
             scale = float(np.abs(jacobians[foot.leg_slot]).sum() * max(abs(r) for r in rates))
         if foot.velocity is None:
             # Dropped only when J q_dot overflows (rates near 1e308).
-            assert not np.all(np.isfinite(want)) or not math.isfinite(scale) or scale > 1e300, (foot, rates)
+            assert not np.all(np.isfinite(want)) or not math.isfinite(scale) or scale > 1e300, (
+                foot,
+                rates,
+            )
             continue
         assert all(math.isfinite(v) for v in foot.velocity), foot
-        assert np.max(np.abs(np.array(foot.velocity) - want)) <= 1e-12 + 1e-12 * scale, (foot, want, rates)
+        assert np.max(np.abs(np.array(foot.velocity) - want)) <= 1e-12 + 1e-12 * scale, (
+            foot,
+            want,
+            rates,
+        )
 
 
 def check_totals(tracker: FootTracker, model: ReferenceTracker) -> None:
@@ -157,7 +216,10 @@ values = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True),
 )
 name_pool = st.one_of(
-    st.sampled_from(PYBULLET_NAMES), st.sampled_from(UNITREE_NAMES), st.sampled_from(UNKNOWN_NAMES), st.text(max_size=12)
+    st.sampled_from(PYBULLET_NAMES),
+    st.sampled_from(UNITREE_NAMES),
+    st.sampled_from(UNKNOWN_NAMES),
+    st.text(max_size=12),
 )
 
 
@@ -175,23 +237,33 @@ def messages(draw) -> tuple[list[str], object, object]:
         rng.shuffle(names)
     else:  # up to 10,000 names: unknown ones (partly repeated) around a full set of leg joints
         count = draw(st.integers(12, 10_000))
-        names = [f"extra_{rng.randrange(3 * count)}_joint" for _ in range(count - 12)] + list(PYBULLET_NAMES)
+        names = [f"extra_{rng.randrange(3 * count)}_joint" for _ in range(count - 12)] + list(
+            PYBULLET_NAMES
+        )
         if draw(st.booleans()):
             names.append(rng.choice(UNITREE_NAMES))  # one duplicate leg joint: rejected
         rng.shuffle(names)
     length = len(names)
     position_length = draw(st.sampled_from([length] * 6 + [0, length + 1, max(length - 1, 0)]))
     velocity_length = draw(st.sampled_from([0, 0, length, length, length + 1, max(length - 1, 0)]))
-    if length > 64:  # drawing 10,000 floats one by one is slow; mix drawn specials into a seeded stream
+    if (
+        length > 64
+    ):  # drawing 10,000 floats one by one is slow; mix drawn specials into a seeded stream
         specials = draw(st.lists(values, min_size=1, max_size=8))
-        positions = [rng.choice(specials) if rng.random() < 0.05 else rng.uniform(-3, 3) for _ in range(position_length)]
-        velocities = [rng.choice(specials) if rng.random() < 0.05 else rng.uniform(-20, 20) for _ in range(velocity_length)]
+        positions = [
+            rng.choice(specials) if rng.random() < 0.05 else rng.uniform(-3, 3)
+            for _ in range(position_length)
+        ]
+        velocities = [
+            rng.choice(specials) if rng.random() < 0.05 else rng.uniform(-20, 20)
+            for _ in range(velocity_length)
+        ]
     else:
         positions = draw(st.lists(values, min_size=position_length, max_size=position_length))
         velocities = draw(st.lists(values, min_size=velocity_length, max_size=velocity_length))
     # rclpy hands the node array.array('d') for float64[] fields; plain lists must work as well.
     if draw(st.booleans()):
-        positions, velocities = array.array("d", positions), array.array("d", velocities)
+        return names, array.array("d", positions), array.array("d", velocities)
     return names, positions, velocities
 
 
@@ -206,7 +278,9 @@ def interleaved_streams(draw) -> list[tuple[list[str], list[float], list[float]]
     stream = []
     for step in range(draw(st.integers(2, 12))):
         part, naming = parts[step % 2] if draw(st.booleans()) else parts[(step + 1) % 2]
-        positions = [draw(values) if draw(st.integers(0, 9)) == 0 else rng.uniform(-2, 2) for _ in part]
+        positions = [
+            draw(values) if draw(st.integers(0, 9)) == 0 else rng.uniform(-2, 2) for _ in part
+        ]
         velocities = [rng.uniform(-5, 5) for _ in part] if draw(st.booleans()) else []
         stream.append(([naming[s] for s in part], positions, velocities))
     return stream
@@ -215,7 +289,11 @@ def interleaved_streams(draw) -> list[tuple[list[str], list[float], list[float]]
 FUZZ_SETTINGS = settings(
     max_examples=400,
     deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.large_base_example],
+    suppress_health_check=[
+        HealthCheck.too_slow,
+        HealthCheck.data_too_large,
+        HealthCheck.large_base_example,
+    ],
 )
 
 
@@ -261,7 +339,9 @@ def test_seeded_bulk_fuzz_20k_messages():
         velocity_length = rng.choice([0, n, n, n]) if rng.random() < 0.97 else n + 2
 
         def value(spread: float) -> float:
-            return rng.choice(SPECIAL_VALUES) if rng.random() < 0.03 else rng.uniform(-spread, spread)
+            return (
+                rng.choice(SPECIAL_VALUES) if rng.random() < 0.03 else rng.uniform(-spread, spread)
+            )
 
         positions = array.array("d", (value(3.0) for _ in range(position_length)))
         velocities = array.array("d", (value(20.0) for _ in range(velocity_length)))
@@ -283,12 +363,22 @@ def test_name_flood_keeps_memory_bounded():
 
 
 @pytest.mark.parametrize(
-    "names, positions, velocities, outcome",
+    ("names", "positions", "velocities", "outcome"),
     [
         ([], [], [], NO_LEG_JOINTS),
         ([""], [0.0], [], NO_LEG_JOINTS),
-        (["", ""], [0.0, 0.0], [], NO_LEG_JOINTS),  # repeated unknown names are ignored, not rejected
-        (["FR_upper_joint", "FR_thigh_joint"], [0.8, 0.8], [], DUPLICATE_NAMES),  # one joint, both namings
+        (
+            ["", ""],
+            [0.0, 0.0],
+            [],
+            NO_LEG_JOINTS,
+        ),  # repeated unknown names are ignored, not rejected
+        (
+            ["FR_upper_joint", "FR_thigh_joint"],
+            [0.8, 0.8],
+            [],
+            DUPLICATE_NAMES,
+        ),  # one joint, both namings
         (PYBULLET_NAMES, [math.nan] * 12, [], ALL_POSITIONS_NON_FINITE),
         (PYBULLET_NAMES, [0.1] * 12, [0.0] * 11, VELOCITY_LENGTH_MISMATCH),
         (PYBULLET_NAMES, [0.1] * 13, [], POSITION_LENGTH_MISMATCH),

@@ -42,22 +42,37 @@ def demo_bag(path: Path) -> tuple[np.ndarray, np.ndarray]:
     swinging = np.array([[GAIT.swinging(float(t), leg) for leg in LEG_NAMES] for t in times])
     # Base x: minus the mean x-velocity of the feet on the ground, integrated (trapezoid).
     stance_vx = np.gradient(feet[:, :, 0], times, axis=0)
-    base_vx = -np.where(~swinging, stance_vx, 0.0).sum(axis=1) / np.maximum((~swinging).sum(axis=1), 1)
-    base_x = np.concatenate(([0.0], np.cumsum(0.5 * (base_vx[1:] + base_vx[:-1]) * np.diff(times))))
+    base_vx = -np.where(~swinging, stance_vx, 0.0).sum(axis=1) / np.maximum(
+        (~swinging).sum(axis=1), 1
+    )
+    base_x = np.concatenate(
+        ([0.0], np.cumsum(0.5 * (base_vx[1:] + base_vx[:-1]) * np.diff(times)))
+    )
     # Base z: the feet on the ground (all four while standing up) a foot radius above z = 0.
-    base_z = FOOT_RADIUS_M - np.where(~swinging, feet[:, :, 2], 0.0).sum(axis=1) / np.maximum((~swinging).sum(axis=1), 1)
+    base_z = FOOT_RADIUS_M - np.where(~swinging, feet[:, :, 2], 0.0).sum(axis=1) / np.maximum(
+        (~swinging).sum(axis=1), 1
+    )
     spec = BagSpec()
     for t, row in zip(times, angles):
         stamp = START_NS + round(t * 1e9)
-        spec.add_joint_state("/joint_states", stamp, JointStateMsg(stamp, quadruped.joint_names, row))
+        spec.add_joint_state(
+            "/joint_states", stamp, JointStateMsg(stamp, quadruped.joint_names, row)
+        )
     pose_times = np.arange(0.0, SECONDS, 1.0 / POSE_RATE_HZ)
     for t in pose_times:
         stamp = START_NS + round(t * 1e9)
         pose = T["geometry_msgs/msg/Pose"](
-            T["geometry_msgs/msg/Point"](float(np.interp(t, times, base_x)), 0.0, float(np.interp(t, times, base_z))),
+            T["geometry_msgs/msg/Point"](
+                float(np.interp(t, times, base_x)), 0.0, float(np.interp(t, times, base_z))
+            ),
             T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
         )
-        spec.add("/base_pose", "geometry_msgs/msg/PoseStamped", stamp, T["geometry_msgs/msg/PoseStamped"](header(stamp, "odom"), pose))
+        spec.add(
+            "/base_pose",
+            "geometry_msgs/msg/PoseStamped",
+            stamp,
+            T["geometry_msgs/msg/PoseStamped"](header(stamp, "odom"), pose),
+        )
     write_bag(path, spec)
     return times, swinging
 
@@ -66,17 +81,31 @@ def demo_bag(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def demo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarray, np.ndarray, int]:
     folder = tmp_path_factory.mktemp("gait")
     times, swinging = demo_bag(folder / "demo")
-    code = cli.main([
-        "gait", str(folder / "demo"), "--base-pose", "/base_pose", "--quiet", "--json", str(folder / "gait.json"),
-        "--plot", str(folder / "gait.png"), "--csv-contacts", str(folder / "contacts.csv"),
-    ])
+    code = cli.main(
+        [
+            "gait",
+            str(folder / "demo"),
+            "--base-pose",
+            "/base_pose",
+            "--quiet",
+            "--json",
+            str(folder / "gait.json"),
+            "--plot",
+            str(folder / "gait.png"),
+            "--csv-contacts",
+            str(folder / "contacts.csv"),
+        ]
+    )
     return folder, times, swinging, code
 
 
 def test_demo_gait_through_a_bag(demo_run) -> None:
     folder, times, swinging, code = demo_run
     assert code == 0
-    document = json.loads((folder / "gait.json").read_text(), parse_constant=lambda name: pytest.fail(f"{name} in JSON"))
+    document = json.loads(
+        (folder / "gait.json").read_text(),
+        parse_constant=lambda name: pytest.fail(f"{name} in JSON"),
+    )
     assert document["gait"] == "trot", document["gait_reason"]
     assert document["world_frame"] == "odom"
     for leg in LEG_NAMES:
@@ -84,8 +113,13 @@ def test_demo_gait_through_a_bag(demo_run) -> None:
         assert entry["status"] == "ok"
         assert abs(entry["stride_period_s"] - GAIT.period_s) < 0.01
         assert entry["step_length_m"] > 0.02  # the base walks forward
-    assert abs(document["phase_vs_FR"]["RL"]) < 0.05 or abs(document["phase_vs_FR"]["RL"] - 1) < 0.05
-    assert abs(document["phase_vs_FR"]["FL"] - 0.5) < 0.05 and abs(document["phase_vs_FR"]["RR"] - 0.5) < 0.05
+    assert (
+        abs(document["phase_vs_FR"]["RL"]) < 0.05 or abs(document["phase_vs_FR"]["RL"] - 1) < 0.05
+    )
+    assert (
+        abs(document["phase_vs_FR"]["FL"] - 0.5) < 0.05
+        and abs(document["phase_vs_FR"]["RR"] - 0.5) < 0.05
+    )
     with (folder / "contacts.csv").open() as stream:
         rows = list(csv.DictReader(stream))
     assert len(rows) == times.size
@@ -94,8 +128,10 @@ def test_demo_gait_through_a_bag(demo_run) -> None:
     assert (stance[times < times[-1] - 1.0 / POSE_RATE_HZ] >= 0).all()
     trotting = (times >= GAIT.periodic_from_s) & (stance >= 0).all(axis=1)
     agreement = ((stance[trotting] == 1) == ~swinging[trotting]).mean()
-    print(f"demo trot through a bag: stance agrees with the demo's swing flag on {agreement:.1%} of the samples; "
-          f"duty {[round(document['legs'][leg]['duty_factor'], 3) for leg in LEG_NAMES]}")
+    print(
+        f"demo trot through a bag: stance agrees with the demo's swing flag on {agreement:.1%} of the samples; "
+        f"duty {[round(document['legs'][leg]['duty_factor'], 3) for leg in LEG_NAMES]}"
+    )
     # The demo lifts a foot as sin^2 (zero speed and height at lift-off and touchdown), so the
     # detector sees the first and last few millimetres of each swing as stance.
     assert agreement > 0.9
@@ -110,7 +146,7 @@ def test_gait_plot_has_a_row_per_leg(demo_run) -> None:
     for leg in LEG_NAMES:
         assert colour_share(top, LEG_COLOURS[leg]) > 0.005, leg
         rgb = np.array(pytest.importorskip("matplotlib.colors").to_rgb(LEG_COLOURS[leg]))
-        ys = np.nonzero((np.abs(top - rgb).max(axis=2) < 0.06))[0]
+        ys = np.nonzero(np.abs(top - rgb).max(axis=2) < 0.06)[0]
         rows.append(np.median(ys))
     assert rows == sorted(rows)  # FR, FL, RR, RL from the top, each in its own row
     assert min(np.diff(rows)) > 20  # pixels
@@ -124,7 +160,12 @@ def test_refuses_without_base_pose(tmp_path: Path, capsys: pytest.CaptureFixture
 
 def test_bad_thresholds_and_input(demo_run, capsys: pytest.CaptureFixture) -> None:
     folder, *_ = demo_run
-    assert cli.main(["gait", str(folder / "demo"), "--base-pose", "/base_pose", "--height-on-m", "0.05"]) == 2
+    assert (
+        cli.main(
+            ["gait", str(folder / "demo"), "--base-pose", "/base_pose", "--height-on-m", "0.05"]
+        )
+        == 2
+    )
     assert "off >= on" in capsys.readouterr().err
     assert cli.main(["gait", str(folder / "nope"), "--base-pose", "/base_pose"]) == 2
     assert capsys.readouterr().err.startswith("a1-leg-fk gait: ")

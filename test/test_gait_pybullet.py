@@ -44,7 +44,9 @@ def trot_targets(t: float) -> list[float]:
     return targets
 
 
-def simulate(quadruped: Quadruped) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def simulate(
+    quadruped: Quadruped,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(stamps [s], joint angles (N, 12) [rad], root position (N, 3) [m], root quaternion xyzw (N, 4), toe contact (N, 4))."""
     client = pybullet.connect(pybullet.DIRECT)
     try:
@@ -53,7 +55,10 @@ def simulate(quadruped: Quadruped) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
         data = pybullet_data.getDataPath()
         plane = pybullet.loadURDF(f"{data}/plane.urdf", physicsClientId=client)
         body = pybullet.loadURDF(f"{data}/a1/a1.urdf", [0, 0, 0.30], physicsClientId=client)
-        infos = [pybullet.getJointInfo(body, j, physicsClientId=client) for j in range(pybullet.getNumJoints(body, physicsClientId=client))]
+        infos = [
+            pybullet.getJointInfo(body, j, physicsClientId=client)
+            for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+        ]
         joint_index = {info[1].decode(): info[0] for info in infos}
         link_index = {info[12].decode(): info[0] for info in infos}
         joints = [joint_index[name] for name in quadruped.joint_names]
@@ -61,36 +66,70 @@ def simulate(quadruped: Quadruped) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
         for joint, angle in zip(joints, trot_targets(0.0)):
             pybullet.resetJointState(body, joint, angle, physicsClientId=client)
         # PyBullet's base pose is the trunk's inertial frame: root = base * inverse(local inertial frame).
-        inertial_position, inertial_orientation = pybullet.getDynamicsInfo(body, -1, physicsClientId=client)[3:5]
+        inertial_position, inertial_orientation = pybullet.getDynamicsInfo(
+            body, -1, physicsClientId=client
+        )[3:5]
         to_root = pybullet.invertTransform(inertial_position, inertial_orientation)
         stamps, angles, positions, orientations, contact = [], [], [], [], []
-        for step in range(int(round(SIM_S / STEP_S))):
+        for step in range(round(SIM_S / STEP_S)):
             pybullet.setJointMotorControlArray(
-                body, joints, pybullet.POSITION_CONTROL, targetPositions=trot_targets(step * STEP_S),
-                forces=[MAX_TORQUE_NM] * 12, positionGains=[POSITION_GAIN] * 12, velocityGains=[1.0] * 12,
+                body,
+                joints,
+                pybullet.POSITION_CONTROL,
+                targetPositions=trot_targets(step * STEP_S),
+                forces=[MAX_TORQUE_NM] * 12,
+                positionGains=[POSITION_GAIN] * 12,
+                velocityGains=[1.0] * 12,
                 physicsClientId=client,
             )
             pybullet.stepSimulation(physicsClientId=client)
-            base_position, base_orientation = pybullet.getBasePositionAndOrientation(body, physicsClientId=client)
-            root_position, root_orientation = pybullet.multiplyTransforms(base_position, base_orientation, *to_root)
+            base_position, base_orientation = pybullet.getBasePositionAndOrientation(
+                body, physicsClientId=client
+            )
+            root_position, root_orientation = pybullet.multiplyTransforms(
+                base_position, base_orientation, *to_root
+            )
             stamps.append((step + 1) * STEP_S)
-            angles.append([state[0] for state in pybullet.getJointStates(body, joints, physicsClientId=client)])
+            angles.append(
+                [
+                    state[0]
+                    for state in pybullet.getJointStates(body, joints, physicsClientId=client)
+                ]
+            )
             positions.append(root_position)
             orientations.append(root_orientation)
-            contact.append([bool(pybullet.getContactPoints(body, plane, linkIndexA=toe, physicsClientId=client)) for toe in toes])
+            contact.append(
+                [
+                    bool(
+                        pybullet.getContactPoints(
+                            body, plane, linkIndexA=toe, physicsClientId=client
+                        )
+                    )
+                    for toe in toes
+                ]
+            )
     finally:
         pybullet.disconnect(client)
-    return np.array(stamps), np.array(angles), np.array(positions), np.array(orientations), np.array(contact)
+    return (
+        np.array(stamps),
+        np.array(angles),
+        np.array(positions),
+        np.array(orientations),
+        np.array(contact),
+    )
 
 
 def rotation_matrices(quaternions: np.ndarray) -> np.ndarray:
     """(N, 3, 3) rotation matrices of (N, 4) unit quaternions (x, y, z, w)."""
     x, y, z, w = quaternions.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
+        ],
+        axis=1,
+    )
 
 
 def test_contacts_agree_with_pybullet() -> None:
@@ -98,14 +137,18 @@ def test_contacts_agree_with_pybullet() -> None:
     stamps, angles, positions, orientations, contact = simulate(quadruped)
     noisy = angles + np.random.default_rng(7).normal(0.0, ENCODER_NOISE_RAD, angles.shape)
     feet = quadruped.fk_batch(noisy)
-    world = np.einsum("nij,nlj->nli", rotation_matrices(orientations), feet) + positions[:, None, :]
+    world = (
+        np.einsum("nij,nlj->nli", rotation_matrices(orientations), feet) + positions[:, None, :]
+    )
     contacts, report = analyze_gait(stamps, world)
     compared = stamps >= COMPARE_FROM_S
     agreement = (contacts.stance[compared] == contact[compared]).mean(axis=0)
-    print(f"stance vs PyBullet contact, {int(compared.sum())} samples at {1 / STEP_S:g} Hz: "
-          + ", ".join(f"{leg} {share:.1%}" for leg, share in zip(LEG_NAMES, agreement))
-          + f"; all {(contacts.stance[compared] == contact[compared]).mean():.1%}; gait {report.gait} (fit {report.gait_fit:.2f}), "
-          f"ground {report.ground.level_m * 1e3:.1f} mm")
+    print(
+        f"stance vs PyBullet contact, {int(compared.sum())} samples at {1 / STEP_S:g} Hz: "
+        + ", ".join(f"{leg} {share:.1%}" for leg, share in zip(LEG_NAMES, agreement))
+        + f"; all {(contacts.stance[compared] == contact[compared]).mean():.1%}; gait {report.gait} (fit {report.gait_fit:.2f}), "
+        f"ground {report.ground.level_m * 1e3:.1f} mm"
+    )
     assert (agreement >= 0.95).all()
     assert report.gait == "trot"
     # The ground level is that of the toe sphere's centre (radius 0.02 m) on the plane z = 0.

@@ -34,12 +34,21 @@ ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node"
 class Commands:
     """joint_commands and /diagnostics as the node publishes them."""
 
-    def __init__(self, ros) -> None:  # noqa: ANN001 (conftest.RosProbe)
+    def __init__(self, ros) -> None:
         self.commands: list[JointState] = []
         self.diagnostics: list[DiagnosticArray] = []
-        ros.node.create_subscription(JointState, "joint_commands", self.commands.append, QoSProfile(depth=5000))
-        ros.node.create_subscription(DiagnosticArray, "/diagnostics", self.diagnostics.append, QoSProfile(depth=100))
-        self.publishers = {leg: ros.node.create_publisher(PointStamped, f"foot_targets/{leg}", QoSProfile(depth=100)) for leg in LEGS}
+        ros.node.create_subscription(
+            JointState, "joint_commands", self.commands.append, QoSProfile(depth=5000)
+        )
+        ros.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self.diagnostics.append, QoSProfile(depth=100)
+        )
+        self.publishers = {
+            leg: ros.node.create_publisher(
+                PointStamped, f"foot_targets/{leg}", QoSProfile(depth=100)
+            )
+            for leg in LEGS
+        }
 
     def ik_values(self) -> dict[str, str]:
         for array in reversed(self.diagnostics):
@@ -50,11 +59,20 @@ class Commands:
 
 
 @pytest.mark.slow
-def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:  # noqa: ANN001
+def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
     demo_states: dict[int, JointState] = {}
-    ros.node.create_subscription(JointState, "joint_states", lambda m: demo_states.__setitem__(stamp_ns(m), m), QoSProfile(depth=5000))
+    ros.node.create_subscription(
+        JointState,
+        "joint_states",
+        lambda m: demo_states.__setitem__(stamp_ns(m), m),
+        QoSProfile(depth=5000),
+    )
     commands = Commands(ros)
-    remaps = [argument for leg in LEGS for argument in ("-r", f"foot_targets/{leg}:=foot_positions/{leg}")]
+    remaps = [
+        argument
+        for leg in LEGS
+        for argument in ("-r", f"foot_targets/{leg}:=foot_positions/{leg}")
+    ]
     ik = processes.start(ik_node_command(*remaps))
     fk = processes.start(node_command())
     demo = processes.start(DEMO)
@@ -63,16 +81,22 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
         f"ik node:\n{processes.output(ik)}\nfk node:\n{processes.output(fk)}\ndemo:\n{processes.output(demo)}"
     )
     ros.spin_for(1.0)
-    matched = defaultdict(int)
+    matched: defaultdict[str, int] = defaultdict(int)
     for command in commands.commands:
         state = demo_states.get(stamp_ns(command))
         if state is None:
             continue
-        assert list(command.name)[0].split("_")[0] in LEGS
+        assert next(iter(command.name)).split("_")[0] in LEGS
         expected = dict(zip(state.name, state.position))
-        np.testing.assert_allclose(command.position, [expected[name] for name in command.name], rtol=0.0, atol=1e-9)
+        np.testing.assert_allclose(
+            command.position, [expected[name] for name in command.name], rtol=0.0, atol=1e-9
+        )
         matched[command.name[0][:2]] += 1
-    assert all(matched[leg] >= 100 for leg in LEGS), (dict(matched), len(demo_states), len(commands.commands))
+    assert all(matched[leg] >= 100 for leg in LEGS), (
+        dict(matched),
+        len(demo_states),
+        len(commands.commands),
+    )
     assert ros.spin_until(lambda: commands.ik_values().get("FR_ok", "0") != "0", 5.0)
     values = commands.ik_values()
     assert values["FR_unreachable"] == values["FR_outside_limits"] == "0"
@@ -82,13 +106,17 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
 
 
 @pytest.mark.slow
-def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:  # noqa: ANN001
+def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:
     commands = Commands(ros)
-    ik = processes.start(ik_node_command("-p", f"command_joint_names:={UNITREE_NAMES}".replace("'", '"')))
+    ik = processes.start(
+        ik_node_command("-p", f"command_joint_names:={UNITREE_NAMES}".replace("'", '"'))
+    )
     target = PointStamped()
     target.header.frame_id = "trunk"
     target.header.stamp.sec, target.header.stamp.nanosec = 1234, 5678
-    target.point.x, target.point.y, target.point.z = (float(v) for v in a1_foot_closed_form("RL", 0.1, 0.9, -1.6))
+    target.point.x, target.point.y, target.point.z = (
+        float(v) for v in a1_foot_closed_form("RL", 0.1, 0.9, -1.6)
+    )
 
     def send_until_answered(leg: str, msg: PointStamped, count: int) -> bool:
         def answered() -> bool:
@@ -127,7 +155,7 @@ def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:  
 
 
 @pytest.mark.slow
-def test_bad_ros_args_exit_2_in_one_line(processes) -> None:  # noqa: ANN001
+def test_bad_ros_args_exit_2_in_one_line(processes) -> None:
     process = processes.start(ik_node_command("-p"))
     try:
         assert process.wait(20) == 2
@@ -139,11 +167,15 @@ def test_bad_ros_args_exit_2_in_one_line(processes) -> None:  # noqa: ANN001
 
 
 @pytest.mark.slow
-def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0(processes) -> None:  # noqa: ANN001
+def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0(
+    processes,
+) -> None:
     bad = processes.start(ik_node_command("-p", 'command_joint_names:=["a", "b"]'))
     assert bad.wait(20) == 1
     assert "command_joint_names must hold 12 names" in processes.output(bad)
-    good = processes.start(ik_node_command("-p", f"command_joint_names:={PYBULLET_NAMES}".replace("'", '"')))
+    good = processes.start(
+        ik_node_command("-p", f"command_joint_names:={PYBULLET_NAMES}".replace("'", '"'))
+    )
     try:
         good.wait(3)
         pytest.fail(f"foot_ik_node exited:\n{processes.output(good)}")
@@ -158,7 +190,9 @@ def test_ik_params_yaml_states_every_parameter() -> None:
     path = ROOT / "config" / "ik_params.yaml"
     text = path.read_text()
     stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]
-    specs = robot_source.PARAMETERS + ik_node.PARAMETERS  # the model's parameters and the node's own
+    specs = (
+        robot_source.PARAMETERS + ik_node.PARAMETERS
+    )  # the model's parameters and the node's own
     scalars = {spec.name: spec.default for spec in specs if spec.default is not None}
     assert stated == scalars
     for spec in specs:
@@ -167,7 +201,7 @@ def test_ik_params_yaml_states_every_parameter() -> None:
 
 
 @pytest.mark.slow
-def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None:  # noqa: ANN001
+def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None:
     """The same mechanism as foot_fk_node's: a Go2-like description on the topic, no parameter."""
     from exported_urdf import exported_quadruped
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
@@ -176,7 +210,11 @@ def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None
     from a1_leg_fk.robot_config import load_robot
 
     xml = exported_quadruped("go2")
-    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    latched = QoSProfile(
+        depth=1,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    )
     ros.node.create_publisher(String, "robot_description", latched).publish(String(data=xml))
     commands = Commands(ros)
     process = processes.start(ik_node_command())
@@ -186,7 +224,9 @@ def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None
 
     def answered_in_base() -> bool:
         message = PointStamped()
-        message.header.frame_id = "base"  # Go2's root link: only accepted once the description is loaded
+        message.header.frame_id = (
+            "base"  # Go2's root link: only accepted once the description is loaded
+        )
         message.point.x, message.point.y, message.point.z = (float(v) for v in target)
         commands.publishers["FR"].publish(message)
         return bool(commands.commands)

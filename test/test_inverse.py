@@ -30,7 +30,11 @@ MINI_CHEETAH_FEET = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_
 ROBOTS = {
     "a1": (DATA / "a1" / "a1.urdf", None, A1_FEET),
     "aliengo": (DATA / "aliengo" / "aliengo.urdf", None, A1_FEET),
-    "mini_cheetah": (DATA / "mini_cheetah" / "mini_cheetah.urdf", MINI_CHEETAH_FEET, list(MINI_CHEETAH_FEET.values())),
+    "mini_cheetah": (
+        DATA / "mini_cheetah" / "mini_cheetah.urdf",
+        MINI_CHEETAH_FEET,
+        list(MINI_CHEETAH_FEET.values()),
+    ),
 }
 ROUND_TRIPS = 2000
 A1_HIP_PITCH_FR = np.array([0.183, -0.047 - 0.08505, 0.0])  # FR hip-pitch joint, base frame [m]
@@ -74,7 +78,9 @@ def test_round_trips_against_fk_and_pybullet(robot) -> None:
     assert (batch.status == inverse.OK).all()
     np.testing.assert_allclose(quadruped.fk_batch(batch.angles), feet, rtol=0.0, atol=1e-9)
     assert batch.residual_m.max() <= 1e-9
-    assert ((batch.angles >= lower - 1e-12) | np.isinf(lower)).all() and (batch.angles <= upper + 1e-12).all()
+    assert ((batch.angles >= lower - 1e-12) | np.isinf(lower)).all() and (
+        batch.angles <= upper + 1e-12
+    ).all()
     unique_checked = 0
     for row in range(ROUND_TRIPS):
         single = quadruped.ik(feet[row])
@@ -83,18 +89,26 @@ def test_round_trips_against_fk_and_pybullet(robot) -> None:
         np.testing.assert_allclose(single.residual_m, batch.residual_m[row], rtol=0.0, atol=1e-12)
         for slot, leg in enumerate(LEGS):
             drawn = q[row, 3 * slot : 3 * slot + 3]
-            inside = [s.angles for s in quadruped.ik_solutions(leg, feet[row, slot]) if s.inside_limits]
-            assert min(np.abs(wrapped(np.subtract(angles, drawn))).max() for angles in inside) <= 1e-9
+            inside = [
+                s.angles for s in quadruped.ik_solutions(leg, feet[row, slot]) if s.inside_limits
+            ]
+            assert (
+                min(np.abs(wrapped(np.subtract(angles, drawn))).max() for angles in inside) <= 1e-9
+            )
             if len(inside) == 1:
                 unique_checked += 1
-                np.testing.assert_allclose(wrapped(single.angles[3 * slot : 3 * slot + 3] - drawn), 0.0, atol=1e-9)
+                np.testing.assert_allclose(
+                    wrapped(single.angles[3 * slot : 3 * slot + 3] - drawn), 0.0, atol=1e-9
+                )
     # The A1's roll branches are both inside the limits only near the roll axis; the continuous
     # joints of mini_cheetah make all four in-limit.
     assert unique_checked > (4000 if name == "a1" else -1)
     path, _, foot_links = ROBOTS[name]
     with pybullet_reference.PyBulletRobot(path) as pybullet_robot:
         for row in range(ROUND_TRIPS):
-            bullet_feet = pybullet_robot.feet(list(quadruped.joint_names), foot_links, batch.angles[row])
+            bullet_feet = pybullet_robot.feet(
+                list(quadruped.joint_names), foot_links, batch.angles[row]
+            )
             np.testing.assert_allclose(bullet_feet, feet[row], rtol=0.0, atol=1e-7)
 
 
@@ -106,9 +120,13 @@ def test_mini_cheetah_has_four_in_limit_solutions_and_the_seed_picks_each() -> N
     solutions = cheetah.ik_solutions("FR", target[0])
     assert len(solutions) == 4 and all(s.inside_limits for s in solutions)
     for solution in solutions:
-        np.testing.assert_allclose(cheetah.legs[0].position(*solution.angles), target[0], atol=1e-12)
+        np.testing.assert_allclose(
+            cheetah.legs[0].position(*solution.angles), target[0], atol=1e-12
+        )
         seed = list(solution.angles) + q[3:]
-        np.testing.assert_allclose(cheetah.ik(target, seed=seed).angles[:3], solution.angles, atol=1e-12)
+        np.testing.assert_allclose(
+            cheetah.ik(target, seed=seed).angles[:3], solution.angles, atol=1e-12
+        )
 
 
 def random_a1_topology_urdf(rng: np.random.Generator) -> str:
@@ -147,7 +165,9 @@ def random_a1_topology_urdf(rng: np.random.Generator) -> str:
             f'<joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_c"/><child link="{leg}_foot"/>'
             f'<origin xyz="{numbers(offsets[3] + [0, 0, -0.2])}" rpy="{numbers(rpy[3])}"/></joint>'
         )
-        legs.append("".join(f'<link name="{link}"/>' for link in parents[1:] + [f"{leg}_foot"]) + joints)
+        legs.append(
+            "".join(f'<link name="{link}"/>' for link in [*parents[1:], f"{leg}_foot"]) + joints
+        )
     return f'<robot name="random"><link name="base"/>{"".join(legs)}</robot>'
 
 
@@ -167,7 +187,10 @@ def test_random_urdfs_with_rpy_and_offsets_round_trip(seed: int) -> None:
 
 def test_a_leg_of_another_topology_uses_damped_least_squares() -> None:
     """The synthetic leg with its knee axis tilted off the pitch axis: no closed form; DLS round trips."""
-    urdf = quadruped_urdf().replace('<origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>', '<origin xyz="0 0 -0.2"/><axis xyz="0 1 0.3"/>')
+    urdf = quadruped_urdf().replace(
+        '<origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>',
+        '<origin xyz="0 0 -0.2"/><axis xyz="0 1 0.3"/>',
+    )
     quadruped = Quadruped.from_urdf(urdf)
     assert not any(solver.closed_form for solver in quadruped._ik_solvers)
     rng = np.random.default_rng(5)
@@ -178,7 +201,10 @@ def test_a_leg_of_another_topology_uses_damped_least_squares() -> None:
         assert result.status == ("ok",) * 4
         np.testing.assert_allclose(quadruped.fk(result.angles), feet[row], rtol=0.0, atol=1e-9)
     solutions = quadruped.ik_solutions("FR", feet[0, 0])
-    assert solutions and all(np.linalg.norm(quadruped.legs[0].position(*s.angles) - feet[0, 0]) <= 1e-9 for s in solutions)
+    assert solutions and all(
+        np.linalg.norm(quadruped.legs[0].position(*s.angles) - feet[0, 0]) <= 1e-9
+        for s in solutions
+    )
     far = quadruped.ik(feet[0] + [5.0, 0.0, 0.0])
     assert far.status == ("unreachable",) * 4
 
@@ -211,14 +237,19 @@ def test_seeded_trajectory_follows_the_same_branch(name: str) -> None:
 def fr_target_at(distance_m: float, direction_rad: float = 0.0) -> np.ndarray:
     """A point in the FR leg's pitch plane (roll 0) at ``distance_m`` from the hip-pitch axis,
     ``direction_rad`` from straight down towards +x."""
-    return A1_HIP_PITCH_FR + distance_m * np.array([math.sin(direction_rad), 0.0, -math.cos(direction_rad)])
+    return A1_HIP_PITCH_FR + distance_m * np.array(
+        [math.sin(direction_rad), 0.0, -math.cos(direction_rad)]
+    )
 
 
-REACH_MIN_M, REACH_MAX_M = 0.4 * math.cos(2.69653369433 / 2.0), 0.4 * math.cos(0.916297857297 / 2.0)
+REACH_MIN_M, REACH_MAX_M = (
+    0.4 * math.cos(2.69653369433 / 2.0),
+    0.4 * math.cos(0.916297857297 / 2.0),
+)
 
 
 @pytest.mark.parametrize(
-    "distance, status",
+    ("distance", "status"),
     [
         (REACH_MIN_M + 1e-6, "ok"),
         (REACH_MAX_M - 1e-6, "ok"),
@@ -227,7 +258,9 @@ REACH_MIN_M, REACH_MAX_M = 0.4 * math.cos(2.69653369433 / 2.0), 0.4 * math.cos(0
         (0.4 + 1e-4, "unreachable"),  # beyond the straight leg
     ],
 )
-def test_just_inside_and_just_outside_the_a1_reach(a1: Quadruped, distance: float, status: str) -> None:
+def test_just_inside_and_just_outside_the_a1_reach(
+    a1: Quadruped, distance: float, status: str
+) -> None:
     assert abs(REACH_MIN_M - 0.088) < 5e-4 and abs(REACH_MAX_M - 0.359) < 5e-4
     feet = a1.fk([0.0, 0.8, -1.5] * 4)
     feet[0] = fr_target_at(distance, 0.3)
@@ -236,7 +269,10 @@ def test_just_inside_and_just_outside_the_a1_reach(a1: Quadruped, distance: floa
     if status == "ok":
         assert result.residual_m[0] <= 1e-9
     else:  # no farther than the in-plane point on the reach circle; as near as the dense search's
-        assert result.residual_m[0] <= abs(distance - (REACH_MIN_M if distance < 0.2 else REACH_MAX_M)) + 1e-12
+        assert (
+            result.residual_m[0]
+            <= abs(distance - (REACH_MIN_M if distance < 0.2 else REACH_MAX_M)) + 1e-12
+        )
         assert abs(result.residual_m[0] - dense_search(a1, 0, feet[0]).in_limits_m) <= 1e-8
     assert abs(np.linalg.norm(a1.fk(result.angles)[0] - feet[0]) - result.residual_m[0]) <= 1e-12
     assert not a1.joints_outside_limits(result.angles)
@@ -245,7 +281,7 @@ def test_just_inside_and_just_outside_the_a1_reach(a1: Quadruped, distance: floa
 def test_behind_the_hip_on_the_axis_and_far_away(a1: Quadruped) -> None:
     feet = a1.fk([0.0, 0.8, -1.5] * 4)
     targets = {
-        "behind the hip": A1_HIP_PITCH_FR + [-0.25, 0.0, 0.05],
+        "behind the hip": A1_HIP_PITCH_FR + np.array([-0.25, 0.0, 0.05]),
         "on the roll axis (singular)": np.array([0.183, -0.047, 0.0]),
         "on the hip-pitch axis (singular: the knee folded flat)": A1_HIP_PITCH_FR,
         "on the roll axis, below": np.array([0.3, -0.047, 0.0]),
@@ -256,7 +292,12 @@ def test_behind_the_hip_on_the_axis_and_far_away(a1: Quadruped) -> None:
         result = a1.ik(feet)
         assert np.isfinite(result.angles).all() and np.isfinite(result.residual_m).all(), name
         reference = dense_search(a1, 0, target)
-        assert result.status[0] == reference.expected_status(), (name, result.status[0], reference.in_limits_m, reference.anywhere_m)
+        assert result.status[0] == reference.expected_status(), (
+            name,
+            result.status[0],
+            reference.in_limits_m,
+            reference.anywhere_m,
+        )
         assert result.residual_m[0] <= reference.in_limits_m + 1e-9, name
 
 
@@ -280,20 +321,29 @@ class DenseSearch:
         return None  # too close to a boundary to judge
 
 
-def dense_search(quadruped: Quadruped, slot: int, target: np.ndarray, steps: int = 24) -> DenseSearch:
+def dense_search(
+    quadruped: Quadruped, slot: int, target: np.ndarray, steps: int = 24
+) -> DenseSearch:
     leg = quadruped.legs[slot]
     lower, upper = ranges(quadruped)
     lower, upper = lower[3 * slot : 3 * slot + 3], upper[3 * slot : 3 * slot + 3]
 
     def nearest(low: np.ndarray, high: np.ndarray) -> float:
-        grid = np.stack(np.meshgrid(*[np.linspace(a, b, steps) for a, b in zip(low, high)], indexing="ij"), -1).reshape(-1, 3)
+        grid = np.stack(
+            np.meshgrid(*[np.linspace(a, b, steps) for a, b in zip(low, high)], indexing="ij"), -1
+        ).reshape(-1, 3)
         configurations = np.zeros((len(grid), 12))
         configurations[:, 3 * slot : 3 * slot + 3] = grid
         distances = np.linalg.norm(quadruped.fk_batch(configurations)[:, slot] - target, axis=1)
         best = math.inf
         for start in grid[np.argsort(distances)[:6]]:
             fit = least_squares(
-                lambda q: np.array(leg.position(*q)) - target, start, bounds=(low, high), xtol=1e-15, ftol=1e-15, gtol=1e-15
+                lambda q: np.array(leg.position(*q)) - target,
+                start,
+                bounds=(low, high),
+                xtol=1e-15,
+                ftol=1e-15,
+                gtol=1e-15,
             )
             best = min(best, float(np.linalg.norm(np.array(leg.position(*fit.x)) - target)))
         return best
@@ -326,7 +376,9 @@ def test_statuses_over_a_uniform_cloud_match_a_dense_search(name: str) -> None:
         if expected is not None:
             judged[expected] += 1
             assert status == expected, f"target {target}: {status}, dense search says {expected}"
-        assert batch.residual_m[row, 0] <= reference.in_limits_m + 1e-9, f"target {target}: not the nearest"
+        assert batch.residual_m[row, 0] <= reference.in_limits_m + 1e-9, (
+            f"target {target}: not the nearest"
+        )
     assert min(judged.values()) >= 5, judged
 
 
@@ -385,27 +437,40 @@ def test_the_least_squares_path_agrees_with_the_closed_form_on_the_a1(a1: Quadru
 
 @settings(max_examples=150, deadline=None, derandomize=True, database=None)
 @given(st.tuples(*[st.floats(-1e6, 1e6, allow_nan=False)] * 3), st.sampled_from(LEGS))
-def test_any_finite_target_gives_finite_angles_and_a_residual(a1: Quadruped, point, leg: str) -> None:
+def test_any_finite_target_gives_finite_angles_and_a_residual(
+    a1: Quadruped, point, leg: str
+) -> None:
     """Never a NaN or an exception for finite input; the residual is the foot's real distance."""
     result = a1.ik_leg(leg, point)
     assert all(math.isfinite(a) for a in result.angles)
     assert result.status in (inverse.OK, inverse.OUTSIDE_LIMITS, inverse.UNREACHABLE)
     foot = a1.legs[LEGS.index(leg)].position(*result.angles)
-    assert math.isclose(result.residual_m, float(np.linalg.norm(np.subtract(foot, point))), rel_tol=1e-9, abs_tol=1e-12)
+    assert math.isclose(
+        result.residual_m,
+        float(np.linalg.norm(np.subtract(foot, point))),
+        rel_tol=1e-9,
+        abs_tol=1e-12,
+    )
 
 
-@pytest.mark.parametrize("point", [(1e200, 0.0, 0.0), (1e300, -1e300, 1e300), (5e-324, 0.0, -0.0), (0.183, -0.047, 0.0)])
+@pytest.mark.parametrize(
+    "point", [(1e200, 0.0, 0.0), (1e300, -1e300, 1e300), (5e-324, 0.0, -0.0), (0.183, -0.047, 0.0)]
+)
 def test_extreme_targets_give_finite_angles_and_residuals(a1: Quadruped, point) -> None:
     result = a1.ik_leg("FR", point)
     assert all(math.isfinite(a) for a in result.angles) and math.isfinite(result.residual_m)
     assert result.status == inverse.UNREACHABLE
-    assert abs(result.residual_m - math.hypot(*point)) <= 1.0 + 1e-12 * math.hypot(*point)  # the leg is < 1 m from the base
+    assert abs(result.residual_m - math.hypot(*point)) <= 1.0 + 1e-12 * math.hypot(
+        *point
+    )  # the leg is < 1 m from the base
 
 
 def test_joint_ranges_wider_than_a_turn() -> None:
     """Limits -4..4 rad (8 rad > 2 pi): two values of an angle can be in range; the seed picks
     the one nearest it, and the unseeded answer is inside the limits."""
-    quadruped = Quadruped.from_urdf(quadruped_urdf().replace('lower="-2" upper="2"', 'lower="-4" upper="4"'))
+    quadruped = Quadruped.from_urdf(
+        quadruped_urdf().replace('lower="-2" upper="2"', 'lower="-4" upper="4"')
+    )
     rng = np.random.default_rng(21)
     q = rng.uniform(-4.0, 4.0, size=(200, 12))
     feet = quadruped.fk_batch(q)
@@ -438,20 +503,32 @@ def test_the_generated_closed_form_picks_the_nearest_in_limit_solution(name: str
         solver = quadruped._ik_solvers[slot]
         hip = quadruped.fk(np.zeros(12))[slot]
         targets = hip + rng.uniform(-0.45, 0.45, size=(400, 3))
-        seeds = rng.uniform(lower[3 * slot : 3 * slot + 3], upper[3 * slot : 3 * slot + 3], size=(400, 3))
+        seeds = rng.uniform(
+            lower[3 * slot : 3 * slot + 3], upper[3 * slot : 3 * slot + 3], size=(400, 3)
+        )
         batch_angles, batch_status, batch_residual = solver.solve_batch(targets, seeds)
         counts = np.zeros(3, dtype=int)
         for row, (target, seed) in enumerate(zip(targets, seeds)):
             result = quadruped.ik_leg(leg, target, seed)
             inside = [s.angles for s in solver.solutions(target, seed) if s.inside_limits]
             reachable = bool(solver.solutions(target, seed))
-            expected = inverse.OK if inside else inverse.OUTSIDE_LIMITS if reachable else inverse.UNREACHABLE
+            expected = (
+                inverse.OK
+                if inside
+                else inverse.OUTSIDE_LIMITS
+                if reachable
+                else inverse.UNREACHABLE
+            )
             assert result.status == expected == batch_status[row], f"leg {leg} target {target}"
             counts[expected] += 1
             if inside:
-                nearest = min(inside, key=lambda angles: sum((a - s) ** 2 for a, s in zip(angles, seed)))
+                nearest = min(
+                    inside, key=lambda angles: sum((a - s) ** 2 for a, s in zip(angles, seed))
+                )
                 np.testing.assert_allclose(result.angles, nearest, rtol=0.0, atol=1e-9)
-                foot = quadruped.fk(np.concatenate([np.zeros(3 * slot), result.angles, np.zeros(9 - 3 * slot)]))[slot]
+                foot = quadruped.fk(
+                    np.concatenate([np.zeros(3 * slot), result.angles, np.zeros(9 - 3 * slot)])
+                )[slot]
                 assert abs(result.residual_m - float(np.linalg.norm(foot - target))) <= 1e-12
             np.testing.assert_allclose(batch_angles[row], result.angles, rtol=0.0, atol=1e-12)
             assert abs(batch_residual[row] - result.residual_m) <= 1e-12
@@ -479,7 +556,9 @@ def test_four_legs_at_once_equal_each_leg_alone(name: str) -> None:
             assert tuple(result.angles[3 * slot : 3 * slot + 3]) == alone.angles
             assert result.residual_m[slot] == alone.residual_m
             foot = quadruped.fk(result.angles)[slot]
-            assert abs(result.residual_m[slot] - float(np.linalg.norm(foot - targets[slot]))) <= 1e-12
+            assert (
+                abs(result.residual_m[slot] - float(np.linalg.norm(foot - targets[slot]))) <= 1e-12
+            )
 
 
 def test_residual_of_an_angle_clamped_onto_its_limit_is_the_fk_distance() -> None:
@@ -499,4 +578,6 @@ def test_residual_of_an_angle_clamped_onto_its_limit_is_the_fk_distance() -> Non
     assert distances.min() > 1e-13  # the clamping moved the feet
     np.testing.assert_allclose(batch.residual_m, distances, rtol=0.0, atol=1e-15)
     for row in range(6):
-        np.testing.assert_allclose(a1.ik(targets[row]).residual_m, batch.residual_m[row], rtol=0.0, atol=1e-15)
+        np.testing.assert_allclose(
+            a1.ik(targets[row]).residual_m, batch.residual_m[row], rtol=0.0, atol=1e-15
+        )

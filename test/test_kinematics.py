@@ -33,7 +33,9 @@ A1_UPPER = np.tile([0.802851455917, 4.18879020479, -0.916297857297], 4)
 
 PROPERTY = settings(max_examples=60, deadline=None, derandomize=True, database=None)
 any_angles = hnp.arrays(np.float64, 12, elements=st.floats(-math.pi, math.pi))
-in_limit_angles = hnp.arrays(np.float64, 12, elements=st.floats(0.0, 1.0)).map(lambda u: A1_LOWER + u * (A1_UPPER - A1_LOWER))
+in_limit_angles = hnp.arrays(np.float64, 12, elements=st.floats(0.0, 1.0)).map(
+    lambda u: A1_LOWER + u * (A1_UPPER - A1_LOWER)
+)
 leg_angles = st.tuples(*[st.floats(-math.pi, math.pi)] * 3)
 
 
@@ -52,7 +54,11 @@ def a1_foot_closed_form(leg: str, q0: float, q1: float, q2: float) -> np.ndarray
     y = left * 0.08505
     # Roll about x:
     return np.array(
-        [front * 0.183 + x, left * 0.047 + y * math.cos(q0) - z * math.sin(q0), y * math.sin(q0) + z * math.cos(q0)]
+        [
+            front * 0.183 + x,
+            left * 0.047 + y * math.cos(q0) - z * math.sin(q0),
+            y * math.sin(q0) + z * math.cos(q0),
+        ]
     )
 
 
@@ -70,7 +76,7 @@ def central_difference(function, q: np.ndarray, step: float = 1e-6) -> np.ndarra
 
 
 @pytest.mark.parametrize(
-    "angles, expected",
+    ("angles", "expected"),
     [
         ((0.0, 0.8, -1.5), (0.1684, -0.1320, -0.2923)),  # standing
         ((0.0, 0.8, -2.697), (0.2290, -0.1320, -0.0753)),  # knee most bent
@@ -88,7 +94,12 @@ def test_reference_fr_poses_to_a_tenth_of_a_millimetre(a1: Quadruped, angles, ex
 
 def test_all_zero_feet_exactly(a1: Quadruped) -> None:
     """y is -0.047 - 0.08505 = -0.13205 m, not the rounded -0.132."""
-    expected = [(0.183, -0.13205, -0.4), (0.183, 0.13205, -0.4), (-0.183, -0.13205, -0.4), (-0.183, 0.13205, -0.4)]
+    expected = [
+        (0.183, -0.13205, -0.4),
+        (0.183, 0.13205, -0.4),
+        (-0.183, -0.13205, -0.4),
+        (-0.183, 0.13205, -0.4),
+    ]
     np.testing.assert_allclose(a1.fk([0.0] * 12), expected, rtol=0.0, atol=1e-12)
 
 
@@ -109,11 +120,20 @@ def test_mini_cheetah_zero_pose_and_its_minus_y_axes() -> None:
 
     Its pitch and knee axes are (0, -1, 0): a positive pitch swings the foot forward (+x).
     """
-    cheetah = Quadruped.from_urdf(str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET)
-    expected = [(0.19, -0.111, -0.389), (0.19, 0.111, -0.389), (-0.19, -0.111, -0.389), (-0.19, 0.111, -0.389)]
+    cheetah = Quadruped.from_urdf(
+        str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET
+    )
+    expected = [
+        (0.19, -0.111, -0.389),
+        (0.19, 0.111, -0.389),
+        (-0.19, -0.111, -0.389),
+        (-0.19, 0.111, -0.389),
+    ]
     np.testing.assert_allclose(cheetah.fk([0.0] * 12), expected, rtol=0.0, atol=1e-12)
     swung = cheetah.fk([0.0, 0.5, 0.0] * 4)[0]
-    np.testing.assert_allclose(swung, (0.19 + 0.389 * math.sin(0.5), -0.111, -0.389 * math.cos(0.5)), rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        swung, (0.19 + 0.389 * math.sin(0.5), -0.111, -0.389 * math.cos(0.5)), rtol=0.0, atol=1e-12
+    )
 
 
 # --- symmetry -----------------------------------------------------------------------------
@@ -142,7 +162,11 @@ def test_front_and_rear_legs_are_0_366_m_apart(a1: Quadruped, angles) -> None:
 
 
 @PROPERTY
-@given(hnp.arrays(np.float64, st.tuples(st.integers(1, 6), st.just(12)), elements=st.floats(-10.0, 10.0)))
+@given(
+    hnp.arrays(
+        np.float64, st.tuples(st.integers(1, 6), st.just(12)), elements=st.floats(-10.0, 10.0)
+    )
+)
 def test_batch_equals_single(a1: Quadruped, q: np.ndarray) -> None:
     rates = np.cos(np.arange(q.size, dtype=float)).reshape(q.shape) * 3.0
     positions = a1.fk_batch(q)
@@ -154,7 +178,9 @@ def test_batch_equals_single(a1: Quadruped, q: np.ndarray) -> None:
     for row in range(len(q)):
         np.testing.assert_allclose(positions[row], a1.fk(q[row]), rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(jacobians[row], a1.jacobians(q[row]), rtol=0.0, atol=1e-12)
-        np.testing.assert_allclose(velocities[row], a1.foot_velocities(q[row], rates[row]), rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(
+            velocities[row], a1.foot_velocities(q[row], rates[row]), rtol=0.0, atol=1e-12
+        )
 
 
 def test_batch_equals_single_across_block_boundaries(a1: Quadruped) -> None:
@@ -169,7 +195,11 @@ def test_batch_equals_single_across_block_boundaries(a1: Quadruped) -> None:
 def test_batch_accepts_lists_and_float32(a1: Quadruped) -> None:
     q = [STANDING, [0.0] * 12]
     np.testing.assert_allclose(a1.fk_batch(q)[1], a1.fk([0.0] * 12), rtol=0.0, atol=1e-12)
-    np.testing.assert_allclose(a1.fk_batch(np.array(q, dtype=np.float32))[0], a1.fk(np.float32(STANDING)), atol=1e-12)
+    np.testing.assert_allclose(
+        a1.fk_batch(np.array(q, dtype=np.float32))[0],
+        a1.fk(np.array(STANDING, dtype=np.float32)),
+        atol=1e-12,
+    )
 
 
 # --- Jacobians and velocities -------------------------------------------------------------
@@ -179,7 +209,7 @@ def test_batch_accepts_lists_and_float32(a1: Quadruped) -> None:
 @given(any_angles)
 def test_jacobian_equals_central_finite_differences(a1: Quadruped, q: np.ndarray) -> None:
     jacobians = a1.jacobians(q)
-    full = central_difference(lambda x: a1.fk(x), q)  # (4, 3, 12)
+    full = central_difference(a1.fk, q)  # (4, 3, 12)
     for leg in range(4):
         expected = full[leg, :, 3 * leg : 3 * leg + 3]
         scale = np.abs(expected).max()
@@ -201,7 +231,9 @@ def test_jacobian_at_zero_by_hand(a1: Quadruped) -> None:
 
 @PROPERTY
 @given(any_angles, hnp.arrays(np.float64, 12, elements=st.floats(-20.0, 20.0)))
-def test_foot_velocities_equal_jacobian_times_rates(a1: Quadruped, q: np.ndarray, rates: np.ndarray) -> None:
+def test_foot_velocities_equal_jacobian_times_rates(
+    a1: Quadruped, q: np.ndarray, rates: np.ndarray
+) -> None:
     expected = np.einsum("lij,lj->li", a1.jacobians(q), rates.reshape(4, 3))
     np.testing.assert_allclose(a1.foot_velocities(q, rates), expected, rtol=0.0, atol=1e-12)
 
@@ -209,7 +241,11 @@ def test_foot_velocities_equal_jacobian_times_rates(a1: Quadruped, q: np.ndarray
 def test_foot_velocities_follow_the_positions_along_a_trajectory(a1: Quadruped) -> None:
     """q(t) = standing + a sin(w t + phase): velocities ~ central differences of fk in time."""
     rng = np.random.default_rng(3)
-    amplitude, omega, phase = rng.uniform(0.1, 0.4, 12), rng.uniform(2.0, 12.0, 12), rng.uniform(0, 2 * np.pi, 12)
+    amplitude, omega, phase = (
+        rng.uniform(0.1, 0.4, 12),
+        rng.uniform(2.0, 12.0, 12),
+        rng.uniform(0, 2 * np.pi, 12),
+    )
 
     def angles(t: np.ndarray) -> np.ndarray:
         return np.array(STANDING) + amplitude * np.sin(omega * t[:, None] + phase)
@@ -222,7 +258,12 @@ def test_foot_velocities_follow_the_positions_along_a_trajectory(a1: Quadruped) 
     assert scale > 0.5  # the feet really move [m/s]
     np.testing.assert_allclose(velocities, expected, rtol=0.0, atol=1e-6 * scale)
     for row in range(0, len(t), 20):
-        np.testing.assert_allclose(a1.foot_velocities(angles(t)[row], rates[row]), expected[row], rtol=0.0, atol=1e-6 * scale)
+        np.testing.assert_allclose(
+            a1.foot_velocities(angles(t)[row], rates[row]),
+            expected[row],
+            rtol=0.0,
+            atol=1e-6 * scale,
+        )
 
 
 # --- limits and reach ---------------------------------------------------------------------
@@ -240,7 +281,9 @@ def test_knee_zero_is_outside_its_limits(a1: Quadruped) -> None:
 
 
 def test_all_zero_reports_the_four_knees(a1: Quadruped) -> None:
-    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [f"{leg}_lower_joint" for leg in LEGS]
+    assert [v.joint for v in a1.joints_outside_limits([0.0] * 12)] == [
+        f"{leg}_lower_joint" for leg in LEGS
+    ]
 
 
 def test_in_limit_and_boundary_angles_are_not_reported(a1: Quadruped) -> None:
@@ -259,12 +302,16 @@ def test_random_in_limit_angles_are_not_reported(a1: Quadruped, q: np.ndarray) -
 
 
 def test_continuous_joints_are_never_reported() -> None:
-    aliengo = Quadruped.from_urdf(str(DATA / "aliengo" / "aliengo.urdf"))  # hip pitch ("upper") is continuous
+    aliengo = Quadruped.from_urdf(
+        str(DATA / "aliengo" / "aliengo.urdf")
+    )  # hip pitch ("upper") is continuous
     q = [0.0, 100.0, -1.5] * 4
     assert aliengo.joints_outside_limits(q) == []
     q[2] = 0.0  # aliengo's knee is limited to [-2.775, -0.646]
     assert [v.joint for v in aliengo.joints_outside_limits(q)] == ["FR_lower_joint"]
-    cheetah = Quadruped.from_urdf(str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET)
+    cheetah = Quadruped.from_urdf(
+        str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET
+    )
     assert cheetah.joints_outside_limits([1e3, -1e3, 50.0] * 4) == []
 
 
@@ -286,7 +333,9 @@ def test_a1_reach_is_0_4_cos_half_knee(a1: Quadruped, leg: str) -> None:
 
 def test_mini_cheetah_reach_with_a_continuous_knee() -> None:
     """Links 0.209 and 0.18 m: sqrt(0.209^2 + 0.18^2 + 2 0.209 0.18 cos q), 0.389 at 0 and 0.029 at +-pi."""
-    cheetah = Quadruped.from_urdf(str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET)
+    cheetah = Quadruped.from_urdf(
+        str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET
+    )
     reach = cheetah.reach("RL")
     assert reach.max_m == pytest.approx(0.389, abs=1e-9)
     assert reach.knee_at_max == pytest.approx(0.0, abs=1e-9)
@@ -310,7 +359,9 @@ def test_angles_from_unitree_and_pybullet_data_names(a1: Quadruped) -> None:
         names[f"{leg}_thigh_joint" if slot % 2 else f"{leg}_upper_joint"] = 0.8 + 0.01 * slot
         names[f"{leg}_calf_joint" if slot < 2 else f"{leg}_lower_joint"] = -1.5 - 0.01 * slot
     q = a1.angles_from_names(names)
-    assert q == pytest.approx([0.0, 0.8, -1.5, 0.1, 0.81, -1.51, 0.2, 0.82, -1.52, 0.3, 0.83, -1.53])
+    assert q == pytest.approx(
+        [0.0, 0.8, -1.5, 0.1, 0.81, -1.51, 0.2, 0.82, -1.52, 0.3, 0.83, -1.53]
+    )
     assert a1.name_to_slot["FR_thigh_joint"] == a1.name_to_slot["FR_upper_joint"] == 1
     assert a1.name_to_slot["FR_calf_joint"] == a1.name_to_slot["FR_lower_joint"] == 2
 
@@ -346,11 +397,18 @@ def test_nan_from_names_names_the_slot(a1: Quadruped) -> None:
 # --- input refusals -----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("bad, slot, leg", [(math.nan, 4, "FL"), (math.inf, 11, "RL"), (-math.inf, 0, "FR")])
+@pytest.mark.parametrize(
+    ("bad", "slot", "leg"), [(math.nan, 4, "FL"), (math.inf, 11, "RL"), (-math.inf, 0, "FR")]
+)
 def test_non_finite_angle(a1: Quadruped, bad: float, slot: int, leg: str) -> None:
     q = list(STANDING)
     q[slot] = bad
-    for call in (lambda: a1.fk(q), lambda: a1.jacobians(q), lambda: a1.joints_outside_limits(q), lambda: a1.foot_velocities(q, [0.0] * 12)):
+    for call in (
+        lambda: a1.fk(q),
+        lambda: a1.jacobians(q),
+        lambda: a1.joints_outside_limits(q),
+        lambda: a1.foot_velocities(q, [0.0] * 12),
+    ):
         with raises_leg_fk_error(f"slot {slot}", f"leg {leg}", str(bad)):
             call()
 
@@ -366,7 +424,11 @@ def test_non_finite_batch_row(a1: Quadruped) -> None:
     q = np.tile(STANDING, (6, 1))
     q[4, 9] = math.nan
     q[5, 0] = math.inf
-    for call in (lambda: a1.fk_batch(q), lambda: a1.jacobians_batch(q), lambda: a1.foot_velocities_batch(q, np.zeros_like(q))):
+    for call in (
+        lambda: a1.fk_batch(q),
+        lambda: a1.jacobians_batch(q),
+        lambda: a1.foot_velocities_batch(q, np.zeros_like(q)),
+    ):
         with raises_leg_fk_error("rows [4, 5]"):
             call()
     with raises_leg_fk_error("joint velocities", "rows [4, 5]"):
@@ -375,16 +437,20 @@ def test_non_finite_batch_row(a1: Quadruped) -> None:
 
 @pytest.mark.parametrize("count", [0, 11, 13])
 def test_wrong_number_of_angles(a1: Quadruped, count: int) -> None:
-    for call in (lambda: a1.fk([0.0] * count), lambda: a1.jacobians([0.0] * count), lambda: a1.foot_velocities(STANDING, [0.0] * count)):
+    for call in (
+        lambda: a1.fk([0.0] * count),
+        lambda: a1.jacobians([0.0] * count),
+        lambda: a1.foot_velocities(STANDING, [0.0] * count),
+    ):
         with raises_leg_fk_error("12", f"got {count}"):
             call()
 
 
 def test_non_numeric_angles(a1: Quadruped) -> None:
     with raises_leg_fk_error("12 numbers"):
-        a1.fk(["zero"] * 12)
+        a1.fk(["zero"] * 12)  # type: ignore[list-item]  # not numbers, on purpose
     with pytest.raises(LegFkError):
-        a1.fk(None)  # type: ignore[arg-type]
+        a1.fk(None)  # type: ignore[arg-type]  # not a sequence, on purpose
 
 
 @pytest.mark.parametrize("shape", [(5, 11), (12,), (2, 12, 1), (3, 13)])

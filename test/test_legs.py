@@ -18,7 +18,9 @@ MINI_CHEETAH_PATH = DATA / "mini_cheetah" / "mini_cheetah.urdf"
 MINI_CHEETAH_FEET = {"FR": "toe_fr", "FL": "toe_fl", "RR": "toe_hr", "RL": "toe_hl"}
 
 
-def leg_urdf(leg: str, knee_type: str = "revolute", extra_joint: bool = False, foot: str | None = None) -> str:
+def leg_urdf(
+    leg: str, knee_type: str = "revolute", extra_joint: bool = False, foot: str | None = None
+) -> str:
     """One synthetic leg under link ``base``: hip roll, hip pitch, knee, fixed foot."""
     limit = '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
     shank_parent = f"{leg}_thigh"
@@ -29,7 +31,7 @@ def leg_urdf(leg: str, knee_type: str = "revolute", extra_joint: bool = False, f
     <axis xyz="0 0 1"/>{limit}</joint>"""
         shank_parent = f"{leg}_extra"
     return f"""
-  <link name="{leg}_hip"/><link name="{leg}_thigh"/><link name="{leg}_shank"/><link name="{foot or leg + '_foot'}"/>
+  <link name="{leg}_hip"/><link name="{leg}_thigh"/><link name="{leg}_shank"/><link name="{foot or leg + "_foot"}"/>
   <joint name="{leg}_hip_joint" type="revolute"><parent link="base"/><child link="{leg}_hip"/>
     <origin xyz="0.2 0.05 0"/><axis xyz="1 0 0"/>{limit}</joint>
   <joint name="{leg}_thigh_joint" type="revolute"><parent link="{leg}_hip"/><child link="{leg}_thigh"/>
@@ -37,7 +39,7 @@ def leg_urdf(leg: str, knee_type: str = "revolute", extra_joint: bool = False, f
   {extra}
   <joint name="{leg}_calf_joint" type="{knee_type}"><parent link="{shank_parent}"/><child link="{leg}_shank"/>
     <origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>{limit}</joint>
-  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/><child link="{foot or leg + '_foot'}"/>
+  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/><child link="{foot or leg + "_foot"}"/>
     <origin xyz="0 0 -0.2"/></joint>"""
 
 
@@ -56,8 +58,14 @@ def test_a1_legs_in_order_with_their_feet_and_joints() -> None:
     assert [leg.leg for leg in legs] == ["FR", "FL", "RR", "RL"]
     assert [leg.foot_link for leg in legs] == ["FR_toe", "FL_toe", "RR_toe", "RL_toe"]
     for leg in legs:
-        assert [j.name for j in leg.movable] == [f"{leg.leg}_hip_joint", f"{leg.leg}_upper_joint", f"{leg.leg}_lower_joint"]
-        assert [j.name for j in leg.joints] == [j.name for j in leg.movable] + [f"{leg.leg}_toe_fixed"]
+        assert [j.name for j in leg.movable] == [
+            f"{leg.leg}_hip_joint",
+            f"{leg.leg}_upper_joint",
+            f"{leg.leg}_lower_joint",
+        ]
+        assert [j.name for j in leg.joints] == [j.name for j in leg.movable] + [
+            f"{leg.leg}_toe_fixed"
+        ]
 
 
 def test_a1_explicit_feet_equal_discovered_feet() -> None:
@@ -77,13 +85,17 @@ def test_mini_cheetah_needs_foot_links_and_works_with_them() -> None:
         find_legs(model)
     legs = find_legs(model, MINI_CHEETAH_FEET)
     assert [leg.foot_link for leg in legs] == ["toe_fr", "toe_fl", "toe_hr", "toe_hl"]
-    assert [j.name for j in legs[2].movable] == ["torso_to_abduct_hr_j", "abduct_hr_to_thigh_hr_j", "thigh_hr_to_knee_hr_j"]
+    assert [j.name for j in legs[2].movable] == [
+        "torso_to_abduct_hr_j",
+        "abduct_hr_to_thigh_hr_j",
+        "thigh_hr_to_knee_hr_j",
+    ]
 
 
 # --- joint naming -------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("leg_slot, leg", list(enumerate(LEG_NAMES)))
+@pytest.mark.parametrize(("leg_slot", "leg"), list(enumerate(LEG_NAMES)))
 def test_unitree_names_map_to_the_pybullet_data_slots(leg_slot: int, leg: str) -> None:
     index = joint_name_index(find_legs(load_urdf(A1_PATH)))
     first = 3 * leg_slot
@@ -93,7 +105,11 @@ def test_unitree_names_map_to_the_pybullet_data_slots(leg_slot: int, leg: str) -
 
 
 def test_pybullet_data_names_map_to_a_unitree_named_model() -> None:
-    text = A1_PATH.read_text(encoding="utf-8").replace("_upper_joint", "_thigh_joint").replace("_lower_joint", "_calf_joint")
+    text = (
+        A1_PATH.read_text(encoding="utf-8")
+        .replace("_upper_joint", "_thigh_joint")
+        .replace("_lower_joint", "_calf_joint")
+    )
     index = joint_name_index(find_legs(load_urdf(text)))
     assert index["RL_thigh_joint"] == index["RL_upper_joint"] == 10
     assert index["RL_calf_joint"] == index["RL_lower_joint"] == 11
@@ -101,7 +117,14 @@ def test_pybullet_data_names_map_to_a_unitree_named_model() -> None:
 
 def test_user_aliases_map_to_their_joint_and_override() -> None:
     legs = find_legs(load_urdf(A1_PATH))
-    index = joint_name_index(legs, {"fr_abduction": "FR_hip_joint", "rl_knee": "RL_lower_joint", "FR_thigh_joint": "FL_upper_joint"})
+    index = joint_name_index(
+        legs,
+        {
+            "fr_abduction": "FR_hip_joint",
+            "rl_knee": "RL_lower_joint",
+            "FR_thigh_joint": "FL_upper_joint",
+        },
+    )
     assert index["fr_abduction"] == 0
     assert index["rl_knee"] == 11
     assert index["FR_thigh_joint"] == 4  # the caller's alias wins over the built-in equivalent
@@ -175,14 +198,24 @@ def test_go2_like_shin_leaves_lose_to_the_foot_named_link() -> None:
     shin collision link X_calflower1; the one named like a foot is the foot."""
     legs = find_legs(parse_urdf(exported_quadruped("go2")))
     assert [leg.foot_link for leg in legs] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
-    assert [j.name for j in legs[0].joints] == ["FR_hip_joint", "FR_thigh_joint", "FR_calf_joint", "FR_foot_joint"]
+    assert [j.name for j in legs[0].joints] == [
+        "FR_hip_joint",
+        "FR_thigh_joint",
+        "FR_calf_joint",
+        "FR_foot_joint",
+    ]
 
 
 def test_b2_like_rotor_leaves_are_not_feet() -> None:
     """Rotor links are fixed leaves with two, one or no movable joints above them."""
     model = parse_urdf(exported_quadruped("b2", root="base_link", rotors=True, shin_links=False))
     assert {"FR_hip_rotor", "FR_thigh_rotor", "FR_calf_rotor"} <= set(model.links)
-    assert [leg.foot_link for leg in find_legs(model)] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
+    assert [leg.foot_link for leg in find_legs(model)] == [
+        "FR_foot",
+        "FL_foot",
+        "RR_foot",
+        "RL_foot",
+    ]
 
 
 @pytest.mark.parametrize("foot", ["FR_toe", "fr_FOOT", "FR_foot_link", "Fr_Toe_Link"])
@@ -192,12 +225,18 @@ def test_every_documented_foot_name_wins_case_insensitively(foot: str) -> None:
 
 
 @pytest.mark.parametrize(
-    "renamed", [{"FR_foot": "FR_tip"}, {"FR_calflower1": "FR_toe"}], ids=["none-named-like-a-foot", "two-named-so"]
+    "renamed",
+    [{"FR_foot": "FR_tip"}, {"FR_calflower1": "FR_toe"}],
+    ids=["none-named-like-a-foot", "two-named-so"],
 )
 def test_several_leaves_without_one_foot_name_ask_for_foot_links(renamed: dict) -> None:
     xml = exported_quadruped("go2")
     for old, new in renamed.items():
         xml = xml.replace(f'"{old}"', f'"{new}"')
-    candidates = sorted({"FR_foot", "FR_calflower1", "FR_tip", "FR_toe"} & set(parse_urdf(xml).links))
-    with raises_leg_fk_error("leg FR", *candidates, "foot_links", "FR_foot|toe|foot_link|toe_link"):
+    candidates = sorted(
+        {"FR_foot", "FR_calflower1", "FR_tip", "FR_toe"} & set(parse_urdf(xml).links)
+    )
+    with raises_leg_fk_error(
+        "leg FR", *candidates, "foot_links", "FR_foot|toe|foot_link|toe_link"
+    ):
         find_legs(parse_urdf(xml))

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pybullet_data
 import pytest
+from conftest import Processes
 from diagnostic_msgs.msg import DiagnosticArray
 from node_harness import (
     LEGS,
@@ -50,7 +51,12 @@ def random_in_limits(robot: Quadruped, rng: np.random.Generator) -> np.ndarray:
 
 
 def send_random_states(
-    client: NodeClient, robot: Quadruped, rng: np.random.Generator, names, count: int, with_rates: bool = False
+    client: NodeClient,
+    robot: Quadruped,
+    rng: np.random.Generator,
+    names,
+    count: int,
+    with_rates: bool = False,
 ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Send ``count`` joint states with random angles in limits [rad] (and, ``with_rates``, random
     rates in [-2, 2] rad/s, else none); returns stamp [ns] -> (angles, rates)."""
@@ -69,13 +75,15 @@ def send_random_states(
 class RunningNode:
     process: subprocess.Popen
     client: NodeClient
-    processes: object
+    processes: Processes
 
     def log(self) -> str:
         return self.processes.output(self.process)
 
 
-def start_node(processes, ros, *ros_args: str, prefix: str = "", joint_states_topic: str = "") -> RunningNode:
+def start_node(
+    processes, ros, *ros_args: str, prefix: str = "", joint_states_topic: str = ""
+) -> RunningNode:
     process = processes.start(node_command(*ros_args))
     client = NodeClient(ros, prefix, joint_states_topic)
     assert client.wait_until_connected(), processes.output(process)
@@ -87,7 +95,9 @@ def a1_node(processes, ros) -> RunningNode:
     return start_node(processes, ros)
 
 
-@pytest.mark.parametrize("names", [PYBULLET_NAMES, UNITREE_NAMES], ids=["pybullet_names", "unitree_names"])
+@pytest.mark.parametrize(
+    "names", [PYBULLET_NAMES, UNITREE_NAMES], ids=["pybullet_names", "unitree_names"]
+)
 def test_random_joint_states_give_pybullet_feet_with_frame_and_stamp(a1_node, reference, names):
     client = a1_node.client
     robot = Quadruped.from_urdf()
@@ -125,31 +135,42 @@ def test_foot_velocities_are_jacobian_times_rates_and_match_finite_differences(a
 
 
 @pytest.mark.slow
-def test_message_object_output_publishes_the_same_feet_velocities_frames_and_stamps(processes, ros, reference):
+def test_message_object_output_publishes_the_same_feet_velocities_frames_and_stamps(
+    processes, ros, reference
+):
     """preserialized_output:=false: the message-object path, against PyBullet and the core; then
     switched on at run time, the pre-serialized path sends the very same values for one message."""
     client = start_node(processes, ros, "-p", "preserialized_output:=false").client
     robot = Quadruped.from_urdf()
-    sent = send_random_states(client, robot, np.random.default_rng(11), PYBULLET_NAMES, 20, with_rates=True)
-    assert client.probe.spin_until(lambda: all(len(client.velocities[leg]) >= len(sent) for leg in LEGS), 10.0)
+    sent = send_random_states(
+        client, robot, np.random.default_rng(11), PYBULLET_NAMES, 20, with_rates=True
+    )
+    assert client.probe.spin_until(
+        lambda: all(len(client.velocities[leg]) >= len(sent) for leg in LEGS), 10.0
+    )
     assert client.wait_for_feet(len(sent))
     for slot, leg in enumerate(LEGS):
         for position, velocity in zip(client.positions[leg], client.velocities[leg]):
             assert position.header.frame_id == velocity.header.frame_id == "trunk"
             angles, rates = sent[stamp_ns(position)]
             assert stamp_ns(velocity) == stamp_ns(position)
-            assert distance(position.point, reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0]) <= 1e-7
+            assert (
+                distance(position.point, reference.feet(PYBULLET_NAMES, [f"{leg}_toe"], angles)[0])
+                <= 1e-7
+            )
             assert distance(position.point, robot.fk(angles)[slot]) <= 1e-12
             expected = robot.jacobians(angles)[slot] @ rates[3 * slot : 3 * slot + 3]
             assert distance(velocity.vector, expected) <= 1e-12
     last = client.joint_state(PYBULLET_NAMES, *sent[max(sent)])
     as_objects = _feet_for(client, last)
-    switched = client.set_parameter("preserialized_output", ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True))
+    switched = client.set_parameter(
+        "preserialized_output", ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True)
+    )
     assert switched.successful, switched.reason
     assert _feet_for(client, last) == as_objects
 
 
-def _feet_for(client: NodeClient, msg) -> list[tuple]:  # noqa: ANN001
+def _feet_for(client: NodeClient, msg) -> list[tuple]:
     """Send ``msg`` alone; the (frame, stamp, x, y, z) of every foot position and velocity it gives."""
     client.clear()
     client.send(msg)
@@ -158,8 +179,24 @@ def _feet_for(client: NodeClient, msg) -> list[tuple]:  # noqa: ANN001
     out = []
     for leg in LEGS:
         position, velocity = client.positions[leg][0], client.velocities[leg][0]
-        out.append((position.header.frame_id, stamp_ns(position), position.point.x, position.point.y, position.point.z))
-        out.append((velocity.header.frame_id, stamp_ns(velocity), velocity.vector.x, velocity.vector.y, velocity.vector.z))
+        out.append(
+            (
+                position.header.frame_id,
+                stamp_ns(position),
+                position.point.x,
+                position.point.y,
+                position.point.z,
+            )
+        )
+        out.append(
+            (
+                velocity.header.frame_id,
+                stamp_ns(velocity),
+                velocity.vector.x,
+                velocity.vector.y,
+                velocity.vector.z,
+            )
+        )
     return out
 
 
@@ -205,7 +242,9 @@ def test_bad_inputs_are_rejected_and_the_next_good_message_is_handled(a1_node):
         client.joint_state(PYBULLET_NAMES, STANDING[:11]),  # position shorter than name
         client.joint_state(PYBULLET_NAMES, STANDING, [0.0] * 5),  # velocity of another length
         client.joint_state(PYBULLET_NAMES[:3] * 2, STANDING[:6]),  # duplicate names
-        client.joint_state(["FR_upper_joint", "FR_thigh_joint"], [0.8, 0.8]),  # one joint under both namings
+        client.joint_state(
+            ["FR_upper_joint", "FR_thigh_joint"], [0.8, 0.8]
+        ),  # one joint under both namings
         client.joint_state(PYBULLET_NAMES, [math.nan] * 12),
         client.joint_state(PYBULLET_NAMES, [math.inf, 0.8, -1.5] + [-math.inf] * 9),
         client.joint_state(["arm_joint_1", "gripper"], [0.1, 0.2]),
@@ -217,26 +256,35 @@ def test_bad_inputs_are_rejected_and_the_next_good_message_is_handled(a1_node):
     client.probe.spin_for(0.5)
     assert not any(client.positions[leg] for leg in LEGS)
     # A NaN for one joint keeps only that leg back.
-    client.send(client.joint_state(PYBULLET_NAMES, [math.nan] + STANDING[1:]))
+    client.send(client.joint_state(PYBULLET_NAMES, [math.nan, *STANDING[1:]]))
     assert client.wait_for_feet(1, legs=["FL", "RR", "RL"])
     client.probe.spin_for(0.3)
     assert not client.positions["FR"]
     good = client.joint_state(PYBULLET_NAMES, STANDING)
     client.send(good)
-    assert client.probe.spin_until(lambda: any(stamp_ns(m) == stamp_ns(good) for m in client.positions["FR"]))
+    assert client.probe.spin_until(
+        lambda: any(stamp_ns(m) == stamp_ns(good) for m in client.positions["FR"])
+    )
     assert distance(client.positions["FR"][-1].point, STANDING_FR) < 1e-4
     for leg in LEGS:
         for msg in client.positions[leg]:
             assert all(math.isfinite(v) for v in (msg.point.x, msg.point.y, msg.point.z))
     assert a1_node.process.poll() is None
     log = a1_node.log()
-    for expected in ("position length mismatch", "velocity length mismatch", "duplicate names", "arm_joint_1"):
+    for expected in (
+        "position length mismatch",
+        "velocity length mismatch",
+        "duplicate names",
+        "arm_joint_1",
+    ):
         assert expected in log, log
 
 
 def test_verify_fk_agrees_with_pybullet_and_reports_limits(a1_node):
     client = a1_node.client
-    client.send(client.joint_state(PYBULLET_NAMES, [0.0, 0.8, 0.0] + STANDING[3:]))  # FR knee straight: out of limits
+    client.send(
+        client.joint_state(PYBULLET_NAMES, [0.0, 0.8, 0.0, *STANDING[3:]])
+    )  # FR knee straight: out of limits
     assert client.wait_for_feet(1)
     response = client.verify()
     tokens = parse_tokens(response.message)
@@ -268,9 +316,12 @@ def test_another_urdf_through_robot_description(processes, ros, tmp_path):
     with PyBulletRobot(ALIENGO_URDF) as aliengo:
         robot = Quadruped.from_urdf(str(ALIENGO_URDF))
         angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
-        assert client.probe.spin_until(
-            lambda: bool(client.send(client.joint_state(robot.joint_names, angles)) or client.positions["RL"]), 20.0
-        ), processes.output(process)
+
+        def sent_and_rl_arrived() -> bool:
+            client.send(client.joint_state(robot.joint_names, angles))
+            return bool(client.positions["RL"])
+
+        assert client.probe.spin_until(sent_and_rl_arrived, 20.0), processes.output(process)
         expected = aliengo.feet(list(robot.joint_names), [f"{leg}_toe" for leg in LEGS], angles)
     for slot, leg in enumerate(LEGS):
         assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7
@@ -282,9 +333,12 @@ def test_namespace_remap_and_params_file_from_config(processes, ros):
     running = start_node(
         processes,
         ros,
-        "-r", "__ns:=/robot1",
-        "-r", "joint_states:=/robot1/state_estimator/joints",
-        "--params-file", str(config),
+        "-r",
+        "__ns:=/robot1",
+        "-r",
+        "joint_states:=/robot1/state_estimator/joints",
+        "--params-file",
+        str(config),
         prefix="/robot1/",
         joint_states_topic="/robot1/state_estimator/joints",
     )
@@ -302,7 +356,8 @@ def test_parameters_change_at_run_time_or_are_rejected_with_a_reason(a1_node):
     assert client.wait_for_feet(1)
     assert client.positions["FR"][-1].header.frame_id == "base"
     rejected = client.set_parameter(
-        "verify_tolerance_m", ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=-1.0)
+        "verify_tolerance_m",
+        ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=-1.0),
     )
     assert not rejected.successful and "verify_tolerance_m" in rejected.reason
     broken = client.set_string_parameter("robot_description", "<robot name='x'><link name='a'/>")
@@ -325,15 +380,20 @@ def test_signal_exits_zero_quickly_without_traceback(a1_node, sig):
 def test_diagnostics_and_markers_reach_subscribers(a1_node):
     client = a1_node.client
     node = client.probe.node
-    diagnostics, markers = [], []
+    diagnostics: list[DiagnosticArray] = []
+    markers: list[MarkerArray] = []
     node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
     node.create_subscription(MarkerArray, "foot_markers", markers.append, 10)
     client.send(client.joint_state(PYBULLET_NAMES, STANDING[:11]))  # rejected
     client.probe.spin_for(0.1)
 
-    def fed() -> bool:  # keep feeding good joint states until a marker array and a diagnostics report came
+    def fed() -> (
+        bool
+    ):  # keep feeding good joint states until a marker array and a diagnostics report came
         client.send(client.joint_state(PYBULLET_NAMES, STANDING))
-        return bool(markers) and any(_diagnostic_values(d).get("feet_published", "0") != "0" for d in diagnostics)
+        return bool(markers) and any(
+            _diagnostic_values(d).get("feet_published", "0") != "0" for d in diagnostics
+        )
 
     assert client.probe.spin_until(fed, 10.0)
     values = _diagnostic_values(diagnostics[-1])
@@ -344,7 +404,10 @@ def test_diagnostics_and_markers_reach_subscribers(a1_node):
     strips = [m for m in markers[-1].markers if m.type == Marker.LINE_STRIP]
     assert len(spheres) == 4 and len(strips) == 4
     fr_sphere = next(m for m in spheres if m.ns.endswith("FR"))
-    assert distance(fr_sphere.pose.position, STANDING_FR) < 1e-4 and fr_sphere.header.frame_id == "trunk"
+    assert (
+        distance(fr_sphere.pose.position, STANDING_FR) < 1e-4
+        and fr_sphere.header.frame_id == "trunk"
+    )
     fr_strip = next(m for m in strips if m.ns.endswith("FR"))
     assert distance(fr_strip.points[0], (0.183, -0.047, 0.0)) < 1e-9  # the hip joint's URDF origin
     assert distance(fr_strip.points[-1], STANDING_FR) < 1e-4
@@ -355,7 +418,9 @@ def _diagnostic_values(array: DiagnosticArray) -> dict[str, str]:
 
 
 def test_joint_states_qos_can_be_overridden_to_reliable(processes, ros):
-    process = processes.start(node_command("-p", "qos_overrides./joint_states.subscription.reliability:=reliable"))
+    process = processes.start(
+        node_command("-p", "qos_overrides./joint_states.subscription.reliability:=reliable")
+    )
     client = NodeClient(ros)  # its joint_states publisher is reliable: matches
     assert client.wait_until_connected(), processes.output(process)
     best_effort = ros.node.create_publisher(JointState, "joint_states", qos_profile_sensor_data)
@@ -384,8 +449,14 @@ def test_urdf_file_foot_links_and_joint_aliases_for_the_mini_cheetah(processes, 
     robot = Quadruped.from_urdf(str(urdf), feet)
     names = ["fr_roll", *robot.joint_names[1:]]  # the FR hip roll under its alias
     angles = [0.2, -0.7, 1.4, -0.1, -0.9, 1.2, 0.15, -0.6, 1.6, -0.2, -0.8, 1.1]
+
+    def sent_and_all_arrived() -> bool:
+        client.send(client.joint_state(names, angles))
+        return all(client.positions[leg] for leg in LEGS)
+
     assert client.probe.spin_until(
-        lambda: bool(client.send(client.joint_state(names, angles)) or all(client.positions[leg] for leg in LEGS)), 20.0
+        sent_and_all_arrived,
+        20.0,
     ), processes.output(process)
     with PyBulletRobot(urdf) as cheetah:
         expected = cheetah.feet(list(robot.joint_names), list(feet.values()), angles)

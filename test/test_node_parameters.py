@@ -20,7 +20,9 @@ DOCUMENTED_RANGES = {
 
 @pytest.fixture
 def node(ros):
-    started = FootFkNode(context=ros.context, parameter_overrides=[Parameter("enable_verify", value=False)])
+    started = FootFkNode(
+        context=ros.context, parameter_overrides=[Parameter("enable_verify", value=False)]
+    )
     yield started
     started.destroy_node()
 
@@ -31,7 +33,9 @@ def _outside(lowest: float, highest: float) -> list[float]:
 
 
 @pytest.mark.parametrize("name", sorted(DOCUMENTED_RANGES))
-def test_values_outside_the_documented_range_are_rejected_naming_the_parameter_and_the_old_value_kept(node, name):
+def test_values_outside_the_documented_range_are_rejected_naming_the_parameter_and_the_old_value_kept(
+    node, name
+):
     old = node.get_parameter(name).value
     for value in _outside(*DOCUMENTED_RANGES[name]):
         result = node.set_parameters([Parameter(name, value=value)])[0]
@@ -49,15 +53,19 @@ def test_both_bounds_are_accepted(node, name):
 
 
 def test_the_settings_follow_accepted_values(node):
-    node.set_parameters([Parameter("marker_rate_hz", value=4.0), Parameter("max_publish_rate_hz", value=0.0)])
+    node.set_parameters(
+        [Parameter("marker_rate_hz", value=4.0), Parameter("max_publish_rate_hz", value=0.0)]
+    )
     assert node._marker_interval_s == 0.25 and node._min_publish_interval_s == 0.0
     node.set_parameters([Parameter("max_publish_rate_hz", value=50.0)])
     assert node._min_publish_interval_s == 0.02
 
 
 def test_an_out_of_range_value_at_start_is_a_leg_fk_error_naming_the_parameter(ros):
-    with pytest.raises(LegFkError, match="marker_rate_hz.*out of range"):
-        FootFkNode(context=ros.context, parameter_overrides=[Parameter("marker_rate_hz", value=0.0)])
+    with pytest.raises(LegFkError, match=r"marker_rate_hz.*out of range"):
+        FootFkNode(
+            context=ros.context, parameter_overrides=[Parameter("marker_rate_hz", value=0.0)]
+        )
 
 
 def test_preserialized_output_can_be_turned_off_and_on_at_run_time(node):

@@ -50,12 +50,18 @@ def test_reach_samples_lie_between_the_reach_radii(leg: str) -> None:
     radii = np.hypot(points[:, 0], points[:, 1])
     assert points.shape == (120 * 120, 2)
     assert radii.min() >= reach.min_m - 1e-9 and radii.max() <= reach.max_m + 1e-9
-    assert radii.min() == pytest.approx(reach.min_m, abs=1e-6) and radii.max() == pytest.approx(reach.max_m, abs=1e-6)
+    assert radii.min() == pytest.approx(reach.min_m, abs=1e-6) and radii.max() == pytest.approx(
+        reach.max_m, abs=1e-6
+    )
     assert radii.max() < reach.max_unlimited_m == pytest.approx(0.4, abs=1e-9)
     edge_radii = np.hypot(edge[:, 0], edge[:, 1])
-    assert edge_radii.min() == pytest.approx(reach.min_m, abs=1e-6) and edge_radii.max() == pytest.approx(reach.max_m, abs=1e-6)
+    assert edge_radii.min() == pytest.approx(
+        reach.min_m, abs=1e-6
+    ) and edge_radii.max() == pytest.approx(reach.max_m, abs=1e-6)
     # The stand pose's foot is in the region: below and near the hip-pitch joint.
-    stand = ROBOT.legs[ROBOT.joint_names.index(f"{leg}_hip_joint") // 3].joint_points((0.0, 0.8, -1.5))
+    stand = ROBOT.legs[ROBOT.joint_names.index(f"{leg}_hip_joint") // 3].joint_points(
+        (0.0, 0.8, -1.5)
+    )
     foot = stand[3, [0, 2]] - stand[1, [0, 2]]
     assert np.min(np.hypot(*(points - foot).T)) < 0.01
 
@@ -100,7 +106,13 @@ def test_plots_are_pngs_with_content(tmp_path: Path) -> None:
 def test_plot_command_writes_both_files(tmp_path: Path) -> None:
     pytest.importorskip("matplotlib")
     out = tmp_path / "plots"
-    result = subprocess.run(CLI + ["plot", "--out", str(out), "--leg", "RL"], capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [*CLI, "plot", "--out", str(out), "--leg", "RL"],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
     for name in ("reach_RL.png", "demo_gait_feet.png"):
         assert (out / name).stat().st_size > 20_000
@@ -115,7 +127,9 @@ def test_plot_command_without_matplotlib_says_how_to_install(tmp_path: Path) -> 
         "from a1_leg_fk.cli import main\n"
         f"sys.exit(main(['plot', '--out', {str(tmp_path)!r}]))\n"
     )
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-c", script], check=False, capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 1
     assert "pip install matplotlib" in result.stderr and "Traceback" not in result.stderr
     assert not list(tmp_path.iterdir())

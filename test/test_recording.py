@@ -6,18 +6,29 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pybullet_data
 import pytest
-from hypothesis import given, settings, strategies as st
+from bag_factory import (
+    ROS1_TYPESTORE,
+    TYPESTORE,
+    BagSpec,
+    JointStateMsg,
+    T,
+    header,
+    joint_state,
+    write_bag,
+)
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from pybullet_reference import PyBulletRobot
 
 from a1_leg_fk.joint_state import FootTracker
 from a1_leg_fk.joint_state_wire import JointStateDecoder
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.recording import read_foot_trajectories
-from bag_factory import ROS1_TYPESTORE, TYPESTORE, BagSpec, JointStateMsg, T, header, joint_state, write_bag
-from pybullet_reference import PyBulletRobot
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
@@ -38,25 +49,43 @@ finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 @settings(max_examples=150, deadline=None)
 @given(
     frame=st.text(st.characters(min_codepoint=97, max_codepoint=122), max_size=9),
-    names=st.lists(st.text(st.characters(min_codepoint=65, max_codepoint=122), max_size=7), max_size=5),
+    names=st.lists(
+        st.text(st.characters(min_codepoint=65, max_codepoint=122), max_size=7), max_size=5
+    ),
     data=st.data(),
     stamp=st.integers(0, 2**31 - 1),
 )
 def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp: int) -> None:
     positions = data.draw(st.lists(finite, min_size=0, max_size=6))
     velocities = data.draw(st.lists(finite, min_size=0, max_size=6))
-    message = joint_state(JointStateMsg(stamp * 1_000_000_000 + 7, names, positions, velocities, frame))
+    message = joint_state(
+        JointStateMsg(stamp * 1_000_000_000 + 7, names, positions, velocities, frame)
+    )
     cdr = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState")
-    big_endian = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState", little_endian=False)
+    big_endian = TYPESTORE.serialize_cdr(
+        message, "sensor_msgs/msg/JointState", little_endian=False
+    )
     ros1 = TYPESTORE.cdr_to_ros1(cdr, "sensor_msgs/msg/JointState")
+    reference: Any  # a deserialized sensor_msgs/msg/JointState
     for raw, decoder, reference in (
         (cdr, JointStateDecoder(), TYPESTORE.deserialize_cdr(cdr, "sensor_msgs/msg/JointState")),
-        (big_endian, JointStateDecoder(), TYPESTORE.deserialize_cdr(big_endian, "sensor_msgs/msg/JointState")),
-        (ros1, JointStateDecoder(ros1=True), ROS1_TYPESTORE.deserialize_ros1(ros1, "sensor_msgs/msg/JointState")),
+        (
+            big_endian,
+            JointStateDecoder(),
+            TYPESTORE.deserialize_cdr(big_endian, "sensor_msgs/msg/JointState"),
+        ),
+        (
+            ros1,
+            JointStateDecoder(ros1=True),
+            ROS1_TYPESTORE.deserialize_ros1(ros1, "sensor_msgs/msg/JointState"),
+        ),
     ):
         for repeat in range(2):  # the second time the names come from the cache
             wire = decoder.decode(raw)
-            assert wire.stamp_ns == reference.header.stamp.sec * 1_000_000_000 + reference.header.stamp.nanosec
+            assert (
+                wire.stamp_ns
+                == reference.header.stamp.sec * 1_000_000_000 + reference.header.stamp.nanosec
+            )
             assert (wire.names if repeat == 0 else decoder.names) == list(reference.name)
             assert wire.names is None or repeat == 0
             assert wire.positions.tolist() == list(reference.position)
@@ -69,11 +98,15 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
 @settings(max_examples=60, deadline=None)
 @given(st.data())
 def test_update_block_equals_update(data) -> None:
-    names = data.draw(st.permutations(NAMES[:6] + ["arm"])) [: data.draw(st.integers(1, 7))]
+    names = data.draw(st.permutations([*NAMES[:6], "arm"]))[: data.draw(st.integers(1, 7))]
     rows = data.draw(st.integers(1, 8))
     value = st.one_of(st.floats(-3, 3), st.sampled_from([math.nan, math.inf]))
     positions = np.array([[data.draw(value) for _ in names] for _ in range(rows)])
-    velocities = np.array([[data.draw(value) for _ in names] for _ in range(rows)]) if data.draw(st.booleans()) else np.empty((rows, 0))
+    velocities = (
+        np.array([[data.draw(value) for _ in names] for _ in range(rows)])
+        if data.draw(st.booleans())
+        else np.empty((rows, 0))
+    )
     one, block = FootTracker(A1), FootTracker(A1)
     one.update(NAMES[:3], [0.1, 0.7, -1.4], [])
     block.update(NAMES[:3], [0.1, 0.7, -1.4], [])
@@ -93,21 +126,36 @@ def test_update_block_equals_update(data) -> None:
 # --- a bag with everything in it -------------------------------------------------------------------
 
 
-def scenario() -> tuple[BagSpec, list[tuple[int, int, list[float], dict[int, list[float]]]], dict[str, int]]:
+def scenario() -> tuple[
+    BagSpec, list[tuple[int, int, list[float], dict[int, list[float]]]], dict[str, int]
+]:
     """A bag's messages and what the test expects: per row (stamp, bag time, merged angles,
     {leg: joint rates}), and the outcome counts."""
     rng = np.random.default_rng(7)
     spec = BagSpec()
     state = [math.nan] * 12
-    rows, counts = [], {"accepted": 0, "position_length_mismatch": 0, "velocity_length_mismatch": 0,
-                        "duplicate_names": 0, "all_positions_non_finite": 0, "no_leg_joints": 0}
+    rows, counts = (
+        [],
+        {
+            "accepted": 0,
+            "position_length_mismatch": 0,
+            "velocity_length_mismatch": 0,
+            "duplicate_names": 0,
+            "all_positions_non_finite": 0,
+            "no_leg_joints": 0,
+        },
+    )
     bag_time = T0
 
-    def put(names, positions, velocities=(), outcome="accepted", stamp=None, bad_legs=()):  # noqa: ANN001
+    def put(names, positions, velocities=(), outcome="accepted", stamp=None, bad_legs=()):
         nonlocal bag_time
         bag_time += 1_000_000
         stamp = bag_time + 3 if stamp is None else stamp
-        spec.add_joint_state("/joint_states", bag_time, JointStateMsg(stamp, names, positions, velocities, "x" * (bag_time % 5)))
+        spec.add_joint_state(
+            "/joint_states",
+            bag_time,
+            JointStateMsg(stamp, names, positions, velocities, "x" * (bag_time % 5)),
+        )
         counts[outcome] += 1
         if outcome != "accepted":
             return
@@ -124,7 +172,9 @@ def scenario() -> tuple[BagSpec, list[tuple[int, int, list[float], dict[int, lis
         if not all(math.isnan(v) for v in state):
             rows.append((stamp or bag_time, bag_time, list(state), rates))
 
-    q = lambda: rng.uniform(-1.0, 1.0, 12).tolist()  # noqa: E731
+    def q() -> list[float]:
+        return rng.uniform(-1.0, 1.0, 12).tolist()
+
     put(NAMES[:3], q()[:3])  # FR only: partial
     put(["arm_joint", *NAMES[3:9]], [0.5, *q()[3:9]])  # FL + RR and an unknown name
     put(NAMES, q()[:11], outcome="position_length_mismatch")
@@ -151,12 +201,15 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
     path = write_bag(bag_path(tmp_path, kind), spec, kind)
     result = read_foot_trajectories(path, topic="/joint_states")
     summary = result.summary
-    assert {k: v for k, v in summary.outcomes.items() if v} == {k: v for k, v in counts.items() if v}
+    assert {k: v for k, v in summary.outcomes.items() if v} == {
+        k: v for k, v in counts.items() if v
+    }
     assert summary.messages == sum(counts.values())
     assert summary.rows == len(rows) == len(result.stamps_ns)
     assert summary.non_finite_joints == 3 + 1 and summary.unknown_names == ("arm_joint", "gripper")
     assert result.stamps_ns.tolist() == [row[0] for row in rows]
     assert result.bag_times_ns.tolist() == [row[1] for row in rows]
+    assert result.velocities is not None
     for got, got_velocity, (_, _, angles, rates) in zip(result.positions, result.velocities, rows):
         for leg in range(4):
             leg_angles = angles[3 * leg : 3 * leg + 3]
@@ -168,7 +221,10 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
             if leg in rates:
                 all_rates = [0.0] * 12
                 all_rates[3 * leg : 3 * leg + 3] = rates[leg]
-                assert np.abs(got_velocity[leg] - A1.foot_velocities(full, all_rates)[leg]).max() <= 1e-12
+                assert (
+                    np.abs(got_velocity[leg] - A1.foot_velocities(full, all_rates)[leg]).max()
+                    <= 1e-12
+                )
             else:
                 assert np.isnan(got_velocity[leg]).all()
     assert result.world_positions is None and result.base_frame == "trunk"
@@ -177,12 +233,24 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
 def test_a_recorded_robot_description_is_used_and_matches_pybullet(tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     spec = BagSpec()
-    spec.add("/robot_description", "std_msgs/msg/String", T0, T["std_msgs/msg/String"](ALIENGO_URDF.read_text()))
+    spec.add(
+        "/robot_description",
+        "std_msgs/msg/String",
+        T0,
+        T["std_msgs/msg/String"](ALIENGO_URDF.read_text()),
+    )
     angles = [rng.uniform(-0.8, 0.8, 12).tolist() for _ in range(5)]
     for index, q in enumerate(angles):
-        spec.add_joint_state("/joint_states", T0 + (index + 1) * 1_000_000, JointStateMsg(T0 + index, NAMES, q))
+        spec.add_joint_state(
+            "/joint_states", T0 + (index + 1) * 1_000_000, JointStateMsg(T0 + index, NAMES, q)
+        )
     # a later description (after the first JointState) must not be used
-    spec.add("/robot_description", "std_msgs/msg/String", T0 + 10**9, T["std_msgs/msg/String"]("<robot name='x'/>"))
+    spec.add(
+        "/robot_description",
+        "std_msgs/msg/String",
+        T0 + 10**9,
+        T["std_msgs/msg/String"]("<robot name='x'/>"),
+    )
     path = write_bag(tmp_path / "aliengo", spec, "mcap")
     result = read_foot_trajectories(path)
     assert result.summary.model.startswith("robot_description topic /robot_description in")
@@ -198,29 +266,47 @@ def rotation_z(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def pose_message(kind: str, stamp: int, position: list[float], yaw: float):  # noqa: ANN201
+def pose_message(kind: str, stamp: int, position: list[float], yaw: float):
     """A base pose of ``kind`` in frame ``odom`` (a rotation about z by ``yaw``)."""
     point = T["geometry_msgs/msg/Point"](*position)
     quaternion = T["geometry_msgs/msg/Quaternion"](0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
     pose = T["geometry_msgs/msg/Pose"](point, quaternion)
     covariance = np.zeros(36)
     if kind == "nav_msgs/msg/Odometry":
-        twist = T["geometry_msgs/msg/TwistWithCovariance"](T["geometry_msgs/msg/Twist"](T["geometry_msgs/msg/Vector3"](0, 0, 0), T["geometry_msgs/msg/Vector3"](0, 0, 0)), covariance)
-        return T[kind](header(stamp, "odom"), "trunk", T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance), twist)
+        twist = T["geometry_msgs/msg/TwistWithCovariance"](
+            T["geometry_msgs/msg/Twist"](
+                T["geometry_msgs/msg/Vector3"](0, 0, 0), T["geometry_msgs/msg/Vector3"](0, 0, 0)
+            ),
+            covariance,
+        )
+        return T[kind](
+            header(stamp, "odom"),
+            "trunk",
+            T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance),
+            twist,
+        )
     if kind == "geometry_msgs/msg/PoseStamped":
         return T[kind](header(stamp, "odom"), pose)
     if kind == "geometry_msgs/msg/PoseWithCovarianceStamped":
-        return T[kind](header(stamp, "odom"), T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance))
-    transform = T["geometry_msgs/msg/Transform"](T["geometry_msgs/msg/Vector3"](*position), quaternion)
+        return T[kind](
+            header(stamp, "odom"), T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance)
+        )
+    transform = T["geometry_msgs/msg/Transform"](
+        T["geometry_msgs/msg/Vector3"](*position), quaternion
+    )
     other = T["geometry_msgs/msg/TransformStamped"](header(stamp, "trunk"), "FR_hip", transform)
     mine = T["geometry_msgs/msg/TransformStamped"](header(stamp, "/odom"), "/trunk", transform)
     return T[kind]([other, mine])
 
 
 @pytest.mark.parametrize(
-    "kind, msgtype",
-    [("sqlite3", "nav_msgs/msg/Odometry"), ("mcap", "geometry_msgs/msg/PoseStamped"),
-     ("ros1", "geometry_msgs/msg/PoseWithCovarianceStamped"), ("mcap", "tf2_msgs/msg/TFMessage")],
+    ("kind", "msgtype"),
+    [
+        ("sqlite3", "nav_msgs/msg/Odometry"),
+        ("mcap", "geometry_msgs/msg/PoseStamped"),
+        ("ros1", "geometry_msgs/msg/PoseWithCovarianceStamped"),
+        ("mcap", "tf2_msgs/msg/TFMessage"),
+    ],
 )
 def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgtype: str) -> None:
     rng = np.random.default_rng(11)
@@ -230,11 +316,18 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
     pose_times = [100, 150, 200, 250, 300, 350, 400, 450, 500, 800, 850, 900, 950, 1000]
     pose_of = {ms: ([0.01 * ms, -0.002 * ms, 0.3], 0.002 * ms) for ms in pose_times}
     for ms in pose_times:
-        spec.add(topic, msgtype, T0 + ms * 1_000_000, pose_message(msgtype, T0 + ms * 1_000_000, *pose_of[ms]))
-    expected = []
+        spec.add(
+            topic,
+            msgtype,
+            T0 + ms * 1_000_000,
+            pose_message(msgtype, T0 + ms * 1_000_000, *pose_of[ms]),
+        )
+    expected: list[np.ndarray | None] = []
     for ms in range(0, 1100, 25):  # JointStates every 25 ms from 0 to 1.075 s
         q = rng.uniform(-1, 1, 12).tolist()
-        spec.add_joint_state("/joint_states", T0 + ms * 1_000_000 + 1, JointStateMsg(T0 + ms * 1_000_000, NAMES, q))
+        spec.add_joint_state(
+            "/joint_states", T0 + ms * 1_000_000 + 1, JointStateMsg(T0 + ms * 1_000_000, NAMES, q)
+        )
         feet = A1.fk(q)
         below = max((p for p in pose_times if p <= ms), default=None)
         above = min((p for p in pose_times if p >= ms), default=None)
@@ -243,7 +336,9 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
             continue
         fraction = 0.0 if above == below else (ms - below) / (above - below)
         # the test's own interpolation: positions linear; yaw about one axis interpolates linearly
-        position = np.array(pose_of[below][0]) + fraction * (np.array(pose_of[above][0]) - np.array(pose_of[below][0]))
+        position = np.array(pose_of[below][0]) + fraction * (
+            np.array(pose_of[above][0]) - np.array(pose_of[below][0])
+        )
         yaw = pose_of[below][1] + fraction * (pose_of[above][1] - pose_of[below][1])
         expected.append(position + feet @ rotation_z(yaw).T)
     path = write_bag(bag_path(tmp_path, kind), spec, kind)
@@ -251,6 +346,7 @@ def test_world_feet_from_each_kind_of_base_pose(tmp_path: Path, kind: str, msgty
     assert result.world_frame == "odom"
     assert result.summary.rows_without_pose == sum(e is None for e in expected)
     assert result.summary.rows_without_pose == 4 + 11 + 3  # before 0.1 s, in the gap, after 1.0 s
+    assert result.world_positions is not None
     for got, want in zip(result.world_positions, expected, strict=True):
         if want is None:
             assert np.isnan(got).all()
@@ -270,7 +366,11 @@ def test_same_length_messages_with_other_names_are_not_mixed_up(tmp_path: Path, 
         angles.append(q)
         names = swapped if (index // 7) % 2 else NAMES
         positions = [q[NAMES.index(name)] for name in names]
-        spec.add_joint_state("/joint_states", T0 + index * 1_000_000, JointStateMsg(T0 + index * 1_000_000, names, positions))
+        spec.add_joint_state(
+            "/joint_states",
+            T0 + index * 1_000_000,
+            JointStateMsg(T0 + index * 1_000_000, names, positions),
+        )
     path = write_bag(bag_path(tmp_path, kind), spec, kind)
     result = read_foot_trajectories(path)
     feet = [leg.chain.foot_link for leg in A1.legs]

@@ -6,6 +6,8 @@ reliable + transient local + depth 1) and, for sim time, a bag replay's ``/clock
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
@@ -19,7 +21,9 @@ from std_msgs.msg import String
 pytestmark = pytest.mark.slow
 
 TOLERANCE_M = 1e-7
-LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
 ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
 BILLION_LAUGHS = (
     '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
@@ -27,7 +31,7 @@ BILLION_LAUGHS = (
 )
 
 
-def publish_description(ros, xml: str, topic: str = "robot_description"):  # noqa: ANN001, ANN201
+def publish_description(ros, xml: str, topic: str = "robot_description"):
     publisher = ros.node.create_publisher(String, topic, LATCHED)
     publisher.publish(String(data=xml))
     return publisher
@@ -38,30 +42,45 @@ def feet_in(client: NodeClient, names, angles, frame: str, timeout_s: float = 30
 
     def arrived() -> bool:
         client.send(client.joint_state(names, angles))
-        return all(client.positions[leg] and client.positions[leg][-1].header.frame_id == frame for leg in LEGS)
+        return all(
+            client.positions[leg] and client.positions[leg][-1].header.frame_id == frame
+            for leg in LEGS
+        )
 
-    assert client.probe.spin_until(arrived, timeout_s), {leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in LEGS}
+    assert client.probe.spin_until(arrived, timeout_s), {
+        leg: [m.header.frame_id for m in client.positions[leg][-3:]] for leg in LEGS
+    }
     return [client.positions[leg][-1] for leg in LEGS]
 
 
-def assert_feet(messages, expected) -> None:  # noqa: ANN001
+def assert_feet(messages, expected) -> None:
     for message, position in zip(messages, expected):
         assert distance(message.point, position) <= TOLERANCE_M
 
 
-def latest_diagnostics(client: NodeClient, key: str, contains: str, timeout_s: float = 10.0) -> dict[str, object]:
+def latest_diagnostics(
+    client: NodeClient, key: str, contains: str, timeout_s: float = 10.0
+) -> dict[str, Any]:
     seen: list[DiagnosticArray] = []
     client.probe.node.create_subscription(DiagnosticArray, "/diagnostics", seen.append, 10)
 
     def found() -> bool:
-        return bool(seen) and contains in {kv.key: kv.value for kv in seen[-1].status[0].values}.get(key, "")
+        return bool(seen) and contains in {
+            kv.key: kv.value for kv in seen[-1].status[0].values
+        }.get(key, "")
 
-    assert client.probe.spin_until(found, timeout_s), [kv for kv in seen[-1].status[0].values] if seen else "none"
+    assert client.probe.spin_until(found, timeout_s), (
+        list(seen[-1].status[0].values) if seen else "none"
+    )
     status = seen[-1].status[0]
-    return {"level": status.level, "message": status.message, **{kv.key: kv.value for kv in status.values}}
+    return {
+        "level": status.level,
+        "message": status.message,
+        **{kv.key: kv.value for kv in status.values},
+    }
 
 
-def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(processes, ros, tmp_path):
+def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(processes, ros):
     """A Unitree-style A1 (root base, X_thigh/X_calf joints, X_foot links, package:// meshes)."""
     publisher = publish_description(ros, unitree_style_a1())
     process = processes.start(node_command())
@@ -77,15 +96,22 @@ def test_a_description_published_before_the_node_starts_is_used_with_no_paramete
     ros.node.destroy_publisher(publisher)
 
 
-def test_a_description_published_later_switches_the_robot_and_republishing_does_not_reload(processes, ros, tmp_path):
+def test_a_description_published_later_switches_the_robot_and_republishing_does_not_reload(
+    processes, ros, tmp_path
+):
     process = processes.start(node_command())
     client = NodeClient(ros)
     with PyBulletRobot(A1_URDF) as a1:
-        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+        assert_feet(
+            feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"),
+            a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES),
+        )
     xml = exported_quadruped("go2")
     publisher = publish_description(ros, xml)
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
+        assert_feet(
+            feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES)
+        )
     assert client.verify().success
     # robot_state_publisher republishes on parameter changes: the same text must not reload (a reload
     # empties the joint state), so two of FR's joints still complete FR with the knee merged before.
@@ -106,29 +132,44 @@ def test_a_description_published_later_switches_the_robot_and_republishing_does_
     ],
     ids=["malformed", "no-legs", "entity-bomb"],
 )
-def test_a_bad_description_on_the_topic_is_rejected_and_the_old_robot_keeps_publishing(processes, ros, xml, reason):
+def test_a_bad_description_on_the_topic_is_rejected_and_the_old_robot_keeps_publishing(
+    processes, ros, xml, reason
+):
     process = processes.start(node_command())
     client = NodeClient(ros)
     feet_in(client, PYBULLET_NAMES, STANDING, "trunk")
     publish_description(ros, xml)
     values = latest_diagnostics(client, "robot_description_topic", "rejected")
-    assert reason in values["robot_description_topic"] and values["level"] == DiagnosticStatus.WARN, values
+    assert (
+        reason in values["robot_description_topic"] and values["level"] == DiagnosticStatus.WARN
+    ), values
     assert "rejected" in values["message"]
     client.clear()
     with PyBulletRobot(A1_URDF) as a1:
-        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+        assert_feet(
+            feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"),
+            a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES),
+        )
     assert process.poll() is None
-    assert f"description on /robot_description rejected, keeping {A1_URDF}" in processes.output(process)
+    assert f"description on /robot_description rejected, keeping {A1_URDF}" in processes.output(
+        process
+    )
 
 
-def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros, tmp_path):
+def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros):
     publish_description(ros, exported_quadruped("go2"))
     process = processes.start(node_command("-p", f"urdf_file:={A1_URDF}"))
     client = NodeClient(ros)
     with PyBulletRobot(A1_URDF) as a1:
-        assert_feet(feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"), a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES))
+        assert_feet(
+            feet_in(client, PYBULLET_NAMES, ANGLES, "trunk"),
+            a1.feet(PYBULLET_NAMES, A1_FEET, ANGLES),
+        )
     values = latest_diagnostics(client, "robot_description_topic", "ignored")
-    assert values["robot_description_topic"] == "/robot_description: ignored: parameter urdf_file is set"
+    assert (
+        values["robot_description_topic"]
+        == "/robot_description: ignored: parameter urdf_file is set"
+    )
     log = processes.output(process)
     assert "parameter urdf_file is set, so /robot_description is ignored" in log
     assert log.count("ignoring the description on /robot_description") == 1
@@ -136,11 +177,15 @@ def test_an_explicit_urdf_file_wins_over_the_topic(processes, ros, tmp_path):
 
 def test_a_namespaced_node_follows_its_namespaced_description_topic(processes, ros, tmp_path):
     publish_description(ros, exported_quadruped("go2"), "/robot1/robot_description")
-    publish_description(ros, exported_quadruped("b2"), "/robot_description")  # another robot's: not ours
+    publish_description(
+        ros, exported_quadruped("b2"), "/robot_description"
+    )  # another robot's: not ours
     processes.start(node_command("-r", "__ns:=/robot1"))
     client = NodeClient(ros, prefix="/robot1/")
     with reference_robot(tmp_path, "go2") as go2:
-        assert_feet(feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES))
+        assert_feet(
+            feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES)
+        )
 
 
 def test_an_empty_topic_parameter_follows_no_topic(processes, ros):
@@ -176,10 +221,17 @@ def test_sim_time_stamps_everything_the_node_stamps_itself(processes, ros):
     assert ros.spin_until(zero_stamped_foot_arrived, 30.0)
     # Until the node has heard /clock its sim time reads 0; from then on it is sim_ns, which stands
     # still, so every stamp the node makes itself is exactly sim_ns (wall time would be ~1.8e18 ns).
-    assert ros.spin_until(lambda: zero_stamped_foot_arrived() and stamp_ns(client.positions["FR"][-1]) != 0, 20.0)
+    assert ros.spin_until(
+        lambda: zero_stamped_foot_arrived() and stamp_ns(client.positions["FR"][-1]) != 0, 20.0
+    )
     for _ in range(3):
         client.clear()
         assert ros.spin_until(zero_stamped_foot_arrived, 10.0)
         assert stamp_ns(client.positions["FR"][-1]) == sim_ns
-    assert ros.spin_until(lambda: bool(tick()) or stamp_ns(diagnostics[-1]) != 0, 10.0)
+
+    def ticked_and_stamped() -> bool:
+        tick()
+        return stamp_ns(diagnostics[-1]) != 0
+
+    assert ros.spin_until(ticked_and_stamped, 10.0)
     assert stamp_ns(diagnostics[-1]) == sim_ns

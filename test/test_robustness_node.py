@@ -41,11 +41,13 @@ def open_fds(pid: int) -> int:
 class Diagnostics:
     """The node's latest /diagnostics status, as a dict of its key/values plus its message."""
 
-    def __init__(self, probe) -> None:  # noqa: ANN001
+    def __init__(self, probe) -> None:
         self.probe = probe
         self.received = 0
         self.latest: dict[str, str] = {}
-        probe.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10))
+        probe.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10)
+        )
 
     def _on_message(self, msg: DiagnosticArray) -> None:
         for status in msg.status:
@@ -57,11 +59,13 @@ class Diagnostics:
     def fresh(self, timeout_s: float = 5.0) -> dict[str, str]:
         """The next status published from now on (the node publishes once a second)."""
         seen = self.received
-        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), "no /diagnostics from the node"
+        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), (
+            "no /diagnostics from the node"
+        )
         return dict(self.latest)
 
 
-def start_node(processes, ros, env: dict[str, str] | None = None):  # noqa: ANN001, ANN201
+def start_node(processes, ros, env: dict[str, str] | None = None):
     process = processes.start(node_command(), env=env)
     client = NodeClient(ros)
     assert client.wait_until_connected(), processes.output(process)
@@ -70,30 +74,40 @@ def start_node(processes, ros, env: dict[str, str] | None = None):  # noqa: ANN0
 
 def wait_for_stamp(client: NodeClient, stamp: int, legs=LEGS, timeout_s: float = 10.0) -> bool:
     return client.probe.spin_until(
-        lambda: all(any(stamp_ns(m) == stamp for m in client.positions[leg]) for leg in legs), timeout_s
+        lambda: all(any(stamp_ns(m) == stamp for m in client.positions[leg]) for leg in legs),
+        timeout_s,
     )
 
 
 def feet_of_stamp(client: NodeClient, stamp: int) -> dict[str, tuple[float, float, float]]:
     return {
-        leg: next((m.point.x, m.point.y, m.point.z) for m in client.positions[leg] if stamp_ns(m) == stamp) for leg in LEGS
+        leg: next(
+            (m.point.x, m.point.y, m.point.z)
+            for m in client.positions[leg]
+            if stamp_ns(m) == stamp
+        )
+        for leg in LEGS
     }
 
 
-def pybullet_feet(angles) -> np.ndarray:  # noqa: ANN001
+def pybullet_feet(angles) -> np.ndarray:
     """PyBullet's own toe link frames for the A1 (independent of a1_leg_fk.pybullet_check)."""
     with PyBulletRobot(A1_URDF) as robot:
         return robot.feet(PYBULLET_NAMES, [f"{leg}_toe" for leg in LEGS], angles)
 
 
-def assert_publishes_correct_feet(client: NodeClient, angles=STANDING) -> None:  # noqa: ANN001
+def assert_publishes_correct_feet(client: NodeClient, angles=STANDING) -> None:
     client.clear()
     msg = client.joint_state(PYBULLET_NAMES, angles)
     client.send(msg)
     assert wait_for_stamp(client, stamp_ns(msg)), "the node stopped publishing feet"
     expected = ROBOT.fk(angles)
     for slot, (leg, got) in enumerate(feet_of_stamp(client, stamp_ns(msg)).items()):
-        assert max(abs(a - b) for a, b in zip(got, expected[slot])) <= 1e-12, (leg, got, expected[slot])
+        assert max(abs(a - b) for a, b in zip(got, expected[slot])) <= 1e-12, (
+            leg,
+            got,
+            expected[slot],
+        )
 
 
 def random_message(rng: random.Random) -> tuple[list[str], list[float], list[float]]:
@@ -114,7 +128,9 @@ def random_message(rng: random.Random) -> tuple[list[str], list[float], list[flo
     def value() -> float:
         return rng.choice(SPECIAL_VALUES) if rng.random() < 0.2 else rng.uniform(-3.0, 3.0)
 
-    positions = [value() for _ in range(n if rng.random() < 0.85 else rng.choice([0, n + 1, max(0, n - 1)]))]
+    positions = [
+        value() for _ in range(n if rng.random() < 0.85 else rng.choice([0, n + 1, max(0, n - 1)]))
+    ]
     velocities = [value() for _ in range(rng.choice([0, n, n, n + 1]))]
     # NUL and lone surrogates cannot cross DDS as a string; everything else does.
     names = [name.replace("\x00", "NUL") for name in names]
@@ -149,7 +165,11 @@ def test_200_fuzzed_messages_over_dds_then_a_good_one(processes, ros):
     # The node's own books balance: every message it received ended in exactly one outcome.
     after = diagnostics.fresh()
     received = int(after["messages_received"]) - int(before["messages_received"])
-    outcomes = sum(int(v) for k, v in after.items() if k.startswith("messages_") and k not in ("messages_received", "messages_out_of_limits"))
+    outcomes = sum(
+        int(v)
+        for k, v in after.items()
+        if k.startswith("messages_") and k not in ("messages_received", "messages_out_of_limits")
+    )
     assert outcomes == int(after["messages_received"]), after
     assert 190 <= received <= 201, f"the node heard {received} of 201 messages"
     assert "Traceback" not in processes.output(process)
@@ -161,10 +181,15 @@ A1_XML = A1_URDF.read_text()
 NO_LEGS = """<robot name="arm"><link name="base"/><link name="l1"/><link name="l2"/>
 <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><limit lower="-1" upper="1"/></joint>
 <joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/></joint></robot>"""
-PRISMATIC_KNEE = re.sub(r'(<joint name="FR_lower_joint" type=")revolute(")', r"\1prismatic\2", A1_XML)
+PRISMATIC_KNEE = re.sub(
+    r'(<joint name="FR_lower_joint" type=")revolute(")', r"\1prismatic\2", A1_XML
+)
 BOMB = (
     '<?xml version="1.0"?>\n<!DOCTYPE robot [\n<!ENTITY lol "lol">\n'
-    + "".join(f'<!ENTITY lol{i} "{f"&lol{i - 1};" * 10 if i > 1 else "&lol;" * 10}">\n' for i in range(1, 10))
+    + "".join(
+        f'<!ENTITY lol{i} "{f"&lol{i - 1};" * 10 if i > 1 else "&lol;" * 10}">\n'
+        for i in range(1, 10)
+    )
     + ']>\n<robot name="&lol9;"><link name="a"/></robot>'
 )
 HUGE = "<robot name='huge'>" + "<!--" + "x" * (50 * 1024 * 1024) + "--></robot>"
@@ -199,7 +224,9 @@ def test_bad_robot_descriptions_are_rejected_with_a_reason_and_the_model_is_kept
     response = client.verify()
     assert response.success, response.message
     rss_after = rss_mb(process.pid)
-    print(f"\nRSS {rss_before:.1f} -> {rss_after:.1f} MB; reasons: {json.dumps(reasons, indent=1)}")
+    print(
+        f"\nRSS {rss_before:.1f} -> {rss_after:.1f} MB; reasons: {json.dumps(reasons, indent=1)}"
+    )
     assert rss_after - rss_before < 100.0, (rss_before, rss_after)
     log = processes.output(process)
     assert "Traceback" not in log
@@ -214,7 +241,9 @@ def test_reloading_good_models_repeatedly_does_not_leak_pybullet_clients(process
     rss_start, fds_start = rss_mb(process.pid), open_fds(process.pid)
     indented = "\n" + A1_XML  # a different string each time forces a reload
     for round_ in range(20):
-        result = client.set_string_parameter("robot_description", indented if round_ % 2 else A1_XML)
+        result = client.set_string_parameter(
+            "robot_description", indented if round_ % 2 else A1_XML
+        )
         assert result.successful, result.reason
         assert_publishes_correct_feet(client)  # a new model starts from an empty joint state
         assert client.verify().success
@@ -294,14 +323,23 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     assert verify.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert ros.spin_until(lambda: publisher.get_subscription_count() > 0, 20.0)
     go, stop, feet_file = tmp_path / "go", tmp_path / "stop", tmp_path / "feet.json"
-    collector = processes.start([sys.executable, str(SOAK_SCRIPT), "--collect", str(feet_file), str(stop)])
-    abusers = [processes.start([sys.executable, "-c", VERIFY_CLIENT, str(i), str(go), str(stop), "1000"]) for i in range(5)]
-    assert ros.spin_until(lambda: all("ready" in processes.output(p) for p in (*abusers, collector)), 60.0), [
-        processes.output(p) for p in (*abusers, collector)
+    collector = processes.start(
+        [sys.executable, str(SOAK_SCRIPT), "--collect", str(feet_file), str(stop)]
+    )
+    abusers = [
+        processes.start([sys.executable, "-c", VERIFY_CLIENT, str(i), str(go), str(stop), "1000"])
+        for i in range(5)
     ]
+    assert ros.spin_until(
+        lambda: all("ready" in processes.output(p) for p in (*abusers, collector)), 60.0
+    ), [processes.output(p) for p in (*abusers, collector)]
 
-    def joint_state(angles, rates) -> JointState:  # noqa: ANN001
-        msg = JointState(name=PYBULLET_NAMES, position=[float(a) for a in angles], velocity=[float(r) for r in rates])
+    def joint_state(angles, rates) -> JointState:
+        msg = JointState(
+            name=PYBULLET_NAMES,
+            position=[float(a) for a in angles],
+            velocity=[float(r) for r in rates],
+        )
         msg.header.stamp = ros.node.get_clock().now().to_msg()
         return msg
 
@@ -311,7 +349,10 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     fds_before, rss_before = open_fds(pid), rss_mb(pid)
     before = diagnostics.fresh()
     rng = np.random.default_rng(5)
-    lower, upper = np.array([j.lower for j in ROBOT.joints]), np.array([j.upper for j in ROBOT.joints])
+    lower, upper = (
+        np.array([j.lower for j in ROBOT.joints]),
+        np.array([j.upper for j in ROBOT.joints]),
+    )
     sent: list[int] = []
     period, duration = 1.0 / 500.0, 6.0
     go.touch()
@@ -331,25 +372,27 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     results = []
     for abuser in abusers:
         abuser.wait(30)
-        line = next(l for l in processes.output(abuser).splitlines() if l.startswith("RESULT "))
-        results.append(json.loads(line[len("RESULT "):]))
+        line = next(x for x in processes.output(abuser).splitlines() if x.startswith("RESULT "))
+        results.append(json.loads(line[len("RESULT ") :]))
     collector.wait(30)
-    feet = {leg: set(stamps) & set(sent) for leg, stamps in json.loads(feet_file.read_text()).items()}
+    feet = {
+        leg: set(stamps) & set(sent) for leg, stamps in json.loads(feet_file.read_text()).items()
+    }
     # Losses, split by where they happen: the node's input (best effort), the node, its output.
     received_by_node = int(after["messages_received"]) - int(before["messages_received"])
     published_by_node = int(after["feet_published"]) - int(before["feet_published"])
-    figures = dict(
-        sent=len(sent),
-        publisher_late_s=round(late_s, 3),
-        node_received=received_by_node,
-        node_published_feet=published_by_node,
-        feet_received=sum(len(v) for v in feet.values()),
-        messages_with_all_4_feet=sum(all(s in feet[leg] for leg in LEGS) for s in sent),
-        verify_calls=sum(r["calls"] for r in results),
-        verify_answered=sum(r["answered"] for r in results),
-        verify_slowest_s=round(max(r["slowest_s"] for r in results), 3),
-        verify_warmup_lost=sum(r["warmup_lost"] for r in results),
-    )
+    figures = {
+        "sent": len(sent),
+        "publisher_late_s": round(late_s, 3),
+        "node_received": received_by_node,
+        "node_published_feet": published_by_node,
+        "feet_received": sum(len(v) for v in feet.values()),
+        "messages_with_all_4_feet": sum(all(s in feet[leg] for leg in LEGS) for s in sent),
+        "verify_calls": sum(r["calls"] for r in results),
+        "verify_answered": sum(r["answered"] for r in results),
+        "verify_slowest_s": round(max(r["slowest_s"] for r in results), 3),
+        "verify_warmup_lost": sum(r["warmup_lost"] for r in results),
+    }
     print("\nverify abuse:", json.dumps(figures))
     assert all(r["answered"] == r["calls"] and r["calls"] >= 5 for r in results), results
     assert all(r["succeeded"] == r["answered"] for r in results), results
@@ -360,7 +403,9 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     # miss a few percent of a 500 Hz stream while 5 clients hammer verify_fk. Bounded, and printed.
     input_lost = len(sent) - received_by_node
     if input_lost:
-        print(f"NOTE: the node's best-effort input missed {input_lost} of {len(sent)} joint states")
+        print(
+            f"NOTE: the node's best-effort input missed {input_lost} of {len(sent)} joint states"
+        )
     assert input_lost <= 0.05 * len(sent), figures
     # No PyBullet client (or anything else) leaked by the calls.
     ros.spin_until(lambda: open_fds(pid) <= fds_before, 5.0)
@@ -379,9 +424,15 @@ def test_node_first_then_publisher_dies_and_another_comes_back(processes, ros):
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert not any(client.positions[leg] for leg in LEGS)
     for generation in range(2):
-        publisher = processes.start(installed_command("joint_state_demo", "a1_leg_fk.demo", "-p", "rate_hz:=100.0"))
+        publisher = processes.start(
+            installed_command("joint_state_demo", "a1_leg_fk.demo", "-p", "rate_hz:=100.0")
+        )
         client.clear()
-        assert client.wait_for_feet(20, timeout_s=20.0), (generation, processes.output(node), processes.output(publisher))
+        assert client.wait_for_feet(20, timeout_s=20.0), (
+            generation,
+            processes.output(node),
+            processes.output(publisher),
+        )
         publisher.kill()  # dies: no goodbye to DDS
         publisher.wait(5)
         ros.spin_for(0.5)
@@ -427,7 +478,9 @@ def test_pybullet_missing_verify_fails_with_install_hint_and_feet_keep_flowing(p
 def test_urdf_pybullet_cannot_load_but_our_parser_can_is_reported_by_verify(processes, ros):
     """An empty <inertial/> on the trunk: fine for kinematics, fatal for PyBullet's URDF parser."""
     process, client = start_node(processes, ros)
-    no_inertia = re.sub(r"<inertial>.*?</inertial>", "<inertial/>", A1_XML, count=1, flags=re.S)
+    no_inertia = re.sub(
+        r"<inertial>.*?</inertial>", "<inertial/>", A1_XML, count=1, flags=re.DOTALL
+    )
     result = client.set_string_parameter("robot_description", no_inertia)
     assert result.successful, result.reason
     assert_publishes_correct_feet(client)  # the same kinematics, so the same feet

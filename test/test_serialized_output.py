@@ -22,7 +22,12 @@ finite = st.floats(allow_nan=False, allow_infinity=False)
 
 
 @settings(max_examples=300, deadline=None, derandomize=True, database=None)
-@given(frame_ids, st.integers(-(2**31), 2**31 - 1), st.integers(0, 2**32 - 1), st.tuples(finite, finite, finite))
+@given(
+    frame_ids,
+    st.integers(-(2**31), 2**31 - 1),
+    st.integers(0, 2**32 - 1),
+    st.tuples(finite, finite, finite),
+)
 def test_patched_bytes_equal_rclpy_serialization(frame_id, sec, nanosec, values):
     patched = SerializedStamped(frame_id)
     assert patched.usable
@@ -35,7 +40,11 @@ def test_patched_bytes_equal_rclpy_serialization(frame_id, sec, nanosec, values)
     assert data == _zero_padding(serialize_message(point), frame_id)
     assert data == _zero_padding(serialize_message(vector), frame_id)
     back = deserialize_message(data, PointStamped)
-    assert (back.point.x, back.point.y, back.point.z) == values and back.header.frame_id == frame_id
+    assert (
+        back.point.x,
+        back.point.y,
+        back.point.z,
+    ) == values and back.header.frame_id == frame_id
 
 
 def test_one_buffer_serves_successive_feet_without_leftovers():

@@ -15,14 +15,16 @@ from pathlib import Path
 import pybullet_data
 import pytest
 from conftest import raises_leg_fk_error
+from exported_urdf import ROBOTS, exported_quadruped
 from shared import PYBULLET_NAMES
 
 from a1_leg_fk.urdf import RobotModel, default_urdf_path, load_urdf, parse_urdf
-from exported_urdf import ROBOTS, exported_quadruped
 
 A1_PATH = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 
-A1_FIXED_JOINTS = ["imu_joint"] + [f"{leg}_{part}" for leg in ("FR", "FL", "RR", "RL") for part in ("hip_fixed", "toe_fixed")]
+A1_FIXED_JOINTS = ["imu_joint"] + [
+    f"{leg}_{part}" for leg in ("FR", "FL", "RR", "RL") for part in ("hip_fixed", "toe_fixed")
+]
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
 <!DOCTYPE robot [
@@ -62,7 +64,9 @@ def test_default_path_is_pybullet_data_a1() -> None:
     assert A1_PATH.is_file()
 
 
-@pytest.mark.parametrize("source", [None, A1_PATH, str(A1_PATH)], ids=["default", "Path", "str-path"])
+@pytest.mark.parametrize(
+    "source", [None, A1_PATH, str(A1_PATH)], ids=["default", "Path", "str-path"]
+)
 def test_a1_loads_from_every_kind_of_source(source) -> None:
     model = load_urdf(source)
     assert isinstance(model, RobotModel)
@@ -101,7 +105,9 @@ def test_chain_to_the_toe_is_root_first_and_includes_fixed_joints() -> None:
     names = [joint.name for joint in model.chain_to("FR_toe")]
     assert names == ["FR_hip_joint", "FR_upper_joint", "FR_lower_joint", "FR_toe_fixed"]
     assert model.chain_to("trunk") == ()
-    assert model.chain_to("FR_toe")[-1].child == "FR_toe"  # the last joint is the link's parent joint
+    assert (
+        model.chain_to("FR_toe")[-1].child == "FR_toe"
+    )  # the last joint is the link's parent joint
     assert set(model.child_links("FR_hip")) == {"FR_upper_shoulder", "FR_upper"}
 
 
@@ -132,8 +138,10 @@ def test_a_transmission_joint_naming_a_missing_link_is_ignored() -> None:
 
 def test_rpy_and_a_non_unit_axis_are_read() -> None:
     model = parse_urdf(
-        two_link_urdf('<origin xyz="0.1 -0.2 0.3" rpy="0.4 -0.5 0.6"/><axis xyz="0 2 0"/>'
-                      '<limit lower="-0.5" upper="1.5" effort="1" velocity="1"/>')
+        two_link_urdf(
+            '<origin xyz="0.1 -0.2 0.3" rpy="0.4 -0.5 0.6"/><axis xyz="0 2 0"/>'
+            '<limit lower="-0.5" upper="1.5" effort="1" velocity="1"/>'
+        )
     )
     joint = model.joints["j"]
     assert joint.origin_xyz == (0.1, -0.2, 0.3)
@@ -143,7 +151,9 @@ def test_rpy_and_a_non_unit_axis_are_read() -> None:
 
 
 def test_an_oblique_axis_is_normalised() -> None:
-    joint = parse_urdf(two_link_urdf('<axis xyz="3 0 4"/><limit lower="-1" upper="1"/>')).joints["j"]
+    joint = parse_urdf(two_link_urdf('<axis xyz="3 0 4"/><limit lower="-1" upper="1"/>')).joints[
+        "j"
+    ]
     assert joint.axis == pytest.approx((0.6, 0.0, 0.8), abs=1e-15)
     assert math.fsum(c * c for c in joint.axis) == pytest.approx(1.0, abs=1e-15)
 
@@ -218,13 +228,17 @@ def test_cycle_names_a_link_on_it() -> None:
 
 
 def test_link_with_two_parents() -> None:
-    xml = two_link_urdf(extra='<link name="c"/><joint name="k" type="fixed"><parent link="c"/><child link="arm"/></joint>')
+    xml = two_link_urdf(
+        extra='<link name="c"/><joint name="k" type="fixed"><parent link="c"/><child link="arm"/></joint>'
+    )
     with raises_leg_fk_error("'arm'"):
         parse_urdf(xml)
 
 
 def test_duplicate_joint_name() -> None:
-    xml = two_link_urdf(extra='<link name="c"/><joint name="j" type="fixed"><parent link="arm"/><child link="c"/></joint>')
+    xml = two_link_urdf(
+        extra='<link name="c"/><joint name="j" type="fixed"><parent link="arm"/><child link="c"/></joint>'
+    )
     with raises_leg_fk_error("'j'", "duplicate"):
         parse_urdf(xml)
 
@@ -246,14 +260,17 @@ def test_non_finite_origin_names_the_joint() -> None:
 
 @pytest.mark.parametrize("joint_type", ["revolute", "continuous", "prismatic"])
 def test_zero_axis_on_a_moving_joint_names_the_joint(joint_type: str) -> None:
-    xml = two_link_urdf('<axis xyz="0 0 0"/><limit lower="-1" upper="1"/>').replace('"revolute"', f'"{joint_type}"')
+    xml = two_link_urdf('<axis xyz="0 0 0"/><limit lower="-1" upper="1"/>').replace(
+        '"revolute"', f'"{joint_type}"'
+    )
     with raises_leg_fk_error("'j'", "axis is the zero vector"):
         parse_urdf(xml)
 
 
 @pytest.mark.parametrize("joint_type", ["fixed", "floating", "planar"])
 @pytest.mark.parametrize(
-    "axis", ['<axis xyz="0 0 0"/>', '<axis xyz="0 0 7"/>', '<axis xyz="zero"/>', '<axis/>', ""],
+    "axis",
+    ['<axis xyz="0 0 0"/>', '<axis xyz="0 0 7"/>', '<axis xyz="zero"/>', "<axis/>", ""],
     ids=["zero", "not-unit", "not-numbers", "no-xyz", "missing"],
 )
 def test_the_axis_of_a_joint_that_has_none_is_ignored(joint_type: str, axis: str) -> None:
@@ -261,7 +278,11 @@ def test_the_axis_of_a_joint_that_has_none_is_ignored(joint_type: str, axis: str
     robot_state_publisher and PyBullet ignore it, and so must we, whatever it says."""
     xml = two_link_urdf(f'<origin xyz="0.1 0 0"/>{axis}').replace('"revolute"', f'"{joint_type}"')
     joint = parse_urdf(xml).joints["j"]
-    assert (joint.type, joint.axis, joint.origin_xyz) == (joint_type, (1.0, 0.0, 0.0), (0.1, 0.0, 0.0))
+    assert (joint.type, joint.axis, joint.origin_xyz) == (
+        joint_type,
+        (1.0, 0.0, 0.0),
+        (0.1, 0.0, 0.0),
+    )
 
 
 def test_revolute_without_limit_names_the_joint() -> None:
@@ -275,7 +296,9 @@ def test_inverted_limits_name_the_joint() -> None:
 
 
 def test_a_small_entity_declaration_is_refused() -> None:
-    xml = '<!DOCTYPE robot [<!ENTITY arm "arm">]>' + two_link_urdf().replace('link="arm"', 'link="&arm;"')
+    xml = '<!DOCTYPE robot [<!ENTITY arm "arm">]>' + two_link_urdf().replace(
+        'link="arm"', 'link="&arm;"'
+    )
     with raises_leg_fk_error("entity", "'arm'"):
         parse_urdf(xml)
 
@@ -320,11 +343,15 @@ def test_empty_document() -> None:
 @pytest.mark.parametrize("robot", ["go2", "b2"])
 def test_an_exported_description_with_every_quirk_is_read(robot: str) -> None:
     xml = exported_quadruped(robot, root="base_link", crlf=True, rotors=True)
-    assert "\r\n" in xml and "Commit Version: 1.6.0" in xml and 'xyz="0 0 0" />\r\n  </joint>' in xml
+    assert (
+        "\r\n" in xml and "Commit Version: 1.6.0" in xml and 'xyz="0 0 0" />\r\n  </joint>' in xml
+    )
     model = load_urdf(xml)
     assert model.root == "base_link"
     fixed = [j for j in model.joints.values() if j.type == "fixed"]
-    assert len(fixed) == 4 * 3 + 4 + 4 * 3  # per leg foot, two shin links and three rotors; four sensors
+    assert (
+        len(fixed) == 4 * 3 + 4 + 4 * 3
+    )  # per leg foot, two shin links and three rotors; four sensors
     assert all(j.axis == (1.0, 0.0, 0.0) for j in fixed)
     # The transmissions' <joint name=...> children are not joints of the tree.
     assert sum(j.movable for j in model.joints.values()) == 12

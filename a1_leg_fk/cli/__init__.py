@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 from a1_leg_fk.cli import bag, demo, echo, gait, ik, plot, verify
 from a1_leg_fk.cli.common import (

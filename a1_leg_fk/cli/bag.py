@@ -10,13 +10,20 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
-from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, non_negative
+from a1_leg_fk.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    non_negative,
+)
 from a1_leg_fk.recording import (
     DEFAULT_MAX_POSE_GAP_S,
     FootTrajectories,
+    RecordingChoices,
     read_foot_trajectories,
 )
 from a1_leg_fk.urdf import LegFkError
@@ -24,19 +31,49 @@ from a1_leg_fk.urdf import LegFkError
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     """INPUT and the options that choose what is read from it (shared with ``a1-leg-fk gait``)."""
-    parser.add_argument("input", metavar="INPUT", help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag")
-    parser.add_argument("--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)")
-    parser.add_argument("--urdf", metavar="FILE", help="robot model (default: the bag's robot_description topic, else the embedded A1)")
-    parser.add_argument("--foot-links", nargs="*", default=[], metavar="LEG=link", help="as the node's foot_links parameter")
-    parser.add_argument("--joint-aliases", nargs="*", default=[], metavar="NAME=joint", help="as the node's joint_aliases parameter")
-    parser.add_argument("--base-pose", metavar="TOPIC",
-                        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped, or /tf): adds world-frame feet")
-    parser.add_argument("--max-pose-gap", type=non_negative, default=DEFAULT_MAX_POSE_GAP_S, metavar="S",
-                        help=f"no world position between two poses further apart than S seconds (default {DEFAULT_MAX_POSE_GAP_S:g})")
+    parser.add_argument(
+        "input",
+        metavar="INPUT",
+        help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag",
+    )
+    parser.add_argument(
+        "--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)"
+    )
+    parser.add_argument(
+        "--urdf",
+        metavar="FILE",
+        help="robot model (default: the bag's robot_description topic, else the embedded A1)",
+    )
+    parser.add_argument(
+        "--foot-links",
+        nargs="*",
+        default=[],
+        metavar="LEG=link",
+        help="as the node's foot_links parameter",
+    )
+    parser.add_argument(
+        "--joint-aliases",
+        nargs="*",
+        default=[],
+        metavar="NAME=joint",
+        help="as the node's joint_aliases parameter",
+    )
+    parser.add_argument(
+        "--base-pose",
+        metavar="TOPIC",
+        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped, or /tf): adds world-frame feet",
+    )
+    parser.add_argument(
+        "--max-pose-gap",
+        type=non_negative,
+        default=DEFAULT_MAX_POSE_GAP_S,
+        metavar="S",
+        help=f"no world position between two poses further apart than S seconds (default {DEFAULT_MAX_POSE_GAP_S:g})",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def recording_options(options: argparse.Namespace) -> dict:
+def recording_options(options: argparse.Namespace) -> RecordingChoices:
     """The keyword arguments of :func:`~a1_leg_fk.recording.open_recording` from parsed options."""
     return {
         "topic": options.topic,
@@ -55,10 +92,12 @@ def show_progress(options: argparse.Namespace) -> bool:
 
 def trajectories_from_options(options: argparse.Namespace) -> FootTrajectories:
     """The feet of ``options.input`` as arrays; :class:`LegFkError` (one line) for bad input."""
-    return read_foot_trajectories(options.input, progress=show_progress(options), **recording_options(options))
+    return read_foot_trajectories(
+        options.input, progress=show_progress(options), **recording_options(options)
+    )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``bag`` with the ``a1-leg-fk`` sub-commands."""
     bag = commands.add_parser(
         "bag",
@@ -68,11 +107,30 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "Exit 0 done, 1 the bag could not be read to its end (what was read is written), 2 bad input.",
     )
     add_recording_arguments(bag)
-    bag.add_argument("--csv", metavar="FILE", help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m]")
-    bag.add_argument("--output-bag", metavar="PATH", help="a new ROS 2 bag with foot_positions/<leg> (and velocities, world feet)")
-    bag.add_argument("--storage", choices=("mcap", "sqlite3"), default="mcap", help="storage of --output-bag (default mcap)")
-    bag.add_argument("--copy-input", action="store_true", help="copy every input topic into --output-bag as well")
-    bag.add_argument("--plot", metavar="FILE.png", help="the feet over time (x, y, z per leg), needs matplotlib")
+    bag.add_argument(
+        "--csv",
+        metavar="FILE",
+        help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m]",
+    )
+    bag.add_argument(
+        "--output-bag",
+        metavar="PATH",
+        help="a new ROS 2 bag with foot_positions/<leg> (and velocities, world feet)",
+    )
+    bag.add_argument(
+        "--storage",
+        choices=("mcap", "sqlite3"),
+        default="mcap",
+        help="storage of --output-bag (default mcap)",
+    )
+    bag.add_argument(
+        "--copy-input",
+        action="store_true",
+        help="copy every input topic into --output-bag as well",
+    )
+    bag.add_argument(
+        "--plot", metavar="FILE.png", help="the feet over time (x, y, z per leg), needs matplotlib"
+    )
     bag.add_argument("--force", action="store_true", help="replace outputs that exist")
     bag.set_defaults(handler=run)
 
@@ -85,16 +143,28 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     del argv  # no ROS here
     try:
         if not (options.csv or options.output_bag or options.plot):
-            raise LegFkError("nothing to write: give --csv FILE, --output-bag PATH and/or --plot FILE.png")
+            raise LegFkError(
+                "nothing to write: give --csv FILE, --output-bag PATH and/or --plot FILE.png"
+            )
         if options.copy_input and not options.output_bag:
             raise LegFkError("--copy-input needs --output-bag")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         outputs = Outputs.checked(
-            Path(options.input), csv=options.csv, bag=options.output_bag, plot=options.plot,
-            storage=options.storage, copy_input=options.copy_input, force=options.force,
+            Path(options.input),
+            csv=options.csv,
+            bag=options.output_bag,
+            plot=options.plot,
+            storage=options.storage,
+            copy_input=options.copy_input,
+            force=options.force,
         )
-        summary = convert(Path(options.input), outputs, progress=show_progress(options), **recording_options(options))
+        summary = convert(
+            Path(options.input),
+            outputs,
+            progress=show_progress(options),
+            **recording_options(options),
+        )
     except (LegFkError, OSError) as error:  # OSError: an output folder not writable, a full disk
         print(f"a1-leg-fk bag: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT

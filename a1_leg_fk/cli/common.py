@@ -7,6 +7,7 @@ never load it.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import os
 import shutil
@@ -15,8 +16,10 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Callable, Sequence, TypeVar
+from types import FrameType
+from typing import Any, Self, TypeVar
 
 PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -71,7 +74,7 @@ def _number(text: str) -> float:
 
 
 def positive(text: str) -> float:
-    """argparse type: a finite number > 0."""
+    """Argparse type: a finite number > 0."""
     value = _number(text)
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a positive number: {text!r}")
@@ -79,7 +82,7 @@ def positive(text: str) -> float:
 
 
 def non_negative(text: str) -> float:
-    """argparse type: a finite number >= 0."""
+    """Argparse type: a finite number >= 0."""
     value = _number(text)
     if not value >= 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
@@ -124,16 +127,16 @@ class StopSignals:
     def __init__(self) -> None:
         self.stop = threading.Event()
         self.signal_name = ""
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
 
-    def __enter__(self) -> StopSignals:
+    def __enter__(self) -> Self:
         for number in (signal.SIGINT, signal.SIGTERM):
             self._previous[number] = signal.signal(number, self._handle)
         return self
 
     def __exit__(self, *exc_info: object) -> None:
         for number, handler in self._previous.items():
-            signal.signal(number, handler)  # type: ignore[arg-type]
+            signal.signal(number, handler)
 
     def _handle(self, number: int, _frame: object) -> None:
         self.signal_name = signal.Signals(number).name
@@ -158,10 +161,14 @@ class Ros:
         self.rclpy = rclpy
         self.context = rclpy.Context()
         rclpy.init(
-            args=[PROG, *argv], context=self.context, signal_handler_options=SignalHandlerOptions.NO
+            args=[PROG, *argv],
+            context=self.context,
+            signal_handler_options=SignalHandlerOptions.NO,
         )
         try:
-            self.node = rclpy.create_node(f"a1_leg_fk_{command}_{os.getpid()}", context=self.context)
+            self.node = rclpy.create_node(
+                f"a1_leg_fk_{command}_{os.getpid()}", context=self.context
+            )
         except BaseException:
             rclpy.try_shutdown(context=self.context)
             raise
@@ -169,6 +176,7 @@ class Ros:
         self.executor.add_node(self.node)
 
     def close(self) -> None:
+        """Shut the executor down, destroy the node and shut this context down."""
         self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.context)
@@ -183,9 +191,12 @@ def start_ros(command: str, argv: Sequence[str]) -> Ros | None:
         return None
 
 
-def with_ros(command: str, argv: Sequence[str], work: Callable[[Ros, threading.Event], T]) -> T | None:
+def with_ros(
+    command: str, argv: Sequence[str], work: Callable[[Ros, threading.Event], T]
+) -> T | None:
     """``work(ros, stop)`` with this tool's node, ``stop`` set by Ctrl-C or SIGTERM; the node is
-    closed afterwards. None (after one line on stderr) when ROS cannot start."""
+    closed afterwards. None (after one line on stderr) when ROS cannot start.
+    """
     with StopSignals() as signals:
         ros = start_ros(command, argv)
         if ros is None:
@@ -201,7 +212,8 @@ def with_ros(command: str, argv: Sequence[str], work: Callable[[Ros, threading.E
 
 def child_command(script: str, module: str) -> list[str]:
     """An installed console script beside this Python (bin/, or lib/a1_leg_fk/ as ``ros2 run``
-    uses), else ``python -m module``."""
+    uses), else ``python -m module``.
+    """
     here = Path(sys.executable).parent
     for candidate in (here / script, Path(sys.prefix) / "lib" / "a1_leg_fk" / script):
         if candidate.is_file() and os.access(candidate, os.X_OK):
@@ -218,7 +230,7 @@ def _die_with_parent(death_signal: int) -> None:
         import ctypes
 
         ctypes.CDLL(None, use_errno=True).prctl(1, death_signal)  # PR_SET_PDEATHSIG = 1
-    except Exception:  # noqa: BLE001, S110 (best effort; other platforms just lack the safety net)
+    except Exception:  # noqa: BLE001 (best effort; other platforms just lack the safety net)
         pass
 
 
@@ -257,10 +269,12 @@ class Child:
                 text=pipes,
                 bufsize=1 if pipes else -1,
                 start_new_session=True,
-                preexec_fn=functools.partial(_die_with_parent, death_signal) if linux else None,
+                # preexec_fn only calls prctl(PR_SET_PDEATHSIG): async-signal-safe, takes no lock.
+                preexec_fn=functools.partial(_die_with_parent, death_signal) if linux else None,  # noqa: PLW1509
             )
 
     def alive(self) -> bool:
+        """Whether the process still runs."""
         return self.process.poll() is None
 
     def stop(self, sig: int = signal.SIGINT, timeout_s: float = CHILD_STOP_TIMEOUT_S) -> int:
@@ -282,10 +296,8 @@ class Child:
         return self.process.returncode
 
     def _signal_group(self, number: int) -> None:
-        try:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.process.pid, number)
-        except (ProcessLookupError, PermissionError):
-            pass
 
     def tail(self, lines: int = 15) -> str:
         """The last ``lines`` lines of its log, indented for a report."""

@@ -11,8 +11,8 @@ import os
 import shutil
 import signal
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from a1_leg_fk.cli.common import (
     EXIT_FAILED,
@@ -34,7 +34,7 @@ from a1_leg_fk.cli.verify import call_verify
 DEMO_START_TIMEOUT_S = 20.0
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``demo`` with the ``a1-leg-fk`` sub-commands."""
     demo = commands.add_parser(
         "demo",
@@ -77,7 +77,9 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
 class Demo:
     """``a1-leg-fk demo``: the two nodes as children, the live table, verify, then a clean stop."""
 
-    def __init__(self, options: argparse.Namespace, argv: Sequence[str], signals: StopSignals) -> None:
+    def __init__(
+        self, options: argparse.Namespace, argv: Sequence[str], signals: StopSignals
+    ) -> None:
         self.options = options
         self.argv = list(argv)
         self.signals = signals
@@ -86,15 +88,18 @@ class Demo:
         self.ros: Ros | None = None
 
     def run(self) -> int:
+        """Start the demo's processes, show the feet, verify, stop everything; the exit code."""
         options, stop = self.options, self.signals.stop
         say("== a1-leg-fk demo: joint_state_demo -> foot_fk_node -> feet ==")
         if not os.environ.get("ROS_DOMAIN_ID"):
             domain = 1 + os.getpid() % 100
             os.environ["ROS_DOMAIN_ID"] = str(domain)
             os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-            say(f"ROS_DOMAIN_ID was unset: using {domain} for this demo and its nodes "
+            say(
+                f"ROS_DOMAIN_ID was unset: using {domain} for this demo and its nodes "
                 f"(discovery range {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}); to watch from another "
-                f"terminal: export ROS_DOMAIN_ID={domain}")
+                f"terminal: export ROS_DOMAIN_ID={domain}"
+            )
         else:
             say(f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} (from the environment)")
         if options.log_dir:
@@ -104,30 +109,47 @@ class Demo:
             log_dir = self.temporary_log_dir = Path(tempfile.mkdtemp(prefix="a1_leg_fk_demo_"))
         child_ros_args = ros_section(self.argv)
         if options.namespace:
-            namespace = options.namespace if options.namespace.startswith("/") else "/" + options.namespace
+            namespace = (
+                options.namespace if options.namespace.startswith("/") else "/" + options.namespace
+            )
             child_ros_args = ["--ros-args", "-r", f"__ns:={namespace}", *child_ros_args]
         os.environ["PYTHONUNBUFFERED"] = "1"
 
         kept = "kept only if something fails" if self.temporary_log_dir else "kept"
         say(f"\n[1/4] starting the two nodes (their output goes to {log_dir}/, {kept})")
-        for name, module in (("foot_fk_node", "a1_leg_fk.node"), ("joint_state_demo", "a1_leg_fk.demo")):
+        for name, module in (
+            ("foot_fk_node", "a1_leg_fk.node"),
+            ("joint_state_demo", "a1_leg_fk.demo"),
+        ):
             if stop.is_set():
                 return EXIT_INTERRUPTED
             command = child_command(name, module) + child_ros_args
             self.children.append(Child(name, command, log_dir / f"{name}.log"))
             say(f"  {name:<17} pid {self.children[-1].process.pid}: {' '.join(command)}")
-        say("  joint_state_demo: publishes joint_states at 500 Hz: the A1 stands up from a crouch (2 s), then trots in place")
-        say("  foot_fk_node:     joint_states -> forward kinematics -> foot_positions/<leg>; offers verify_fk")
+        say(
+            "  joint_state_demo: publishes joint_states at 500 Hz: the A1 stands up from a crouch (2 s), then trots in place"
+        )
+        say(
+            "  foot_fk_node:     joint_states -> forward kinematics -> foot_positions/<leg>; offers verify_fk"
+        )
 
         self.ros = start_ros("demo", self.argv)
         if self.ros is None:
             return EXIT_FAILED
         table = subscribe_feet(self.ros, options.namespace)
-        say(f"\n[2/4] the feet, live for {options.duration:g} s: x forward, y left, z up, in mm from the trunk "
-            "origin; rate = messages per second on each topic   (Ctrl-C stops everything)")
+        say(
+            f"\n[2/4] the feet, live for {options.duration:g} s: x forward, y left, z up, in mm from the trunk "
+            "origin; rate = messages per second on each topic   (Ctrl-C stops everything)"
+        )
         ended = echo_loop(
-            self.ros, table, stop, topics_heading(table), options.interval, duration_s=options.duration,
-            data_timeout_s=DEMO_START_TIMEOUT_S, duration_after_data=True,
+            self.ros,
+            table,
+            stop,
+            topics_heading(table),
+            options.interval,
+            duration_s=options.duration,
+            data_timeout_s=DEMO_START_TIMEOUT_S,
+            duration_after_data=True,
             healthy=lambda: all(child.alive() for child in self.children),
         )
         if ended == "stop":
@@ -136,10 +158,14 @@ class Demo:
             return EXIT_FAILED  # which child died, and its output, is reported when stopping
         code = EXIT_OK
         if ended == "no_data":
-            say(f"  no feet from all of {', '.join(table.topics)} within {DEMO_START_TIMEOUT_S:g} s")
+            say(
+                f"  no feet from all of {', '.join(table.topics)} within {DEMO_START_TIMEOUT_S:g} s"
+            )
             code = EXIT_FAILED
 
-        say("\n[3/4] verify_fk: the node recomputes the latest feet with PyBullet and compares (distance per foot, m)")
+        say(
+            "\n[3/4] verify_fk: the node recomputes the latest feet with PyBullet and compares (distance per foot, m)"
+        )
         verify_code, text = call_verify(self.ros, options.namespace, 5.0, stop)
         say("  " + text.replace("\n", "\n  "))
         if verify_code == EXIT_INTERRUPTED:
@@ -171,7 +197,9 @@ def _stop_children(children: list[Child], code: int) -> int:
             say(f"  {child.name} stopped (by SIGINT while still starting)")
         elif child in died or returncode != 0:
             how = "had already exited" if child in died else "exited"
-            say(f"  {child.name} {how} with code {returncode}; its last output ({child.log}):\n{child.tail()}")
+            say(
+                f"  {child.name} {how} with code {returncode}; its last output ({child.log}):\n{child.tail()}"
+            )
             code = EXIT_FAILED
         else:
             say(f"  {child.name} stopped (exit code 0)")

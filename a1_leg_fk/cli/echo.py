@@ -11,7 +11,8 @@ import sys
 import threading
 import time
 from collections import deque
-from typing import Callable, Sequence, TextIO
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, TextIO
 
 from a1_leg_fk.cli.common import (
     EXIT_NO_ANSWER,
@@ -24,6 +25,9 @@ from a1_leg_fk.cli.common import (
     with_ros,
 )
 from a1_leg_fk.legs import LEG_NAMES
+
+if TYPE_CHECKING:  # imported by subscribe_feet, once ROS is up
+    from geometry_msgs.msg import PointStamped
 
 RATE_WINDOW_S = 2.0
 TTY_INTERVAL_S = 0.2
@@ -43,7 +47,7 @@ def add_interval_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``echo`` with the ``a1-leg-fk`` sub-commands."""
     echo = commands.add_parser(
         "echo",
@@ -54,7 +58,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "terminal). Ctrl-C stops (exit 0).",
     )
     echo.add_argument(
-        "--once", action="store_true", help="print the first complete table (all four feet) and exit"
+        "--once",
+        action="store_true",
+        help="print the first complete table (all four feet) and exit",
     )
     echo.add_argument(
         "--duration",
@@ -78,19 +84,28 @@ class FootTable:
 
     def __init__(self, topics: Sequence[str]) -> None:
         self.topics = list(topics)
-        self.latest: dict[str, tuple[float, float, float, str] | None] = {leg: None for leg in LEG_NAMES}
-        self.received = {leg: 0 for leg in LEG_NAMES}
+        self.latest: dict[str, tuple[float, float, float, str] | None] = dict.fromkeys(LEG_NAMES)
+        self.received = dict.fromkeys(LEG_NAMES, 0)
         # (arrival time [s, monotonic], publication sequence number or None) within RATE_WINDOW_S
-        self._arrivals: dict[str, deque[tuple[float, int | None]]] = {leg: deque() for leg in LEG_NAMES}
+        self._arrivals: dict[str, deque[tuple[float, int | None]]] = {
+            leg: deque() for leg in LEG_NAMES
+        }
 
-    def callback(self, leg: str) -> Callable[[object, dict], None]:
-        def on_message(message, info: dict) -> None:  # noqa: ANN001 (geometry_msgs/PointStamped)
+    def callback(self, leg: str) -> Callable[[PointStamped, dict[str, int]], None]:
+        """The subscription callback of ``leg``'s foot topic: stores the point, counts the rate."""
+
+        def on_message(message: PointStamped, info: dict[str, int]) -> None:
             point = message.point
             self.latest[leg] = (point.x, point.y, point.z, message.header.frame_id)
             self.received[leg] += 1
             arrivals = self._arrivals[leg]
             sequence = info.get("publication_sequence_number") if isinstance(info, dict) else None
-            if arrivals and sequence is not None and arrivals[-1][1] is not None and sequence <= arrivals[-1][1]:
+            if (
+                arrivals
+                and sequence is not None
+                and arrivals[-1][1] is not None
+                and sequence <= arrivals[-1][1]
+            ):
                 arrivals.clear()  # a restarted or second publisher: start measuring again
             arrivals.append((time.monotonic(), sequence))
 
@@ -98,6 +113,7 @@ class FootTable:
 
     @property
     def complete(self) -> bool:
+        """Whether every foot has been received at least once."""
         return all(value is not None for value in self.latest.values())
 
     def rate_hz(self, leg: str, now: float) -> float | None:
@@ -112,13 +128,19 @@ class FootTable:
         if len(arrivals) < 2 or arrivals[-1][0] <= arrivals[0][0]:
             return None
         (first_time, first_seq), (last_time, last_seq) = arrivals[0], arrivals[-1]
-        sent = last_seq - first_seq if first_seq is not None and last_seq is not None else len(arrivals) - 1
+        sent = (
+            last_seq - first_seq
+            if first_seq is not None and last_seq is not None
+            else len(arrivals) - 1
+        )
         return sent / (last_time - first_time)
 
     def lines(self, heading: str) -> list[str]:
         """The table: a heading, a column header, one row per leg."""
         now = time.monotonic()
-        frames = sorted({value[3] for value in self.latest.values() if value is not None and value[3]})
+        frames = sorted(
+            {value[3] for value in self.latest.values() if value is not None and value[3]}
+        )
         rows = [
             heading + (f", frame {'/'.join(frames)}" if frames else ""),
             f"{'leg':<4}{'x [mm]':>9}{'y [mm]':>9}{'z [mm]':>9}{'rate [Hz]':>11}",
@@ -144,6 +166,7 @@ class TableWriter:
         self._height = 0
 
     def write(self, lines: list[str]) -> None:
+        """Print ``lines`` (over the previous table on a terminal)."""
         if self.in_place:
             up = f"\x1b[{self._height}F" if self._height else ""
             self.stream.write(up + "".join(f"{line}\x1b[K\n" for line in lines))
@@ -154,6 +177,7 @@ class TableWriter:
 
 
 def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
+    """Subscribe to the four foot topics under ``namespace``; the table their callbacks fill."""
     from geometry_msgs.msg import PointStamped
     from rclpy.qos import qos_profile_sensor_data
 
@@ -161,7 +185,14 @@ def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
     table = FootTable(names)
     # Best effort and volatile: matches reliable and best-effort, volatile and transient-local publishers.
     subscriptions = [
-        ros.node.create_subscription(PointStamped, name, table.callback(leg), qos_profile_sensor_data)
+        # rclpy passes the MessageInfo dict to a two-argument callback; its annotation names only
+        # the one-argument form.
+        ros.node.create_subscription(
+            PointStamped,
+            name,
+            table.callback(leg),  # type: ignore[arg-type]
+            qos_profile_sensor_data,
+        )
         for leg, name in zip(LEG_NAMES, names)
     ]
     table.topics = [subscription.topic_name for subscription in subscriptions]
@@ -169,8 +200,14 @@ def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
 
 
 def topics_heading(table: FootTable) -> str:
-    common = os.path.commonprefix(table.topics)
-    return f"feet from {common}<{'|'.join(LEG_NAMES)}>" if common.endswith("/") else "feet from " + ", ".join(table.topics)
+    """The table's heading: the topics as ``<prefix>/<FR|FL|RR|RL>`` when they share a prefix."""
+    # Character-wise on purpose: the common prefix is used only when it ends in "/".
+    common = os.path.commonprefix(table.topics)  # noqa: RUF071
+    return (
+        f"feet from {common}<{'|'.join(LEG_NAMES)}>"
+        if common.endswith("/")
+        else "feet from " + ", ".join(table.topics)
+    )
 
 
 def echo_loop(
@@ -210,7 +247,11 @@ def echo_loop(
         if complete_at is None and data_timeout_s is not None and now - start >= data_timeout_s:
             return "no_data"
         duration_start = complete_at if duration_after_data else start
-        if duration_s is not None and duration_start is not None and now - duration_start >= duration_s:
+        if (
+            duration_s is not None
+            and duration_start is not None
+            and now - duration_start >= duration_s
+        ):
             writer.write(table.lines(heading))
             return "duration"
         if not healthy():
@@ -228,8 +269,14 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         table = subscribe_feet(ros, options.namespace)
         heading = topics_heading(table) + ("" if options.once else " (Ctrl-C to stop)")
         ended = echo_loop(
-            ros, table, stop, heading, options.interval, duration_s=options.duration,
-            once=options.once, data_timeout_s=options.timeout if options.once else None,
+            ros,
+            table,
+            stop,
+            heading,
+            options.interval,
+            duration_s=options.duration,
+            once=options.once,
+            data_timeout_s=options.timeout if options.once else None,
         )
         return ended, table
 

@@ -13,15 +13,15 @@ import argparse
 import csv
 import json
 import sys
+from collections.abc import Sequence
 from dataclasses import fields
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from a1_leg_fk.cli.bag import add_recording_arguments, trajectories_from_options
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
-from a1_leg_fk.gait_analysis import ContactThresholds, Contacts, GaitReport, analyze_gait
+from a1_leg_fk.gait_analysis import Contacts, ContactThresholds, GaitReport, analyze_gait
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
@@ -42,7 +42,7 @@ THRESHOLD_HELP = {
 }
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``gait`` with the ``a1-leg-fk`` sub-commands."""
     gait = commands.add_parser(
         "gait",
@@ -53,16 +53,37 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "2 bad input.",
     )
     add_recording_arguments(gait)
-    gait.add_argument("--json", metavar="FILE", help="write the report as JSON (no NaN: missing values are null with a reason)")
-    gait.add_argument("--plot", metavar="FILE.png", help="Hildebrand gait diagram above the feet's heights (needs matplotlib)")
-    gait.add_argument("--csv-contacts", metavar="FILE", help="one row per sample: time, stance (0/1), height [m] and speed [m/s] per leg")
-    gait.add_argument("--unsorted", choices=("sort", "reject"), default="sort",
-                      help="stamps that go back in time: sort them (default, reported) or reject the input")
+    gait.add_argument(
+        "--json",
+        metavar="FILE",
+        help="write the report as JSON (no NaN: missing values are null with a reason)",
+    )
+    gait.add_argument(
+        "--plot",
+        metavar="FILE.png",
+        help="Hildebrand gait diagram above the feet's heights (needs matplotlib)",
+    )
+    gait.add_argument(
+        "--csv-contacts",
+        metavar="FILE",
+        help="one row per sample: time, stance (0/1), height [m] and speed [m/s] per leg",
+    )
+    gait.add_argument(
+        "--unsorted",
+        choices=("sort", "reject"),
+        default="sort",
+        help="stamps that go back in time: sort them (default, reported) or reject the input",
+    )
     defaults = ContactThresholds()
     for item in fields(ContactThresholds):
-        gait.add_argument(f"--{item.name.replace('_', '-')}", dest=item.name, type=float, metavar="X",
-                          default=getattr(defaults, item.name),
-                          help=f"{THRESHOLD_HELP[item.name]} (default {getattr(defaults, item.name):g})")
+        gait.add_argument(
+            f"--{item.name.replace('_', '-')}",
+            dest=item.name,
+            type=float,
+            metavar="X",
+            default=getattr(defaults, item.name),
+            help=f"{THRESHOLD_HELP[item.name]} (default {getattr(defaults, item.name):g})",
+        )
     gait.set_defaults(handler=run)
 
 
@@ -72,12 +93,16 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     try:
         if not options.base_pose:
             raise LegFkError(NEEDS_BASE_POSE)
-        thresholds = ContactThresholds(**{item.name: getattr(options, item.name) for item in fields(ContactThresholds)})
+        thresholds = ContactThresholds(
+            **{item.name: getattr(options, item.name) for item in fields(ContactThresholds)}
+        )
         trajectories = trajectories_from_options(options)
         if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
             raise LegFkError(f"{options.input}: no JointState rows with feet")
         stamps_s = (trajectories.stamps_ns - trajectories.stamps_ns.min()) * 1e-9
-        contacts, report = analyze_gait(stamps_s, trajectories.world_positions, thresholds, options.unsorted)
+        contacts, report = analyze_gait(
+            stamps_s, trajectories.world_positions, thresholds, options.unsorted
+        )
     except LegFkError as error:
         print(f"{PROG}: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -88,7 +113,10 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         print(line)
     code = write_outputs(options, contacts, report, trajectories.world_frame)
     if trajectories.summary.stopped:
-        print(f"{PROG}: {options.input}: stopped early: {trajectories.summary.stopped}", file=sys.stderr)
+        print(
+            f"{PROG}: {options.input}: stopped early: {trajectories.summary.stopped}",
+            file=sys.stderr,
+        )
         return EXIT_FAILED
     return code
 
@@ -99,12 +127,16 @@ def _number(value: float | None, form: str) -> str:
 
 def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
     """The printed report: gait, ground, one row per leg, notes."""
-    phases = ", ".join(f"{leg} {_number(value, '.2f')}" for leg, value in report.phase_vs_fr.items())
+    phases = ", ".join(
+        f"{leg} {_number(value, '.2f')}" for leg, value in report.phase_vs_fr.items()
+    )
     lines = [
         f"gait:      {report.gait} (fit {report.gait_fit:.2f}; {report.gait_reason})",
         f"phases:    touchdown vs FR: {phases}; mean duty factor {_number(report.duty_factor, '.3f')}",
-        f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
-        f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg",
+        (
+            f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
+            f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg"
+        ),
         f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} {'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}",
     ]
     for leg, metrics in report.legs.items():
@@ -117,7 +149,9 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
     return lines
 
 
-def write_outputs(options: argparse.Namespace, contacts: Contacts, report: GaitReport, world_frame: str | None) -> int:
+def write_outputs(
+    options: argparse.Namespace, contacts: Contacts, report: GaitReport, world_frame: str | None
+) -> int:
     """Write --json, --csv-contacts and --plot; EXIT_FAILED if the plot cannot be drawn."""
     if options.json:
         document = {"input": str(options.input), "world_frame": world_frame, **report.to_json()}
@@ -140,14 +174,24 @@ def write_outputs(options: argparse.Namespace, contacts: Contacts, report: GaitR
 
 def write_contacts_csv(contacts: Contacts, path: Path) -> None:
     """One row per sample: ``time_s``, ``<leg>_stance`` (0/1), ``<leg>_height_m``, ``<leg>_speed_mps`` (empty where unknown)."""
-    header = ["time_s", *(f"{leg}_stance" for leg in LEG_NAMES), *(f"{leg}_height_m" for leg in LEG_NAMES),
-              *(f"{leg}_speed_mps" for leg in LEG_NAMES)]
+    header = [
+        "time_s",
+        *(f"{leg}_stance" for leg in LEG_NAMES),
+        *(f"{leg}_height_m" for leg in LEG_NAMES),
+        *(f"{leg}_speed_mps" for leg in LEG_NAMES),
+    ]
     with path.open("w", newline="") as stream:
         writer = csv.writer(stream)
         writer.writerow(header)
         for row in range(contacts.times_s.size):
-            stance = [int(value) if known else "" for value, known in zip(contacts.stance[row], contacts.valid[row])]
-            numbers = [_csv_value(value) for value in (*contacts.heights_m[row], *contacts.speeds_mps[row])]
+            stance = [
+                int(value) if known else ""
+                for value, known in zip(contacts.stance[row], contacts.valid[row])
+            ]
+            numbers = [
+                _csv_value(value)
+                for value in (*contacts.heights_m[row], *contacts.speeds_mps[row])
+            ]
             writer.writerow([f"{contacts.times_s[row]:.9f}", *stance, *numbers])
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import TYPE_CHECKING, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_OK
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
@@ -19,7 +20,9 @@ if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
     from a1_leg_fk.kinematics import Quadruped
 
 
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(
+    subparsers: argparse._SubParsersAction[argparse.ArgumentParser],
+) -> argparse.ArgumentParser:
     """Register ``ik`` on the ``a1-leg-fk`` command parser."""
     parser = subparsers.add_parser(
         "ik",
@@ -28,13 +31,24 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "the joint ranges) that put the foot at X Y Z [m] in the base frame, the status (ok, outside_limits, "
         "unreachable), the distance from the foot at those angles to the target, and every exact solution.",
     )
-    parser.add_argument("leg", choices=LEG_NAMES, metavar="LEG", help=f"one of {', '.join(LEG_NAMES)}")
+    parser.add_argument(
+        "leg", choices=LEG_NAMES, metavar="LEG", help=f"one of {', '.join(LEG_NAMES)}"
+    )
     for axis in ("x", "y", "z"):
-        parser.add_argument(axis, type=float, metavar=axis.upper(), help=f"target {axis} [m], base frame")
-    parser.add_argument("--seed", type=float, nargs="+", metavar="RAD",
-                        help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all {JOINTS_PER_LEG * len(LEG_NAMES)} in "
-                        "slot order (FR, FL, RR, RL, root side first)")
-    parser.add_argument("--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)")
+        parser.add_argument(
+            axis, type=float, metavar=axis.upper(), help=f"target {axis} [m], base frame"
+        )
+    parser.add_argument(
+        "--seed",
+        type=float,
+        nargs="+",
+        metavar="RAD",
+        help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all {JOINTS_PER_LEG * len(LEG_NAMES)} in "
+        "slot order (FR, FL, RR, RL, root side first)",
+    )
+    parser.add_argument(
+        "--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)"
+    )
     parser.set_defaults(handler=run)
     return parser
 
@@ -47,7 +61,11 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
 
     try:
         quadruped = Quadruped.from_urdf(options.urdf)
-        print("\n".join(report(quadruped, options.leg, (options.x, options.y, options.z), options.seed)))
+        print(
+            "\n".join(
+                report(quadruped, options.leg, (options.x, options.y, options.z), options.seed)
+            )
+        )
     except LegFkError as error:
         print(f"a1-leg-fk ik: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -64,7 +82,9 @@ def report(
     slot = leg_slot(leg)
     first = slot * JOINTS_PER_LEG
     target = checked_point(point, leg)
-    feet = quadruped.fk([range_middle(joint) for joint in quadruped.joints])  # the other legs: anywhere in reach
+    feet = quadruped.fk(
+        [range_middle(joint) for joint in quadruped.joints]
+    )  # the other legs: anywhere in reach
     feet[slot] = target
     full_seed = None
     if seed is not None:
@@ -74,7 +94,9 @@ def report(
         elif len(seed) == len(quadruped.joints):
             full_seed = list(seed)
         else:
-            raise LegFkError(f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, got {len(seed)}")
+            raise LegFkError(
+                f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, got {len(seed)}"
+            )
     result = quadruped.ik(feet, full_seed)
     names = quadruped.joint_names[first : first + JOINTS_PER_LEG]
     angles = result.angles[first : first + JOINTS_PER_LEG]
@@ -82,10 +104,16 @@ def report(
         f"leg {leg}, target ({', '.join(f'{v:.6f}' for v in target)}) m in frame '{quadruped.base_frame}' of {quadruped.model.source}",
         f"status: {result.status[slot]}   residual: {result.residual_m[slot]:.3g} m",
         "angles:",
-        *(f"  {name:<24} {angle:+.9f} rad {math.degrees(angle):+11.4f} deg" for name, angle in zip(names, angles)),
+        *(
+            f"  {name:<24} {angle:+.9f} rad {math.degrees(angle):+11.4f} deg"
+            for name, angle in zip(names, angles)
+        ),
     ]
     solutions = quadruped.ik_solutions(leg, target)
-    lines.append(f"exact solutions: {len(solutions)}" + ("" if solutions else " (the target is out of reach)"))
+    lines.append(
+        f"exact solutions: {len(solutions)}"
+        + ("" if solutions else " (the target is out of reach)")
+    )
     for number, solution in enumerate(solutions, 1):
         values = " ".join(f"{a:+.6f}" for a in solution.angles)
         degrees = " ".join(f"{math.degrees(a):+9.3f}" for a in solution.angles)

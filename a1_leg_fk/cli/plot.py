@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from a1_leg_fk.cli.common import EXIT_FAILED, EXIT_OK, PROG
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``plot`` with the ``a1-leg-fk`` sub-commands."""
     plot = commands.add_parser(
         "plot",
@@ -21,9 +21,15 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         "the inner/outer reach circles) and demo_gait_feet.png (the four feet over two cycles of the "
         "demo trot, side and top views). No ROS needed.",
     )
-    plot.add_argument("--out", default=".", metavar="DIR", help="output folder (default: current folder)")
-    plot.add_argument("--leg", default="FR", choices=LEG_NAMES, help="leg of the reach plot (default FR)")
-    plot.add_argument("--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)")
+    plot.add_argument(
+        "--out", default=".", metavar="DIR", help="output folder (default: current folder)"
+    )
+    plot.add_argument(
+        "--leg", default="FR", choices=LEG_NAMES, help="leg of the reach plot (default FR)"
+    )
+    plot.add_argument(
+        "--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)"
+    )
     plot.set_defaults(handler=run)
 
 

@@ -9,7 +9,7 @@ import argparse
 import sys
 import threading
 import time
-from typing import Sequence
+from collections.abc import Sequence
 
 from a1_leg_fk.cli.common import (
     EXIT_FAILED,
@@ -24,7 +24,7 @@ from a1_leg_fk.cli.common import (
 )
 
 
-def add_parser(commands: argparse._SubParsersAction) -> None:
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Register ``verify`` with the ``a1-leg-fk`` sub-commands."""
     verify = commands.add_parser(
         "verify",
@@ -47,14 +47,18 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
 VERIFY_ASK_AGAIN_S = 1.0
 
 
-def call_verify(ros: Ros, namespace: str, timeout_s: float, stop: threading.Event) -> tuple[int, str]:
+def call_verify(
+    ros: Ros, namespace: str, timeout_s: float, stop: threading.Event
+) -> tuple[int, str]:
     """Call verify_fk: ``(exit code, text to print)``."""
     from rclpy.qos import QoSProfile
     from std_srvs.srv import Trigger
 
     # Every client of a service receives the replies to all its clients: a deeper history keeps
     # ours from being pushed out while others call too.
-    client = ros.node.create_client(Trigger, prefixed(namespace, "verify_fk"), qos_profile=QoSProfile(depth=100))
+    client = ros.node.create_client(
+        Trigger, prefixed(namespace, "verify_fk"), qos_profile=QoSProfile(depth=100)
+    )
     name = ros.node.resolve_service_name(client.srv_name)
     try:
         deadline = time.monotonic() + timeout_s
@@ -85,13 +89,17 @@ def call_verify(ros: Ros, namespace: str, timeout_s: float, stop: threading.Even
     finally:
         ros.node.destroy_client(client)
     verdict = "OK, the node's FK agrees with PyBullet" if response.success else "FAILED"
-    return (EXIT_OK if response.success else EXIT_FAILED), f"verify_fk ({name}): {verdict}\n  {response.message}"
+    return (
+        EXIT_OK if response.success else EXIT_FAILED
+    ), f"verify_fk ({name}): {verdict}\n  {response.message}"
 
 
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk verify``; ``argv``: the whole command line, for ``rclpy.init``."""
     result = with_ros(
-        "verify", argv, lambda ros, stop: call_verify(ros, options.namespace, options.timeout, stop)
+        "verify",
+        argv,
+        lambda ros, stop: call_verify(ros, options.namespace, options.timeout, stop),
     )
     if result is None:
         return EXIT_NO_ANSWER

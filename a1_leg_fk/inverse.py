@@ -498,7 +498,7 @@ def _knee_branch_can_be_inside(peak: float, sign: float, lower: float, upper: fl
 def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):  # noqa: ANN202
     """The closed form of :func:`_branches` and the choice of :meth:`LegSolver.solve` as one
     generated function on floats with the leg's constants folded in, as the FK is (see
-    :func:`a1_leg_fk.kinematics._leg_source`), or ``None`` when a joint has finite limits 2 pi or more
+    :func:`a1_leg_fk.fk_codegen.leg_source`), or ``None`` when a joint has finite limits 2 pi or more
     apart (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
     [m, base frame] and the seed [rad]; it returns ``(angles, reachable)`` with ``angles`` the
     in-limit exact solution nearest the seed (``None`` if there is none), or ``None`` for the
@@ -510,7 +510,7 @@ def _fast_solver(g: _Geometry, limits: Sequence[tuple[float, float]], leg: str):
     (of the angles before any clamping onto a limit); and the text of
     ``solve``'s body for :func:`_fused_solver` (``return None`` wherever ``solve`` would not return
     an in-limit solution, ``best`` the chosen angles or ``None``)."""
-    from a1_leg_fk.kinematics import Term, _Code, _linear, _sum  # kinematics imports this module
+    from a1_leg_fk.fk_codegen import Code as _Code, Term, linear as _linear, weighted_sum as _sum
 
     if any(lower != -math.inf and not upper - lower < TWO_PI for lower, upper in limits):
         return None

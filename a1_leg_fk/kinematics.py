@@ -1,13 +1,10 @@
 """Forward kinematics of the four feet: positions, Jacobians, foot velocities, limits and reach.
 
-Everything expensive happens once, in :func:`compile_leg`: the chain's fixed transforms are
-folded into three *stages*, one per movable joint, each mapping a point ``p`` in the joint's
-child frame to its parent side as ``p -> o + M Rot(a, q) p``. Writing
-``M Rot(a, q) = C0 + cos(q) C1 + sin(q) C2`` (Rodrigues, with ``C0 = M a a^T``,
-``C1 = M (I - a a^T)``, ``C2 = M [a]x``) turns the whole leg into straight-line arithmetic,
-which is generated once as Python source with every zero coefficient dropped and every unit
-coefficient simplified. The same source runs on floats (``math``, the per-message path) and on
-numpy arrays (the batch path), so both compute exactly the same expression.
+Everything expensive happens once, when a :class:`CompiledLeg` is made: the chain is folded into
+three stages (:mod:`a1_leg_fk.leg_stages`), which turn the whole leg into straight-line
+arithmetic in the cosines and sines of its angles, generated once as Python source
+(:mod:`a1_leg_fk.fk_codegen`). The same source runs on floats (``math``, the per-message path)
+and on numpy arrays (the batch path), so both compute exactly the same expression.
 
 Frames and units: joint angles in rad, joint velocities in rad/s, positions in m and foot
 velocities in m/s, all in the root link's frame (the base frame), relative to the base.
@@ -27,6 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from a1_leg_fk import inverse
+from a1_leg_fk.fk_codegen import compile_source, leg_source
+from a1_leg_fk.leg_stages import fold_chain
 from a1_leg_fk.legs import (
     JOINT_COUNT,
     JOINTS_PER_LEG,
@@ -46,24 +45,6 @@ BATCH_CHUNK_ROWS = 4096
 
 Matrix3 = tuple[tuple[float, float, float], ...]
 Vector3 = tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Stage:
-    """One movable joint, with the fixed transforms before it folded in: ``p -> o + M Rot(axis, q) p``."""
-
-    joint: Joint
-    rotation: np.ndarray  # M, 3x3
-    offset: np.ndarray  # o [m], 3
-    axis: np.ndarray  # unit, in the joint frame
-
-    @cached_property
-    def rodrigues_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(C0, C1, C2) with ``M Rot(axis, q) = C0 + cos(q) C1 + sin(q) C2``."""
-        outer = np.outer(self.axis, self.axis)
-        x, y, z = self.axis
-        cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-        return self.rotation @ outer, self.rotation @ (np.eye(3) - outer), self.rotation @ cross
 
 
 @dataclass(frozen=True)
@@ -98,13 +79,11 @@ class CompiledLeg:
     """
 
     def __init__(self, chain: LegChain) -> None:
+        """Fold ``chain`` into stages and compile its generated FK functions."""
         self.chain = chain
-        self.stages, self.foot_offset = _fold_chain(chain)
-        self.source = _leg_source(self.stages, self.foot_offset)
-        namespace: dict[str, Any] = {"_cos": math.cos, "_sin": math.sin}
-        exec(  # our own generated source (_leg_source)
-            compile(self.source, f"<a1_leg_fk generated FK of leg {chain.leg}>", "exec"), namespace
-        )
+        self.stages, self.foot_offset = fold_chain(chain)
+        self.source = leg_source(self.stages, self.foot_offset)
+        namespace = compile_source(self.source, f"FK of leg {chain.leg}", self)
         # The generated functions take and return floats (or numpy arrays, the *_from_trig ones).
         self.position: Callable[..., tuple[float, float, float]] = namespace["position"]
         self.position_velocity: Callable[..., tuple[float, ...]] = namespace["position_velocity"]
@@ -424,208 +403,3 @@ def _leg_trig(cos: np.ndarray, sin: np.ndarray, slot: int) -> list[np.ndarray]:
     return [
         array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)
     ]
-
-
-# --- folding a chain into stages -----------------------------------------------------------
-
-
-def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
-    """URDF ``rpy`` [rad] -> rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    roll, pitch, yaw = rpy
-    cr, sr, cp, sp, cy, sy = (
-        math.cos(roll),
-        math.sin(roll),
-        math.cos(pitch),
-        math.sin(pitch),
-        math.cos(yaw),
-        math.sin(yaw),
-    )
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-
-
-def _fold_chain(chain: LegChain) -> tuple[tuple[Stage, ...], np.ndarray]:
-    """Stages for the three movable joints, and the foot's offset [m] in the last one's child frame."""
-    stages = []
-    rotation, offset = np.eye(3), np.zeros(3)
-    for joint in chain.joints:
-        offset = offset + rotation @ np.array(joint.origin_xyz)
-        rotation = rotation @ rpy_matrix(joint.origin_rpy)
-        if joint.movable:
-            stages.append(Stage(joint, rotation, offset, np.array(joint.axis)))
-            rotation, offset = np.eye(3), np.zeros(3)
-    return tuple(stages), offset
-
-
-# --- generating the leg's straight-line code ------------------------------------------------
-
-
-Term = float | str  # a constant, or the name of a variable in the generated code
-
-
-class _Code:
-    """Generated statements, with fresh variable names and zero-free linear expressions."""
-
-    def __init__(self, prefix: str) -> None:
-        self.lines: list[str] = []
-        self._prefix = prefix
-        self._count = 0
-
-    def assign(self, expressions: Sequence[Term]) -> tuple[Term, ...]:
-        """Bind each non-constant expression to a fresh variable; constants stay constants."""
-        names: list[Term] = []
-        for expression in expressions:
-            if isinstance(expression, float):
-                names.append(expression)
-            else:
-                self._count += 1
-                name = f"{self._prefix}{self._count}"
-                names.append(name)
-                self.lines.append(f"{name} = {expression}")
-        return tuple(names)
-
-
-def _linear(row: Sequence[float], vector: Sequence[Term]) -> Term:
-    """``row . vector`` as a constant or an expression string, zero terms dropped."""
-    constant = 0.0
-    terms = []
-    for coefficient, value in zip(row, vector):
-        coefficient = float(coefficient)
-        if coefficient == 0.0:
-            continue
-        if isinstance(value, float):
-            constant += coefficient * value
-        elif coefficient == 1.0:
-            terms.append(value)
-        elif coefficient == -1.0:
-            terms.append(f"-{value}")
-        else:
-            terms.append(f"{coefficient!r}*{value}")
-    return _joined(constant, terms)
-
-
-def _sum(parts: Sequence[tuple[str, Term]]) -> Term:
-    """Sum of ``factor * term`` pairs (factor '' for none), zero terms dropped."""
-    constant = 0.0
-    terms = []
-    for factor, term in parts:
-        if isinstance(term, float) and not factor:
-            constant += term
-        elif isinstance(term, float):
-            if term != 0.0:
-                terms.append(f"{term!r}*{factor}")
-        else:
-            terms.append(f"{factor}*{term}" if factor else term)
-    return _joined(constant, terms)
-
-
-def _joined(constant: float, terms: list[str]) -> Term:
-    """``constant + terms[0] + ...`` as a constant, a single term, or a parenthesised sum."""
-    if not terms:
-        return constant
-    if constant != 0.0:
-        terms.insert(0, repr(constant))
-    return terms[0] if len(terms) == 1 else "(" + " + ".join(terms) + ")"
-
-
-def _leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
-    """Python source of the leg's four functions (see :class:`CompiledLeg`)."""
-    position_code, velocity_code, jacobian_code = _Code("p"), _Code("v"), _Code("j")
-    point: tuple[Term, ...] = tuple(float(v) for v in foot)
-    velocity: tuple[Term, ...] = (0.0, 0.0, 0.0)
-    tangents: list[tuple[Term, ...]] = []
-    jacobian_point = point
-    for slot in reversed(range(len(stages))):
-        terms = stages[slot].rodrigues_terms
-        offset = stages[slot].offset
-        cos, sin, rate = f"c{slot}", f"s{slot}", f"dq{slot}"
-        # Velocity first: it needs the point before this stage moves it.
-        velocity = velocity_code.assign(
-            [
-                _sum(
-                    [
-                        ("", _rotate_row(terms, axis, velocity, cos, sin)),
-                        (rate, _derivative_row(terms, axis, point, cos, sin)),
-                    ]
-                )
-                for axis in range(3)
-            ]
-        )
-        tangents = [
-            jacobian_code.assign([_rotate_row(terms, axis, t, cos, sin) for axis in range(3)])
-            for t in tangents
-        ]
-        tangents.insert(
-            0,
-            jacobian_code.assign(
-                [_derivative_row(terms, axis, jacobian_point, cos, sin) for axis in range(3)]
-            ),
-        )
-        new_point = [
-            _sum([("", float(offset[axis])), ("", _rotate_row(terms, axis, point, cos, sin))])
-            for axis in range(3)
-        ]
-        point = position_code.assign(new_point)
-        velocity_code.lines.extend(
-            f"{name} = {expr}" for name, expr in zip(point, new_point) if isinstance(name, str)
-        )
-        if slot > 0:  # the root-side stage's point is not needed by any column
-            jacobian_point = jacobian_code.assign(
-                [
-                    _sum(
-                        [
-                            ("", float(offset[axis])),
-                            ("", _rotate_row(terms, axis, jacobian_point, cos, sin)),
-                        ]
-                    )
-                    for axis in range(3)
-                ]
-            )
-    trig = "c0, s0, c1, s1, c2, s2"
-    from_angles = [f"c{i} = _cos(q{i})\n    s{i} = _sin(q{i})" for i in range(len(stages))]
-    body = "\n    ".join(position_code.lines)
-    return "\n".join(
-        [
-            f"def position_from_trig({trig}):\n    {body}\n    return ({_tuple(point)})\n",
-            "def position(q0, q1, q2):\n    "
-            + "\n    ".join(from_angles)
-            + f"\n    {body}\n    return ({_tuple(point)})\n",
-            "def position_velocity(q0, q1, q2, dq0, dq1, dq2):\n    "
-            + "\n    ".join(from_angles + velocity_code.lines)
-            + f"\n    return ({_tuple(point)}, {_tuple(velocity)})\n",
-            f"def jacobian_from_trig({trig}):\n    "
-            + "\n    ".join(jacobian_code.lines or ["pass"])
-            + f"\n    return ({', '.join(_tuple(t) for t in tangents)})\n",
-        ]
-    )
-
-
-def _rotate_row(
-    terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str
-) -> Term:
-    """Row ``axis`` of ``(C0 + cos C1 + sin C2) vector``."""
-    c0, c1, c2 = terms
-    return _sum(
-        [
-            ("", _linear(c0[axis], vector)),
-            (cos, _linear(c1[axis], vector)),
-            (sin, _linear(c2[axis], vector)),
-        ]
-    )
-
-
-def _derivative_row(
-    terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str
-) -> Term:
-    """Row ``axis`` of ``d/dq (C0 + cos C1 + sin C2) vector = (cos C2 - sin C1) vector``."""
-    _, c1, c2 = terms
-    return _sum([(f"-{sin}", _linear(c1[axis], vector)), (cos, _linear(c2[axis], vector))])
-
-
-def _tuple(terms: Sequence[Term]) -> str:
-    return ", ".join(repr(t) if isinstance(t, float) else t for t in terms)

@@ -134,7 +134,7 @@ def random_a1_topology_urdf(rng: np.random.Generator) -> str:
     limits: roll axis perpendicular to the pitch axis, knee axis parallel to it, in their frames."""
 
     def rotation(rpy) -> np.ndarray:
-        from a1_leg_fk.kinematics import rpy_matrix
+        from a1_leg_fk.leg_stages import rpy_matrix
 
         return rpy_matrix(rpy)
 

@@ -1,0 +1,75 @@
+"""A leg's chain folded into three *stages*, one per movable joint.
+
+Each stage maps a point ``p`` in the joint's child frame to the parent side of the joint, with
+every fixed transform before it folded in: ``p -> o + M Rot(a, q) p`` (``o`` [m], ``M`` a
+rotation, ``a`` the unit axis, ``q`` [rad]). Writing ``M Rot(a, q) = C0 + cos(q) C1 + sin(q) C2``
+(Rodrigues, with ``C0 = M a a^T``, ``C1 = M (I - a a^T)``, ``C2 = M [a]x``) makes a leg's forward
+kinematics straight-line arithmetic in the cosines and sines of its angles (see
+:mod:`a1_leg_fk.fk_codegen`), and gives the inverse kinematics its geometry.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from a1_leg_fk.legs import LegChain
+from a1_leg_fk.urdf import Joint
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One movable joint, with the fixed transforms before it folded in.
+
+    It maps ``p -> o + M Rot(axis, q) p``.
+    """
+
+    joint: Joint
+    rotation: np.ndarray  # M, 3x3
+    offset: np.ndarray  # o [m], 3
+    axis: np.ndarray  # unit, in the joint frame
+
+    @cached_property
+    def rodrigues_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(C0, C1, C2) with ``M Rot(axis, q) = C0 + cos(q) C1 + sin(q) C2``."""
+        outer = np.outer(self.axis, self.axis)
+        x, y, z = self.axis
+        cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+        return self.rotation @ outer, self.rotation @ (np.eye(3) - outer), self.rotation @ cross
+
+
+def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
+    """URDF ``rpy`` [rad] -> rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    roll, pitch, yaw = rpy
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(roll),
+        math.sin(roll),
+        math.cos(pitch),
+        math.sin(pitch),
+        math.cos(yaw),
+        math.sin(yaw),
+    )
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def fold_chain(chain: LegChain) -> tuple[tuple[Stage, ...], np.ndarray]:
+    """Stages for the three movable joints, and the foot's offset [m] in the last one's child frame."""
+    stages = []
+    rotation, offset = np.eye(3), np.zeros(3)
+    for joint in chain.joints:
+        offset = offset + rotation @ np.array(joint.origin_xyz)
+        rotation = rotation @ rpy_matrix(joint.origin_rpy)
+        if joint.movable:
+            stages.append(Stage(joint, rotation, offset, np.array(joint.axis)))
+            rotation, offset = np.eye(3), np.zeros(3)
+    return tuple(stages), offset

@@ -19,10 +19,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Unpack, cast
 
 import numpy as np
 
@@ -195,38 +194,24 @@ class BlockStats:
 
 
 def read_foot_trajectories(
-    path: str | Path,
-    *,
-    topic: str | None = None,
-    urdf: str | Path | None = None,
-    foot_links: Sequence[str] = (),
-    joint_aliases: Sequence[str] = (),
-    base_pose: str | None = None,
-    max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
-    progress: bool = False,
+    path: str | Path, *, progress: bool = False, **choices: Unpack[RecordingChoices]
 ) -> FootTrajectories:
     """The four feet over a recorded run, as arrays (one row per accepted JointState message
     that leaves at least one leg known, in bag order).
 
-    ``path``: a ROS 2 bag directory, a ``.mcap`` file or a ROS 1 ``.bag``. ``topic``: the
-    JointState topic (needed when there are several). Model: ``urdf`` (a path), else the bag's
+    ``path``: a ROS 2 bag directory, a ``.mcap`` file or a ROS 1 ``.bag``. ``progress``: a
+    progress bar on stderr (with tqdm). ``choices``, keyword arguments as
+    :func:`open_recording`'s (:class:`RecordingChoices`): ``topic``: the JointState topic
+    (needed when there are several). Model: ``urdf`` (a path), else the bag's
     ``robot_description`` topic (the latest message before the first JointState), else the
     embedded A1; ``foot_links``/``joint_aliases`` as the node's parameters (``"KEY=value"``).
     ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
     gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
-    stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s]).
-    Raises :class:`LegFkError` for bad input; a bag that cannot be read to its end gives what was
+    stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s], default
+    :data:`DEFAULT_MAX_POSE_GAP_S`). Raises :class:`LegFkError` for bad input; a bag that cannot be read to its end gives what was
     read, with ``summary.stopped`` saying why.
     """
-    recording = open_recording(
-        path,
-        topic=topic,
-        urdf=urdf,
-        foot_links=foot_links,
-        joint_aliases=joint_aliases,
-        base_pose=base_pose,
-        max_pose_gap_s=max_pose_gap_s,
-    )
+    recording = open_recording(path, **choices)
     try:
         stats = BlockStats()
         blocks = []

@@ -12,7 +12,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command
 from std_srvs.srv import Trigger
@@ -120,6 +120,12 @@ class NodeClient:
         return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[
             0
         ]
+
+
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+"""robot_state_publisher's robot_description QoS: a late subscriber still gets the latest message."""
 
 
 def parse_tokens(message: str) -> dict[str, str]:

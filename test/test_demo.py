@@ -156,7 +156,6 @@ def test_the_demo_publishes_the_urdf_it_animates_latched_on_robot_description(
 ) -> None:
     """Like robot_state_publisher: one message, transient local, so a late subscriber still gets it."""
     from pybullet_reference import A1_URDF
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from std_msgs.msg import String
 
     processes.start([*DEMO, "--ros-args", "-r", "__ns:=/demo_description"])
@@ -167,13 +166,10 @@ def test_the_demo_publishes_the_urdf_it_animates_latched_on_robot_description(
     ros.spin_for(
         1.0
     )  # the message was published at start: only a latched subscription hears it now
-    latched = QoSProfile(
-        depth=1,
-        reliability=ReliabilityPolicy.RELIABLE,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    )
+    from node_harness import LATCHED
+
     ros.node.create_subscription(
-        String, "/demo_description/robot_description", heard.append, latched
+        String, "/demo_description/robot_description", heard.append, LATCHED
     )
     assert ros.spin_until(lambda: bool(heard), 20.0)
     assert heard[0].data == A1_URDF.read_text(encoding="utf-8").lstrip()

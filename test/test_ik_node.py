@@ -204,18 +204,14 @@ def test_ik_params_yaml_states_every_parameter() -> None:
 def test_the_ik_node_follows_the_robot_description_topic(processes, ros) -> None:
     """The same mechanism as foot_fk_node's: a Go2-like description on the topic, no parameter."""
     from exported_urdf import exported_quadruped
-    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
     from std_msgs.msg import String
 
     from a1_leg_fk.robot_config import load_robot
 
     xml = exported_quadruped("go2")
-    latched = QoSProfile(
-        depth=1,
-        reliability=ReliabilityPolicy.RELIABLE,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    )
-    ros.node.create_publisher(String, "robot_description", latched).publish(String(data=xml))
+    from node_harness import LATCHED
+
+    ros.node.create_publisher(String, "robot_description", LATCHED).publish(String(data=xml))
     commands = Commands(ros)
     process = processes.start(ik_node_command())
     go2 = load_robot(xml).quadruped

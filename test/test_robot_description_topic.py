@@ -11,9 +11,8 @@ from typing import Any
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
-from node_harness import NodeClient, distance, node_command, stamp_ns
+from node_harness import LATCHED, NodeClient, distance, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from shared import A1_FEET, LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES
 from std_msgs.msg import String
@@ -21,9 +20,6 @@ from std_msgs.msg import String
 pytestmark = pytest.mark.slow
 
 TOLERANCE_M = 1e-7
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
 ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
 BILLION_LAUGHS = (
     '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'

@@ -160,7 +160,7 @@ class RobotSource:
         self._pending: RobotConfig | None = None
         self._ignored_logged = False
         topic = str(parameter_value(node, "robot_description_topic"))
-        self.topic_name = node.resolve_topic_name(topic) if topic else ""
+        self.topic_name = _resolved_topic(node, topic) if topic else ""
         self.topic_status = (
             "not followed (robot_description_topic is empty)" if not topic else "nothing received"
         )
@@ -276,3 +276,13 @@ class RobotSource:
             f"{[leg.chain.foot_link for leg in config.quadruped.legs]}"
         )
         self._on_change(config)
+
+
+def _resolved_topic(node: Node, topic: str) -> str:
+    """The full name of ``topic`` for ``node``; :class:`LegFkError` names the parameter if invalid."""
+    try:
+        return node.resolve_topic_name(topic)
+    except Exception as error:  # rclpy raises its internal RCLError for a bad name
+        raise LegFkError(
+            f"robot_description_topic '{topic}' is not a valid topic name: {error}"
+        ) from error

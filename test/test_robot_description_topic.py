@@ -231,3 +231,11 @@ def test_sim_time_stamps_everything_the_node_stamps_itself(processes, ros):
 
     assert ros.spin_until(ticked_and_stamped, 10.0)
     assert stamp_ns(diagnostics[-1]) == sim_ns
+
+
+def test_an_invalid_topic_parameter_stops_the_node_with_one_line(processes):
+    process = processes.start(node_command("-p", "robot_description_topic:=bad//name"))
+    assert process.wait(30) == 1
+    output = processes.output(process)
+    assert "cannot start: robot_description_topic 'bad//name' is not a valid topic name" in output
+    assert "Traceback" not in output

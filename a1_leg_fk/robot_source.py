@@ -37,7 +37,7 @@ from std_msgs.msg import String
 
 from a1_leg_fk.legs import FOOT_NAME_SUFFIXES
 from a1_leg_fk.robot_config import RobotConfig, load_robot
-from a1_leg_fk.urdf import MAX_URDF_CHARS, LegFkError
+from a1_leg_fk.urdf import LegFkError
 
 DESCRIPTION_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -192,33 +192,25 @@ class RobotSource:
         """The explicitly set parameter that wins over the topic, or ''."""
         return next((name for name in EXPLICIT_PARAMETERS if values[name]), "")
 
-    def _build(self, values: dict[str, object]) -> RobotConfig:
-        """The robot for these parameter values and the topic's latest description."""
+    def _build(self, values: dict[str, object], topic_text: str | None = None) -> RobotConfig:
+        """The robot for these parameter values and a topic description (default: the latest)."""
+        topic_text = self._topic_text if topic_text is None else topic_text
         feet, aliases = string_list(values["foot_links"]), string_list(values["joint_aliases"])
-        if self._explicit(values) or not self._topic_text:
+        if self._explicit(values) or not topic_text:
             return load_robot(
                 str(values["robot_description"]), str(values["urdf_file"]), feet, aliases
             )
-        return load_robot(self._topic_text, "", feet, aliases, description_name=self.topic_name)
+        return load_robot(topic_text, "", feet, aliases, description_name=self.topic_name)
 
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         changes = {p.name: p.value for p in parameters if p.name in MODEL_PARAMETERS}
         self._pending = None
         if not changes:
             return SetParametersResult(successful=True)
-        description = changes.get("robot_description", "")
-        if (
-            isinstance(description, str) and len(description) > MAX_URDF_CHARS
-        ):  # refused before it is parsed
-            return SetParametersResult(
-                successful=False,
-                reason=f"robot_description: more than the {MAX_URDF_CHARS} "
-                "characters accepted for a robot description",
-            )
         try:
-            self._pending = self._build(
-                self._values(changes)
-            )  # applied once rclpy stored the values
+            # Applied by _apply_parameters, once rclpy has stored the values. The size cap is
+            # checked before any parsing (urdf.checked_urdf_text).
+            self._pending = self._build(self._values(changes))
         except LegFkError as error:
             self._node.get_logger().warn(
                 f"parameter change rejected, keeping {self.config.source}: {error}"
@@ -248,15 +240,8 @@ class RobotSource:
                     f"ignoring the description on {self.topic_name}: parameter {explicit} is set and wins"
                 )
             return
-        values = self._values({})
         try:
-            config = load_robot(
-                text,
-                "",
-                string_list(values["foot_links"]),
-                string_list(values["joint_aliases"]),
-                description_name=self.topic_name,
-            )
+            config = self._build(self._values({}), text)
         except LegFkError as error:
             self.topic_rejected = True
             self.topic_status = f"rejected: {error}"

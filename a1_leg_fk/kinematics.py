@@ -335,10 +335,8 @@ def _checked_feet(feet: np.ndarray) -> np.ndarray:
         raise LegFkError(
             f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}"
         )
-    total = sum(
-        targets.ravel().tolist()
-    )  # a NaN or infinity makes it non-finite (cheaper than isfinite)
-    if total - total != 0.0:
+    # One sum is cheaper than np.isfinite on 12 values: a NaN or infinity makes it non-finite.
+    if not math.isfinite(sum(targets.ravel().tolist())):
         for slot, leg in enumerate(LEG_NAMES):
             inverse.checked_point(targets[slot], leg)
     return targets

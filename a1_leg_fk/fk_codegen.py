@@ -103,6 +103,11 @@ def weighted_sum(parts: Sequence[tuple[str, Term]]) -> Term:
     return _joined(constant, terms)
 
 
+def scaled(coefficient: float, term: Term) -> Term:
+    """``coefficient * term``: a constant for a constant term, else an expression, signs combined."""
+    return coefficient * term if isinstance(term, float) else _scaled(coefficient, term)
+
+
 def term_tuple(terms: Sequence[Term]) -> str:
     """``a, b, c``: the terms as the items of a tuple display."""
     return ", ".join(repr(t) if isinstance(t, float) else t for t in terms)

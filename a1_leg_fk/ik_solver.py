@@ -81,13 +81,15 @@ class LegSolver:
         generated = (
             None
             if self.geometry is None
-            else fast_solver(self.geometry, self._limits, leg.chain.leg, self)
+            else fast_solver(
+                self.geometry, self._limits, leg.chain.leg, self, leg.position(*self._middle)
+            )
         )
         self._fast: Callable[..., Any] | None = None
         self._fast_batch: Callable[..., Any] | None = None
-        self._fast_body: str | None = None
+        self._first_roll_sign: float | None = None  # of the generated code (None: there is none)
         if generated is not None:
-            self._fast, self._fast_batch, self._fast_body = generated
+            self._fast, self._fast_batch, self._first_roll_sign = generated
 
     # --- public --------------------------------------------------------------------------
 
@@ -187,8 +189,7 @@ class LegSolver:
         if self._fast_batch is not None:
             # A target on the roll axis or far away: not found here.
             with np.errstate(all="ignore"):
-                *chosen, best_distance, trig = self._fast_batch(*columns, *seed_columns)
-            found = np.isfinite(best_distance)
+                *chosen, found, trig = self._fast_batch(*columns, *seed_columns)
             status[found] = OK
             redo = ~found  # rows whose residual needs the FK of the angles' own cosines and sines
             for row in np.flatnonzero(redo).tolist():  # the rare rows: the scalar path decides

@@ -50,6 +50,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -82,6 +83,8 @@ __all__ = [
     "solve_feet_batch",
 ]
 
+ALL_OK = tuple(("ok",) * legs for legs in range(5))
+"""The status of :class:`IkResult` when every one of 0..4 legs is ``ok``."""
 BATCH_BLOCK_ROWS = 8192
 """Rows per block of :func:`solve_feet_batch`."""
 
@@ -106,10 +109,10 @@ def checked_point(point: Sequence[float], leg: str) -> tuple[float, float, float
 # --- four legs ------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class IkResult:
+class IkResult(NamedTuple):
     """:meth:`Quadruped.ik`'s answer: 12 angles [rad] in slot order, one status name per leg
-    (FR, FL, RR, RL), and per leg the distance [m] from the foot at those angles to its target.
+    (FR, FL, RR, RL), and per leg the distance [m] from the foot at those angles to its target; a
+    named tuple, as it is made on every call and must be cheap.
     """
 
     angles: np.ndarray  # (12,)
@@ -129,24 +132,24 @@ class IkBatchResult:
 
 
 def solve_feet(
-    solvers: Sequence[LegSolver], feet: np.ndarray, seed: Sequence[float] | None
+    solvers: Sequence[LegSolver], targets: Sequence[float], seed: Sequence[float] | None
 ) -> IkResult:
-    """IK of four legs for (4, 3) checked targets [m] and 12 checked seed angles (or ``None``)."""
+    """IK of the legs for checked targets [m] (x, y, z of each leg in slot order: 12 floats for four
+    legs) and 12 checked seed angles [rad] (or ``None``).
+    """
     fused = fused_solver(tuple(solvers))
     if fused is not None:  # the common case: every leg has an in-limit solution
         solve, middle = fused
-        found = solve(*feet.ravel().tolist(), *(middle if seed is None else seed))
+        found = solve(*targets, *(middle if seed is None else seed))
         if found is not None:
             values = np.array(found)
-            return IkResult(
-                values[: 3 * len(solvers)], ("ok",) * len(solvers), values[3 * len(solvers) :]
-            )
+            joints = 3 * len(solvers)
+            return IkResult(values[:joints], ALL_OK[len(solvers)], values[joints:])
     angles: list[float] = []
     status, residuals = [], []
-    targets = feet.tolist()  # floats: Python arithmetic on numpy scalars is several times slower
     for slot, solver in enumerate(solvers):
         leg_seed = None if seed is None else seed[3 * slot : 3 * slot + 3]
-        result = solver.solve(targets[slot], leg_seed)
+        result = solver.solve(targets[3 * slot : 3 * slot + 3], leg_seed)
         angles.extend(result.angles)
         status.append(STATUS_NAMES[result.status])
         residuals.append(result.residual_m)

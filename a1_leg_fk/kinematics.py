@@ -235,12 +235,12 @@ class Quadruped:
     def _ik_solvers(self) -> tuple[inverse.LegSolver, ...]:
         return tuple(inverse.LegSolver(leg) for leg in self.legs)
 
-    def ik(self, feet: np.ndarray, seed: Angles | None = None) -> inverse.IkResult:
+    def ik(self, feet: ArrayLike, seed: Angles | None = None) -> inverse.IkResult:
         """Joint angles [rad] putting the four feet at ``feet`` ((4, 3) [m], base frame), with a
         status (``ok``, ``outside_limits``, ``unreachable``) and residual [m] per leg; ``seed``
         (12 angles [rad]) picks the solution nearest it (see :mod:`a1_leg_fk.inverse`).
         """
-        checked_seed = None if seed is None else _checked_configuration(seed, "seed")
+        checked_seed = None if seed is None else _quickly_checked_configuration(seed, "seed")
         return inverse.solve_feet(self._ik_solvers, _checked_feet(feet), checked_seed)
 
     def ik_batch(self, feet: np.ndarray, seed: np.ndarray | None = None) -> inverse.IkBatchResult:
@@ -325,8 +325,12 @@ class Quadruped:
         )
 
 
-def _checked_feet(feet: np.ndarray) -> np.ndarray:
-    """(4, 3) finite targets [m], or a LegFkError naming the leg."""
+def _checked_feet(feet: ArrayLike) -> list[float]:
+    """The 12 coordinates [m] of (4, 3) finite targets, leg by leg, or a LegFkError naming the leg.
+
+    Cheap for a (4, 3) float array, the common case: one ``tolist`` and one sum (a NaN or infinity
+    makes the sum non-finite; only then is each leg examined).
+    """
     try:
         targets = np.asarray(feet, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -335,11 +339,11 @@ def _checked_feet(feet: np.ndarray) -> np.ndarray:
         raise LegFkError(
             f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}"
         )
-    # One sum is cheaper than np.isfinite on 12 values: a NaN or infinity makes it non-finite.
-    if not math.isfinite(sum(targets.ravel().tolist())):
+    flat: list[float] = targets.ravel().tolist()
+    if not math.isfinite(sum(flat)):
         for slot, leg in enumerate(LEG_NAMES):
-            inverse.checked_point(targets[slot], leg)
-    return targets
+            inverse.checked_point(flat[3 * slot : 3 * slot + 3], leg)
+    return flat
 
 
 def _checked_configuration(
@@ -364,7 +368,7 @@ def _checked_configuration(
     return q
 
 
-def _quickly_checked_configuration(angles: Angles) -> list[float]:
+def _quickly_checked_configuration(angles: Angles, what: str = "joint angles") -> list[float]:
     """As :func:`_checked_configuration`, but cheap for 12 finite Python floats or ints.
 
     The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
@@ -375,8 +379,8 @@ def _quickly_checked_configuration(angles: Angles) -> list[float]:
         total = sum(q)
         usable = len(q) == JOINT_COUNT and isinstance(total, (float, int)) and math.isfinite(total)
     except (TypeError, OverflowError):  # not numbers; an int too large for a float
-        return _checked_configuration(angles)
-    return q if usable else _checked_configuration(angles)
+        return _checked_configuration(angles, what)
+    return q if usable else _checked_configuration(angles, what)
 
 
 def _checked_batch(angles: ArrayLike, what: str) -> np.ndarray:

@@ -36,7 +36,7 @@ def main() -> None:
         result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
     )
     searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
-    searched = inverse.solve_feet(searching, feet, None)
+    searched = inverse.solve_feet(searching, feet.ravel().tolist(), None)
     assert (
         searched.status == ("ok",) * 4
         and np.abs(quadruped.fk(searched.angles) - feet).max() <= 1e-9
@@ -47,7 +47,7 @@ def main() -> None:
             "Quadruped.ik(feet)  [closed form]": lambda: quadruped.ik(feet),
             "Quadruped.fk(q)": lambda: quadruped.fk(SPEED_POSE),
             "damped least squares, same targets": lambda: inverse.solve_feet(
-                searching, feet, None
+                searching, feet.ravel().tolist(), None
             ),
         },
         repeats=7,

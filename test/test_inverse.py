@@ -430,7 +430,7 @@ def test_the_least_squares_path_agrees_with_the_closed_form_on_the_a1(a1: Quadru
     outside = inside + rng.uniform(-0.3, 0.3, size=inside.shape)
     for feet in np.concatenate([inside, outside]):
         closed = a1.ik(feet)
-        searched = inverse.solve_feet(searching, feet, None)
+        searched = inverse.solve_feet(searching, feet.ravel().tolist(), None)
         assert searched.status == closed.status
         np.testing.assert_allclose(searched.residual_m, closed.residual_m, rtol=0.0, atol=1e-9)
 
@@ -454,15 +454,32 @@ def test_any_finite_target_gives_finite_angles_and_a_residual(
 
 
 @pytest.mark.parametrize(
-    "point", [(1e200, 0.0, 0.0), (1e300, -1e300, 1e300), (5e-324, 0.0, -0.0), (0.183, -0.047, 0.0)]
+    "point",
+    [
+        (1e200, 0.0, 0.0),
+        (1e300, -1e300, 1e300),
+        (0.3, -1e300, 1e300),  # the roll plane's squares overflow, the knee's do not
+        (5e-324, 0.0, -0.0),
+        (0.183, -0.047, 0.0),
+    ],
 )
 def test_extreme_targets_give_finite_angles_and_residuals(a1: Quadruped, point) -> None:
+    """Also where the squares of the coordinates overflow (1e300): the batch and the four-leg call
+    answer as the one-leg call."""
     result = a1.ik_leg("FR", point)
     assert all(math.isfinite(a) for a in result.angles) and math.isfinite(result.residual_m)
     assert result.status == inverse.UNREACHABLE
     assert abs(result.residual_m - math.hypot(*point)) <= 1.0 + 1e-12 * math.hypot(
         *point
     )  # the leg is < 1 m from the base
+    feet = a1.fk([0.0, 0.8, -1.5] * 4)
+    feet[0] = point
+    batch, single = a1.ik_batch(feet[np.newaxis]), a1.ik(feet)
+    assert batch.status[0, 0] == inverse.UNREACHABLE and single.status[0] == "unreachable"
+    assert single.status[1:] == ("ok",) * 3 and (batch.status[0, 1:] == inverse.OK).all()
+    np.testing.assert_allclose(batch.angles[0], single.angles, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(single.angles[:3], result.angles, rtol=0.0, atol=1e-12)
+    assert batch.residual_m[0, 0] == single.residual_m[0] == result.residual_m
 
 
 def test_joint_ranges_wider_than_a_turn() -> None:

@@ -174,28 +174,26 @@ def _representative(
     limits: Sequence[tuple[float, float]],
     slot: int,
     seed: str,
-    indent: str,
     outside: str,
+    mark: str = "",
 ) -> str:
     """:func:`representative_angle` on ``name`` in place, as statements: nothing to do for an angle
-    already inside the limits; else its value modulo 2 pi just above the lower limit, clamped onto
-    the range within :data:`LIMIT_TOLERANCE_RAD` and ``outside`` beyond; for a continuous joint the
-    value within pi of ``seed``.
+    already inside the limits; else (after the statement ``mark``, if any) its value modulo 2 pi
+    just above the lower limit, clamped onto the range within :data:`LIMIT_TOLERANCE_RAD` and
+    ``outside`` beyond; for a continuous joint the value within pi of ``seed``.
     """
     lower, upper = limits[slot]
     if lower == -math.inf:
         return f"{name} = {seed} + ({name} - {seed} + {math.pi!r}) % {TWO_PI!r} - {math.pi!r}"
     low = lower - LIMIT_TOLERANCE_RAD
-    return (
-        f"if not {lower!r} <= {name} <= {upper!r}:\n"
-        f"{indent}    {name} = {low!r} + ({name} - {low!r}) % {TWO_PI!r}\n"
-        f"{indent}    if {name} > {upper!r}:\n"
-        f"{indent}        if {name} > {upper + LIMIT_TOLERANCE_RAD!r}:\n"
-        f"{indent}            {outside}\n"
-        f"{indent}        {name} = {upper!r}\n"
-        f"{indent}    elif {name} < {lower!r}:\n"
-        f"{indent}        {name} = {lower!r}"
-    )
+    return f"""if not {lower!r} <= {name} <= {upper!r}:{f"{chr(10)}    {mark}" if mark else ""}
+    {name} = {low!r} + ({name} - {low!r}) % {TWO_PI!r}
+    if {name} > {upper!r}:
+        if {name} > {upper + LIMIT_TOLERANCE_RAD!r}:
+            {outside}
+        {name} = {upper!r}
+    elif {name} < {lower!r}:
+        {name} = {lower!r}"""
 
 
 def _representatives(name: str, limits: Sequence[tuple[float, float]], slot: int) -> str:
@@ -262,66 +260,82 @@ def _indented(text: str, spaces: int) -> str:
     return text.replace("\n", "\n" + " " * spaces)
 
 
+def _clamped_argument(name: str, outside: str) -> str:
+    """Statements that leave an ``acos`` argument ``name`` inside [-1, 1] alone, clamp it onto +-1
+    within :data:`ARGUMENT_TOLERANCE` and execute ``outside`` beyond.
+    """
+    return f"""if not -1.0 <= {name} <= 1.0:
+    if abs({name}) > {1.0 + ARGUMENT_TOLERANCE!r}:
+        {outside}
+    {name} = 1.0 if {name} > 0.0 else -1.0"""
+
+
 def scalar_body(
     g: Geometry,
     limits: Sequence[tuple[float, float]],
     first_sign: float,
     targets: Sequence[str] = ("tx", "ty", "tz"),
     seeds: Sequence[str] = ("r0", "r1", "r2"),
+    fused: bool = False,
 ) -> str:
     """The body (indented 4) of the generated ``solve`` on floats: it leaves in ``best`` the
     in-limit solution nearest the seed (``None`` if there is none) and in ``reachable`` whether
     any branch reaches the target, or executes ``UNREACHED`` (a roll argument beyond 1) or
     ``ROLL_OUTSIDE`` (a roll angle outside the limits; then ``continue``), placeholders the
     caller replaces. The target and seed are the variables ``targets`` and ``seeds``.
+
+    ``fused`` (for :func:`fused_solver`): no ``reachable``, and where the leg has one knee branch
+    ``branch_trig`` tells whether ``c0, s0, c2, s2`` and ``along, across`` (the cosine and sine of
+    ``q1`` times a length) are those of the angles in ``best``: the roll loop was left by its
+    ``break`` right after choosing them, and no angle went through the modulo or a clamp.
     """
     stage, knee = _roll_stage(g, targets), _knee(g, limits)
     r0, r1, r2 = seeds
-    tolerance = 1.0 + ARGUMENT_TOLERANCE
     single = _single_roll_bound(limits)
+    trig = fused and len(knee.signs) == 1
+    mark = "branch_trig = False" if trig else ""
+    nearer = (
+        f"best is None or (q0 - {r0}) ** 2 + (q1 - {r1}) ** 2 + (q2 - {r2}) ** 2"
+        f" < (best[0] - {r0}) ** 2 + (best[1] - {r1}) ** 2 + (best[2] - {r2}) ** 2"
+    )
+    early = f"{-single!r} < cos_roll < {single!r}"  # then the other roll branch is outside
     branch = f"""c2, s2 = {knee.cos_knee}, {knee.sin_knee}
 q2 = {knee.angle}
-{_representative("q2", limits, 2, r2, "", "continue")}
+{_representative("q2", limits, 2, r2, "continue", mark)}
 fx, fy = {knee.fx}, {knee.fy}
-q1 = _atan2(fx * {stage.gy} - fy * {stage.gx}, fx * {stage.gx} + fy * {stage.gy})
-{_representative("q1", limits, 1, r1, "", "continue")}
-distance = d0 + (q1 - {r1}) ** 2 + (q2 - {r2}) ** 2
-if distance < best_distance:
-    best, best_distance = (q0, q1, q2), distance"""
+along, across = fx * {stage.gx} + fy * {stage.gy}, fx * {stage.gy} - fy * {stage.gx}
+q1 = _atan2(across, along)
+{_representative("q1", limits, 1, r1, "continue", mark)}
+if {nearer}:
+    best = (q0, q1, q2)"""
     if len(knee.signs) == 2:
         branch = f"for knee_sign in {knee.signs!r}:\n    " + _indented(branch, 4)
-    early = (
-        f"\nif best is not None and {-single!r} < cos_roll < {single!r}:  # the other branch is outside\n    break"
-        if single > 0.0
-        else ""
-    )
+        if single > 0.0:
+            branch += f"\nif best is not None and {early}:\n    break"
+    elif single > 0.0:
+        branch += f"\n    if {early}:\n        break"
     roll_branch = f"""c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll
 s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
 q0 = _atan2(s0, c0)
-{_representative("q0", limits, 0, r0, "", "ROLL_OUTSIDE")}
+{_representative("q0", limits, 0, r0, "ROLL_OUTSIDE", mark)}
 {chr(10).join(stage.knee)}
-knee_argument = ({stage.gx} * {stage.gx} + {stage.gy} * {stage.gy} - {g.alpha!r}) / {g.kappa!r}
-if abs(knee_argument) > {tolerance!r}:
-    continue
-reachable = True
-d0 = (q0 - {r0}) ** 2
-cos_knee = 1.0 if knee_argument > 1.0 else -1.0 if knee_argument < -1.0 else knee_argument
+cos_knee = ({stage.gx} * {stage.gx} + {stage.gy} * {stage.gy} - {g.alpha!r}) / {g.kappa!r}
+{_clamped_argument("cos_knee", "continue")}{"" if fused else f"{chr(10)}reachable = True"}
 sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
 knee_angle = _atan2(sin_knee, cos_knee)
-{branch}{early}"""
+{branch}"""
+    start = "best, branch_trig = None, True" if trig else "best = None"
     body = f"""{chr(10).join(stage.head)}
 radius = _sqrt({stage.a} * {stage.a} + {stage.b_cross} * {stage.b_cross})
 if not 0.0 < radius < _inf:  # on the roll axis, or too far for the squares
     return None
-roll_argument = {g.lateral_m!r} / radius
-if abs(roll_argument) > {tolerance!r}:
-    UNREACHED
-cos_roll = 1.0 if roll_argument > 1.0 else -1.0 if roll_argument < -1.0 else roll_argument
+cos_roll = {g.lateral_m!r} / radius
+{_clamped_argument("cos_roll", "UNREACHED")}
 sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
 cos_base, sin_base = {stage.a} / radius, {stage.b_cross} / radius
-best, best_distance, reachable, roll_outside = None, _inf, False, False
+{start if fused else "best, reachable, roll_outside = None, False, False"}
 for roll_sign in {(first_sign, -first_sign)!r}:
-    {_indented(roll_branch, 4)}"""
+    {_indented(roll_branch, 4)}{f"{chr(10)}else:{chr(10)}    branch_trig = False" if trig else ""}"""
     return "    " + _indented(body, 4) + "\n"
 
 
@@ -484,12 +498,20 @@ def fused_solver(
             first_sign,
             (tx, ty, tz),
             seeds[3 * slot : 3 * slot + 3],
+            fused=True,
         )
+        q0, q1, q2 = (f"_q{joint}" for joint in range(3 * slot, 3 * slot + 3))
+        trig = f"c0, s0, c1, s1, c2, s2 = _cos({q0}), _sin({q0}), _cos({q1}), _sin({q1}), _cos({q2}), _sin({q2})"
+        if "branch_trig" in body:
+            trig = f"""if branch_trig:
+        length = _hypot(along, across)
+        c1, s1 = along / length, across / length
+    else:
+        {trig}"""
         lines += [
             body.replace("UNREACHED", "return None").replace("ROLL_OUTSIDE", "continue"),
-            "    if best is None:\n        return None",
-            f"    q0, q1, q2 = _q{3 * slot}, _q{3 * slot + 1}, _q{3 * slot + 2} = best",
-            position_body(solver.leg.source, "fx, fy, fz"),
+            f"    if best is None:\n        return None\n    {q0}, {q1}, {q2} = best\n    {trig}",
+            function_body(solver.leg.source, "position_from_trig", "fx, fy, fz"),
             f"    _e{slot} = _hypot(fx - {tx}, fy - {ty}, fz - {tz})  # hypot: no overflow",
         ]
     outputs = [f"_q{joint}" for joint in range(3 * len(solvers))] + [
@@ -501,11 +523,12 @@ def fused_solver(
     return namespace["solve"], sum((solver._middle for solver in solvers), ())
 
 
-def position_body(source: str, names: str) -> str:
-    """The body of the generated ``position(q0, q1, q2)`` in a leg's FK ``source`` (see
-    :class:`CompiledLeg`), assigning the foot [m, base frame] to ``names`` instead of returning it.
+def function_body(source: str, function: str, names: str) -> str:
+    """The body of the generated ``function`` (``position`` or ``position_from_trig``) in a leg's
+    FK ``source`` (see :class:`CompiledLeg`), assigning the foot [m, base frame] to ``names``
+    instead of returning it.
     """
-    header = "def position(q0, q1, q2):\n"
+    start = source.index("\n", source.index(f"def {function}(")) + 1
     # The functions are blank-line separated.
-    body, _ = source[source.index(header) + len(header) :].split("\n\n", 1)
+    body, _ = source[start:].split("\n\n", 1)
     return body.replace("\n    return ", f"\n    {names} = ")

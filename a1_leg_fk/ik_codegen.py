@@ -460,11 +460,12 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     if both.size:
         c0, s0, q0 = second_c0[both], second_s0[both], second_q0[both]
         other = knee_batch(c0, s0, q0, *roll_batch(c0, s0, tx[both], ty[both], tz[both]), True, r0[both], r1[both], r2[both])
-        mine = [column[both] for column in best]
+        mine = [column[both] for column in best[:4]]
         # The nearer the seed; on a tie the first branch, as the scalar code.
         closer = other[0] & (~mine[0] | (_distance(other, r0[both], r1[both], r2[both]) < _distance(mine, r0[both], r1[both], r2[both])))
+        rows = both[closer]
         for column, new in zip(best, other):
-            column[both] = _where(closer, new, column[both])
+            column[rows] = new[closer]
     found, best0, best1, best2, cos0, sin0, x1, y1, cos2, sin2 = best
     norm1 = _sqrt(x1 * x1 + y1 * y1)  # a distance in the knee's plane, < 1 m where a branch was found
     return best0, best1, best2, found, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)

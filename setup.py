@@ -36,9 +36,9 @@ setup(
     python_requires=">=3.10",
     entry_points={
         "console_scripts": [
-            "foot_fk_node = a1_leg_fk.node:main",
-            "foot_ik_node = a1_leg_fk.ik_node:main",
-            "joint_state_demo = a1_leg_fk.demo:main",
+            "foot_fk_node = a1_leg_fk.executables:foot_fk_node",
+            "foot_ik_node = a1_leg_fk.executables:foot_ik_node",
+            "joint_state_demo = a1_leg_fk.executables:joint_state_demo",
             "a1-leg-fk = a1_leg_fk.cli:main",
         ],
     },

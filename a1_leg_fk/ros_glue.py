@@ -1,5 +1,6 @@
-"""ROS plumbing shared by ``foot_fk_node`` and ``foot_ik_node``: the spin loop of ``main`` with its
-exit codes, one ``/diagnostics`` status, and warnings limited to one a second per kind.
+"""ROS plumbing shared by ``foot_fk_node``, ``foot_ik_node`` and ``joint_state_demo``: the spin
+loop of ``main`` with its exit codes and its Ctrl-C/SIGTERM, one ``/diagnostics`` status, and
+warnings limited to one a second per kind.
 """
 
 from __future__ import annotations
@@ -13,14 +14,18 @@ from typing import TypedDict
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.context import Context
-from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 
+from a1_leg_fk.stop_signals import StopSignals
 from a1_leg_fk.urdf import LegFkError
 
 WARNING_INTERVAL_S = 1.0
 """At most one warning a second for each kind of problem."""
+SPIN_SLICE_S = 0.1
+"""The longest turn of a node's executor [s]: how late a Ctrl-C/SIGTERM is noticed at most."""
 
 
 class NodeOptions(TypedDict, total=False):
@@ -45,48 +50,47 @@ def run_node(
     usage_errors: tuple[type[Exception], ...] = (),
     executor_factory: Callable[[], Executor] | None = None,
 ) -> int:
-    """Start rclpy, spin the node until Ctrl-C/SIGTERM (exit 0).
+    """Start rclpy, spin the node until Ctrl-C/SIGTERM (exit 0, also when it comes while starting).
 
     Bad ``--ros-args``, or one of ``usage_errors`` while the node starts (a bad parameter): one line
     on stderr and exit 2. A :class:`LegFkError` while starting: a fatal log line and exit 1.
     ``executor_factory`` defaults to :func:`make_executor`.
+
+    SIGINT/SIGTERM only set a flag (:class:`StopSignals`, shared with the executable's, which is
+    in place before the slow imports) and rclpy's own handlers stay off. rclpy's would, from a
+    thread of theirs, shut the context down in the middle of the node's construction (an
+    RCLError traceback, exit 1) and, for SIGINT, also raise KeyboardInterrupt wherever the main
+    thread is; before they are installed (the imports, ``rclpy.init``) Python's default handlers
+    raise a KeyboardInterrupt traceback or end the process by SIGTERM. The flag is checked once
+    the node is built and between turns of the executor (at most :data:`SPIN_SLICE_S` apart).
     """
-    try:
-        rclpy.init(args=None if args is None else list(args))
-    except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
-        print(f"{executable}: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
-        return 2
-    node = None
-    try:
-        node = make_node()
-        executor = (executor_factory or make_executor)()
-        executor.add_node(node)
-        while rclpy.ok():
-            _spin_once(executor)
-    except LegFkError as error:
-        rclpy.logging.get_logger(executable).fatal(f"cannot start: {error}")
-        return 1
-    except usage_errors as error:
-        print(f"{executable}: {error}", file=sys.stderr)
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()  # the signal handler may have shut the context down already
+    with StopSignals() as signals:
+        try:
+            rclpy.init(
+                args=None if args is None else list(args),
+                signal_handler_options=SignalHandlerOptions.NO,
+            )
+        except Exception as error:  # noqa: BLE001 (rclpy raises its internal RCLError for bad --ros-args)
+            print(f"{executable}: cannot start: {_ros_args_error(str(error))}", file=sys.stderr)
+            return 2
+        node = None
+        try:
+            node = make_node()
+            executor = (executor_factory or make_executor)()
+            executor.add_node(node)
+            while not signals.stop.is_set():
+                executor.spin_once(timeout_sec=SPIN_SLICE_S)
+        except LegFkError as error:
+            rclpy.logging.get_logger(executable).fatal(f"cannot start: {error}")
+            return 1
+        except usage_errors as error:
+            print(f"{executable}: {error}", file=sys.stderr)
+            return 2
+        finally:
+            if node is not None:
+                node.destroy_node()
+            rclpy.try_shutdown()
     return 0
-
-
-def _spin_once(executor: Executor) -> None:
-    """One turn of the executor; a SIGINT/SIGTERM that shut the context down between the loop's
-    ``rclpy.ok()`` and this turn ends the loop instead of raising rcl's "context is not valid".
-    """
-    try:
-        executor.spin_once(timeout_sec=0.1)
-    except Exception:
-        if rclpy.ok():
-            raise
 
 
 def make_executor() -> Executor:

@@ -18,8 +18,9 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from types import FrameType
-from typing import Any, Self, TypeVar
+from typing import TypeVar
+
+from a1_leg_fk.stop_signals import StopSignals
 
 PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -112,35 +113,6 @@ def prefixed(namespace: str, name: str) -> str:
 def say(text: str = "") -> None:
     """Print a line now (the demo's output is interleaved with its children's timing)."""
     print(text, flush=True)
-
-
-# --- stopping on Ctrl-C / SIGTERM ---------------------------------------------------------------
-
-
-class StopSignals:
-    """Turns SIGINT and SIGTERM into a flag (``stop.is_set()``) instead of an exception.
-
-    With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call or of the
-    cleanup; every loop here waits in short slices and checks the flag.
-    """
-
-    def __init__(self) -> None:
-        self.stop = threading.Event()
-        self.signal_name = ""
-        self._previous: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
-
-    def __enter__(self) -> Self:
-        for number in (signal.SIGINT, signal.SIGTERM):
-            self._previous[number] = signal.signal(number, self._handle)
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        for number, handler in self._previous.items():
-            signal.signal(number, handler)
-
-    def _handle(self, number: int, _frame: object) -> None:
-        self.signal_name = signal.Signals(number).name
-        self.stop.set()
 
 
 # --- this tool's ROS node ------------------------------------------------------------------------

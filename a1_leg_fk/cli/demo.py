@@ -20,7 +20,6 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     Child,
     Ros,
-    StopSignals,
     child_command,
     namespace_parent,
     positive,
@@ -30,6 +29,7 @@ from a1_leg_fk.cli.common import (
 )
 from a1_leg_fk.cli.echo import add_interval_argument, echo_loop, subscribe_feet, topics_heading
 from a1_leg_fk.cli.verify import call_verify
+from a1_leg_fk.stop_signals import StopSignals
 
 DEMO_START_TIMEOUT_S = 20.0
 

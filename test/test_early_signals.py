@@ -1,0 +1,98 @@
+"""Ctrl-C/SIGTERM in the first second of an executable's life (imports, rclpy.init, the node's
+construction, the first turns): every process stops within a bound, with exit 0 and no traceback.
+
+The moments are counted from when the process catches SIGTERM (read from /proc: its ``SigCgt``
+mask), i.e. once Python has started and the executable's handler is in place; before that the
+interpreter's own defaults apply (README, Troubleshooting). One more signal goes right after the
+spawn, when that default may still end the process: exit by the signal itself, or 0, and no
+traceback.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from node_harness import node_command
+from shared import installed_command
+
+DELAYS_S = (0.0, 0.05, 0.15, 0.3, 0.5, 0.8)
+"""After the SIGTERM handler is in place [s]: the imports, rclpy.init, the node's construction,
+the first turns of the executor (about 0.3, 0.001, 0.15 s on the development machine)."""
+EXIT_BOUND_S = 5.0
+CATCH_TIMEOUT_S = 10.0
+
+EXECUTABLES = {
+    "foot_fk_node": node_command(),
+    "foot_ik_node": installed_command("foot_ik_node", "a1_leg_fk.ik_node"),
+    "joint_state_demo": installed_command("joint_state_demo", "a1_leg_fk.demo"),
+}
+
+
+def catches(pid: int, number: int) -> bool:
+    """Whether process ``pid`` has a handler for signal ``number`` (Linux: /proc/<pid>/status)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) >> (number - 1) & 1)
+    return False
+
+
+def wait_until_caught(process: subprocess.Popen, number: int) -> None:
+    """Poll (1 ms) until ``process`` catches ``number``; fails if it exits or takes too long."""
+    deadline = time.monotonic() + CATCH_TIMEOUT_S
+    while not catches(process.pid, number):
+        assert process.poll() is None, f"exited ({process.returncode}) before catching {number}"
+        assert time.monotonic() < deadline, f"no handler for {number} after {CATCH_TIMEOUT_S} s"
+        time.sleep(0.001)
+
+
+def stop_outcome(
+    processes, process: subprocess.Popen, number: int
+) -> tuple[int | None, float, bool]:
+    """Send ``number`` now; (exit code or None if still running after the bound, seconds to
+    exit, whether the output has a traceback). The process is killed if it outlives the bound."""
+    sent = time.monotonic()
+    process.send_signal(number)
+    try:
+        code: int | None = process.wait(EXIT_BOUND_S)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait(5)
+        code = None
+    return code, time.monotonic() - sent, "Traceback" in processes.output(process)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/<pid>/status")
+@pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("executable", ["foot_fk_node", "joint_state_demo"])
+def test_a_signal_while_starting_stops_with_exit_0(
+    processes, executable: str, number: int
+) -> None:
+    failures = []
+    for delay_s in DELAYS_S:
+        process = processes.start(EXECUTABLES[executable])
+        wait_until_caught(process, signal.SIGTERM)
+        time.sleep(delay_s)
+        code, exit_s, traceback = stop_outcome(processes, process, number)
+        if code != 0 or traceback:
+            failures.append(
+                f"+{delay_s} s: exit {code} after {exit_s:.2f} s, traceback={traceback}"
+            )
+    assert not failures, f"{executable} {signal.Signals(number).name}: " + "; ".join(failures)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("executable", sorted(EXECUTABLES))
+def test_a_signal_right_after_the_spawn_ends_the_process(
+    processes, executable: str, number: int
+) -> None:
+    process = processes.start(EXECUTABLES[executable])
+    code, _, traceback = stop_outcome(processes, process, number)
+    assert code in (0, -number), f"exit {code}"
+    assert not traceback, processes.output(process)

@@ -76,13 +76,15 @@ def test_stream_rate_stamps_names_and_clean_exit(
     assert len(samples) > 100, processes.output(process)
 
     # Rate: what arrived per second, and what was sent per second (publication sequence numbers).
+    # Over 2 s of arrival times on a loaded machine a late timer catches up in a burst (582 Hz was
+    # seen with four test runs at once): +-20 % here; the demo's own timing is the stamps', +-10 %.
     arrival_span = samples[-1][0] - samples[0][0]
     received_hz = (len(samples) - 1) / arrival_span
-    assert 450.0 <= received_hz <= 550.0, f"received {received_hz:.1f} Hz"
+    assert 400.0 <= received_hz <= 600.0, f"received {received_hz:.1f} Hz"
     if samples[0][1] is not None:
         sent = known(samples[-1][1]) - known(samples[0][1])
         sent_hz = sent / arrival_span
-        assert 450.0 <= sent_hz <= 550.0, f"sent {sent_hz:.1f} Hz"
+        assert 400.0 <= sent_hz <= 600.0, f"sent {sent_hz:.1f} Hz"
         assert len(samples) >= 0.9 * (sent + 1)  # few losses
 
     # Stamps: the node clock (system time here), increasing, 2 ms apart, fresh.

@@ -130,7 +130,8 @@ class BagWriter:
                 data = typestore.ros1_to_cdr(raw, connection.msgtype)
             except Exception as error:  # noqa: BLE001 (rosbags: a type it cannot convert)
                 raise LegFkError(
-                    f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to ROS 2: {error}"
+                    f"--copy-input: cannot convert {connection.topic} ({connection.msgtype}) to "
+                    f"ROS 2: {error}"
                 ) from None
         self.writer.write(target, bag_time, data)
 
@@ -189,4 +190,4 @@ def _input_qos(connection: Connection) -> list[Qos]:
     return list(profiles) if profiles else [default_qos()]
 
 
-# --- the plot ---------------------------------------------------------------------------------------
+# --- the plot ------------------------------------------------------------------------------------

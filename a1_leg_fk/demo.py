@@ -1,4 +1,5 @@
-"""``joint_state_demo``: the A1 gait of :mod:`a1_leg_fk.demo_gait` as a sensor_msgs/JointState stream.
+"""``joint_state_demo``: the A1 gait of :mod:`a1_leg_fk.demo_gait` as a sensor_msgs/JointState
+stream.
 
 Publishes ``joint_states`` (a relative name: namespaces and remaps apply) at ``rate_hz`` with
 the 12 leg joints' positions [rad] and velocities [rad/s]: the robot stands up from a crouch for
@@ -38,7 +39,8 @@ NAMINGS = ("pybullet", "unitree")
 DEFAULT_RATE_HZ = 500.0
 MAX_RATE_HZ = 10000.0
 MAX_CATCH_UP_S = 0.1
-"""Longest stall [s] made up for by publishing the missed samples at once; longer ones are skipped."""
+"""Longest stall [s] made up for by publishing the missed samples at once; longer ones are
+skipped."""
 
 
 def joint_names(quadruped: Quadruped, naming: str) -> list[str]:
@@ -78,7 +80,8 @@ def _node_class() -> type[Node]:
                 DEFAULT_RATE_HZ,
                 ParameterDescriptor(
                     type=ParameterType.PARAMETER_DOUBLE,
-                    description=f"Messages per second on {TOPIC} (0 < rate_hz <= {MAX_RATE_HZ:g}).",
+                    description=f"Messages per second on {TOPIC} (0 < rate_hz <= "
+                    f"{MAX_RATE_HZ:g}).",
                     floating_point_range=[
                         FloatingPointRange(from_value=0.0, to_value=MAX_RATE_HZ)
                     ],
@@ -92,8 +95,9 @@ def _node_class() -> type[Node]:
                 ParameterDescriptor(
                     type=ParameterType.PARAMETER_STRING,
                     description=(
-                        "Joint names: 'pybullet' (FR_hip_joint, FR_upper_joint, FR_lower_joint, ... as in "
-                        "pybullet_data's a1.urdf) or 'unitree' (FR_hip_joint, FR_thigh_joint, FR_calf_joint, ...)."
+                        "Joint names: 'pybullet' (FR_hip_joint, FR_upper_joint, FR_lower_joint, "
+                        "... as in pybullet_data's a1.urdf) or 'unitree' (FR_hip_joint, "
+                        "FR_thigh_joint, FR_calf_joint, ...)."
                     ),
                     additional_constraints=f"one of {', '.join(NAMINGS)}",
                     read_only=True,
@@ -131,10 +135,10 @@ def _node_class() -> type[Node]:
             self.start_ns = self.get_clock().now().nanoseconds
             self.timer = self.create_timer(1.0 / self.rate_hz, self._publish_due)
             self.get_logger().info(
-                f"publishing {self.publisher.topic_name} at {self.rate_hz:g} Hz, {naming} joint names, and the "
-                f"A1's URDF on {self.description_publisher.topic_name} (transient local): "
-                f"standing up for {self.gait.parameters.stand_s:g} s, then trotting in place at "
-                f"{self.gait.parameters.trot_hz:g} Hz"
+                f"publishing {self.publisher.topic_name} at {self.rate_hz:g} Hz, {naming} joint "
+                f"names, and the A1's URDF on {self.description_publisher.topic_name} (transient "
+                f"local): standing up for {self.gait.parameters.stand_s:g} s, then trotting in "
+                f"place at {self.gait.parameters.trot_hz:g} Hz"
             )
 
         def _publish_due(self) -> None:
@@ -148,7 +152,8 @@ def _node_class() -> type[Node]:
             if due - self.sent > self.max_behind:
                 self.skipped += due - 1 - self.sent
                 self.get_logger().warn(
-                    f"{due - self.sent} samples behind: skipping ahead ({self.skipped} skipped so far)",
+                    f"{due - self.sent} samples behind: skipping ahead ({self.skipped} skipped "
+                    "so far)",
                     throttle_duration_sec=5.0,
                 )
                 self.sent = due - 1

@@ -1,4 +1,5 @@
-"""The demo gait generator (for ``joint_state_demo``; gait *analysis* is :mod:`a1_leg_fk.gait_analysis`).
+"""The demo gait generator (for ``joint_state_demo``; gait *analysis* is
+:mod:`a1_leg_fk.gait_analysis`).
 
 A plausible A1 gait as a function of time: stand up from a crouch, then trot in place forever.
 
@@ -8,10 +9,13 @@ roll, hip pitch, knee per leg, see :mod:`a1_leg_fk.legs`).
 
 Timeline (times in seconds from the start of the stream)::
 
-    t <= 0                      crouched: knees at the most-bent end of their range (with a margin),
-                                hip pitch half the knee angle, so each foot sits under its hip
-    0 .. stand_s                stand up: a cosine blend (zero velocity at both ends) to the stand pose
-    stand_s .. + ramp_s         the trot's amplitude fades in (smoothstep), so velocities stay continuous
+    t <= 0                      crouched: knees at the most-bent end of their range (with a
+                                margin), hip pitch half the knee angle, so each foot sits under
+                                its hip
+    0 .. stand_s                stand up: a cosine blend (zero velocity at both ends) to the
+                                stand pose
+    stand_s .. + ramp_s         the trot's amplitude fades in (smoothstep), so velocities stay
+                                continuous
     after that                  periodic trot in place, ``trot_hz`` cycles per second
 
 Trot: the diagonal pairs FR+RL and FL+RR alternate, half a cycle apart. A leg swings while the
@@ -41,7 +45,8 @@ if TYPE_CHECKING:  # kinematics needs numpy; this module does not
 
 
 STAND_POSE = (0.0, 0.8, -1.5)
-"""Hip roll, hip pitch, knee [rad] of the A1's usual standing pose (a gait design choice, not a limit)."""
+"""Hip roll, hip pitch, knee [rad] of the A1's usual standing pose (a gait design choice, not a
+limit)."""
 
 PAIR_OF_LEG = {"FR": 0, "RL": 0, "FL": 1, "RR": 1}
 """Diagonal pair of each leg: pair 0 (FR+RL) and pair 1 (FL+RR) are half a trot cycle apart."""
@@ -91,7 +96,8 @@ class Gait:
                 and knee_upper < knee_lower + 2 * parameters.crouch_margin
             ):
                 raise LegFkError(
-                    f"leg {LEG_NAMES[leg_slot]}: knee range [{knee_lower}, {knee_upper}] is too small"
+                    f"leg {LEG_NAMES[leg_slot]}: knee range [{knee_lower}, {knee_upper}] is too "
+                    "small"
                 )
             # The most-bent end of the knee range is the one farther from the straight leg (0).
             if knee_lower is None or knee_upper is None:
@@ -132,7 +138,9 @@ class Gait:
         return self.state(t)[0]
 
     def velocities(self, t: float) -> list[float]:
-        """The 12 joint rates [rad/s] at time ``t`` [s]: the exact time derivatives of :meth:`angles`."""
+        """The 12 joint rates [rad/s] at time ``t`` [s]: the exact time derivatives of
+        :meth:`angles`.
+        """
         return self.state(t)[1]
 
     def state(self, t: float) -> tuple[list[float], list[float]]:
@@ -178,7 +186,9 @@ class Gait:
         return (roll, pitch, knee), (roll_rate, pitch_rate, knee_rate)
 
     def _check_limits(self) -> None:
-        """Every joint's trajectory (its bounds, worked out per phase) inside its limits with margin."""
+        """Every joint's trajectory (its bounds, worked out per phase) inside its limits with
+        margin.
+        """
         p = self.parameters
         # Offsets bounds over a phase (envelope in [0, 1] scales them toward 0, which lies inside).
         roll_range = (-p.roll_sway, p.roll_sway)
@@ -192,12 +202,14 @@ class Gait:
                 upper is not None and high > upper - p.limit_margin
             ):
                 raise LegFkError(
-                    f"the gait moves slot {slot} (leg {LEG_NAMES[slot // JOINTS_PER_LEG]}, joint {slot % JOINTS_PER_LEG}) "
-                    f"over [{low:.3f}, {high:.3f}] rad, outside its limits [{lower}, {upper}] less a "
-                    f"{p.limit_margin} rad margin"
+                    f"the gait moves slot {slot} (leg {LEG_NAMES[slot // JOINTS_PER_LEG]}, joint "
+                    f"{slot % JOINTS_PER_LEG}) over [{low:.3f}, {high:.3f}] rad, outside its "
+                    f"limits [{lower}, {upper}] less a {p.limit_margin} rad margin"
                 )
 
 
 def limits_of(quadruped: Quadruped) -> list[tuple[float | None, float | None]]:
-    """The 12 ``(lower, upper)`` joint limits [rad] of a :class:`a1_leg_fk.kinematics.Quadruped`."""
+    """The 12 ``(lower, upper)`` joint limits [rad] of a
+    :class:`a1_leg_fk.kinematics.Quadruped`.
+    """
     return [(joint.lower, joint.upper) for joint in quadruped.joints]

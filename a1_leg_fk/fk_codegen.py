@@ -89,7 +89,9 @@ def linear(row: Sequence[float], vector: Sequence[Term]) -> Term:
 
 
 def weighted_sum(parts: Sequence[tuple[str, Term]]) -> Term:
-    """Sum of ``factor * term`` pairs (factor ``''`` for none, or a signed name), zero terms dropped."""
+    """Sum of ``factor * term`` pairs (factor ``''`` for none, or a signed name), zero terms
+    dropped.
+    """
     constant = 0.0
     terms = []
     for factor, term in parts:
@@ -104,7 +106,9 @@ def weighted_sum(parts: Sequence[tuple[str, Term]]) -> Term:
 
 
 def scaled(coefficient: float, term: Term) -> Term:
-    """``coefficient * term``: a constant for a constant term, else an expression, signs combined."""
+    """``coefficient * term``: a constant for a constant term, else an expression, signs
+    combined.
+    """
     return coefficient * term if isinstance(term, float) else _scaled(coefficient, term)
 
 

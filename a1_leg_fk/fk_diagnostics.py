@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from a1_leg_fk.joint_state import REJECTIONS, TrackerCounts
 
 OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"
-"""``diagnostic_msgs/msg/DiagnosticStatus`` levels (byte constants, as the message defines them)."""
+"""``diagnostic_msgs/msg/DiagnosticStatus`` levels (byte constants, as the message defines
+them)."""
 
 MAX_LISTED_UNKNOWN_NAMES = 20
 
@@ -87,6 +88,7 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         "stamp_jumps_back": report.stamp_jumps_back,
         "last_verify": report.last_verify,
         "model": report.model,
-        "robot_description_topic": f"{report.description_topic or 'none'}: {report.description_status}",
+        "robot_description_topic": f"{report.description_topic or 'none'}: "
+        f"{report.description_status}",
     }
     return level, summary, values

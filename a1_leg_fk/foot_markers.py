@@ -1,4 +1,6 @@
-"""``foot_markers`` of ``foot_fk_node``: per leg a sphere at the foot and a line strip through its joints."""
+"""``foot_markers`` of ``foot_fk_node``: per leg a sphere at the foot and a line strip through its
+joints.
+"""
 
 from __future__ import annotations
 

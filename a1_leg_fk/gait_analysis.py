@@ -1,4 +1,5 @@
-"""Gait analysis from world-frame feet: contacts (kinematic, with hysteresis), stride metrics, gait name.
+"""Gait analysis from world-frame feet: contacts (kinematic, with hysteresis), stride metrics, gait
+name.
 
 Pure numpy (no ROS, no file I/O): the input is ``stamps_s`` (N,) [s] and ``world_feet`` (N, 4, 3)
 [m], the feet in a world frame with z up, legs in :data:`a1_leg_fk.legs.LEG_NAMES` order (FR, FL,
@@ -10,7 +11,8 @@ The work is split by job, and this module re-exports the public API of both:
 * :mod:`a1_leg_fk.gait_contacts` -- :func:`detect_contacts`: ground plane, foot speeds [m/s],
   hysteresis, minimum phase, stance edge times [s] (:class:`Contacts`, :class:`ContactThresholds`).
 * :mod:`a1_leg_fk.gait_metrics` -- :func:`gait_metrics`: duty factor, stride period [s], step
-  length [m], swing clearance [m], touchdown phases vs FR and the gait's name (:class:`GaitReport`).
+  length [m], swing clearance [m], touchdown phases vs FR and the gait's name
+  (:class:`GaitReport`).
 
 :func:`analyze_gait` runs both. Times are in seconds from the first stamp.
 """
@@ -47,6 +49,8 @@ def analyze_gait(
     thresholds: ContactThresholds = ContactThresholds(),  # noqa: B008 (a frozen dataclass)
     unsorted: str = "sort",
 ) -> tuple[Contacts, GaitReport]:
-    """:func:`detect_contacts` then :func:`gait_metrics`: contacts and the gait report in one call."""
+    """:func:`detect_contacts` then :func:`gait_metrics`: contacts and the gait report in one
+    call.
+    """
     contacts = detect_contacts(stamps_s, world_feet, thresholds, unsorted)
     return contacts, gait_metrics(contacts)

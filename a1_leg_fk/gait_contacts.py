@@ -4,8 +4,8 @@ Pure numpy (no ROS, no file I/O); :func:`detect_contacts` takes ``stamps_s`` (N,
 ``world_feet`` (N, 4, 3) [m] as described in :mod:`a1_leg_fk.gait_analysis`. A foot is in stance
 when it is near the ground and nearly still:
 
-* **Ground.** A plane ``z = level + gx (x - x0) + gy (y - y0)`` fitted to the samples where a foot is
-  still (speed below ``speed_on_mps``): least squares, then refitted on the lower half of the
+* **Ground.** A plane ``z = level + gx (x - x0) + gy (y - y0)`` fitted to the samples where a foot
+  is still (speed below ``speed_on_mps``): least squares, then refitted on the lower half of the
   residuals three times (so a still swing apex does not lift it), and finally shifted to the
   ``ground_percentile`` percentile of the residuals of all still samples. The level is that of the
   *foot frame* in stance (ground + foot radius), so neither the floor height nor the foot radius
@@ -44,7 +44,8 @@ PLANE_REFITS = 3
 EDGE_NOISE_DEVIATIONS = 3.0
 EDGE_NOISE_FLOOR_M = 0.001
 SLOPE_RCOND = 0.01
-"""Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set 0)."""
+"""Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set
+0)."""
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,9 @@ class GroundPlane:
 
 @dataclass(frozen=True)
 class Stance:
-    """One stance phase [s from the first stamp]; an edge at the data's or a gap's border is not observed."""
+    """One stance phase [s from the first stamp]; an edge at the data's or a gap's border is not
+    observed.
+    """
 
     t_on: float
     t_off: float
@@ -132,7 +135,8 @@ class Contacts:
 def prepare(
     stamps_s: np.ndarray, world_feet: np.ndarray, unsorted: str = "sort"
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """``(stamps, feet, notes)`` checked, sorted by time (``unsorted="sort"``) or refused (``"reject"``).
+    """``(stamps, feet, notes)`` checked, sorted by time (``unsorted="sort"``) or refused
+    (``"reject"``).
 
     Rows with a repeated stamp keep the first; the notes say what was sorted or dropped.
     """
@@ -150,7 +154,8 @@ def prepare(
         if unsorted == "reject":
             first = int(np.argmax(np.diff(stamps) < 0)) + 1
             raise LegFkError(
-                f"stamps not increasing: {backwards} go back in time (first at row {first}); rejected"
+                f"stamps not increasing: {backwards} go back in time (first at row {first}); "
+                "rejected"
             )
         order = np.argsort(stamps, kind="stable")
         stamps, feet = stamps[order], feet[order]
@@ -175,13 +180,16 @@ def prepare(
 
 
 def segments_of(valid: np.ndarray) -> np.ndarray:
-    """Index of the gap-free run each sample belongs to (-1 where not valid), for one leg's (N,) mask."""
+    """Index of the gap-free run each sample belongs to (-1 where not valid), for one leg's (N,)
+    mask.
+    """
     starts = valid & ~np.concatenate(([False], valid[:-1]))
     return np.where(valid, np.cumsum(starts) - 1, -1)
 
 
 def still_speeds(times: np.ndarray, points: np.ndarray, window_s: float) -> np.ndarray:
-    """(n,) speed [m/s] of one gap-free run: the smaller of the spans ending and starting at each sample.
+    """(n,) speed [m/s] of one gap-free run: the smaller of the spans ending and starting at each
+    sample.
 
     A span reaches the nearest sample at least ``window_s`` away (at least the neighbour), or the
     run's end; its difference quotient is the central-difference velocity at the span's middle.
@@ -252,7 +260,9 @@ def _run_duration(times: np.ndarray, first: int, last: int) -> float:
 
 
 def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float) -> np.ndarray:
-    """``stance`` with interior swings, then interior stances, shorter than ``min_phase_s`` merged away."""
+    """``stance`` with interior swings, then interior stances, shorter than ``min_phase_s`` merged
+    away.
+    """
     stance = stance.copy()
     for value in (False, True):
         for first, last, run_value in _runs(stance):
@@ -263,7 +273,9 @@ def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float)
 
 
 def trim_edges(heights: np.ndarray, stance: np.ndarray, tolerance_m: float) -> np.ndarray:
-    """``stance`` with each stance's edge samples higher than its median + ``tolerance_m`` moved to swing."""
+    """``stance`` with each stance's edge samples higher than its median + ``tolerance_m`` moved to
+    swing.
+    """
     stance = stance.copy()
     for first, last, value in _runs(stance):
         if not value:
@@ -285,7 +297,8 @@ def detect_contacts(
     """Stance/swing of each foot from world-frame feet; see the module docstring for the method.
 
     ``stamps_s`` (N,) [s], ``world_feet`` (N, 4, 3) [m] world frame, z up, NaN rows = gaps.
-    ``unsorted``: ``"sort"`` (default; noted) or ``"reject"`` (:class:`LegFkError`) for stamps that go back.
+    ``unsorted``: ``"sort"`` (default; noted) or ``"reject"`` (:class:`LegFkError`) for stamps that
+    go back.
     """
     stamps, feet, notes = prepare(stamps_s, world_feet, unsorted)
     times = stamps - stamps[0]
@@ -304,8 +317,8 @@ def detect_contacts(
         still = valid & (speeds < thresholds.speed_on_mps)
     if still.sum() < 3:
         raise LegFkError(
-            f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} samples): "
-            "cannot find the ground; are these world-frame feet?"
+            f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} "
+            "samples): cannot find the ground; are these world-frame feet?"
         )
     ground = fit_ground(feet[still], thresholds.ground_percentile)
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)

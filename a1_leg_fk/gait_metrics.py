@@ -1,15 +1,16 @@
-"""Gait metrics from foot contacts: per-leg stride metrics, touchdown phases vs FR, the gait's name.
+"""Gait metrics from foot contacts: per-leg stride metrics, touchdown phases vs FR, the gait's
+name.
 
 Pure numpy (no ROS, no file I/O); the input is :func:`a1_leg_fk.gait_contacts.detect_contacts`'s
 :class:`~a1_leg_fk.gait_contacts.Contacts`.
 
 Metrics (:func:`gait_metrics`): per leg the stance intervals, duty factor (stance time over stride
-time of the complete strides; strides off the leg's median period by more than half, such as a pause
-to stand, are left out and counted as irregular), stride period and frequency (touchdown to touchdown), step length
-(horizontal distance between consecutive touchdown positions, each the median position of its
-stance), swing clearance (peak height of each complete swing above the ground plane); for the
-robot, each leg's touchdown phase relative to FR's strides (0..1, circular mean, with its
-consistency ``R`` in 0..1) and the gait named from the phases and the duty factor.
+time of the complete strides; strides off the leg's median period by more than half, such as a
+pause to stand, are left out and counted as irregular), stride period and frequency (touchdown to
+touchdown), step length (horizontal distance between consecutive touchdown positions, each the
+median position of its stance), swing clearance (peak height of each complete swing above the
+ground plane); for the robot, each leg's touchdown phase relative to FR's strides (0..1, circular
+mean, with its consistency ``R`` in 0..1) and the gait named from the phases and the duty factor.
 Times are in seconds from the first stamp.
 """
 
@@ -47,7 +48,9 @@ MIN_CONSISTENCY = 0.6
 
 @dataclass(frozen=True)
 class LegMetrics:
-    """One leg's stride metrics; ``None`` where the data cannot give a value (``reason`` says why)."""
+    """One leg's stride metrics; ``None`` where the data cannot give a value (``reason`` says
+    why).
+    """
 
     leg: str
     status: str  # "ok", "no data", "never touches down", "never lifts", "too few strides"
@@ -65,7 +68,9 @@ class LegMetrics:
 
 @dataclass(frozen=True)
 class GaitReport:
-    """The gait of a recording: name, fit, per-leg metrics, phases, and what they were computed with."""
+    """The gait of a recording: name, fit, per-leg metrics, phases, and what they were computed
+    with.
+    """
 
     gait: str
     gait_fit: float  # 0..1: template match x phase consistency
@@ -80,7 +85,9 @@ class GaitReport:
     notes: tuple[str, ...] = field(default=())
 
     def to_json(self) -> dict[str, Any]:
-        """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a ``reason``)."""
+        """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a
+        ``reason``).
+        """
         legs = {}
         for leg, metrics in self.legs.items():
             entry = {key: value for key, value in asdict(metrics).items() if key != "leg"}
@@ -196,7 +203,9 @@ def _circular_distance(a: float, b: float) -> float:
 def relative_phases(
     contacts: Contacts, fr_strides: list[tuple[float, float]]
 ) -> tuple[dict[str, float | None], dict[str, float | None]]:
-    """Touchdown phase of FL, RR, RL within FR's strides (0..1) and its consistency R, ``None`` without data."""
+    """Touchdown phase of FL, RR, RL within FR's strides (0..1) and its consistency R, ``None``
+    without data.
+    """
     phases: dict[str, float | None] = {}
     consistency: dict[str, float | None] = {}
     starts = np.array([a for a, _ in fr_strides])
@@ -216,13 +225,18 @@ def relative_phases(
 def name_gait(
     phases: dict[str, float | None], consistency: dict[str, float | None], duty: float | None
 ) -> tuple[str, float, str, dict[str, float]]:
-    """``(name, fit 0..1, reason, fit of every candidate)`` from the phases vs FR and the duty factor."""
+    """``(name, fit 0..1, reason, fit of every candidate)`` from the phases vs FR and the duty
+    factor.
+    """
     if any(value is None for value in phases.values()):
         missing = [leg for leg, value in phases.items() if value is None]
         return (
             "unknown",
             0.0,
-            f"no touchdown phase for {', '.join(missing)} (needs strides of FR and touchdowns of each leg)",
+            (
+                f"no touchdown phase for {', '.join(missing)} (needs strides of FR and "
+                "touchdowns of each leg)"
+            ),
             {},
         )
     # Every phase (and so every consistency) is known from here on.

@@ -136,7 +136,8 @@ def branches(
     for roll_sign in (1.0, -1.0):
         c0 = cos_base * cos_roll - roll_sign * sin_base * sin_roll  # cos(base + sign * acos)
         s0 = sin_base * cos_roll + roll_sign * cos_base * sin_roll
-        # x = Rot(a0, -q0) t0 = a0 (a0 . t0) + c0 (t0 - a0 (a0 . t0)) - s0 (a0 x t0), relative to o1
+        # x = Rot(a0, -q0) t0 = a0 (a0 . t0) + c0 (t0 - a0 (a0 . t0)) - s0 (a0 x t0), relative to
+        # o1
         px, py, pz = t0[0] - ax * along, t0[1] - ay * along, t0[2] - az * along
         cx, cy, cz = ay * t0[2] - az * t0[1], az * t0[0] - ax * t0[2], ax * t0[1] - ay * t0[0]
         ex = ax * along + c0 * px - s0 * cx - ox

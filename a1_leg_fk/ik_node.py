@@ -83,7 +83,8 @@ class FootIkNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.get_logger().info(
             f"joint angles of {self._model.source} for targets in frame '{self._base_frame}' from "
-            f"{self.resolve_topic_name('foot_targets')}/<leg> to {self.resolve_topic_name('joint_commands')}"
+            f"{self.resolve_topic_name('foot_targets')}/<leg> to "
+            f"{self.resolve_topic_name('joint_commands')}"
         )
 
     def _settings(self, changes: dict[str, object]) -> tuple[str, list[list[str]]]:
@@ -96,7 +97,8 @@ class FootIkNode(Node):
         names = string_list(value["command_joint_names"]) or list(quadruped.joint_names)
         if len(names) != len(quadruped.joint_names):
             raise LegFkError(
-                f"command_joint_names must hold {len(quadruped.joint_names)} names, got {len(names)}: {names}"
+                f"command_joint_names must hold {len(quadruped.joint_names)} names, got "
+                f"{len(names)}: {names}"
             )
         per_leg = [
             names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG]
@@ -120,7 +122,9 @@ class FootIkNode(Node):
             self._pending_settings = None
 
     def _on_robot(self, config: RobotConfig) -> None:
-        """Another robot was accepted (a parameter or the description topic): start over with it."""
+        """Another robot was accepted (a parameter or the description topic): start over with
+        it.
+        """
         self._model = config
         self._apply_settings(self._settings({}))
         self._seeds = [None] * len(LEG_NAMES)
@@ -142,7 +146,8 @@ class FootIkNode(Node):
             self._warnings.warn(
                 f"frame/{leg}",
                 f"leg {leg}: ignoring a target in frame '{frame}': only '{self._base_frame}' "
-                f"(or empty) is accepted, there is no TF here ({self._counts['rejected_frame']} so far)",
+                "(or empty) is accepted, there is no TF here "
+                f"({self._counts['rejected_frame']} so far)",
             )
             return
         point = msg.point
@@ -207,7 +212,8 @@ class FootIkNode(Node):
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
             "model": self._model.source,
-            "robot_description_topic": f"{self._robot.topic_name or 'none'}: {self._robot.topic_status}",
+            "robot_description_topic": f"{self._robot.topic_name or 'none'}: "
+            f"{self._robot.topic_status}",
         }
         hardware_id = self._model.quadruped.model.name
         array = ros_glue.diagnostics(

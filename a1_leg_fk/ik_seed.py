@@ -49,7 +49,9 @@ ARRAY = SimpleNamespace(
 
 
 def range_middle(joint: Joint) -> float:
-    """The middle of a joint's range [rad], 0 for a continuous joint: the seed when none is given."""
+    """The middle of a joint's range [rad], 0 for a continuous joint: the seed when none is
+    given.
+    """
     return 0.0 if joint.lower is None or joint.upper is None else (joint.lower + joint.upper) / 2.0
 
 

@@ -247,7 +247,9 @@ class FootTracker:
     def _check(
         self, layout: _NameLayout, names: int, positions: int, velocities: int
     ) -> str | None:
-        """The message's rejection (setting :attr:`last_problem`), NO_LEG_JOINTS, or None if usable."""
+        """The message's rejection (setting :attr:`last_problem`), NO_LEG_JOINTS, or None if
+        usable.
+        """
         if positions != names:
             self.last_problem = f"{names} names but {positions} positions"
             return POSITION_LENGTH_MISMATCH

@@ -56,7 +56,9 @@ class JointStateDecoder:
         return self._names
 
     def decode(self, raw: bytes | memoryview) -> WireJointState:
-        """The fields of one serialized message; :class:`WireError` if it is cut short or corrupt."""
+        """The fields of one serialized message; :class:`WireError` if it is cut short or
+        corrupt.
+        """
         stamp_ns, changed, order, positions, velocities = self.fields(raw)
         dtype = _DOUBLES[order]
         return WireJointState(
@@ -178,7 +180,9 @@ def _check_count(count: int, available: int, what: str) -> None:
 
 
 def _cdr_doubles(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[bytes, int]:
-    """The ``sequence<float64>`` at ``offset`` (relative to the body): (its bytes, offset after)."""
+    """The ``sequence<float64>`` at ``offset`` (relative to the body): (its bytes, offset
+    after).
+    """
     offset = (offset + 3) & -4
     count = u32(raw, 4 + offset)[0]
     offset += 4

@@ -63,7 +63,9 @@ def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
 
 
 def fold_chain(chain: LegChain) -> tuple[tuple[Stage, ...], np.ndarray]:
-    """Stages for the three movable joints, and the foot's offset [m] in the last one's child frame."""
+    """Stages for the three movable joints, and the foot's offset [m] in the last one's child
+    frame.
+    """
     stages = []
     rotation, offset = np.eye(3), np.zeros(3)
     for joint in chain.joints:

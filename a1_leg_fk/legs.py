@@ -30,11 +30,13 @@ def leg_slot(leg: str) -> int:
 FOOT_NAME_SUFFIXES: tuple[str, ...] = ("foot", "toe", "foot_link", "toe_link")
 """Where several leaf links of a leg qualify as its foot, the one named ``<leg>_<suffix>`` with one
 of these suffixes (case-insensitive: ``FR_foot``, ``fr_toe``, ``FR_foot_link``) is the foot. Go2's
-description has two qualifying leaves per leg: ``FR_foot`` and a shin collision link ``FR_calflower1``."""
+description has two qualifying leaves per leg: ``FR_foot`` and a shin collision link
+``FR_calflower1``."""
 
 UNITREE_NAME_PAIRS: tuple[tuple[str, str], ...] = (("upper", "thigh"), ("lower", "calf"))
 """Equivalent joint-name parts: pybullet_data's A1 says ``X_upper_joint``/``X_lower_joint`` where
-Unitree's descriptions (unitree_ros, Gazebo, real-robot bridges) say ``X_thigh_joint``/``X_calf_joint``."""
+Unitree's descriptions (unitree_ros, Gazebo, real-robot bridges) say
+``X_thigh_joint``/``X_calf_joint``."""
 
 
 @dataclass(frozen=True)
@@ -99,9 +101,10 @@ def _discover_feet(model: RobotModel) -> dict[str, str]:
             matching = named_foot if len(named_foot) == 1 else matching
         if len(matching) != 1:
             raise LegFkError(
-                f"{model.source}: leg {leg}: expected one leaf link named '{leg}...' with three movable "
-                f"joints above it, or one of them named {leg}_{'|'.join(FOOT_NAME_SUFFIXES)}; found "
-                f"{matching or 'none'} among {candidates}; name the feet with foot_links"
+                f"{model.source}: leg {leg}: expected one leaf link named '{leg}...' with three "
+                "movable joints above it, or one of them named "
+                f"{leg}_{'|'.join(FOOT_NAME_SUFFIXES)}; found {matching or 'none'} among "
+                f"{candidates}; name the feet with foot_links"
             )
         feet[leg] = matching[0]
     return feet
@@ -112,7 +115,9 @@ def _named_like_a_foot(leg: str, link: str) -> bool:
 
 
 def _explain_missing_foot(model: RobotModel, leg: str) -> None:
-    """Raise the chain error (e.g. a prismatic knee) of the leg's deepest leaf link, if it has one."""
+    """Raise the chain error (e.g. a prismatic knee) of the leg's deepest leaf link, if it has
+    one.
+    """
     leaves = [
         link
         for link in model.links
@@ -139,8 +144,8 @@ def _leg_chain(model: RobotModel, leg: str, foot_link: str) -> LegChain:
     movable = [joint.name for joint in chain if joint.movable]
     if len(movable) != JOINTS_PER_LEG:
         raise LegFkError(
-            f"{model.source}: leg {leg}: the chain to foot link '{foot_link}' has {len(movable)} movable "
-            f"joints {movable}, not {JOINTS_PER_LEG}"
+            f"{model.source}: leg {leg}: the chain to foot link '{foot_link}' has {len(movable)} "
+            f"movable joints {movable}, not {JOINTS_PER_LEG}"
         )
     return LegChain(leg, foot_link, chain)
 
@@ -164,7 +169,8 @@ def joint_name_index(
     for incoming, urdf_name in (aliases or {}).items():
         if urdf_name not in index:
             raise LegFkError(
-                f"joint alias '{incoming}={urdf_name}': '{urdf_name}' is not a leg joint of the model"
+                f"joint alias '{incoming}={urdf_name}': '{urdf_name}' is not a leg joint of the "
+                "model"
             )
         index[incoming] = index[urdf_name]
     return index

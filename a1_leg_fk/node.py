@@ -47,7 +47,8 @@ DIAGNOSTICS_PERIOD_S = 1.0
 SUBSCRIBER_CHECK_PERIOD_S = 0.5
 OUTPUT_QOS = QoSProfile(depth=10)  # reliable: heard by reliable and best-effort subscribers
 JOINT_STATES_QOS = QoSProfile(
-    # The sensor-data profile (best effort: hears reliable and best-effort publishers alike), with a
+    # The sensor-data profile (best effort: hears reliable and best-effort publishers alike), with
+    # a
     # deeper queue than its 5, so that a burst of a 1 kHz stream is not overwritten while we work.
     history=qos_profile_sensor_data.history,
     depth=100,
@@ -67,7 +68,8 @@ PARAMETERS = (
         "publish_velocities",
         True,
         ParameterType.PARAMETER_BOOL,
-        "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three velocities",
+        "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three "
+        "velocities",
     ),
     ParameterSpec(
         "publish_markers",
@@ -112,7 +114,8 @@ PARAMETERS = (
         "messages, cheaper); false = as message objects",
     ),
 )
-"""The node's own parameters; the model parameters are :class:`a1_leg_fk.robot_source.RobotSource`'s."""
+"""The node's own parameters; the model parameters are
+:class:`a1_leg_fk.robot_source.RobotSource`'s."""
 
 
 class FootFkNode(Node):
@@ -167,7 +170,8 @@ class FootFkNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
             f"feet of {self._model.source} in frame '{self._base_frame}' from "
-            f"{self.resolve_topic_name('joint_states')} to {self.resolve_topic_name('foot_positions')}/<leg>"
+            f"{self.resolve_topic_name('joint_states')} to "
+            f"{self.resolve_topic_name('foot_positions')}/<leg>"
         )
 
     # --- per message ---------------------------------------------------------------------
@@ -211,7 +215,9 @@ class FootFkNode(Node):
     def _publish_serialized(
         self, writer: SerializedStamped, feet: list[Foot], sec: int, nanosec: int
     ) -> None:
-        """Publish the feet as pre-serialized bytes (same messages, cheaper than message objects)."""
+        """Publish the feet as pre-serialized bytes (same messages, cheaper than message
+        objects).
+        """
         serialized = writer.serialized
         velocities = self._publish_velocities
         for foot in feet:
@@ -229,9 +235,10 @@ class FootFkNode(Node):
             self._stamp_jumps_back += 1
             self._warnings.warn(
                 "stamp_went_back",
-                f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} s, from "
-                f"{self._last_stamp_ns / 1e9:.3f} to {stamp_ns / 1e9:.3f} (bag replay loop or clock reset?); "
-                f"publishing with the new stamps ({self._stamp_jumps_back} jumps back so far)",
+                f"joint_states stamp went back by {(self._last_stamp_ns - stamp_ns) / 1e9:.3f} "
+                f"s, from {self._last_stamp_ns / 1e9:.3f} to {stamp_ns / 1e9:.3f} (bag replay "
+                "loop or clock reset?); publishing with the new stamps "
+                f"({self._stamp_jumps_back} jumps back so far)",
             )
         self._last_stamp_ns = stamp_ns
         return stamp
@@ -243,14 +250,16 @@ class FootFkNode(Node):
         if outcome in REJECTIONS:
             self._warnings.warn(
                 outcome,
-                f"rejected a joint_states message: {outcome.replace('_', ' ')}, {tracker.last_problem} "
-                f"({tracker.counts.outcomes[outcome]} such messages so far)",
+                f"rejected a joint_states message: {outcome.replace('_', ' ')}, "
+                f"{tracker.last_problem} ({tracker.counts.outcomes[outcome]} such messages so "
+                "far)",
             )
         else:
             self._warnings.warn(
                 "non_finite_position",
-                f"ignoring a joint_states value: {tracker.last_problem}; its leg is not published from this "
-                f"message ({tracker.counts.non_finite_joints} such values so far)",
+                f"ignoring a joint_states value: {tracker.last_problem}; its leg is not "
+                f"published from this message ({tracker.counts.non_finite_joints} such values so "
+                "far)",
             )
 
     def _warn_unknown_names(self) -> None:
@@ -388,7 +397,9 @@ class FootFkNode(Node):
         self._serialized = writer if writer is not None and writer.usable else None
 
     def _on_robot(self, config: RobotConfig) -> None:
-        """Another robot was accepted (a parameter or the description topic): start over with it."""
+        """Another robot was accepted (a parameter or the description topic): start over with
+        it.
+        """
         self._model = config
         self._tracker = FootTracker(config.quadruped)
         self._apply_settings()

@@ -1,4 +1,5 @@
-"""PNG plots of the kinematics: one leg's reach envelope, the feet over the demo gait, and a gait diagram.
+"""PNG plots of the kinematics: one leg's reach envelope, the feet over the demo gait, and a gait
+diagram.
 
 matplotlib is optional: it is imported only when a plot is drawn (with the non-interactive Agg
 backend), and its absence raises :class:`MissingMatplotlib`, whose message says how to install it.
@@ -57,11 +58,12 @@ def _limits(
 def reach_samples(
     quadruped: Quadruped, leg: str, samples: int = 250
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The leg's foot over a ``samples`` x ``samples`` grid of hip pitch x knee within their limits.
+    """The leg's foot over a ``samples`` x ``samples`` grid of hip pitch x knee within their
+    limits.
 
     Hip roll is 0. Returns ``(points, edge)`` in the hip's sagittal plane, ``[x, z]`` [m] relative
-    to the hip-pitch joint: ``points`` (samples**2, 2) fill the reachable region and ``edge`` (M, 2)
-    traces its outline (the images of the four edges of the angle rectangle, in order).
+    to the hip-pitch joint: ``points`` (samples**2, 2) fill the reachable region and ``edge`` (M,
+    2) traces its outline (the images of the four edges of the angle rectangle, in order).
     """
     slot = leg_slot(leg)
     first = slot * JOINTS_PER_LEG
@@ -111,7 +113,9 @@ def _plane_points(
 
 
 def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 250) -> Path:
-    """Write ``path`` (PNG): where the leg's foot can be in its hip's sagittal plane (hip roll 0)."""
+    """Write ``path`` (PNG): where the leg's foot can be in its hip's sagittal plane (hip roll
+    0).
+    """
     plt = pyplot()
     slot = leg_slot(leg)
     points, edge = reach_samples(quadruped, leg, samples)
@@ -124,7 +128,8 @@ def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 
     figure, axes = plt.subplots(figsize=(7.5, 7.5))
     from matplotlib.patches import Patch
 
-    # The region: its outline filled with the non-zero winding rule (the map (pitch, knee) -> foot keeps
+    # The region: its outline filled with the non-zero winding rule (the map (pitch, knee) -> foot
+    # keeps
     # its orientation away from the straight knee, so every covered point winds at least once),
     # and over it a sparse subset of the sampled feet.
     axes.fill(edge[:, 0], edge[:, 1], color=REGION_COLOUR, linewidth=0, zorder=0)
@@ -168,7 +173,10 @@ def plot_reach(quadruped: Quadruped, leg: str, path: str | Path, samples: int = 
             reach.max_unlimited_m,
             "--",
             "0.3",
-            f"straight knee {reach.max_unlimited_m:.3f} m (knee {reach.knee_at_max_unlimited:.2f} rad: outside its limits)",
+            (
+                f"straight knee {reach.max_unlimited_m:.3f} m (knee "
+                f"{reach.knee_at_max_unlimited:.2f} rad: outside its limits)"
+            ),
         ),
     ):
         axes.plot(
@@ -216,7 +224,9 @@ def gait_feet(
     cycles: float = 2.0,
     samples_per_cycle: int = 200,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(times [s], feet (N, 4, 3) [m, base frame])`` over ``cycles`` periodic trot cycles of the gait."""
+    """``(times [s], feet (N, 4, 3) [m, base frame])`` over ``cycles`` periodic trot cycles of the
+    gait.
+    """
     gait = gait or Gait(limits_of(quadruped))
     count = max(2, round(cycles * samples_per_cycle) + 1)
     times = gait.periodic_from_s + np.linspace(0.0, cycles * gait.period_s, count)
@@ -227,7 +237,9 @@ def gait_feet(
 def plot_gait_feet(
     quadruped: Quadruped, path: str | Path, gait: Gait | None = None, cycles: float = 2.0
 ) -> Path:
-    """Write ``path`` (PNG): the four feet over ``cycles`` cycles of the demo trot, side and top views."""
+    """Write ``path`` (PNG): the four feet over ``cycles`` cycles of the demo trot, side and top
+    views.
+    """
     plt = pyplot()
     gait = gait or Gait(limits_of(quadruped))
     times, feet = gait_feet(quadruped, gait, cycles)
@@ -254,8 +266,8 @@ def plot_gait_feet(
         axes.grid(True, linewidth=0.4, alpha=0.6)
         axes.legend(fontsize=8, loc="best")
     figure.suptitle(
-        f"Feet over {cycles:g} cycles of the demo trot ({gait.parameters.trot_hz:g} Hz, diagonal pairs FR+RL / FL+RR), "
-        f"t = {times[0]:.2f}..{times[-1]:.2f} s; dots: start"
+        f"Feet over {cycles:g} cycles of the demo trot ({gait.parameters.trot_hz:g} Hz, diagonal "
+        f"pairs FR+RL / FL+RR), t = {times[0]:.2f}..{times[-1]:.2f} s; dots: start"
     )
     return _save(figure, plt, path)
 
@@ -277,8 +289,8 @@ def plot_gait_diagram(
 
     Top: one row per leg (FR, FL, RR, RL from the top), a bar over each stance interval [s from the
     first stamp]. Bottom: each foot's height above the detected ground plane [m] (the plane itself
-    at 0, the on/off height thresholds dashed), so a reader sees at a glance whether the stances sit
-    where the feet are down.
+    at 0, the on/off height thresholds dashed), so a reader sees at a glance whether the stances
+    sit where the feet are down.
     """
     plt = pyplot()
     thresholds = contacts.thresholds
@@ -314,8 +326,9 @@ def plot_gait_diagram(
         0.0,
         color="k",
         linewidth=1.2,
-        label=f"detected ground (height 0): z = {ground.level_m:.3f} m\nat x, y = {ground.origin_xy[0]:.2f}, "
-        f"{ground.origin_xy[1]:.2f} m, slope {ground.slope_deg:.1f} deg",
+        label=f"detected ground (height 0): z = {ground.level_m:.3f} m\nat x, y = "
+        f"{ground.origin_xy[0]:.2f}, {ground.origin_xy[1]:.2f} m, slope {ground.slope_deg:.1f} "
+        "deg",
     )
     for value, text in ((thresholds.height_on_m, "on"), (thresholds.height_off_m, "off")):
         heights.axhline(value, color="0.4", linestyle="--", linewidth=0.8)

@@ -60,7 +60,9 @@ class PyBulletFeet:
     """A quadruped loaded into a PyBullet DIRECT client of its own, fixed at the origin."""
 
     def __init__(self, quadruped: Quadruped, urdf_xml: str) -> None:
-        """Load ``urdf_xml`` (the text the quadruped was built from); PyBullet errors become LegFkError."""
+        """Load ``urdf_xml`` (the text the quadruped was built from); PyBullet errors become
+        LegFkError.
+        """
         self._pybullet = import_pybullet()
         self._quadruped = quadruped
         self._client = self._pybullet.connect(self._pybullet.DIRECT)

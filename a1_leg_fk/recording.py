@@ -98,7 +98,8 @@ class RecordingSummary:
             lines.insert(4, f"ignored names: {list(self.unknown_names[:20])}")
         if self.base_pose_topic:
             lines.append(
-                f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a pose (outside its time range or in a gap)"
+                f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a "
+                "pose (outside its time range or in a gap)"
             )
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
@@ -190,7 +191,7 @@ class BlockStats:
         )
 
 
-# --- the notebook API -----------------------------------------------------------------------------
+# --- the notebook API ----------------------------------------------------------------------------
 
 
 def read_foot_trajectories(
@@ -208,8 +209,8 @@ def read_foot_trajectories(
     ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
     gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
     stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s], default
-    :data:`DEFAULT_MAX_POSE_GAP_S`). Raises :class:`LegFkError` for bad input; a bag that cannot be read to its end gives what was
-    read, with ``summary.stopped`` saying why.
+    :data:`DEFAULT_MAX_POSE_GAP_S`). Raises :class:`LegFkError` for bad input; a bag that cannot be
+    read to its end gives what was read, with ``summary.stopped`` saying why.
     """
     recording = open_recording(path, **choices)
     try:

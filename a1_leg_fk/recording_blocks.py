@@ -281,7 +281,9 @@ def feet_of(quadruped: Quadruped, angles: np.ndarray) -> np.ndarray:
 
 
 def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all finite."""
+    """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all
+    finite.
+    """
     out = np.full((angles.shape[0], LEGS, 3), math.nan)
     usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(
         angles

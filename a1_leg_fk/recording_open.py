@@ -217,11 +217,13 @@ def _storage_file(directory: Path) -> Path:
     storage = sorted(child for child in directory.iterdir() if child.suffix in (".db3", ".mcap"))
     if not storage:
         raise LegFkError(
-            f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file)"
+            f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap "
+            "file)"
         )
     if len(storage) > 1:
         raise LegFkError(
-            f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: {', '.join(p.name for p in storage)}"
+            f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: "
+            f"{', '.join(p.name for p in storage)}"
         )
     return storage[0]
 

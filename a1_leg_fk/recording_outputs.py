@@ -181,7 +181,7 @@ def convert(
         close_recording(recording)
 
 
-# --- CSV --------------------------------------------------------------------------------------------
+# --- CSV -----------------------------------------------------------------------------------------
 
 
 class CsvWriter:
@@ -256,7 +256,7 @@ class CsvWriter:
         self.file = open(self.path, "ab")  # noqa: SIM115 (open until close() or abort())
 
 
-# --- the output bag ---------------------------------------------------------------------------------
+# --- the output bag ------------------------------------------------------------------------------
 
 
 def plot_trajectories(trajectories: FootTrajectories, path: Path) -> Path:

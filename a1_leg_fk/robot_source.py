@@ -10,11 +10,11 @@ published before the node started still arrives), and decides which description 
 2. otherwise the latest description from the topic;
 3. otherwise the embedded A1, until one arrives.
 
-Every description, from a parameter or the topic, goes through :func:`a1_leg_fk.robot_config.load_robot`
-(size cap, entity refusal, leg discovery, ``foot_links``, ``joint_aliases``). An accepted one is
-handed to the node's ``on_change``; a rejected one is logged with its reason, reported by
-:attr:`RobotSource.topic_status`, and the old model stays. The same text published again (as
-robot_state_publisher does on parameter changes) does not reload.
+Every description, from a parameter or the topic, goes through
+:func:`a1_leg_fk.robot_config.load_robot` (size cap, entity refusal, leg discovery, ``foot_links``,
+``joint_aliases``). An accepted one is handed to the node's ``on_change``; a rejected one is logged
+with its reason, reported by :attr:`RobotSource.topic_status`, and the old model stays. The same
+text published again (as robot_state_publisher does on parameter changes) does not reload.
 """
 
 from __future__ import annotations
@@ -92,7 +92,9 @@ def parameter_value(node: Node, name: str) -> object:
 
 
 def string_list(value: object) -> list[str]:
-    """A string-array parameter's value (rclpy gives a list of str, ``[]`` when unset) as a list."""
+    """A string-array parameter's value (rclpy gives a list of str, ``[]`` when unset) as a
+    list.
+    """
     return list(cast("Sequence[str]", value))
 
 
@@ -103,21 +105,23 @@ PARAMETERS = (
         "robot_description",
         "",
         ParameterType.PARAMETER_STRING,
-        "URDF XML of the robot; when set (or urdf_file is), the robot_description topic is ignored",
+        "URDF XML of the robot; when set (or urdf_file is), the robot_description topic is "
+        "ignored",
     ),
     ParameterSpec(
         "urdf_file",
         "",
         ParameterType.PARAMETER_STRING,
-        "Path of a URDF file, used when robot_description is empty; when set, the topic is ignored",
+        "Path of a URDF file, used when robot_description is empty; when set, the topic is "
+        "ignored",
     ),
     ParameterSpec(
         "foot_links",
         None,
         ParameterType.PARAMETER_STRING_ARRAY,
-        "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = each leg's leaf link FR..., FL..., "
-        "RR..., RL... with three movable joints above it, or of several such leaves the one named "
-        f"<leg>_<{'|'.join(FOOT_NAME_SUFFIXES)}> (case-insensitive)",
+        "Foot link per leg as LEG=link (e.g. FR=toe_fr); empty = each leg's leaf link FR..., "
+        "FL..., RR..., RL... with three movable joints above it, or of several such leaves the "
+        f"one named <leg>_<{'|'.join(FOOT_NAME_SUFFIXES)}> (case-insensitive)",
     ),
     ParameterSpec(
         "joint_aliases",
@@ -129,8 +133,9 @@ PARAMETERS = (
         "robot_description_topic",
         "robot_description",
         ParameterType.PARAMETER_STRING,
-        "Topic of the robot description (std_msgs/String, transient local, as robot_state_publisher "
-        "publishes it) followed when neither robot_description nor urdf_file is set; empty = none",
+        "Topic of the robot description (std_msgs/String, transient local, as "
+        "robot_state_publisher publishes it) followed when neither robot_description nor "
+        "urdf_file is set; empty = none",
         read_only=True,
     ),
 )
@@ -138,7 +143,8 @@ BASE_FRAME_PARAMETER = ParameterSpec(
     "base_frame",
     "",
     ParameterType.PARAMETER_STRING,
-    "frame_id of the feet; empty = the URDF's root link (trunk for the embedded A1, base for Unitree's)",
+    "frame_id of the feet; empty = the URDF's root link (trunk for the embedded A1, base for "
+    "Unitree's)",
 )
 
 
@@ -177,8 +183,14 @@ class RobotSource:
         if not self.topic_name:
             return f"robot: {self.config.source} (no robot_description topic followed)"
         if explicit:
-            return f"robot: {self.config.source}; parameter {explicit} is set, so {self.topic_name} is ignored"
-        return f"robot: {self.config.source} until a description arrives on {self.topic_name} (followed)"
+            return (
+                f"robot: {self.config.source}; parameter {explicit} is set, so "
+                f"{self.topic_name} is ignored"
+            )
+        return (
+            f"robot: {self.config.source} until a description arrives on {self.topic_name} "
+            "(followed)"
+        )
 
     # --- parameters ------------------------------------------------------------------------
 
@@ -237,7 +249,8 @@ class RobotSource:
             if not self._ignored_logged:
                 self._ignored_logged = True
                 self._node.get_logger().info(
-                    f"ignoring the description on {self.topic_name}: parameter {explicit} is set and wins"
+                    f"ignoring the description on {self.topic_name}: parameter {explicit} is set "
+                    "and wins"
                 )
             return
         try:
@@ -264,7 +277,9 @@ class RobotSource:
 
 
 def _resolved_topic(node: Node, topic: str) -> str:
-    """The full name of ``topic`` for ``node``; :class:`LegFkError` names the parameter if invalid."""
+    """The full name of ``topic`` for ``node``; :class:`LegFkError` names the parameter if
+    invalid.
+    """
     try:
         return node.resolve_topic_name(topic)
     except Exception as error:  # rclpy raises its internal RCLError for a bad name

@@ -52,8 +52,8 @@ def run_node(
 ) -> int:
     """Start rclpy, spin the node until Ctrl-C/SIGTERM (exit 0, also when it comes while starting).
 
-    Bad ``--ros-args``, or one of ``usage_errors`` while the node starts (a bad parameter): one line
-    on stderr and exit 2. A :class:`LegFkError` while starting: a fatal log line and exit 1.
+    Bad ``--ros-args``, or one of ``usage_errors`` while the node starts (a bad parameter): one
+    line on stderr and exit 2. A :class:`LegFkError` while starting: a fatal log line and exit 1.
     ``executor_factory`` defaults to :func:`make_executor`.
 
     SIGINT/SIGTERM only set a flag (:class:`StopSignals`, shared with the executable's, which is
@@ -107,16 +107,17 @@ def make_executor() -> Executor:
 
 
 def _ros_args_error(message: str) -> str:
-    """Rcl's refusal of the command line, cut to its first line, with a hint where a URDF given with
-    ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and exported
-    URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML.
+    """Rcl's refusal of the command line, cut to its first line, with a hint where a URDF given
+    with ``-p robot_description:=...`` was refused: rcl parses every ``-p`` value as YAML, and
+    exported URDFs (a comment such as ``Commit Version: 1.6.0``) are not valid YAML.
     """
     first_line = message.splitlines()[0] if message else message
     if "robot_description:=" not in message:
         return first_line
     return (
-        f"{first_line[:160]}... (rcl parses every -p value as YAML, and this URDF is not valid YAML: give it in "
-        "a --params-file as a quoted or block string, through a launch file, or on the robot_description topic)"
+        f"{first_line[:160]}... (rcl parses every -p value as YAML, and this URDF is not valid "
+        "YAML: give it in a --params-file as a quoted or block string, through a launch file, "
+        "or on the robot_description topic)"
     )
 
 
@@ -143,7 +144,9 @@ def diagnostics(
     hardware_id: str,
     values: Mapping[str, object],
 ) -> DiagnosticArray:
-    """A one-status DiagnosticArray stamped with the node's clock; ``name`` follows the node's name."""
+    """A one-status DiagnosticArray stamped with the node's clock; ``name`` follows the node's
+    name.
+    """
     status = DiagnosticStatus(
         level=level,
         name=f"{node.get_name()}: {name}",

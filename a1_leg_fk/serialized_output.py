@@ -17,7 +17,8 @@ from rclpy.serialization import serialize_message
 
 
 class SerializedStamped:
-    """A PointStamped/Vector3Stamped (same CDR layout: a Header, then three float64) serialized once.
+    """A PointStamped/Vector3Stamped (same CDR layout: a Header, then three float64) serialized
+    once.
 
     :meth:`serialized` patches a stamp and three values [m or m/s] into the bytes. ``usable`` is
     False unless the rmw writes the little-endian CDR this expects (checked on a probe message);

@@ -1,6 +1,8 @@
-"""Ctrl-C and SIGTERM as a flag instead of an exception, for the ``a1-leg-fk`` commands and the nodes.
+"""Ctrl-C and SIGTERM as a flag instead of an exception, for the ``a1-leg-fk`` commands and the
+nodes.
 
-Standard library only: the executables install it before their slow imports (rclpy, numpy, PyBullet).
+Standard library only: the executables install it before their slow imports (rclpy, numpy,
+PyBullet).
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ class StopSignals:
     """Turns SIGINT and SIGTERM into a flag (``stop.is_set()``) instead of an exception.
 
     With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call or of the
-    cleanup; every loop that uses it waits in short slices and checks the flag. Entered inside another
-    StopSignals (an executable's, installed before its imports), it shares that one's ``stop``: a
-    signal that came before is not lost. Enter it in the main thread (Python's signal rule).
+    cleanup; every loop that uses it waits in short slices and checks the flag. Entered inside
+    another StopSignals (an executable's, installed before its imports), it shares that one's
+    ``stop``: a signal that came before is not lost. Enter it in the main thread (Python's signal
+    rule).
     """
 
     def __init__(self) -> None:

@@ -114,7 +114,8 @@ def load_urdf(source: str | Path | None = None) -> RobotModel:
 
 
 def read_urdf_text(source: str | Path | None = None) -> tuple[str, str]:
-    """``(XML text, name for messages)`` of a URDF path, an XML string, or ``None`` (the embedded A1).
+    """``(XML text, name for messages)`` of a URDF path, an XML string, or ``None`` (the embedded
+    A1).
 
     The one place that reads robot descriptions; the text passes :func:`checked_urdf_text`.
     """
@@ -273,7 +274,8 @@ def _check_tree(links: tuple[str, ...], joints: Mapping[str, Joint], source: str
         for role, link in (("parent", joint.parent), ("child", joint.child)):
             if link not in known:
                 raise LegFkError(
-                    f"{source}: joint '{joint.name}' names {role} link '{link}', which does not exist"
+                    f"{source}: joint '{joint.name}' names {role} link '{link}', which does not "
+                    "exist"
                 )
         if joint.child in parent_of:
             raise LegFkError(f"{source}: link '{joint.child}' is the child of more than one joint")
@@ -288,7 +290,9 @@ def _check_tree(links: tuple[str, ...], joints: Mapping[str, Joint], source: str
 
 
 def _link_on_cycle(parent_of: Mapping[str, str]) -> str | None:
-    """A link on a parent cycle, or ``None`` when every parent path ends at a root (linear time)."""
+    """A link on a parent cycle, or ``None`` when every parent path ends at a root (linear
+    time).
+    """
     reaches_root: set[str] = set()
     for start in parent_of:
         path: list[str] = []

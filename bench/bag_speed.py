@@ -123,7 +123,8 @@ def speed(options: argparse.Namespace, folder: Path) -> None:
     bag = folder / "bench_bag"
     content = "names, positions and velocities" if options.velocities else "names and positions"
     print(
-        f"generating {options.messages:,} JointState messages at 1 kHz ({content}; {options.storage}) ...",
+        f"generating {options.messages:,} JointState messages at 1 kHz ({content}; "
+        f"{options.storage}) ...",
         flush=True,
     )
     generation = timed(generate, bag, options.messages, options.storage, options.velocities)
@@ -174,7 +175,8 @@ def peak_rss_mb(arguments: list[str]) -> float:
 
 def long_run(options: argparse.Namespace, folder: Path) -> None:
     print(
-        "| bag | messages | --csv peak RSS [MB] | --output-bag peak RSS [MB] |\n| --- | --- | --- | --- |"
+        "| bag | messages | --csv peak RSS [MB] | --output-bag peak RSS [MB] |\n"
+        "| --- | --- | --- | --- |"
     )
     for minutes in (3, 30):
         messages = minutes * 60 * 1000

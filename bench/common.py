@@ -57,8 +57,9 @@ def machine() -> str:
     rmw = os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp (default)")
     libraries = ", ".join(f"{name} {_version(name)}" for name in ("numpy", "pybullet", "rclpy"))
     return (
-        f"machine: nproc={len(os.sched_getaffinity(0))} (cpu_count={os.cpu_count()}), {model}, {platform.platform()}, "
-        f"load avg {load}\npython {platform.python_version()}, {libraries}, {rmw}"
+        f"machine: nproc={len(os.sched_getaffinity(0))} (cpu_count={os.cpu_count()}), {model}, "
+        f"{platform.platform()}, load avg {load}\npython {platform.python_version()}, "
+        f"{libraries}, {rmw}"
     )
 
 

@@ -159,8 +159,10 @@ def main() -> None:
     for name, seconds in rows:
         print(f"  {name:<52} {seconds * 1e6:9.2f} {seconds / fk_seconds:15.1f}x")
     print(
-        f"  Quadruped.fk: {fk_seconds * 1e6:.2f} us/call (target <= 5 us: {'met' if fk_seconds <= 5e-6 else 'NOT met'}); "
-        f"{numpy_seconds / fk_seconds:.1f}x faster than (a) (target >= 20x: {'met' if numpy_seconds / fk_seconds >= 20 else 'NOT met'}), "
+        f"  Quadruped.fk: {fk_seconds * 1e6:.2f} us/call (target <= 5 us: "
+        f"{'met' if fk_seconds <= 5e-6 else 'NOT met'}); {numpy_seconds / fk_seconds:.1f}x "
+        "faster than (a) (target >= 20x: "
+        f"{'met' if numpy_seconds / fk_seconds >= 20 else 'NOT met'}), "
         f"{numpy_math_seconds / fk_seconds:.1f}x faster than (a')"
     )
 
@@ -184,16 +186,19 @@ def main() -> None:
     batch_seconds, trig_seconds = statistics.median(batch_runs), statistics.median(trig_runs)
     throughput = BATCH_ROWS / batch_seconds / 1e6
     print(
-        f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} interleaved runs)"
+        f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} "
+        "interleaved runs)"
     )
     print(f"  {'method':<52} {'s':>9} {'M configs/s':>12}")
     print(f"  {'Quadruped.fk_batch':<52} {batch_seconds:9.3f} {throughput:12.2f}")
     print(
-        f"  {'np.sin + np.cos alone (the floor)':<52} {trig_seconds:9.3f} {BATCH_ROWS / trig_seconds / 1e6:12.2f}"
+        f"  {'np.sin + np.cos alone (the floor)':<52} {trig_seconds:9.3f} "
+        f"{BATCH_ROWS / trig_seconds / 1e6:12.2f}"
     )
     print(
         f"  fk_batch / trig floor = {batch_seconds / trig_seconds:.2f}x; "
-        f"throughput {throughput:.2f} M/s (target >= 1.3 M/s: {'met' if throughput >= 1.3 else 'NOT met'})"
+        f"throughput {throughput:.2f} M/s (target >= 1.3 M/s: "
+        f"{'met' if throughput >= 1.3 else 'NOT met'})"
     )
 
 

@@ -80,7 +80,8 @@ class Phase:
 
 
 def machine_busy_s() -> float:
-    """CPU seconds the whole machine has been busy (all cores; /proc/stat, idle and iowait excluded)."""
+    """CPU seconds the whole machine has been busy (all cores; /proc/stat, idle and iowait
+    excluded)."""
     fields = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:9]]
     return (sum(fields) - fields[3] - fields[4]) / CLOCK_TICKS
 
@@ -147,13 +148,15 @@ class Child(common.Child):
         return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # utime, stime (fields 14, 15)
 
     def timed_stop(self, sig: int = signal.SIGINT) -> tuple[int | None, float]:
-        """Stop it; (exit code, None if it had to be killed; seconds from the signal to the exit)."""
+        """Stop it; (exit code, None if it had to be killed; seconds from the signal to the
+        exit)."""
         code = self.stop(sig)
         return (None if self.killed else code), self.stop_s
 
 
 class Scenario:
-    """receiver + generator + (node or baseline) [+ verify caller] on one domain, phases in order."""
+    """receiver + generator + (node or baseline) [+ verify caller] on one domain, phases in
+    order."""
 
     def __init__(
         self,
@@ -344,8 +347,8 @@ def print_report(
     print(f"ROS_DOMAIN_ID {args.domain}, executor '{args.executor}'")
     header = (
         f"{'scenario':<30} {'in Hz':>7} {'out Hz':>7} {'in loss':>8} {'foot loss':>9} "
-        f"{'p50 ms':>7} {'p95 ms':>7} {'p99 ms':>7} {'max ms':>7} {'CPU %':>6} {'us/in':>6} {'rx CPU%':>7} "
-        f"{'others%':>7} {'ratio':>6}"
+        f"{'p50 ms':>7} {'p95 ms':>7} {'p99 ms':>7} {'max ms':>7} {'CPU %':>6} {'us/in':>6} "
+        f"{'rx CPU%':>7} {'others%':>7} {'ratio':>6}"
     )
     print(header)
     print("-" * len(header))
@@ -353,9 +356,11 @@ def print_report(
 
     def row(label: str, r: dict, ratio: str = "") -> None:
         print(
-            f"{label:<30} {r['rate_hz']:>7.0f} {r['out_hz']:>7.0f} {r['input_loss']:>8.2%} {r['foot_loss']:>9.2%} "
-            f"{r['p50']:>7.2f} {r['p95']:>7.2f} {r['p99']:>7.2f} {r['max']:>7.1f} {r['cpu_under_test']:>6.1f} "
-            f"{1e4 * r['cpu_under_test'] / r['rate_hz']:>6.0f} {r['cpu_receiver']:>7.1f} {r['cpu_others']:>7.0f} {ratio:>6}"
+            f"{label:<30} {r['rate_hz']:>7.0f} {r['out_hz']:>7.0f} {r['input_loss']:>8.2%} "
+            f"{r['foot_loss']:>9.2%} {r['p50']:>7.2f} {r['p95']:>7.2f} {r['p99']:>7.2f} "
+            f"{r['max']:>7.1f} {r['cpu_under_test']:>6.1f} "
+            f"{1e4 * r['cpu_under_test'] / r['rate_hz']:>6.0f} {r['cpu_receiver']:>7.1f} "
+            f"{r['cpu_others']:>7.0f} {ratio:>6}"
         )
 
     for phase in node_phases:
@@ -372,23 +377,26 @@ def print_report(
             if phase.result and phase.ramp:
                 row(f"{label} ramp {phase.rate:.0f} Hz", phase.result)
     print(
-        "(CPU % of one core; us/in: CPU us per input; rx: the receiver; others: CPU % used by processes outside"
-        " this benchmark (the machine's total from /proc/stat minus ours), a sign of a noisy measurement;"
-        " ratio on a 1 kHz row: node CPU / baseline CPU)"
+        "(CPU % of one core; us/in: CPU us per input; rx: the receiver; others: CPU % used by "
+        "processes outside this benchmark (the machine's total from /proc/stat minus ours), a "
+        "sign of a noisy measurement; ratio on a 1 kHz row: node CPU / baseline CPU)"
     )
     print()
     node_max, node_top = max_sustained(node_phases)
     base_max, base_top = max_sustained(base_phases)
     rate_ratio = node_max / base_max if base_max else float("nan")
     print(
-        f"max sustained input rate (< {LOSS_LIMIT:.1%} loss): node {'>=' if node_top else ''}{node_max:.0f} Hz, "
-        f"baseline {'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline {fmt(rate_ratio, '.2f')}"
+        f"max sustained input rate (< {LOSS_LIMIT:.1%} loss): node "
+        f"{'>=' if node_top else ''}{node_max:.0f} Hz, baseline "
+        f"{'>=' if base_top else ''}{base_max:.0f} Hz, ratio node/baseline "
+        f"{fmt(rate_ratio, '.2f')}"
     )
     print(
         f"startup (process start -> first published foot): node {node.startup_s:.2f} s"
         + (f", baseline {base.startup_s:.2f} s" if base else "")
-        + f"; the node's own start-up (process start -> its start-up log line) {fmt(node.ready_s, '.2f')} s,"
-        " the rest is DDS discovery of the already running publisher"
+        + "; the node's own start-up (process start -> its start-up log line) "
+        f"{fmt(node.ready_s, '.2f')} s, the rest is DDS discovery of the already running "
+        "publisher"
     )
     if node.verify_summary:
         v = node.verify_summary
@@ -549,7 +557,8 @@ def main() -> int:
     signal.signal(signal.SIGTERM, on_term)
     total = sum(p.duration for p in node_phases + base_phases)
     print(
-        f"node_throughput: about {total + 15 + 1.4 * len(rates) * 2:.0f} s on ROS_DOMAIN_ID={args.domain}",
+        f"node_throughput: about {total + 15 + 1.4 * len(rates) * 2:.0f} s on "
+        f"ROS_DOMAIN_ID={args.domain}",
         flush=True,
     )
     node = base = None

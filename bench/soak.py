@@ -183,8 +183,9 @@ def soak(args: argparse.Namespace) -> int:
         return children[-1].process
 
     print(
-        f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % bad/partial, "
-        f"verify every {args.verify_period:g} s; ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}",
+        f"soak: {args.duration:g} s at {args.rate:g} Hz, ~{100 * args.bad_fraction:g} % "
+        f"bad/partial, verify every {args.verify_period:g} s; "
+        f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}",
         flush=True,
     )
     node_process = start(
@@ -388,7 +389,8 @@ def soak(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(summary, indent=1))
     if rss_end > rss_warm * (1.0 + args.max_rss_growth):
         failures.append(
-            f"RSS grew {rss_warm:.1f} -> {rss_end:.1f} MB after warm-up (> {100 * args.max_rss_growth:g} %)"
+            f"RSS grew {rss_warm:.1f} -> {rss_end:.1f} MB after warm-up (> "
+            f"{100 * args.max_rss_growth:g} %)"
         )
     if lost_by_node or output_lost:
         failures.append(
@@ -396,12 +398,14 @@ def soak(args: argparse.Namespace) -> int:
         )
     if input_lost > args.max_input_loss * sent:
         failures.append(
-            f"the node's best-effort input lost {input_lost} of {sent} messages (> {100 * args.max_input_loss:g} %)"
+            f"the node's best-effort input lost {input_lost} of {sent} messages (> "
+            f"{100 * args.max_input_loss:g} %)"
         )
     elif input_lost:
         print(
-            f"soak: note: {input_lost} of {sent} messages ({100 * input_lost / sent:.2f} %) never reached the node "
-            "(best-effort input under load; not counted as lost by the node)"
+            f"soak: note: {input_lost} of {sent} messages ({100 * input_lost / sent:.2f} %) "
+            "never reached the node (best-effort input under load; not counted as lost by the "
+            "node)"
         )
     for failure in failures[:10]:
         print(f"soak: FAIL: {failure}", file=sys.stderr)

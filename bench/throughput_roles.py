@@ -1,8 +1,10 @@
-"""The processes of ``bench/node_throughput.py``: load generator, receiver, echo baseline, verify caller.
+"""The processes of ``bench/node_throughput.py``: load generator, receiver, echo baseline, verify
+caller.
 
 Run as ``python bench/throughput_roles.py ROLE [options]`` on the ROS_DOMAIN_ID the orchestrator
 chose. Control is by JSON lines: commands on stdin, events on stdout (one object per line), so
-the orchestrator itself needs no ROS. Every role exits cleanly on SIGINT/SIGTERM or ``{"op": "stop"}``.
+the orchestrator itself needs no ROS. Every role exits cleanly on SIGINT/SIGTERM or
+``{"op": "stop"}``.
 
 Roles
 - ``generator``: JointState (12 joints, positions and velocities) on ``joint_states``. Until the
@@ -11,8 +13,8 @@ Roles
   messages, paced by ``time.perf_counter`` (sleep until just before the next one is due, then
   send every message that is due: the average rate is exact, jitter is a few hundred us). Each
   message's stamp is ``time.time_ns()`` when it is sent (strictly increasing), and its
-  ``header.frame_id`` is its sequence number. Reports ``phase_start`` and ``phase_end`` (sent, first
-  and last stamp, achieved duration).
+  ``header.frame_id`` is its sequence number. Reports ``phase_start`` and ``phase_end`` (sent,
+  first and last stamp, achieved duration).
 - ``receiver``: raw (serialized) subscriptions to the eight output topics, drained from its own
   wait set without an executor; per message it keeps the JointState stamp parsed from the CDR
   bytes, the DDS reception time and the publisher's sequence number (``received_timestamp``,
@@ -23,7 +25,8 @@ Roles
 - ``baseline``: the bare rclpy echo: same QoS and executor as the node; per JointState it copies
   three positions per leg into four PointStamped (and, when the message has velocities, three
   velocities into four Vector3Stamped, the node's outputs) and publishes them; no FK, no checks.
-- ``verifier``: calls ``verify_fk`` 20 times a second between ``{"op": "go"}`` and ``{"op": "stop"}``.
+- ``verifier``: calls ``verify_fk`` 20 times a second between ``{"op": "go"}`` and
+  ``{"op": "stop"}``.
 """
 
 from __future__ import annotations
@@ -60,7 +63,8 @@ def emit(**event: object) -> None:
 
 
 class Control:
-    """stdin commands (a reader thread) and SIGINT/SIGTERM, for a process that owns its main loop."""
+    """stdin commands (a reader thread) and SIGINT/SIGTERM, for a process that owns its main
+    loop."""
 
     def __init__(self) -> None:
         self.commands: queue.Queue[dict] = queue.Queue()

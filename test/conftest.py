@@ -66,7 +66,8 @@ class Processes:
         raise KeyError(process)
 
     def interrupt(self, process: subprocess.Popen, timeout_s: float = 5.0) -> int:
-        """Send SIGINT (as Ctrl-C does) and return the exit code, killing it after ``timeout_s``."""
+        """Send SIGINT (as Ctrl-C does) and return the exit code, killing it after
+        ``timeout_s``."""
         if process.poll() is None:
             process.send_signal(signal.SIGINT)
         try:

@@ -1,4 +1,5 @@
-"""Robot descriptions in the style of published, exporter-written quadruped URDFs, made by the tests.
+"""Robot descriptions in the style of published, exporter-written quadruped URDFs, made by the
+tests.
 
 Unitree's own descriptions (unitreerobotics/unitree_ros, ``robots/*_description/urdf/``) were read
 to learn their structure; none of their text is copied here. What they do that a hand-written URDF
@@ -204,8 +205,13 @@ def _leg(
     if shin_links:  # collision-only links with no <inertial>, the second one a leaf under the calf
         text += [
             (
-                f'  <link\n    name="{leg}_calflower">\n    <collision>\n      <geometry>\n        '
-                '<cylinder length="0.065" radius="0.011" />\n      </geometry>\n    </collision>\n  </link>\n'
+                f'  <link\n    name="{leg}_calflower">\n'
+                "    <collision>\n"
+                "      <geometry>\n"
+                '        <cylinder length="0.065" radius="0.011" />\n'
+                "      </geometry>\n"
+                "    </collision>\n"
+                "  </link>\n"
             ),
             _fixed(
                 f"{leg}_calflower_joint",
@@ -216,8 +222,13 @@ def _leg(
                 zero_axis,
             ),
             (
-                f'  <link\n    name="{leg}_calflower1">\n    <collision>\n      <geometry>\n        '
-                '<cylinder length="0.03" radius="0.0155" />\n      </geometry>\n    </collision>\n  </link>\n'
+                f'  <link\n    name="{leg}_calflower1">\n'
+                "    <collision>\n"
+                "      <geometry>\n"
+                '        <cylinder length="0.03" radius="0.0155" />\n'
+                "      </geometry>\n"
+                "    </collision>\n"
+                "  </link>\n"
             ),
             _fixed(
                 f"{leg}_calflower1_joint",
@@ -235,14 +246,20 @@ def _leg(
             ("calf", f"{leg}_thigh", f"0 {-side * 0.058!r} 0"),
         ):
             text.append(
-                f'  <link name="{leg}_{rotor}_rotor">\n    <inertial>\n      <origin rpy="0 0 0" '
-                'xyz="0.0 0.0 0.0"/>\n      <mass value="0.2734"/>\n      <inertia ixx="0.000144463" '
-                'ixy="0.0" ixz="0.0" iyy="0.000144463" iyz="0.0" izz="0.000263053"/>\n    </inertial>\n'
+                f'  <link name="{leg}_{rotor}_rotor">\n'
+                "    <inertial>\n"
+                '      <origin rpy="0 0 0" xyz="0.0 0.0 0.0"/>\n'
+                '      <mass value="0.2734"/>\n'
+                '      <inertia ixx="0.000144463" ixy="0.0" ixz="0.0" iyy="0.000144463" '
+                'iyz="0.0" izz="0.000263053"/>\n'
+                "    </inertial>\n"
                 "  </link>\n"
             )
             text.append(
-                f'  <joint name="{leg}_{rotor}_rotor_joint" type="fixed">\n    <origin rpy="0 0 0" '
-                f'xyz="{origin}"/>\n    <parent link="{parent}"/>\n    <child link="{leg}_{rotor}_rotor"/>\n'
+                f'  <joint name="{leg}_{rotor}_rotor_joint" type="fixed">\n'
+                f'    <origin rpy="0 0 0" xyz="{origin}"/>\n'
+                f'    <parent link="{parent}"/>\n'
+                f'    <child link="{leg}_{rotor}_rotor"/>\n'
                 "  </joint>\n"
             )
     return "".join(text)
@@ -265,9 +282,21 @@ def _sensors(root: str, zero_axis: bool) -> str:
 
 def _link(name: str, visual: str, mass: str, com: str, inertia: str = "9.6e-06") -> str:
     return (
-        f'  <link\n    name="{name}">\n    <inertial>\n      <origin\n        xyz="{com}"\n        rpy="0 0 0" />\n'
-        f'      <mass\n        value="{mass}" />\n      <inertia\n        ixx="{inertia}"\n        ixy="0"\n'
-        f'        ixz="0"\n        iyy="{inertia}"\n        iyz="0"\n        izz="{inertia}" />\n    </inertial>\n'
+        f'  <link\n    name="{name}">\n'
+        "    <inertial>\n"
+        "      <origin\n"
+        f'        xyz="{com}"\n'
+        '        rpy="0 0 0" />\n'
+        "      <mass\n"
+        f'        value="{mass}" />\n'
+        "      <inertia\n"
+        f'        ixx="{inertia}"\n'
+        '        ixy="0"\n'
+        '        ixz="0"\n'
+        f'        iyy="{inertia}"\n'
+        '        iyz="0"\n'
+        f'        izz="{inertia}" />\n'
+        "    </inertial>\n"
         f"{visual}  </link>\n"
     )
 
@@ -280,11 +309,25 @@ def _box_visual(meshes: bool, mesh_folder: str, part: str) -> str:
     )
     collision = geometry if meshes else '<sphere radius="0.01" />'
     return (
-        '    <visual>\n      <origin\n        xyz="0 0 0"\n        rpy="0 0 0" />\n      <geometry>\n'
-        f'        {geometry}\n      </geometry>\n      <material\n        name="">\n        <color\n'
-        '          rgba="1 1 1 1" />\n      </material>\n    </visual>\n'
-        '    <collision>\n      <origin rpy="0 0 0" xyz="0 0 0" />\n      <geometry>\n'
-        f"        {collision}\n      </geometry>\n    </collision>\n"
+        "    <visual>\n"
+        "      <origin\n"
+        '        xyz="0 0 0"\n'
+        '        rpy="0 0 0" />\n'
+        "      <geometry>\n"
+        f"        {geometry}\n"
+        "      </geometry>\n"
+        "      <material\n"
+        '        name="">\n'
+        "        <color\n"
+        '          rgba="1 1 1 1" />\n'
+        "      </material>\n"
+        "    </visual>\n"
+        "    <collision>\n"
+        '      <origin rpy="0 0 0" xyz="0 0 0" />\n'
+        "      <geometry>\n"
+        f"        {collision}\n"
+        "      </geometry>\n"
+        "    </collision>\n"
     )
 
 
@@ -292,10 +335,23 @@ def _revolute(
     name: str, parent: str, child: str, xyz: str, axis: str, limits: tuple[float, float]
 ) -> str:
     return (
-        f'  <joint\n    name="{name}"\n    type="revolute">\n    <origin\n      xyz="{xyz}"\n      rpy="0 0 0" />\n'
-        f'    <parent\n      link="{parent}" />\n    <child\n      link="{child}" />\n    <axis\n      xyz="{axis}" />\n'
-        f'    <limit\n      lower="{limits[0]!r}"\n      upper="{limits[1]!r}"\n      effort="23.7"\n'
-        '      velocity="30.1" />\n  </joint>\n'
+        f'  <joint\n    name="{name}"\n'
+        '    type="revolute">\n'
+        "    <origin\n"
+        f'      xyz="{xyz}"\n'
+        '      rpy="0 0 0" />\n'
+        "    <parent\n"
+        f'      link="{parent}" />\n'
+        "    <child\n"
+        f'      link="{child}" />\n'
+        "    <axis\n"
+        f'      xyz="{axis}" />\n'
+        "    <limit\n"
+        f'      lower="{limits[0]!r}"\n'
+        f'      upper="{limits[1]!r}"\n'
+        '      effort="23.7"\n'
+        '      velocity="30.1" />\n'
+        "  </joint>\n"
     )
 
 
@@ -311,8 +367,15 @@ def _fixed(
     collapse = ' dont_collapse="true"' if dont_collapse else ""
     axis = '    <axis\n      xyz="0 0 0" />\n' if zero_axis else ""
     return (
-        f'  <joint\n    name="{name}"\n    type="fixed"{collapse}>\n    <origin\n      xyz="{xyz}"\n'
-        f'      rpy="{rpy}" />\n    <parent\n      link="{parent}" />\n    <child\n      link="{child}" />\n'
+        f'  <joint\n    name="{name}"\n'
+        f'    type="fixed"{collapse}>\n'
+        "    <origin\n"
+        f'      xyz="{xyz}"\n'
+        f'      rpy="{rpy}" />\n'
+        "    <parent\n"
+        f'      link="{parent}" />\n'
+        "    <child\n"
+        f'      link="{child}" />\n'
         f"{axis}  </joint>\n"
     )
 
@@ -320,23 +383,35 @@ def _fixed(
 def _gazebo_and_transmissions(root: str) -> str:
     blocks = [
         (
-            '  <gazebo>\n    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
-            "      <robotNamespace>/robot_gazebo</robotNamespace>\n    </plugin>\n  </gazebo>\n"
+            "  <gazebo>\n"
+            '    <plugin filename="libgazebo_ros_control.so" name="gazebo_ros_control">\n'
+            "      <robotNamespace>/robot_gazebo</robotNamespace>\n"
+            "    </plugin>\n"
+            "  </gazebo>\n"
         ),
         f'  <gazebo reference="{root}">\n    <material>Gazebo/Green</material>\n  </gazebo>\n',
     ]
     for leg in LEGS:
         blocks.append(
-            f'  <gazebo reference="{leg}_foot">\n    <visual>\n      <plugin filename="libDrawForce.so" '
-            f'name="drawForcePlugin">\n        <topicName>{leg}_foot_contact</topicName>\n      </plugin>\n'
-            "    </visual>\n  </gazebo>\n"
+            f'  <gazebo reference="{leg}_foot">\n'
+            "    <visual>\n"
+            '      <plugin filename="libDrawForce.so" name="drawForcePlugin">\n'
+            f"        <topicName>{leg}_foot_contact</topicName>\n"
+            "      </plugin>\n"
+            "    </visual>\n"
+            "  </gazebo>\n"
         )
         blocks.extend(
             (
-                f'  <transmission name="{leg}_{joint}_tran">\n    <type>transmission_interface/SimpleTransmission'
-                f'</type>\n    <joint name="{leg}_{joint}_joint">\n      <hardwareInterface>hardware_interface/'
-                'EffortJointInterface</hardwareInterface>\n    </joint>\n    <actuator name="'
-                f'{leg}_{joint}_motor">\n      <mechanicalReduction>1</mechanicalReduction>\n    </actuator>\n'
+                f'  <transmission name="{leg}_{joint}_tran">\n'
+                "    <type>transmission_interface/SimpleTransmission</type>\n"
+                f'    <joint name="{leg}_{joint}_joint">\n'
+                "      <hardwareInterface>hardware_interface/EffortJointInterface"
+                "</hardwareInterface>\n"
+                "    </joint>\n"
+                f'    <actuator name="{leg}_{joint}_motor">\n'
+                "      <mechanicalReduction>1</mechanicalReduction>\n"
+                "    </actuator>\n"
                 "  </transmission>\n"
             )
             for joint in ("hip", "thigh", "calf")
@@ -363,7 +438,11 @@ def unitree_style_a1(mesh_folder: str = "package://a1_description/meshes") -> st
     text = text.replace('filename="meshes/', f'filename="{mesh_folder}/')
     robot_start = text.index(">", text.index("<robot")) + 1
     root = (
-        '\n  <link name="base"/>\n  <joint name="floating_base" type="fixed">\n    <origin rpy="0 0 0" '
-        'xyz="0 0 0"/>\n    <parent link="base"/>\n    <child link="trunk"/>\n  </joint>'
+        '\n  <link name="base"/>\n'
+        '  <joint name="floating_base" type="fixed">\n'
+        '    <origin rpy="0 0 0" xyz="0 0 0"/>\n'
+        '    <parent link="base"/>\n'
+        '    <child link="trunk"/>\n'
+        "  </joint>"
     )
     return text[:robot_start] + root + text[robot_start:]

@@ -1,4 +1,5 @@
-"""Talking to a running ``foot_fk_node`` from a test: publish joint states, collect feet, call services."""
+"""Talking to a running ``foot_fk_node`` from a test: publish joint states, collect feet, call
+services."""
 
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ __all__ = [
 ]
 
 node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
-"""``node_command(*ros_args)``: the installed foot_fk_node (else ``python -m``), with ``--ros-args``."""
+"""``node_command(*ros_args)``: the installed foot_fk_node (else ``python -m``), with
+``--ros-args``."""
 
 
 class NodeClient:
@@ -125,7 +127,8 @@ class NodeClient:
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
 )
-"""robot_state_publisher's robot_description QoS: a late subscriber still gets the latest message."""
+"""robot_state_publisher's robot_description QoS: a late subscriber still gets the latest
+message."""
 
 
 def parse_tokens(message: str) -> dict[str, str]:

@@ -1,4 +1,5 @@
-"""PyBullet's own answer, for tests: a URDF in a DIRECT client of its own, base fixed at the origin.
+"""PyBullet's own answer, for tests: a URDF in a DIRECT client of its own, base fixed at the
+origin.
 
 Independent of :mod:`a1_leg_fk.pybullet_check` (the code under test): joints and links are found by
 name, angles set with ``resetJointState`` and link frames read with ``getLinkState(...)[4]``.

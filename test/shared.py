@@ -32,7 +32,8 @@ STANDING = list(STAND_LEG) * 4
 """All four legs standing [rad], in slot order: the reference write-up's pose."""
 
 STANDING_FR = (0.1684, -0.1320, -0.2923)
-"""The FR foot of the A1 in :data:`STANDING`, trunk frame [m]: the reference write-up's published value."""
+"""The FR foot of the A1 in :data:`STANDING`, trunk frame [m]: the reference write-up's published
+value."""
 
 ROOT = Path(__file__).resolve().parent.parent
 """The repository (the package's source tree: package.xml, config/, bench/)."""

@@ -179,7 +179,8 @@ def test_a1_matches_pybullet_outside_the_limits_too(
 
 
 def test_a1_jacobian_matches_pybullet(a1: Quadruped, a1_robot: PyBulletRobot) -> None:
-    """PyBullet's calculateJacobian at the toe's link-frame origin, fixed base: the columns of our 3 joints."""
+    """PyBullet's calculateJacobian at the toe's link-frame origin, fixed base: the columns of our
+    3 joints."""
     movable = [info[0] for info in a1_robot.info if info[2] != pybullet.JOINT_FIXED]
     for q in random_configurations(a1_robot, A1_JOINTS, 20, seed=9):
         a1_robot.set_joints(A1_JOINTS, q)
@@ -254,28 +255,38 @@ def synthetic_leg(leg: str, x: float, y: float) -> str:
             '<inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial>'
         )
 
-    return f"""
-  <joint name="{leg}_mount" type="fixed"><parent link="base"/><child link="{leg}_mount"/>
-    <origin xyz="{x} {y} 0.01" rpy="0.1 -0.2 {0.3 * side}"/></joint>
-  <link name="{leg}_mount">{inertial("0.01 0 0", "0.2 0 0")}</link>
-  <joint name="{leg}_roll" type="revolute"><parent link="{leg}_mount"/><child link="{leg}_hip"/>
-    <origin xyz="0.01 {0.02 * side} -0.01" rpy="0.4 0.25 -0.6"/><axis xyz="2 0 0.5"/>{limit}</joint>
-  <link name="{leg}_hip">{inertial("0.01 0.02 -0.03", "0.3 0.2 0.1")}</link>
-  <joint name="{leg}_pitch" type="continuous"><parent link="{leg}_hip"/><child link="{leg}_thigh"/>
-    <origin xyz="0 {0.08 * side} 0" rpy="-0.3 0 0.2"/><axis xyz="0 2 0"/></joint>
-  <link name="{leg}_thigh">{inertial("0 0.01 -0.1", "0 0.5 0")}</link>
-  <joint name="{leg}_knee" type="revolute"><parent link="{leg}_thigh"/><child link="{leg}_shank"/>
-    <origin xyz="0 0 -0.2" rpy="0 0.1 0"/><axis xyz="0 -1 0.1"/><limit lower="-2.5" upper="-0.5" effort="1" velocity="1"/></joint>
-  <link name="{leg}_shank">{inertial("0.01 0 -0.1", "-0.1 0.2 0.3")}</link>
-  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/><child link="{leg}_foot"/>
-    <origin xyz="0.02 0.01 -0.21" rpy="0.5 0.6 0.7"/></joint>
-  <link name="{leg}_foot">{inertial("0 0 0", "0 0 0")}</link>"""
+    return (
+        f'\n  <joint name="{leg}_mount" type="fixed"><parent link="base"/>'
+        f'<child link="{leg}_mount"/>\n'
+        f'    <origin xyz="{x} {y} 0.01" rpy="0.1 -0.2 {0.3 * side}"/></joint>\n'
+        f'  <link name="{leg}_mount">{inertial("0.01 0 0", "0.2 0 0")}</link>\n'
+        f'  <joint name="{leg}_roll" type="revolute"><parent link="{leg}_mount"/>'
+        f'<child link="{leg}_hip"/>\n'
+        f'    <origin xyz="0.01 {0.02 * side} -0.01" rpy="0.4 0.25 -0.6"/>'
+        f'<axis xyz="2 0 0.5"/>{limit}</joint>\n'
+        f'  <link name="{leg}_hip">{inertial("0.01 0.02 -0.03", "0.3 0.2 0.1")}</link>\n'
+        f'  <joint name="{leg}_pitch" type="continuous"><parent link="{leg}_hip"/>'
+        f'<child link="{leg}_thigh"/>\n'
+        f'    <origin xyz="0 {0.08 * side} 0" rpy="-0.3 0 0.2"/><axis xyz="0 2 0"/></joint>\n'
+        f'  <link name="{leg}_thigh">{inertial("0 0.01 -0.1", "0 0.5 0")}</link>\n'
+        f'  <joint name="{leg}_knee" type="revolute"><parent link="{leg}_thigh"/>'
+        f'<child link="{leg}_shank"/>\n'
+        '    <origin xyz="0 0 -0.2" rpy="0 0.1 0"/><axis xyz="0 -1 0.1"/>'
+        '<limit lower="-2.5" upper="-0.5" effort="1" velocity="1"/></joint>\n'
+        f'  <link name="{leg}_shank">{inertial("0.01 0 -0.1", "-0.1 0.2 0.3")}</link>\n'
+        f'  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/>'
+        f'<child link="{leg}_foot"/>\n'
+        '    <origin xyz="0.02 0.01 -0.21" rpy="0.5 0.6 0.7"/></joint>\n'
+        f'  <link name="{leg}_foot">{inertial("0 0 0", "0 0 0")}</link>'
+    )
 
 
 SYNTHETIC_URDF = (
-    '<?xml version="1.0"?>\n<robot name="synthetic">\n'
-    '  <link name="base"><inertial><origin xyz="0.05 -0.02 0.03" rpy="0.2 0.1 0.3"/><mass value="5"/>'
-    '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
+    '<?xml version="1.0"?>\n'
+    '<robot name="synthetic">\n'
+    '  <link name="base"><inertial><origin xyz="0.05 -0.02 0.03" rpy="0.2 0.1 0.3"/>'
+    '<mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
+    "</inertial></link>"
     + "".join(
         synthetic_leg(leg, x, y)
         for leg, x, y in (
@@ -346,7 +357,8 @@ def test_summing_parent_frame_pos_is_7_to_14_cm_off_and_the_com_offset_fixes_it(
 def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(
     synthetic_robot: PyBulletRobot,
 ) -> None:
-    """Evidence for corrected_chain's reading of the fields: rotated inertial frames, rpy, non-unit axes."""
+    """Evidence for corrected_chain's reading of the fields: rotated inertial frames, rpy, non-unit
+    axes."""
     naive, corrected = [], []
     for q in random_configurations(synthetic_robot, SYNTHETIC_JOINTS, 100, seed=19):
         synthetic_robot.set_joints(SYNTHETIC_JOINTS, q)
@@ -369,7 +381,8 @@ def test_the_corrected_chain_also_holds_with_rpy_and_rotated_inertials(
 def test_parent_frame_orn_is_the_inverse_com_to_com_rotation(
     synthetic_robot: PyBulletRobot, joint: str, parent_com_rpy, origin_rpy, child_com_rpy
 ) -> None:
-    """getJointInfo()[15] = conj(parent_com^-1 * origin * child_com), rpy values typed from SYNTHETIC_URDF."""
+    """getJointInfo()[15] = conj(parent_com^-1 * origin * child_com), rpy values typed from
+    SYNTHETIC_URDF."""
 
     def matrix(rpy) -> np.ndarray:
         return quaternion_matrix(pybullet.getQuaternionFromEuler(rpy))
@@ -381,13 +394,15 @@ def test_parent_frame_orn_is_the_inverse_com_to_com_rotation(
 
 
 def test_link_state_0_is_the_com_not_the_link_frame(a1_robot: PyBulletRobot) -> None:
-    """For FR_lower, getLinkState()[0] is the CoM, 0.1076 m from the frame (URDF inertial xyz 0.006435 0 -0.107388)."""
+    """For FR_lower, getLinkState()[0] is the CoM, 0.1076 m from the frame (URDF inertial xyz
+    0.006435 0 -0.107388)."""
     a1_robot.set_joints(A1_JOINTS, [0.0, 0.8, -1.5] * 4)
     state = a1_robot.link_state("FR_lower")
     offset = np.array(state[0]) - np.array(state[4])
     assert np.linalg.norm(offset) == pytest.approx(math.hypot(0.006435, 0.107388), abs=1e-6)
     assert np.linalg.norm(offset) > 0.1
-    # The toe's inertial origin is its frame, so there [0] and [4] agree: only [4] is right for both.
+    # The toe's inertial origin is its frame, so there [0] and [4] agree: only [4] is right for
+    # both.
     toe = a1_robot.link_state("FR_toe")
     assert np.abs(np.array(toe[0]) - np.array(toe[4])).max() <= TOLERANCE_M
 
@@ -410,7 +425,8 @@ def test_reset_joint_state_does_not_enforce_limits(a1: Quadruped, a1_robot: PyBu
 
 
 def test_pybullet_places_the_urdf_root_frame_at_the_origin(a1_robot: PyBulletRobot) -> None:
-    """The base *CoM* sits at the trunk's inertial xyz (0.012731 0.002186 0.000515): world = base frame."""
+    """The base *CoM* sits at the trunk's inertial xyz (0.012731 0.002186 0.000515): world = base
+    frame."""
     position, orientation = pybullet.getBasePositionAndOrientation(
         a1_robot.body, physicsClientId=a1_robot.client
     )

@@ -33,7 +33,8 @@ def stand_by_hand_mm(leg: str) -> tuple[float, float, float]:
 
     pybullet_data's a1.urdf: hip-roll joints at (+-0.183, +-0.047, 0) in the trunk, the hip-pitch
     joint 0.08505 m further out sideways, thigh and calf 0.2 m each, both pitching about y:
-    x = hip_x - 0.2 sin(pitch) - 0.2 sin(pitch + knee), z = -0.2 cos(pitch) - 0.2 cos(pitch + knee).
+    x = hip_x - 0.2 sin(pitch) - 0.2 sin(pitch + knee), z = -0.2 cos(pitch) - 0.2 cos(pitch +
+    knee).
     """
     _, pitch, knee = STAND
     hip_x = 0.183 if leg[0] == "F" else -0.183
@@ -45,7 +46,8 @@ def stand_by_hand_mm(leg: str) -> tuple[float, float, float]:
 
 
 def pybullet_feet_mm(angles: tuple[float, ...]) -> dict[str, tuple[float, float, float]]:
-    """Feet [mm] of pybullet_data's a1.urdf, computed by PyBullet itself (fixed base at the origin)."""
+    """Feet [mm] of pybullet_data's a1.urdf, computed by PyBullet itself (fixed base at the
+    origin)."""
     pytest.importorskip("pybullet")
     from pybullet_reference import A1_URDF, PyBulletRobot
 
@@ -74,7 +76,8 @@ def assert_table(output: str, expected: dict[str, tuple[float, float, float]]) -
 
 
 class JointStatePublisher:
-    """Publishes one configurable joint state at 20 Hz from the test's own node (while it spins)."""
+    """Publishes one configurable joint state at 20 Hz from the test's own node (while it
+    spins)."""
 
     def __init__(self, ros, topic: str = "joint_states") -> None:
         from sensor_msgs.msg import JointState
@@ -95,12 +98,14 @@ class JointStatePublisher:
 
 
 def run_cli(processes, ros, arguments: list[str], timeout_s: float = 25.0) -> tuple[int, str]:
-    """Run a1-leg-fk to completion while the test's node spins (publishing); (exit code, output)."""
+    """Run a1-leg-fk to completion while the test's node spins (publishing); (exit code,
+    output)."""
     process = processes.start(CLI + arguments)
     if not ros.spin_until(lambda: process.poll() is not None, timeout_s):
         process.kill()
         pytest.fail(
-            f"a1-leg-fk {' '.join(arguments)} still running after {timeout_s} s:\n{processes.output(process)}"
+            f"a1-leg-fk {' '.join(arguments)} still running after {timeout_s} "
+            f"s:\n{processes.output(process)}"
         )
     output = processes.output(process)
     assert "Traceback" not in output, output

@@ -156,7 +156,8 @@ def test_lower_rate_and_integer_parameter(processes, ros) -> None:
 def test_the_demo_publishes_the_urdf_it_animates_latched_on_robot_description(
     processes, ros
 ) -> None:
-    """Like robot_state_publisher: one message, transient local, so a late subscriber still gets it."""
+    """Like robot_state_publisher: one message, transient local, so a late subscriber still gets
+    it."""
     from pybullet_reference import A1_URDF
     from std_msgs.msg import String
 

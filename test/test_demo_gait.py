@@ -42,7 +42,8 @@ def test_stands_up_from_a_crouch_then_trots() -> None:
     # Crouched: knees in the most-bent 10 % of their range; standing: the A1's usual pose.
     assert (crouch[2::3] < knee_lower + 0.1 * (knee_upper - knee_lower)).all()
     np.testing.assert_allclose(stood.reshape(4, 3), [[0.0, 0.8, -1.5]] * 4, atol=1e-12)
-    # The body rises: every foot ends lower relative to the trunk (z more negative) than it started.
+    # The body rises: every foot ends lower relative to the trunk (z more negative) than it
+    # started.
     assert (ROBOT.fk(stood)[:, 2] < ROBOT.fk(crouch)[:, 2] - 0.05).all()
     # Crouch: each foot roughly under its hip-pitch joint.
     for leg in ROBOT.legs:

@@ -45,8 +45,8 @@ def test_feet_match_pybullet_with_no_configuration(tmp_path: Path, robot: str) -
 
 
 def test_go2_like_standing_foot_by_hand() -> None:
-    """FR at hip 0, thigh 0.8, calf -1.5: hip (0.1934, -0.0465, 0), thigh 0.0955 further right, then
-    two 0.213 m segments pitched by 0.8 and 0.8 - 1.5 rad about y."""
+    """FR at hip 0, thigh 0.8, calf -1.5: hip (0.1934, -0.0465, 0), thigh 0.0955 further right,
+    then two 0.213 m segments pitched by 0.8 and 0.8 - 1.5 rad about y."""
     foot = load_robot(exported_quadruped("go2")).quadruped.fk([0.0, 0.8, -1.5] * 4)[0]
     expected = (
         0.1934 - 0.213 * np.sin(0.8) - 0.213 * np.sin(0.8 - 1.5),
@@ -57,7 +57,8 @@ def test_go2_like_standing_foot_by_hand() -> None:
 
 
 def test_pybullet_itself_refuses_a_description_whose_meshes_are_missing(tmp_path: Path) -> None:
-    """Why verify_fk needs a kinematic twin: loadURDF refuses the whole file over one missing mesh."""
+    """Why verify_fk needs a kinematic twin: loadURDF refuses the whole file over one missing
+    mesh."""
     path = tmp_path / "go2_meshes.urdf"
     path.write_text(
         exported_quadruped("go2", mesh_folder="package://no_such_description/meshes"),
@@ -146,7 +147,8 @@ def test_the_node_publishes_pybullet_feet_and_verifies_with_no_configuration(
 
 @pytest.mark.slow
 def test_an_exported_description_on_the_command_line_is_refused_with_a_hint(processes) -> None:
-    """rcl parses `-p name:=value` as YAML before the node runs; the exporter header is not YAML."""
+    """rcl parses `-p name:=value` as YAML before the node runs; the exporter header is not
+    YAML."""
     process = processes.start(
         node_command("-p", f"robot_description:={exported_quadruped('go2')}")
     )

@@ -30,7 +30,8 @@ ALIAS_LINE = re.compile(r"^\s+\w+ = \w+$", re.MULTILINE)
 
 
 def test_the_a1_front_right_source_is_the_golden_one() -> None:
-    """Regenerate with: Quadruped.from_urdf().legs[0].source (review the diff before committing)."""
+    """Regenerate with: Quadruped.from_urdf().legs[0].source (review the diff before
+    committing)."""
     assert Quadruped.from_urdf().legs[0].source == GOLDEN.read_text(encoding="utf-8")
 
 

@@ -45,7 +45,8 @@ from a1_leg_fk.joint_state import (
 )
 from a1_leg_fk.kinematics import Quadruped
 
-# The names (test/shared.py) are written from the naming conventions, independently of legs.joint_name_index.
+# The names (test/shared.py) are written from the naming conventions, independently of
+# legs.joint_name_index.
 SLOT_OF = {
     **{n: i for i, n in enumerate(PYBULLET_NAMES)},
     **{n: i for i, n in enumerate(UNITREE_NAMES)},

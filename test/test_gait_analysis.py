@@ -45,7 +45,8 @@ def synthetic(
     seed: int = 0,
     pause: tuple[float, float] | None = None,
 ):
-    """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the first stamp]).
+    """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the
+    first stamp]).
 
     ``pause=(at, length)`` [s] freezes the gait from ``at`` for ``length`` (the true stances then
     hold for gait time, not for the stamps).
@@ -134,13 +135,15 @@ def test_synthetic_gait(gait: str, rate: int, speed: float) -> None:
     assert abs(ground.level_m - true_level) < 0.002
     assert abs(ground.slope[0] - a) < 0.003 and abs(ground.slope[1] - b) < 0.003
     print(
-        f"{gait} {rate} Hz {speed} m/s: worst touchdown error {worst[0] * 1e3:.1f} ms, lift-off {worst[1] * 1e3:.1f} ms, "
-        f"duty {[round(known(m.duty_factor), 3) for m in report.legs.values()]} (true {DUTY[gait]})"
+        f"{gait} {rate} Hz {speed} m/s: worst touchdown error {worst[0] * 1e3:.1f} ms, lift-off "
+        f"{worst[1] * 1e3:.1f} ms, duty "
+        f"{[round(known(m.duty_factor), 3) for m in report.legs.values()]} (true {DUTY[gait]})"
     )
 
 
 def test_a_pause_is_an_irregular_stride() -> None:
-    # A pronk frozen mid-stance (all four feet down) for 1 s: the stride around it is no gait cycle.
+    # A pronk frozen mid-stance (all four feet down) for 1 s: the stride around it is no gait
+    # cycle.
     pause_at = 3 * PERIOD_S + 0.5 * DUTY["pronk"] * PERIOD_S
     stamps, feet, _ = synthetic("pronk", 0.0, 200, seconds=7.0, pause=(pause_at, 1.0))
     _, report = analyze_gait(stamps, feet)
@@ -244,7 +247,8 @@ def test_nan_gap_splits_phases() -> None:
 
 
 def test_slope_is_not_fitted_where_the_feet_do_not_spread() -> None:
-    # Only FR is known, stepping in place on one spot: no slope can be told from one spot, so (almost) none is fitted.
+    # Only FR is known, stepping in place on one spot: no slope can be told from one spot, so
+    # (almost) none is fitted.
     stamps, feet, _ = synthetic("trot", 0.0, 100, seconds=4.0)
     feet[:, 1:] = np.nan
     contacts, report = analyze_gait(stamps, feet)

@@ -1,5 +1,5 @@
-"""``a1-leg-fk gait`` end to end: the demo gait (joint_state_demo's stand-up + trot) in a bag with a
-base pose this test makes, through the bag reader, the analysis, the JSON, the CSV and the plot.
+"""``a1-leg-fk gait`` end to end: the demo gait (joint_state_demo's stand-up + trot) in a bag with
+a base pose this test makes, through the bag reader, the analysis, the JSON, the CSV and the plot.
 
 The base pose: the demo trots in place in the base frame, its stance feet sweeping backwards; the
 test moves the base forward by exactly the stance feet's mean sweep (from the FK), and holds it at
@@ -129,8 +129,9 @@ def test_demo_gait_through_a_bag(demo_run) -> None:
     trotting = (times >= GAIT.periodic_from_s) & (stance >= 0).all(axis=1)
     agreement = ((stance[trotting] == 1) == ~swinging[trotting]).mean()
     print(
-        f"demo trot through a bag: stance agrees with the demo's swing flag on {agreement:.1%} of the samples; "
-        f"duty {[round(document['legs'][leg]['duty_factor'], 3) for leg in LEG_NAMES]}"
+        f"demo trot through a bag: stance agrees with the demo's swing flag on {agreement:.1%} "
+        "of the samples; duty "
+        f"{[round(document['legs'][leg]['duty_factor'], 3) for leg in LEG_NAMES]}"
     )
     # The demo lifts a foot as sin^2 (zero speed and height at lift-off and touchdown), so the
     # detector sees the first and last few millimetres of each swing as stance.

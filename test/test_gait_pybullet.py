@@ -47,7 +47,8 @@ def trot_targets(t: float) -> list[float]:
 def simulate(
     quadruped: Quadruped,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(stamps [s], joint angles (N, 12) [rad], root position (N, 3) [m], root quaternion xyzw (N, 4), toe contact (N, 4))."""
+    """(stamps [s], joint angles (N, 12) [rad], root position (N, 3) [m], root quaternion xyzw (N,
+    4), toe contact (N, 4))."""
     client = pybullet.connect(pybullet.DIRECT)
     try:
         pybullet.setGravity(0, 0, -9.81, physicsClientId=client)
@@ -65,7 +66,8 @@ def simulate(
         toes = [link_index[f"{leg}_toe"] for leg in LEG_NAMES]
         for joint, angle in zip(joints, trot_targets(0.0)):
             pybullet.resetJointState(body, joint, angle, physicsClientId=client)
-        # PyBullet's base pose is the trunk's inertial frame: root = base * inverse(local inertial frame).
+        # PyBullet's base pose is the trunk's inertial frame: root = base * inverse(local inertial
+        # frame).
         inertial_position, inertial_orientation = pybullet.getDynamicsInfo(
             body, -1, physicsClientId=client
         )[3:5]
@@ -146,8 +148,8 @@ def test_contacts_agree_with_pybullet() -> None:
     print(
         f"stance vs PyBullet contact, {int(compared.sum())} samples at {1 / STEP_S:g} Hz: "
         + ", ".join(f"{leg} {share:.1%}" for leg, share in zip(LEG_NAMES, agreement))
-        + f"; all {(contacts.stance[compared] == contact[compared]).mean():.1%}; gait {report.gait} (fit {report.gait_fit:.2f}), "
-        f"ground {report.ground.level_m * 1e3:.1f} mm"
+        + f"; all {(contacts.stance[compared] == contact[compared]).mean():.1%}; gait "
+        f"{report.gait} (fit {report.gait_fit:.2f}), ground {report.ground.level_m * 1e3:.1f} mm"
     )
     assert (agreement >= 0.95).all()
     assert report.gait == "trot"

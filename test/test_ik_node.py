@@ -76,9 +76,11 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
     ik = processes.start(ik_node_command(*remaps))
     fk = processes.start(node_command())
     demo = processes.start(DEMO)
-    # Both streams: the probe may discover the demo seconds after the nodes did (Fast DDS under load).
+    # Both streams: the probe may discover the demo seconds after the nodes did (Fast DDS under
+    # load).
     assert ros.spin_until(lambda: len(commands.commands) > 400 and len(demo_states) > 400, 30.0), (
-        f"ik node:\n{processes.output(ik)}\nfk node:\n{processes.output(fk)}\ndemo:\n{processes.output(demo)}"
+        f"ik node:\n{processes.output(ik)}\nfk "
+        f"node:\n{processes.output(fk)}\ndemo:\n{processes.output(demo)}"
     )
     ros.spin_for(1.0)
     matched: defaultdict[str, int] = defaultdict(int)
@@ -186,7 +188,8 @@ def test_wrong_number_of_command_names_fails_with_the_reason_and_sigterm_exits_0
 
 
 def test_ik_params_yaml_states_every_parameter() -> None:
-    """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays commented out."""
+    """config/ik_params.yaml: every scalar parameter with the node's default, the string arrays
+    commented out."""
     path = ROOT / "config" / "ik_params.yaml"
     text = path.read_text()
     stated = yaml.safe_load(text)[ik_node.NODE_NAME]["ros__parameters"]

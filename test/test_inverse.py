@@ -66,8 +66,8 @@ def robot(request) -> tuple[str, Quadruped]:
 
 
 def test_round_trips_against_fk_and_pybullet(robot) -> None:
-    """2,000 in-limit configurations per leg: FK(IK(FK(q))) = FK(q) within 1e-9 m (and PyBullet's FK
-    of our angles within its float32 1e-7 m); IK(FK(q)) = q within 1e-9 rad where the in-limit
+    """2,000 in-limit configurations per leg: FK(IK(FK(q))) = FK(q) within 1e-9 m (and PyBullet's
+    FK of our angles within its float32 1e-7 m); IK(FK(q)) = q within 1e-9 rad where the in-limit
     solution is unique; the batch equals the single call."""
     name, quadruped = robot
     assert all(solver.closed_form for solver in quadruped._ik_solvers)
@@ -131,7 +131,8 @@ def test_mini_cheetah_has_four_in_limit_solutions_and_the_seed_picks_each() -> N
 
 def random_a1_topology_urdf(rng: np.random.Generator) -> str:
     """Four legs of the A1 topology with random rpy on every joint, random offsets, axis signs and
-    limits: roll axis perpendicular to the pitch axis, knee axis parallel to it, in their frames."""
+    limits: roll axis perpendicular to the pitch axis, knee axis parallel to it, in their
+    frames."""
 
     def rotation(rpy) -> np.ndarray:
         from a1_leg_fk.leg_stages import rpy_matrix
@@ -157,13 +158,16 @@ def random_a1_topology_urdf(rng: np.random.Generator) -> str:
         parents = ["base", f"{leg}_a", f"{leg}_b", f"{leg}_c"]
         for index in range(3):
             joints += (
-                f'<joint name="{leg}_j{index}" type="revolute"><parent link="{parents[index]}"/><child link="{parents[index + 1]}"/>'
-                f'<origin xyz="{numbers(offsets[index])}" rpy="{numbers(rpy[index])}"/><axis xyz="{numbers(axes[index])}"/>'
-                f'<limit lower="{float(centres[index]) - 1.2!r}" upper="{float(centres[index]) + 1.2!r}" effort="1" velocity="1"/></joint>'
+                f'<joint name="{leg}_j{index}" type="revolute"><parent '
+                f'link="{parents[index]}"/><child link="{parents[index + 1]}"/><origin '
+                f'xyz="{numbers(offsets[index])}" rpy="{numbers(rpy[index])}"/><axis '
+                f'xyz="{numbers(axes[index])}"/><limit lower="{float(centres[index]) - 1.2!r}" '
+                f'upper="{float(centres[index]) + 1.2!r}" effort="1" velocity="1"/></joint>'
             )
         joints += (
-            f'<joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_c"/><child link="{leg}_foot"/>'
-            f'<origin xyz="{numbers(offsets[3] + [0, 0, -0.2])}" rpy="{numbers(rpy[3])}"/></joint>'
+            f'<joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_c"/><child '
+            f'link="{leg}_foot"/><origin xyz="{numbers(offsets[3] + [0, 0, -0.2])}" '
+            f'rpy="{numbers(rpy[3])}"/></joint>'
         )
         legs.append(
             "".join(f'<link name="{link}"/>' for link in [*parents[1:], f"{leg}_foot"]) + joints
@@ -186,7 +190,8 @@ def test_random_urdfs_with_rpy_and_offsets_round_trip(seed: int) -> None:
 
 
 def test_a_leg_of_another_topology_uses_damped_least_squares() -> None:
-    """The synthetic leg with its knee axis tilted off the pitch axis: no closed form; DLS round trips."""
+    """The synthetic leg with its knee axis tilted off the pitch axis: no closed form; DLS round
+    trips."""
     urdf = quadruped_urdf().replace(
         '<origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>',
         '<origin xyz="0 0 -0.2"/><axis xyz="0 1 0.3"/>',
@@ -497,7 +502,8 @@ def test_joint_ranges_wider_than_a_turn() -> None:
     unseeded = quadruped.ik_batch(feet)
     assert (unseeded.status == inverse.OK).all() and (np.abs(unseeded.angles) <= 4.0).all()
     np.testing.assert_allclose(quadruped.fk_batch(unseeded.angles), feet, rtol=0.0, atol=1e-9)
-    # By hand: the value of 3.5 rad nearest -3.5 in -4..4 is 3.5 - 2 pi = -2.783; of -3 nearest 3, 3.283.
+    # By hand: the value of 3.5 rad nearest -3.5 in -4..4 is 3.5 - 2 pi = -2.783; of -3 nearest 3,
+    # 3.283.
     shifted = quadruped.ik(quadruped.fk([0.0, 0.3, 3.5] * 4), seed=[0.0, 0.3, -3.5] * 4)
     assert shifted.angles[2] == pytest.approx(3.5 - 2 * math.pi, abs=1e-9)
     shifted = quadruped.ik(quadruped.fk([0.0, -3.0, 1.0] * 4), seed=[0.0, 3.0, 1.0] * 4)
@@ -571,7 +577,8 @@ def test_four_legs_at_once_equal_each_leg_alone(name: str) -> None:
             alone = quadruped.ik_leg(leg, targets[slot], seed[3 * slot : 3 * slot + 3])
             assert result.status[slot] == inverse.STATUS_NAMES[alone.status]
             assert tuple(result.angles[3 * slot : 3 * slot + 3]) == alone.angles
-            # The same distance, with the cosines and sines of the branch (``ik``) or of the angles.
+            # The same distance, with the cosines and sines of the branch (``ik``) or of the
+            # angles.
             assert abs(result.residual_m[slot] - alone.residual_m) <= 1e-15
             foot = quadruped.fk(result.angles)[slot]
             assert (

@@ -45,7 +45,8 @@ def a1() -> Quadruped:
 
 
 def a1_foot_closed_form(leg: str, q0: float, q1: float, q2: float) -> np.ndarray:
-    """The A1 foot [m], base frame: hip + Rx(q0) [(0, +-0.08505, 0) + Ry(q1) ((0,0,-0.2) + Ry(q2) (0,0,-0.2))]."""
+    """The A1 foot [m], base frame: hip + Rx(q0) [(0, +-0.08505, 0) + Ry(q1) ((0,0,-0.2) + Ry(q2)
+    (0,0,-0.2))]."""
     front = 1.0 if leg[0] == "F" else -1.0
     left = 1.0 if leg[1] == "L" else -1.0
     # In the thigh's pitch plane (Ry(t) (0, 0, -l) = (-l sin t, 0, -l cos t)):
@@ -116,7 +117,8 @@ def test_fk_equals_the_closed_form_a1_leg(a1: Quadruped, q: np.ndarray) -> None:
 
 
 def test_mini_cheetah_zero_pose_and_its_minus_y_axes() -> None:
-    """Hand-computed from mini_cheetah.urdf: hip (0.19, -+0.049, 0), thigh -+0.062, links 0.209 and 0.18 m.
+    """Hand-computed from mini_cheetah.urdf: hip (0.19, -+0.049, 0), thigh -+0.062, links 0.209 and
+    0.18 m.
 
     Its pitch and knee axes are (0, -1, 0): a positive pitch swings the foot forward (+x).
     """
@@ -332,7 +334,8 @@ def test_a1_reach_is_0_4_cos_half_knee(a1: Quadruped, leg: str) -> None:
 
 
 def test_mini_cheetah_reach_with_a_continuous_knee() -> None:
-    """Links 0.209 and 0.18 m: sqrt(0.209^2 + 0.18^2 + 2 0.209 0.18 cos q), 0.389 at 0 and 0.029 at +-pi."""
+    """Links 0.209 and 0.18 m: sqrt(0.209^2 + 0.18^2 + 2 0.209 0.18 cos q), 0.389 at 0 and 0.029 at
+    +-pi."""
     cheetah = Quadruped.from_urdf(
         str(DATA / "mini_cheetah" / "mini_cheetah.urdf"), foot_links=MINI_CHEETAH_FEET
     )

@@ -26,21 +26,30 @@ def leg_urdf(
     shank_parent = f"{leg}_thigh"
     extra = ""
     if extra_joint:  # a fourth movable joint between thigh and knee
-        extra = f"""<link name="{leg}_extra"/>
-  <joint name="{leg}_extra_joint" type="revolute"><parent link="{leg}_thigh"/><child link="{leg}_extra"/>
-    <axis xyz="0 0 1"/>{limit}</joint>"""
+        extra = (
+            f'<link name="{leg}_extra"/>\n'
+            f'  <joint name="{leg}_extra_joint" type="revolute"><parent link="{leg}_thigh"/>'
+            f'<child link="{leg}_extra"/>\n'
+            f'    <axis xyz="0 0 1"/>{limit}</joint>'
+        )
         shank_parent = f"{leg}_extra"
-    return f"""
-  <link name="{leg}_hip"/><link name="{leg}_thigh"/><link name="{leg}_shank"/><link name="{foot or leg + "_foot"}"/>
-  <joint name="{leg}_hip_joint" type="revolute"><parent link="base"/><child link="{leg}_hip"/>
-    <origin xyz="0.2 0.05 0"/><axis xyz="1 0 0"/>{limit}</joint>
-  <joint name="{leg}_thigh_joint" type="revolute"><parent link="{leg}_hip"/><child link="{leg}_thigh"/>
-    <origin xyz="0 0.08 0"/><axis xyz="0 1 0"/>{limit}</joint>
-  {extra}
-  <joint name="{leg}_calf_joint" type="{knee_type}"><parent link="{shank_parent}"/><child link="{leg}_shank"/>
-    <origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>{limit}</joint>
-  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/><child link="{foot or leg + "_foot"}"/>
-    <origin xyz="0 0 -0.2"/></joint>"""
+    return (
+        f'\n  <link name="{leg}_hip"/><link name="{leg}_thigh"/><link name="{leg}_shank"/>'
+        f'<link name="{foot or leg + "_foot"}"/>\n'
+        f'  <joint name="{leg}_hip_joint" type="revolute"><parent link="base"/>'
+        f'<child link="{leg}_hip"/>\n'
+        f'    <origin xyz="0.2 0.05 0"/><axis xyz="1 0 0"/>{limit}</joint>\n'
+        f'  <joint name="{leg}_thigh_joint" type="revolute"><parent link="{leg}_hip"/>'
+        f'<child link="{leg}_thigh"/>\n'
+        f'    <origin xyz="0 0.08 0"/><axis xyz="0 1 0"/>{limit}</joint>\n'
+        f"  {extra}\n"
+        f'  <joint name="{leg}_calf_joint" type="{knee_type}"><parent link="{shank_parent}"/>'
+        f'<child link="{leg}_shank"/>\n'
+        f'    <origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/>{limit}</joint>\n'
+        f'  <joint name="{leg}_foot_fixed" type="fixed"><parent link="{leg}_shank"/>'
+        f'<child link="{foot or leg + "_foot"}"/>\n'
+        '    <origin xyz="0 0 -0.2"/></joint>'
+    )
 
 
 def quadruped_urdf(**per_leg: dict) -> str:
@@ -194,8 +203,8 @@ def test_ambiguous_discovery_asks_for_foot_links() -> None:
 
 
 def test_go2_like_shin_leaves_lose_to_the_foot_named_link() -> None:
-    """Go2's description has two leaves with three movable joints above them per leg: X_foot and the
-    shin collision link X_calflower1; the one named like a foot is the foot."""
+    """Go2's description has two leaves with three movable joints above them per leg: X_foot and
+    the shin collision link X_calflower1; the one named like a foot is the foot."""
     legs = find_legs(parse_urdf(exported_quadruped("go2")))
     assert [leg.foot_link for leg in legs] == ["FR_foot", "FL_foot", "RR_foot", "RL_foot"]
     assert [j.name for j in legs[0].joints] == [

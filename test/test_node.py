@@ -1,4 +1,5 @@
-"""foot_fk_node as a real process over real DDS: interface, correctness, bad input, parameters, shutdown."""
+"""foot_fk_node as a real process over real DDS: interface, correctness, bad input, parameters,
+shutdown."""
 
 from __future__ import annotations
 
@@ -171,7 +172,8 @@ def test_message_object_output_publishes_the_same_feet_velocities_frames_and_sta
 
 
 def _feet_for(client: NodeClient, msg) -> list[tuple]:
-    """Send ``msg`` alone; the (frame, stamp, x, y, z) of every foot position and velocity it gives."""
+    """Send ``msg`` alone; the (frame, stamp, x, y, z) of every foot position and velocity it
+    gives."""
     client.clear()
     client.send(msg)
     assert client.probe.spin_until(lambda: all(client.velocities[leg] for leg in LEGS), 10.0)

@@ -1,4 +1,5 @@
-"""foot_fk_node's parameter ranges (FloatingPointRange, enforced by rclpy), on a node in this process."""
+"""foot_fk_node's parameter ranges (FloatingPointRange, enforced by rclpy), on a node in this
+process."""
 
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ def _outside(lowest: float, highest: float) -> list[float]:
 
 
 @pytest.mark.parametrize("name", sorted(DOCUMENTED_RANGES))
-def test_values_outside_the_documented_range_are_rejected_naming_the_parameter_and_the_old_value_kept(
+def test_values_outside_the_documented_range_are_rejected_naming_the_parameter_and_old_value_kept(
     node, name
 ):
     old = node.get_parameter(name).value

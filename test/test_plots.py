@@ -123,7 +123,8 @@ def test_plot_command_writes_both_files(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_plot_command_without_matplotlib_says_how_to_install(tmp_path: Path) -> None:
     script = (
-        "import sys; sys.modules['matplotlib'] = None\n"  # makes `import matplotlib` raise ImportError
+        # the next line makes `import matplotlib` raise ImportError
+        "import sys; sys.modules['matplotlib'] = None\n"
         "from a1_leg_fk.cli import main\n"
         f"sys.exit(main(['plot', '--out', {str(tmp_path)!r}]))\n"
     )

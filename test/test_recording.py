@@ -41,7 +41,7 @@ def bag_path(tmp_path: Path, kind: str, name: str = "run") -> Path:
     return tmp_path / (f"{name}.bag" if kind == "ros1" else name)
 
 
-# --- the wire decoder against rosbags ----------------------------------------------------------------
+# --- the wire decoder against rosbags ------------------------------------------------------------
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
@@ -92,7 +92,7 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
             assert wire.velocities.tolist() == list(reference.velocity)
 
 
-# --- update_block is update, K times ---------------------------------------------------------------
+# --- update_block is update, K times -------------------------------------------------------------
 
 
 @settings(max_examples=60, deadline=None)
@@ -123,7 +123,7 @@ def test_update_block_equals_update(data) -> None:
     np.testing.assert_array_equal(block.angles, one.angles)
 
 
-# --- a bag with everything in it -------------------------------------------------------------------
+# --- a bag with everything in it -----------------------------------------------------------------
 
 
 def scenario() -> tuple[

@@ -22,8 +22,8 @@ pytestmark = pytest.mark.slow
 TOLERANCE_M = 1e-7
 ANGLES = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
 BILLION_LAUGHS = (
-    '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
-    '<robot name="bomb"><link name="&b;"/></robot>'
+    '<?xml version="1.0"?><!DOCTYPE robot [<!ENTITY a "aaaaaaaaaa"><!ENTITY b '
+    '"&a;&a;&a;&a;&a;&a;&a;&a;">]><robot name="bomb"><link name="&b;"/></robot>'
 )
 
 
@@ -109,8 +109,10 @@ def test_a_description_published_later_switches_the_robot_and_republishing_does_
             feet_in(client, UNITREE_NAMES, ANGLES, "base"), go2.feet(UNITREE_NAMES, FEET, ANGLES)
         )
     assert client.verify().success
-    # robot_state_publisher republishes on parameter changes: the same text must not reload (a reload
-    # empties the joint state), so two of FR's joints still complete FR with the knee merged before.
+    # robot_state_publisher republishes on parameter changes: the same text must not reload (a
+    # reload
+    # empties the joint state), so two of FR's joints still complete FR with the knee merged
+    # before.
     publisher.publish(String(data=xml))
     client.probe.spin_for(1.0)
     client.clear()
@@ -216,7 +218,8 @@ def test_sim_time_stamps_everything_the_node_stamps_itself(processes, ros):
 
     assert ros.spin_until(zero_stamped_foot_arrived, 30.0)
     # Until the node has heard /clock its sim time reads 0; from then on it is sim_ns, which stands
-    # still, so every stamp the node makes itself is exactly sim_ns (wall time would be ~1.8e18 ns).
+    # still, so every stamp the node makes itself is exactly sim_ns (wall time would be ~1.8e18
+    # ns).
     assert ros.spin_until(
         lambda: zero_stamped_foot_arrived() and stamp_ns(client.positions["FR"][-1]) != 0, 20.0
     )

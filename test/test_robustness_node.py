@@ -178,9 +178,12 @@ def test_200_fuzzed_messages_over_dds_then_a_good_one(processes, ros):
 # --- 2. bad robot descriptions at run time ----------------------------------------------------
 
 A1_XML = A1_URDF.read_text()
-NO_LEGS = """<robot name="arm"><link name="base"/><link name="l1"/><link name="l2"/>
-<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><limit lower="-1" upper="1"/></joint>
-<joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/></joint></robot>"""
+NO_LEGS = (
+    '<robot name="arm"><link name="base"/><link name="l1"/><link name="l2"/>\n'
+    '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
+    '<limit lower="-1" upper="1"/></joint>\n'
+    '<joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/></joint></robot>'
+)
 PRISMATIC_KNEE = re.sub(
     r'(<joint name="FR_lower_joint" type=")revolute(")', r"\1prismatic\2", A1_XML
 )
@@ -266,8 +269,8 @@ VERIFY_CLIENT = textwrap.dedent(
     rclpy.init()
     node = rclpy.create_node(f"verify_abuser_{index}")
     # Every client's response reader receives the replies to all clients (rmw_fastrtps filters
-    # them by request writer on arrival); with the default KEEP_LAST 10 a starved client's own reply
-    # can be pushed out by ten replies to the others. A deep history keeps it.
+    # them by request writer on arrival); with the default KEEP_LAST 10 a starved client's own
+    # reply can be pushed out by ten replies to the others. A deep history keeps it.
     depth = int(sys.argv[4])
     client = node.create_client(Trigger, "verify_fk", qos_profile=QoSProfile(depth=depth))
     executor = SingleThreadedExecutor()
@@ -303,7 +306,10 @@ VERIFY_CLIENT = textwrap.dedent(
         succeeded += response.success
         if not response.success and len(failures) < 3:
             failures.append(response.message)
-    print("RESULT " + json.dumps(dict(warmup_lost=warmup_lost, calls=calls, answered=answered, succeeded=succeeded, slowest_s=slowest, failures=failures)), flush=True)
+    print("RESULT " + json.dumps(dict(
+        warmup_lost=warmup_lost, calls=calls, answered=answered, succeeded=succeeded,
+        slowest_s=slowest, failures=failures,
+    )), flush=True)
     node.destroy_node()
     rclpy.shutdown()
     """
@@ -315,7 +321,8 @@ SOAK_SCRIPT = ROOT / "bench" / "soak.py"
 
 
 def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes, ros, tmp_path):
-    """Counts feet in a separate process (an in-test rclpy subscriber can't keep up with 2000/s)."""
+    """Counts feet in a separate process (an in-test rclpy subscriber can't keep up with
+    2000/s)."""
     node = processes.start(node_command())
     diagnostics = Diagnostics(ros)
     publisher = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=10000))
@@ -415,7 +422,7 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     assert node.poll() is None
 
 
-# --- 4. faults ------------------------------------------------------------------------------------
+# --- 4. faults -----------------------------------------------------------------------------------
 
 
 def test_node_first_then_publisher_dies_and_another_comes_back(processes, ros):

@@ -120,14 +120,16 @@ def test_chain_to_an_unknown_link_names_it() -> None:
 
 
 def test_transmission_joints_are_not_joints() -> None:
-    """pybullet_data's A1 has 12 ``<transmission><joint name=...>``: only the 21 real ones count."""
+    """pybullet_data's A1 has 12 ``<transmission><joint name=...>``: only the 21 real ones
+    count."""
     model = load_urdf(A1_PATH)
     assert A1_PATH.read_text(encoding="utf-8").count("<joint ") == 21 + 12
     assert len(model.joints) == 21
 
 
 def test_a_transmission_joint_naming_a_missing_link_is_ignored() -> None:
-    """Parsed as a joint, this one would fail (its parent link does not exist); it must be ignored."""
+    """Parsed as a joint, this one would fail (its parent link does not exist); it must be
+    ignored."""
     extra = """<transmission name="t"><type>transmission_interface/SimpleTransmission</type>
       <joint name="ghost" type="revolute"><parent link="nowhere"/><child link="arm"/></joint>
       <actuator name="m"><mechanicalReduction>1</mechanicalReduction></actuator></transmission>"""
@@ -229,7 +231,8 @@ def test_cycle_names_a_link_on_it() -> None:
 
 def test_link_with_two_parents() -> None:
     xml = two_link_urdf(
-        extra='<link name="c"/><joint name="k" type="fixed"><parent link="c"/><child link="arm"/></joint>'
+        extra='<link name="c"/><joint name="k" type="fixed"><parent link="c"/><child '
+        'link="arm"/></joint>'
     )
     with raises_leg_fk_error("'arm'"):
         parse_urdf(xml)
@@ -237,7 +240,8 @@ def test_link_with_two_parents() -> None:
 
 def test_duplicate_joint_name() -> None:
     xml = two_link_urdf(
-        extra='<link name="c"/><joint name="j" type="fixed"><parent link="arm"/><child link="c"/></joint>'
+        extra='<link name="c"/><joint name="j" type="fixed"><parent link="arm"/><child '
+        'link="c"/></joint>'
     )
     with raises_leg_fk_error("'j'", "duplicate"):
         parse_urdf(xml)

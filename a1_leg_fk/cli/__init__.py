@@ -1,4 +1,5 @@
-"""``a1-leg-fk``: echo | verify | plot | demo | bag | gait | ik, for installs without the ROS 2 command line tools.
+"""``a1-leg-fk``: echo | verify | plot | demo | bag | gait | ik, for installs without the ROS 2
+command line tools.
 
 One module per command (:mod:`.echo`, :mod:`.verify`, :mod:`.plot`, :mod:`.demo`, :mod:`.bag`,
 :mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options, argv)``; the
@@ -39,8 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``a1-leg-fk`` parser: one sub-command per module of :data:`COMMANDS`."""
     parser = argparse.ArgumentParser(
         prog=PROG,
-        description="Tools around foot_fk_node (the a1_leg_fk feet forward kinematics) for installs "
-        "without the ROS 2 command line. ROS arguments go last: ... --ros-args -r __ns:=/robot1",
+        description="Tools around foot_fk_node (the a1_leg_fk feet forward kinematics) for "
+        "installs without the ROS 2 command line. ROS arguments go last: ... --ros-args -r "
+        "__ns:=/robot1",
         epilog="exit codes: 0 ok, 1 failed, 2 no answer in time / bad usage, 130 interrupted",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

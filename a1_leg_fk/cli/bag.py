@@ -61,14 +61,16 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--base-pose",
         metavar="TOPIC",
-        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, PoseWithCovarianceStamped, or /tf): adds world-frame feet",
+        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, "
+        "PoseWithCovarianceStamped, or /tf): adds world-frame feet",
     )
     parser.add_argument(
         "--max-pose-gap",
         type=non_negative,
         default=DEFAULT_MAX_POSE_GAP_S,
         metavar="S",
-        help=f"no world position between two poses further apart than S seconds (default {DEFAULT_MAX_POSE_GAP_S:g})",
+        help="no world position between two poses further apart than S seconds (default "
+        f"{DEFAULT_MAX_POSE_GAP_S:g})",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -102,9 +104,10 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     bag = commands.add_parser(
         "bag",
         help="a recorded run (ROS bag) -> foot trajectories: CSV, a new bag, a PNG",
-        description="Compute every foot of a recorded run with the node's model and JointState rules, and "
-        "write them as CSV (--csv), a new ROS 2 bag (--output-bag) and/or a plot (--plot); print a summary. "
-        "Exit 0 done, 1 the bag could not be read to its end (what was read is written), 2 bad input.",
+        description="Compute every foot of a recorded run with the node's model and JointState "
+        "rules, and write them as CSV (--csv), a new ROS 2 bag (--output-bag) and/or a plot "
+        "(--plot); print a summary. Exit 0 done, 1 the bag could not be read to its end (what "
+        "was read is written), 2 bad input.",
     )
     add_recording_arguments(bag)
     bag.add_argument(

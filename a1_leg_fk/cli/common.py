@@ -1,4 +1,5 @@
-"""The plumbing the ``a1-leg-fk`` commands share: exit codes, argument types, signals, ROS, children.
+"""The plumbing the ``a1-leg-fk`` commands share: exit codes, argument types, signals, ROS,
+children.
 
 Nothing here imports rclpy at import time: the commands that need no ROS (plot, bag, gait, ik)
 never load it.
@@ -35,7 +36,8 @@ T = TypeVar("T")
 
 
 def our_arguments(argv: Sequence[str]) -> list[str]:
-    """``argv`` (program name excluded) less its ROS arguments, as rclpy's ``remove_ros_args`` says.
+    """``argv`` (program name excluded) less its ROS arguments, as rclpy's ``remove_ros_args``
+    says.
 
     :class:`BadRosArguments` (a ``ValueError``) when rcl cannot parse them.
 
@@ -59,7 +61,8 @@ class BadRosArguments(ValueError):
 
 
 def ros_section(argv: Sequence[str]) -> list[str]:
-    """``argv`` from its first ``--ros-args`` on (empty without one): what the demo hands its nodes.
+    """``argv`` from its first ``--ros-args`` on (empty without one): what the demo hands its
+    nodes.
 
     rcl finds in it the same ROS arguments as in the whole ``argv``; the nodes ignore the rest
     (anything of ours after a closing ``--``), as ``rclpy.init`` does.
@@ -197,7 +200,9 @@ def child_command(script: str, module: str) -> list[str]:
 
 
 def _die_with_parent(death_signal: int) -> None:
-    """In the child before exec: get ``death_signal`` if the parent dies (even by SIGKILL). Linux only."""
+    """In the child before exec: get ``death_signal`` if the parent dies (even by SIGKILL). Linux
+    only.
+    """
     try:
         import ctypes
 

@@ -39,10 +39,12 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     demo = commands.add_parser(
         "demo",
         parents=[namespace_parent()],
-        help="start foot_fk_node and joint_state_demo, show the feet live, verify, stop everything",
-        description="The whole pipeline in one command: starts foot_fk_node and joint_state_demo (a simulated "
-        "A1 that stands up, then trots in place), shows the live echo table for --duration seconds, calls "
-        "verify_fk, then stops both. Uses ROS_DOMAIN_ID if set, else picks one for itself.",
+        help="start foot_fk_node and joint_state_demo, show the feet live, verify, stop "
+        "everything",
+        description="The whole pipeline in one command: starts foot_fk_node and "
+        "joint_state_demo (a simulated A1 that stands up, then trots in place), shows the live "
+        "echo table for --duration seconds, calls verify_fk, then stops both. Uses "
+        "ROS_DOMAIN_ID if set, else picks one for itself.",
     )
     demo.add_argument(
         "--duration",
@@ -97,8 +99,8 @@ class Demo:
             os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
             say(
                 f"ROS_DOMAIN_ID was unset: using {domain} for this demo and its nodes "
-                f"(discovery range {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}); to watch from another "
-                f"terminal: export ROS_DOMAIN_ID={domain}"
+                f"(discovery range {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}); to watch from "
+                f"another terminal: export ROS_DOMAIN_ID={domain}"
             )
         else:
             say(f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} (from the environment)")
@@ -127,10 +129,12 @@ class Demo:
             self.children.append(Child(name, command, log_dir / f"{name}.log"))
             say(f"  {name:<17} pid {self.children[-1].process.pid}: {' '.join(command)}")
         say(
-            "  joint_state_demo: publishes joint_states at 500 Hz: the A1 stands up from a crouch (2 s), then trots in place"
+            "  joint_state_demo: publishes joint_states at 500 Hz: the A1 stands up from a "
+            "crouch (2 s), then trots in place"
         )
         say(
-            "  foot_fk_node:     joint_states -> forward kinematics -> foot_positions/<leg>; offers verify_fk"
+            "  foot_fk_node:     joint_states -> forward kinematics -> foot_positions/<leg>; "
+            "offers verify_fk"
         )
 
         self.ros = start_ros("demo", self.argv)
@@ -138,8 +142,9 @@ class Demo:
             return EXIT_FAILED
         table = subscribe_feet(self.ros, options.namespace)
         say(
-            f"\n[2/4] the feet, live for {options.duration:g} s: x forward, y left, z up, in mm from the trunk "
-            "origin; rate = messages per second on each topic   (Ctrl-C stops everything)"
+            f"\n[2/4] the feet, live for {options.duration:g} s: x forward, y left, z up, in mm "
+            "from the trunk origin; rate = messages per second on each topic   (Ctrl-C stops "
+            "everything)"
         )
         ended = echo_loop(
             self.ros,
@@ -159,12 +164,14 @@ class Demo:
         code = EXIT_OK
         if ended == "no_data":
             say(
-                f"  no feet from all of {', '.join(table.topics)} within {DEMO_START_TIMEOUT_S:g} s"
+                f"  no feet from all of {', '.join(table.topics)} within "
+                f"{DEMO_START_TIMEOUT_S:g} s"
             )
             code = EXIT_FAILED
 
         say(
-            "\n[3/4] verify_fk: the node recomputes the latest feet with PyBullet and compares (distance per foot, m)"
+            "\n[3/4] verify_fk: the node recomputes the latest feet with PyBullet and compares "
+            "(distance per foot, m)"
         )
         verify_code, text = call_verify(self.ros, options.namespace, 5.0, stop)
         say("  " + text.replace("\n", "\n  "))
@@ -198,7 +205,8 @@ def _stop_children(children: list[Child], code: int) -> int:
         elif child in died or returncode != 0:
             how = "had already exited" if child in died else "exited"
             say(
-                f"  {child.name} {how} with code {returncode}; its last output ({child.log}):\n{child.tail()}"
+                f"  {child.name} {how} with code {returncode}; its last output "
+                f"({child.log}):\n{child.tail()}"
             )
             code = EXIT_FAILED
         else:

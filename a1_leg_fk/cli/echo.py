@@ -52,10 +52,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     echo = commands.add_parser(
         "echo",
         parents=[namespace_parent()],
-        help="live table of the four feet (foot_positions/<leg>): x/y/z in mm and each topic's rate",
-        description="Subscribe to foot_positions/FR|FL|RR|RL and show x, y, z [mm] per foot and the rate "
-        "of each topic [Hz], refreshed in place (a new table per refresh when the output is not a "
-        "terminal). Ctrl-C stops (exit 0).",
+        help="live table of the four feet (foot_positions/<leg>): x/y/z in mm and each topic's "
+        "rate",
+        description="Subscribe to foot_positions/FR|FL|RR|RL and show x, y, z [mm] per foot and "
+        "the rate of each topic [Hz], refreshed in place (a new table per refresh when the "
+        "output is not a terminal). Ctrl-C stops (exit 0).",
     )
     echo.add_argument(
         "--once",
@@ -74,7 +75,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         type=positive,
         default=10.0,
         metavar="S",
-        help="with --once: give up (exit 2) when no complete table arrives within S s (default 10)",
+        help="with --once: give up (exit 2) when no complete table arrives within S s (default "
+        "10)",
     )
     echo.set_defaults(handler=run)
 
@@ -117,7 +119,8 @@ class FootTable:
         return all(value is not None for value in self.latest.values())
 
     def rate_hz(self, leg: str, now: float) -> float | None:
-        """Messages per second the publisher sent over the last RATE_WINDOW_S (None: too few to tell).
+        """Messages per second the publisher sent over the last RATE_WINDOW_S (None: too few to
+        tell).
 
         Counted from the publication sequence numbers where the middleware reports them, so that
         messages this tool could not keep up with still count; else from the arrivals.
@@ -158,7 +161,9 @@ class FootTable:
 
 
 class TableWriter:
-    """Prints tables: over the previous one (ANSI cursor-up) on a terminal, one after another otherwise."""
+    """Prints tables: over the previous one (ANSI cursor-up) on a terminal, one after another
+    otherwise.
+    """
 
     def __init__(self, stream: TextIO) -> None:
         self.stream = stream
@@ -183,7 +188,8 @@ def subscribe_feet(ros: Ros, namespace: str) -> FootTable:
 
     names = [prefixed(namespace, f"foot_positions/{leg}") for leg in LEG_NAMES]
     table = FootTable(names)
-    # Best effort and volatile: matches reliable and best-effort, volatile and transient-local publishers.
+    # Best effort and volatile: matches reliable and best-effort, volatile and transient-local
+    # publishers.
     subscriptions = [
         # rclpy passes the MessageInfo dict to a two-argument callback; its annotation names only
         # the one-argument form.
@@ -226,8 +232,8 @@ def echo_loop(
 
     'once' (``once`` and all four feet arrived: that table printed), 'duration' (``duration_s``
     passed, counted from the first complete table when ``duration_after_data``), 'no_data' (not all
-    four feet within ``data_timeout_s``), 'stop' (a signal), 'unhealthy' (``healthy()`` turned false).
-    Without ``once`` a table is printed every ``interval_s``, and a last one at the end.
+    four feet within ``data_timeout_s``), 'stop' (a signal), 'unhealthy' (``healthy()`` turned
+    false). Without ``once`` a table is printed every ``interval_s``, and a last one at the end.
     """
     writer = TableWriter(sys.stdout)
     if interval_s is None:
@@ -286,8 +292,9 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     ended, table = result
     if ended == "no_data":
         print(
-            f"{PROG} echo: no message from all of {', '.join(table.topics)} within {options.timeout:g} s "
-            "(is foot_fk_node running, in this namespace and ROS domain, and receiving joint_states?)",
+            f"{PROG} echo: no message from all of {', '.join(table.topics)} within "
+            f"{options.timeout:g} s (is foot_fk_node running, in this namespace and ROS domain, "
+            "and receiving joint_states?)",
             file=sys.stderr,
         )
         return EXIT_NO_ANSWER

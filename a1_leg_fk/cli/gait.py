@@ -27,9 +27,10 @@ from a1_leg_fk.urdf import LegFkError
 
 PROG = "a1-leg-fk gait"
 NEEDS_BASE_POSE = (
-    "needs --base-pose TOPIC (nav_msgs/Odometry, geometry_msgs/PoseStamped or /tf): contacts are found "
-    "from each foot's height above the ground and its speed, which only world-frame feet have; "
-    "base-frame feet move with the body (a stance foot sweeps backwards, a swing foot can look still)"
+    "needs --base-pose TOPIC (nav_msgs/Odometry, geometry_msgs/PoseStamped or /tf): contacts "
+    "are found from each foot's height above the ground and its speed, which only world-frame "
+    "feet have; base-frame feet move with the body (a stance foot sweeps backwards, a swing "
+    "foot can look still)"
 )
 THRESHOLD_HELP = {
     "height_on_m": "stance starts below this height above the ground level [m]",
@@ -46,11 +47,12 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     """Register ``gait`` with the ``a1-leg-fk`` sub-commands."""
     gait = commands.add_parser(
         "gait",
-        help="a recorded run (ROS bag) -> when each foot was down, duty factor, stride, step, clearance, gait name",
-        description="Find each foot's stance phases from its world-frame height and speed (hysteresis, minimum "
-        "phase, ground level estimated from the data), then per-leg metrics and the gait (walk, trot, pace, "
-        "bound, pronk or unknown). Needs --base-pose. Exit 0 done, 1 bag not read to its end or plot failed, "
-        "2 bad input.",
+        help="a recorded run (ROS bag) -> when each foot was down, duty factor, stride, step, "
+        "clearance, gait name",
+        description="Find each foot's stance phases from its world-frame height and speed "
+        "(hysteresis, minimum phase, ground level estimated from the data), then per-leg "
+        "metrics and the gait (walk, trot, pace, bound, pronk or unknown). Needs --base-pose. "
+        "Exit 0 done, 1 bag not read to its end or plot failed, 2 bad input.",
     )
     add_recording_arguments(gait)
     gait.add_argument(
@@ -132,17 +134,26 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
     )
     lines = [
         f"gait:      {report.gait} (fit {report.gait_fit:.2f}; {report.gait_reason})",
-        f"phases:    touchdown vs FR: {phases}; mean duty factor {_number(report.duty_factor, '.3f')}",
         (
-            f"ground:    level {report.ground.level_m:.4f} m in {world_frame or 'the world frame'} "
-            f"(foot frame in stance), slope {report.ground.slope_deg:.1f} deg"
+            f"phases:    touchdown vs FR: {phases}; mean duty factor "
+            f"{_number(report.duty_factor, '.3f')}"
         ),
-        f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} {'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}",
+        (
+            f"ground:    level {report.ground.level_m:.4f} m in "
+            f"{world_frame or 'the world frame'} (foot frame in stance), slope "
+            f"{report.ground.slope_deg:.1f} deg"
+        ),
+        (
+            f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} "
+            f"{'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}"
+        ),
     ]
     for leg, metrics in report.legs.items():
         lines.append(
-            f"{leg:<4} {metrics.status:<19} {len(metrics.stance_s):>7} {_number(metrics.duty_factor, '.3f'):>6} "
-            f"{_number(metrics.stride_period_s, '.3f'):>9} {_number(metrics.stride_frequency_hz, '.2f'):>8} "
+            f"{leg:<4} {metrics.status:<19} {len(metrics.stance_s):>7} "
+            f"{_number(metrics.duty_factor, '.3f'):>6} "
+            f"{_number(metrics.stride_period_s, '.3f'):>9} "
+            f"{_number(metrics.stride_frequency_hz, '.2f'):>8} "
             f"{_number(metrics.step_length_m, '.3f'):>8} {_number(metrics.clearance_m, '.3f'):>8}"
         )
     lines.extend(f"note:      {note}" for note in report.notes)
@@ -173,7 +184,9 @@ def write_outputs(
 
 
 def write_contacts_csv(contacts: Contacts, path: Path) -> None:
-    """One row per sample: ``time_s``, ``<leg>_stance`` (0/1), ``<leg>_height_m``, ``<leg>_speed_mps`` (empty where unknown)."""
+    """One row per sample: ``time_s``, ``<leg>_stance`` (0/1), ``<leg>_height_m``,
+    ``<leg>_speed_mps`` (empty where unknown).
+    """
     header = [
         "time_s",
         *(f"{leg}_stance" for leg in LEG_NAMES),

@@ -26,10 +26,12 @@ def add_parser(
     """Register ``ik`` on the ``a1-leg-fk`` command parser."""
     parser = subparsers.add_parser(
         "ik",
-        help="joint angles that put one foot at X Y Z (base frame, m): status, residual, every solution",
-        description="Inverse kinematics of one leg, offline: the angles nearest the seed (default: the middle of "
-        "the joint ranges) that put the foot at X Y Z [m] in the base frame, the status (ok, outside_limits, "
-        "unreachable), the distance from the foot at those angles to the target, and every exact solution.",
+        help="joint angles that put one foot at X Y Z (base frame, m): status, residual, every "
+        "solution",
+        description="Inverse kinematics of one leg, offline: the angles nearest the seed "
+        "(default: the middle of the joint ranges) that put the foot at X Y Z [m] in the base "
+        "frame, the status (ok, outside_limits, unreachable), the distance from the foot at "
+        "those angles to the target, and every exact solution.",
     )
     parser.add_argument(
         "leg", choices=LEG_NAMES, metavar="LEG", help=f"one of {', '.join(LEG_NAMES)}"
@@ -43,8 +45,8 @@ def add_parser(
         type=float,
         nargs="+",
         metavar="RAD",
-        help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all {JOINTS_PER_LEG * len(LEG_NAMES)} in "
-        "slot order (FR, FL, RR, RL, root side first)",
+        help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all "
+        f"{JOINTS_PER_LEG * len(LEG_NAMES)} in slot order (FR, FL, RR, RL, root side first)",
     )
     parser.add_argument(
         "--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)"
@@ -95,13 +97,17 @@ def report(
             full_seed = list(seed)
         else:
             raise LegFkError(
-                f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, got {len(seed)}"
+                f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, "
+                f"got {len(seed)}"
             )
     result = quadruped.ik(feet, full_seed)
     names = quadruped.joint_names[first : first + JOINTS_PER_LEG]
     angles = result.angles[first : first + JOINTS_PER_LEG]
     lines = [
-        f"leg {leg}, target ({', '.join(f'{v:.6f}' for v in target)}) m in frame '{quadruped.base_frame}' of {quadruped.model.source}",
+        (
+            f"leg {leg}, target ({', '.join(f'{v:.6f}' for v in target)}) m in frame "
+            f"'{quadruped.base_frame}' of {quadruped.model.source}"
+        ),
         f"status: {result.status[slot]}   residual: {result.residual_m[slot]:.3g} m",
         "angles:",
         *(

@@ -1,4 +1,6 @@
-"""``a1-leg-fk plot``: PNGs of a leg's reach envelope and of the feet over the demo gait (no ROS)."""
+"""``a1-leg-fk plot``: PNGs of a leg's reach envelope and of the feet over the demo gait (no
+ROS).
+"""
 
 from __future__ import annotations
 
@@ -16,10 +18,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     """Register ``plot`` with the ``a1-leg-fk`` sub-commands."""
     plot = commands.add_parser(
         "plot",
-        help="write PNGs: a leg's reach envelope, and the feet over the demo gait (needs matplotlib)",
-        description="Write reach_<leg>.png (where the leg's foot can be, in its hip's sagittal plane, with "
-        "the inner/outer reach circles) and demo_gait_feet.png (the four feet over two cycles of the "
-        "demo trot, side and top views). No ROS needed.",
+        help="write PNGs: a leg's reach envelope, and the feet over the demo gait (needs "
+        "matplotlib)",
+        description="Write reach_<leg>.png (where the leg's foot can be, in its hip's sagittal "
+        "plane, with the inner/outer reach circles) and demo_gait_feet.png (the four feet over "
+        "two cycles of the demo trot, side and top views). No ROS needed.",
     )
     plot.add_argument(
         "--out", default=".", metavar="DIR", help="output folder (default: current folder)"

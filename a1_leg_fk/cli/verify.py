@@ -30,9 +30,9 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "verify",
         parents=[namespace_parent()],
         help="call verify_fk: compare the node's feet with PyBullet's for the last joint state",
-        description="Call the node's verify_fk service (std_srvs/Trigger) and print its answer. Exit 0 when "
-        "the node's FK agrees with PyBullet's, 1 when it does not or the node has no joint state yet, "
-        "2 when no service answers within --timeout.",
+        description="Call the node's verify_fk service (std_srvs/Trigger) and print its answer. "
+        "Exit 0 when the node's FK agrees with PyBullet's, 1 when it does not or the node has "
+        "no joint state yet, 2 when no service answers within --timeout.",
     )
     verify.add_argument(
         "--timeout",

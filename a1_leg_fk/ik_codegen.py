@@ -57,7 +57,9 @@ def _knee_branch_can_be_inside(peak: float, sign: float, lower: float, upper: fl
 
 
 def _bound(code: Code, expressions: Sequence[Term]) -> tuple[Term, ...]:
-    """Constants, names and negated names as they are, other expressions bound to fresh variables."""
+    """Constants, names and negated names as they are, other expressions bound to fresh
+    variables.
+    """
     return tuple(
         e if isinstance(e, float) or e.lstrip("-").isidentifier() else code.assign([e])[0]
         for e in expressions
@@ -206,7 +208,8 @@ def _representatives(name: str, limits: Sequence[tuple[float, float]], slot: int
     if lower == -math.inf:
         return (
             f"{name} = {name} - r{slot} + {math.pi!r}\n"
-            f"{name} = {name} - {TWO_PI!r} * _floor({name} * {1.0 / TWO_PI!r}) - {math.pi!r} + r{slot}\n"
+            f"{name} = {name} - {TWO_PI!r} * _floor({name} * {1.0 / TWO_PI!r})"
+            f" - {math.pi!r} + r{slot}\n"
             f"{name}_inside = True"
         )
     low = lower - LIMIT_TOLERANCE_RAD
@@ -325,6 +328,7 @@ sin_knee = _sqrt(1.0 - cos_knee * cos_knee)
 knee_angle = _atan2(sin_knee, cos_knee)
 {branch}"""
     start = "best, branch_trig = None, True" if trig else "best = None"
+    no_break = "\nelse:\n    branch_trig = False" if trig else ""  # the loop ran out
     body = f"""{chr(10).join(stage.head)}
 radius = _sqrt({stage.a} * {stage.a} + {stage.b_cross} * {stage.b_cross})
 if not 0.0 < radius < _inf:  # on the roll axis, or too far for the squares
@@ -335,7 +339,7 @@ sin_roll = _sqrt(1.0 - cos_roll * cos_roll)
 cos_base, sin_base = {stage.a} / radius, {stage.b_cross} / radius
 {start if fused else "best, reachable, roll_outside = None, False, False"}
 for roll_sign in {(first_sign, -first_sign)!r}:
-    {_indented(roll_branch, 4)}{f"{chr(10)}else:{chr(10)}    branch_trig = False" if trig else ""}"""
+    {_indented(roll_branch, 4)}{no_break}"""
     return "    " + _indented(body, 4) + "\n"
 
 
@@ -348,8 +352,8 @@ def fast_solver(
 ) -> tuple[Callable[..., Any], Callable[..., Any], float] | None:
     """The closed form of :func:`branches` and the choice of :meth:`LegSolver.solve` as one
     generated function on floats with the leg's constants folded in, as the FK is (see
-    :func:`a1_leg_fk.fk_codegen.leg_source`), or ``None`` when a joint has finite limits 2 pi or more
-    apart (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
+    :func:`a1_leg_fk.fk_codegen.leg_source`), or ``None`` when a joint has finite limits 2 pi or
+    more apart (then the general path decides). ``solve(tx, ty, tz, r0, r1, r2)`` takes a target
     [m, base frame] and the seed [rad]; it returns ``(angles, reachable)`` with ``angles`` the
     in-limit exact solution nearest the seed (``None`` if there is none), or ``None`` for the
     general path to decide (a target on the roll axis or too far for its squares; no solution in
@@ -370,7 +374,7 @@ def fast_solver(
         + body.replace("UNREACHED", "return None, False").replace(
             "ROLL_OUTSIDE", "roll_outside = True; continue"
         )
-        + """    if best is None and roll_outside:  # whether a roll branch outside the limits reaches the target
+        + """    if best is None and roll_outside:  # a roll branch outside the limits may reach it
         return None
     return best, reachable
 """
@@ -407,7 +411,8 @@ for knee_sign in {knee.signs!r}:
     distance = _where(found, d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2, _inf)
     better = distance < best_distance
     best_distance = _where(better, distance, best_distance)
-    best = [_where(better, new, old) for new, old in zip((better, q0, q1, q2, c0, s0, along, across, c2, s2), best)]
+    new = (better, q0, q1, q2, c0, s0, along, across, c2, s2)
+    best = [_where(better, value, old) for value, old in zip(new, best)]
 best[0] = best_distance < _inf
 return best"""
 
@@ -455,19 +460,23 @@ def solve_batch(tx, ty, tz, r0, r1, r2):
     s0 = _where(first_q0_inside, first_s0, second_s0)
     q0 = _where(first_q0_inside, first_q0, second_q0)
     {_indented(chr(10).join(stage.knee), 4)}
-    best = knee_batch(c0, s0, q0, {stage.gx}, {stage.gy}, first_q0_inside | second_q0_inside, r0, r1, r2)
+    inside = first_q0_inside | second_q0_inside
+    best = knee_batch(c0, s0, q0, {stage.gx}, {stage.gy}, inside, r0, r1, r2)
     both = _flatnonzero(first_q0_inside & second_q0_inside)
     if both.size:
         c0, s0, q0 = second_c0[both], second_s0[both], second_q0[both]
-        other = knee_batch(c0, s0, q0, *roll_batch(c0, s0, tx[both], ty[both], tz[both]), True, r0[both], r1[both], r2[both])
+        gx, gy = roll_batch(c0, s0, tx[both], ty[both], tz[both])
+        seed = r0[both], r1[both], r2[both]
+        other = knee_batch(c0, s0, q0, gx, gy, True, *seed)
         mine = [column[both] for column in best[:4]]
         # The nearer the seed; on a tie the first branch, as the scalar code.
-        closer = other[0] & (~mine[0] | (_distance(other, r0[both], r1[both], r2[both]) < _distance(mine, r0[both], r1[both], r2[both])))
+        closer = other[0] & (~mine[0] | (_distance(other, *seed) < _distance(mine, *seed)))
         rows = both[closer]
         for column, new in zip(best, other):
             column[rows] = new[closer]
     found, best0, best1, best2, cos0, sin0, x1, y1, cos2, sin2 = best
-    norm1 = _sqrt(x1 * x1 + y1 * y1)  # a distance in the knee's plane, < 1 m where a branch was found
+    # A distance in the knee's plane, < 1 m where a branch was found: no overflow.
+    norm1 = _sqrt(x1 * x1 + y1 * y1)
     return best0, best1, best2, found, (cos0, sin0, x1 / norm1, y1 / norm1, cos2, sin2)
 """
 
@@ -502,7 +511,8 @@ def fused_solver(
             fused=True,
         )
         q0, q1, q2 = (f"_q{joint}" for joint in range(3 * slot, 3 * slot + 3))
-        trig = f"c0, s0, c1, s1, c2, s2 = _cos({q0}), _sin({q0}), _cos({q1}), _sin({q1}), _cos({q2}), _sin({q2})"
+        trig = ", ".join(f"_cos({q}), _sin({q})" for q in (q0, q1, q2))
+        trig = f"c0, s0, c1, s1, c2, s2 = {trig}"
         if "branch_trig" in body:
             trig = f"""if branch_trig:
         length = _hypot(along, across)

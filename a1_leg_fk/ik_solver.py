@@ -170,8 +170,8 @@ class LegSolver:
     def solve_batch(
         self, points: np.ndarray, seeds: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For (N, 3) targets [m] and (N, 3) seeds [rad] (``None``: the middle): (N, 3) angles [rad],
-        (N,) int8 status codes, (N,) residuals [m]; row by row the same as :meth:`solve`.
+        """For (N, 3) targets [m] and (N, 3) seeds [rad] (``None``: the middle): (N, 3) angles
+        [rad], (N,) int8 status codes, (N,) residuals [m]; row by row the same as :meth:`solve`.
         """
         rows = points.shape[0]
         if seeds is None:
@@ -242,8 +242,8 @@ class LegSolver:
         seed: Sequence[FloatsOrArrays],
         xp: SimpleNamespace = SCALAR,
     ) -> tuple[tuple[FloatsOrArrays, FloatsOrArrays, FloatsOrArrays], FloatsOrArrays]:
-        """Each angle's value modulo 2 pi by :func:`representative_angle` (inside its limits where it
-        can be), and whether all three are inside (within :data:`LIMIT_TOLERANCE_RAD`).
+        """Each angle's value modulo 2 pi by :func:`representative_angle` (inside its limits where
+        it can be), and whether all three are inside (within :data:`LIMIT_TOLERANCE_RAD`).
         """
         chosen, all_inside = [], True
         for angle, reference, (lower, upper) in zip(angles, seed, self._limits):

@@ -106,7 +106,7 @@ def checked_point(point: Sequence[float], leg: str) -> tuple[float, float, float
     return values  # three, checked above
 
 
-# --- four legs ------------------------------------------------------------------------------------
+# --- four legs -------------------------------------------------------------------------------
 
 
 class IkResult(NamedTuple):
@@ -134,8 +134,8 @@ class IkBatchResult:
 def solve_feet(
     solvers: Sequence[LegSolver], targets: Sequence[float], seed: Sequence[float] | None
 ) -> IkResult:
-    """IK of the legs for checked targets [m] (x, y, z of each leg in slot order: 12 floats for four
-    legs) and 12 checked seed angles [rad] (or ``None``).
+    """IK of the legs for checked targets [m] (x, y, z of each leg in slot order: 12 floats for
+    four legs) and 12 checked seed angles [rad] (or ``None``).
     """
     fused = fused_solver(tuple(solvers))
     if fused is not None:  # the common case: every leg has an in-limit solution
@@ -159,7 +159,9 @@ def solve_feet(
 def solve_feet_batch(
     solvers: Sequence[LegSolver], feet: np.ndarray, seeds: np.ndarray | None
 ) -> IkBatchResult:
-    """IK of four legs for (N, 4, 3) checked targets [m] and (N, 12) checked seeds (or ``None``)."""
+    """IK of four legs for (N, 4, 3) checked targets [m] and (N, 12) checked seeds [rad] (or
+    ``None``).
+    """
     rows = feet.shape[0]
     angles = np.empty((rows, 3 * len(solvers)))
     status = np.empty((rows, len(solvers)), dtype=np.int8)

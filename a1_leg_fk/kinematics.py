@@ -93,7 +93,9 @@ class CompiledLeg:
         self.jacobian_from_trig: Callable[..., tuple[Any, ...]] = namespace["jacobian_from_trig"]
 
     def joint_points(self, angles: Angles) -> np.ndarray:
-        """(4, 3): the three movable joints' origins and the foot [m], root frame, root side first."""
+        """(4, 3): the three movable joints' origins and the foot [m], root frame, root side
+        first.
+        """
         rotation, origin = np.eye(3), np.zeros(3)
         points = []
         for stage, angle in zip(self.stages, angles):
@@ -206,7 +208,9 @@ class Quadruped:
         return out
 
     def angles_from_names(self, positions: Mapping[str, float]) -> list[float]:
-        """The 12 angles [rad] in slot order from a ``{joint name: angle}`` dict naming all of them."""
+        """The 12 angles [rad] in slot order from a ``{joint name: angle}`` dict naming all of
+        them.
+        """
         angles: list[float | None] = [None] * JOINT_COUNT
         for name, value in positions.items():
             slot = self.name_to_slot.get(name)
@@ -221,7 +225,9 @@ class Quadruped:
         return _checked_configuration(cast("list[float]", angles))  # no None left (checked above)
 
     def joints_outside_limits(self, angles: Angles) -> list[LimitViolation]:
-        """The joints whose angle [rad] lies outside their URDF limits (continuous joints have none)."""
+        """The joints whose angle [rad] lies outside their URDF limits (continuous joints have
+        none).
+        """
         q = _checked_configuration(angles)
         return [
             LimitViolation(joint.name, value, joint.lower, joint.upper)
@@ -254,7 +260,8 @@ class Quadruped:
         if bad.any():
             row, slot = (int(i) for i in np.argwhere(bad)[0])
             raise LegFkError(
-                f"feet: leg {LEG_NAMES[slot]} of row {row} is not finite ({bad.sum()} such targets)"
+                f"feet: leg {LEG_NAMES[slot]} of row {row} is not finite"
+                f" ({bad.sum()} such targets)"
             )
         seeds = None if seed is None else _checked_batch(seed, "seed")
         if seeds is not None and seeds.shape[0] != targets.shape[0]:
@@ -264,7 +271,9 @@ class Quadruped:
     def ik_leg(
         self, leg: str, point: Sequence[float], seed: Angles | None = None
     ) -> inverse.LegIk:
-        """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or ``None``."""
+        """:meth:`ik` of one leg: ``point`` [m, base frame], ``seed`` its 3 angles [rad] or
+        ``None``.
+        """
         checked_seed = (
             None
             if seed is None
@@ -337,7 +346,8 @@ def _checked_feet(feet: ArrayLike) -> list[float]:
         raise LegFkError(f"feet must be {len(LEG_NAMES)} x 3 numbers: {error}") from error
     if targets.shape != (len(LEG_NAMES), 3):
         raise LegFkError(
-            f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}), got {targets.shape}"
+            f"feet must have shape ({len(LEG_NAMES)}, 3) (legs {'/'.join(LEG_NAMES)}),"
+            f" got {targets.shape}"
         )
     flat: list[float] = targets.ravel().tolist()
     if not math.isfinite(sum(flat)):
@@ -371,8 +381,9 @@ def _checked_configuration(
 def _quickly_checked_configuration(angles: Angles, what: str = "joint angles") -> list[float]:
     """As :func:`_checked_configuration`, but cheap for 12 finite Python floats or ints.
 
-    The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and only then is each
-    value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0`` here, ratio 0.995.)
+    The common case costs a list copy and a sum: a NaN or infinity makes the sum non-finite, and
+    only then is each value examined. (``math.isfinite`` measured as fast as ``x - x == 0.0``
+    here, ratio 0.995.)
     """
     try:
         q = angles.tolist() if isinstance(angles, np.ndarray) else list(angles)

@@ -405,16 +405,15 @@ found = usable & q1_inside & q2_inside"""
     else:  # both knee branches: the nearer the seed where both are inside
         knee_code = f"""d0 = (q0 - r0) ** 2
 best_distance = _full(q0.shape, _inf)
-best = [best_distance] * 10
+best = [best_distance] * 9
 for knee_sign in {knee.signs!r}:
     {_indented(branch, 4)}
     distance = _where(found, d0 + (q1 - r1) ** 2 + (q2 - r2) ** 2, _inf)
     better = distance < best_distance
     best_distance = _where(better, distance, best_distance)
-    new = (better, q0, q1, q2, c0, s0, along, across, c2, s2)
+    new = (q0, q1, q2, c0, s0, along, across, c2, s2)
     best = [_where(better, value, old) for value, old in zip(new, best)]
-best[0] = best_distance < _inf
-return best"""
+return [best_distance < _inf, *best]"""
 
     def roll_branch(name: str, sign: float) -> str:
         """The columns of one roll branch: cosine, sine, angle and whether it is inside (the

@@ -83,8 +83,6 @@ __all__ = [
     "solve_feet_batch",
 ]
 
-ALL_OK = tuple(("ok",) * legs for legs in range(5))
-"""The status of :class:`IkResult` when every one of 0..4 legs is ``ok``."""
 BATCH_BLOCK_ROWS = 8192
 """Rows per block of :func:`solve_feet_batch`."""
 
@@ -144,7 +142,7 @@ def solve_feet(
         if found is not None:
             values = np.array(found)
             joints = 3 * len(solvers)
-            return IkResult(values[:joints], ALL_OK[len(solvers)], values[joints:])
+            return IkResult(values[:joints], ("ok",) * len(solvers), values[joints:])
     angles: list[float] = []
     status, residuals = [], []
     for slot, solver in enumerate(solvers):

@@ -24,25 +24,12 @@ MAX_STEP_RAD = 0.3
 
 def _positions(leg: CompiledLeg, angles: np.ndarray) -> np.ndarray:
     """(K, 3) feet [m] for (K, 3) angles [rad]."""
-    cos, sin = np.cos(angles), np.sin(angles)
-    out = np.empty((angles.shape[0], 3))
-    out[:, 0], out[:, 1], out[:, 2] = leg.position_from_trig(
-        cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
-    )
-    return out
+    return leg.positions_batch(np.cos(angles), np.sin(angles))
 
 
 def _jacobians(leg: CompiledLeg, angles: np.ndarray) -> np.ndarray:
     """(K, 3, 3) d foot / d angles for (K, 3) angles [rad]."""
-    cos, sin = np.cos(angles), np.sin(angles)
-    columns = leg.jacobian_from_trig(
-        cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
-    )
-    out = np.empty((angles.shape[0], 3, 3))
-    for joint in range(3):
-        for axis in range(3):
-            out[:, axis, joint] = columns[3 * joint + axis]
-    return out
+    return leg.jacobians_batch(np.cos(angles), np.sin(angles))
 
 
 # A target 1e200 m away: squared distances overflow to inf.

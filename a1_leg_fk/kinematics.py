@@ -92,6 +92,33 @@ class CompiledLeg:
         ]
         self.jacobian_from_trig: Callable[..., tuple[Any, ...]] = namespace["jacobian_from_trig"]
 
+    def positions_batch(
+        self, cos: np.ndarray, sin: np.ndarray, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """(K, 3) feet [m, root frame] for the (K, 3) cosines and sines of the leg's angles,
+        written into ``out`` when given (a view of a larger array, say).
+        """
+        out = np.empty((cos.shape[0], 3)) if out is None else out
+        out[:, 0], out[:, 1], out[:, 2] = self.position_from_trig(
+            cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
+        )
+        return out
+
+    def jacobians_batch(
+        self, cos: np.ndarray, sin: np.ndarray, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """(K, 3, 3) d(foot [m]) / d(angles [rad]), root frame, for the (K, 3) cosines and sines of
+        the leg's angles, written into ``out`` when given.
+        """
+        out = np.empty((cos.shape[0], 3, 3)) if out is None else out
+        columns = self.jacobian_from_trig(
+            cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
+        )
+        for joint in range(3):
+            for axis in range(3):
+                out[:, axis, joint] = columns[3 * joint + axis]
+        return out
+
     def joint_points(self, angles: Angles) -> np.ndarray:
         """(4, 3): the three movable joints' origins and the foot [m], root frame, root side
         first.
@@ -160,9 +187,8 @@ class Quadruped:
         for rows in _row_blocks(q.shape[0]):
             cos, sin = np.cos(q[rows]), np.sin(q[rows])
             for slot, leg in enumerate(self.legs):
-                trig = _leg_trig(cos, sin, slot)
-                x, y, z = leg.position_from_trig(*trig)
-                out[rows, slot, 0], out[rows, slot, 1], out[rows, slot, 2] = x, y, z
+                joints = _leg_columns(slot)
+                leg.positions_batch(cos[:, joints], sin[:, joints], out[rows, slot])
         return out
 
     def foot_velocities(self, angles: Angles, rates: Angles) -> np.ndarray:
@@ -201,10 +227,8 @@ class Quadruped:
         for rows in _row_blocks(q.shape[0]):
             cos, sin = np.cos(q[rows]), np.sin(q[rows])
             for slot, leg in enumerate(self.legs):
-                columns = leg.jacobian_from_trig(*_leg_trig(cos, sin, slot))
-                for joint_slot in range(JOINTS_PER_LEG):
-                    for axis in range(3):
-                        out[rows, slot, axis, joint_slot] = columns[3 * joint_slot + axis]
+                joints = _leg_columns(slot)
+                leg.jacobians_batch(cos[:, joints], sin[:, joints], out[rows, slot])
         return out
 
     def angles_from_names(self, positions: Mapping[str, float]) -> list[float]:
@@ -411,8 +435,6 @@ def _row_blocks(rows: int) -> list[slice]:
     ]
 
 
-def _leg_trig(cos: np.ndarray, sin: np.ndarray, slot: int) -> list[np.ndarray]:
-    first = slot * JOINTS_PER_LEG
-    return [
-        array[:, slot] for slot in range(first, first + JOINTS_PER_LEG) for array in (cos, sin)
-    ]
+def _leg_columns(slot: int) -> slice:
+    """The columns of leg ``slot``'s three joints in an (N, 12) array of angles."""
+    return slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)

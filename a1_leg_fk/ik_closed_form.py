@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from a1_leg_fk.ik_seed import FloatsOrArrays
+from a1_leg_fk.leg_stages import knee_circle
 
 if TYPE_CHECKING:  # kinematics imports inverse, which imports this module: no cycle at run time
     from a1_leg_fk.kinematics import CompiledLeg
@@ -21,7 +22,7 @@ ARGUMENT_TOLERANCE = 1e-12
 """How far beyond +-1 an ``acos`` argument may be (rounding of a target on the boundary of the
 workspace) and still count as reaching the target; it is then clamped to +-1."""
 PERPENDICULAR_TOLERANCE = 1e-9
-"""|cos| between axes below which they count as perpendicular, and |1 - |cos|| for parallel."""
+"""|cos| between the roll and pitch axes below which they count as perpendicular."""
 Vector3 = tuple[float, float, float]
 Branch = tuple[tuple[FloatsOrArrays, FloatsOrArrays, FloatsOrArrays], FloatsOrArrays]
 """``((q0, q1, q2), exact)``: a branch's angles [rad] and whether it reaches the target."""
@@ -53,28 +54,16 @@ def closed_form_geometry(leg: CompiledLeg) -> Geometry | None:
     """The constants of the closed form, or ``None`` when the leg is not of the A1 topology."""
     roll, pitch, knee = leg.stages
     pitch_axis = pitch.rotation @ pitch.axis
-    knee_in_pitch = knee.rotation @ knee.axis
     if abs(float(roll.axis @ pitch_axis)) > PERPENDICULAR_TOLERANCE:
         return None
-    if abs(abs(float(pitch.axis @ knee_in_pitch)) - 1.0) > PERPENDICULAR_TOLERANCE:
+    circle = knee_circle(pitch, knee, leg.foot_offset)
+    if circle is None:
         return None
-    c0, c1, c2 = knee.rodrigues_terms
-    # The foot in the pitch joint's child frame: u + cos v + sin w.
-    u = knee.offset + c0 @ leg.foot_offset
-    v, w = c1 @ leg.foot_offset, c2 @ leg.foot_offset
-    first = np.cross(pitch.axis, [1.0, 0.0, 0.0])
-    if np.linalg.norm(first) < 0.5:
-        first = np.cross(pitch.axis, [0.0, 1.0, 0.0])
-    first /= np.linalg.norm(first)
-    second = np.cross(pitch.axis, first)
-    basis = np.stack([first, second])
-    foot_u, foot_v, foot_w = basis @ u, basis @ v, basis @ w
-    alpha = float(foot_u @ foot_u + foot_v @ foot_v)
-    beta, gamma = 2.0 * float(foot_u @ foot_v), 2.0 * float(foot_u @ foot_w)
+    alpha, beta, gamma = circle.alpha, circle.beta, circle.gamma
     kappa = math.hypot(beta, gamma)
     if kappa < 1e-12:  # the foot on the knee axis, or the knee on the pitch axis: no knee motion
         return None
-    rows, plane = roll.rotation.T, basis @ pitch.rotation.T
+    rows, plane = roll.rotation.T, circle.basis @ pitch.rotation.T
     return Geometry(
         roll_rotation_t=(_floats(rows[0]), _floats(rows[1]), _floats(rows[2])),
         roll_origin=_floats(roll.offset),
@@ -82,11 +71,11 @@ def closed_form_geometry(leg: CompiledLeg) -> Geometry | None:
         pitch_axis=_floats(pitch_axis),
         pitch_cross=_floats(np.cross(roll.axis, pitch_axis)),
         pitch_origin=_floats(pitch.offset),
-        lateral_m=float(pitch_axis @ pitch.offset + pitch.axis @ u),
+        lateral_m=float(pitch_axis @ pitch.offset) + circle.along,
         plane=(_floats(plane[0]), _floats(plane[1])),
-        foot_u=tuple(foot_u.tolist()),
-        foot_v=tuple(foot_v.tolist()),
-        foot_w=tuple(foot_w.tolist()),
+        foot_u=tuple(circle.u.tolist()),
+        foot_v=tuple(circle.v.tolist()),
+        foot_w=tuple(circle.w.tolist()),
         alpha=alpha,
         kappa=kappa,
         cos_peak=beta / kappa,

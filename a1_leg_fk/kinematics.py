@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 
 from a1_leg_fk import inverse
 from a1_leg_fk.fk_codegen import compile_source, leg_source
-from a1_leg_fk.leg_stages import fold_chain
+from a1_leg_fk.leg_stages import fold_chain, knee_circle
 from a1_leg_fk.legs import (
     JOINT_COUNT,
     JOINTS_PER_LEG,
@@ -320,17 +320,12 @@ class Quadruped:
         """
         compiled = self.legs[leg_slot(leg)]
         pitch, knee = compiled.stages[1], compiled.stages[2]
-        if abs(abs(float(pitch.axis @ knee.rotation @ knee.axis)) - 1.0) > 1e-9:
+        circle = knee_circle(pitch, knee, compiled.foot_offset)
+        if circle is None:
             raise LegFkError(
                 f"leg {leg}: knee axis is not parallel to the hip-pitch axis; reach is not defined"
             )
-        # Foot in the pitch joint's frame: u + cos(q) v + sin(q) w; its distance to the pitch axis
-        # squared is alpha + beta cos(q) + gamma sin(q) (the cos^2, sin^2, cos*sin terms cancel).
-        project = np.eye(3) - np.outer(pitch.axis, pitch.axis)
-        c0, c1, c2 = knee.rodrigues_terms
-        u = project @ (knee.offset + c0 @ compiled.foot_offset)
-        v, w = project @ (c1 @ compiled.foot_offset), project @ (c2 @ compiled.foot_offset)
-        alpha, beta, gamma = u @ u + v @ v, 2.0 * (u @ v), 2.0 * (u @ w)
+        alpha, beta, gamma = circle.alpha, circle.beta, circle.gamma
 
         def distance(angle: float) -> float:
             return math.sqrt(max(alpha + beta * math.cos(angle) + gamma * math.sin(angle), 0.0))

@@ -42,6 +42,58 @@ class Stage:
         return self.rotation @ outer, self.rotation @ (np.eye(3) - outer), self.rotation @ cross
 
 
+PARALLEL_TOLERANCE = 1e-9
+"""``|1 - |cos||`` between two axes below which they count as parallel."""
+
+
+@dataclass(frozen=True)
+class KneeCircle:
+    """The foot as the knee turns, in the plane normal to the hip-pitch axis (knee axis parallel
+    to it): at knee angle ``q`` the foot is ``u + cos(q) v + sin(q) w`` [m] in the coordinates of
+    :attr:`basis`, relative to the pitch axis, so its squared distance from that axis is
+    ``alpha + beta cos(q) + gamma sin(q)`` [m^2] (the cos^2, sin^2 and cos*sin terms cancel).
+    """
+
+    basis: np.ndarray  # (2, 3): orthonormal rows spanning that plane, in the pitch child frame
+    u: np.ndarray  # (2,) [m]
+    v: np.ndarray
+    w: np.ndarray
+    along: float  # the foot's coordinate along the pitch axis [m], the same at every knee angle
+
+    @property
+    def alpha(self) -> float:
+        """The constant term [m^2]."""
+        return float(self.u @ self.u + self.v @ self.v)
+
+    @property
+    def beta(self) -> float:
+        """The cosine's coefficient [m^2]."""
+        return 2.0 * float(self.u @ self.v)
+
+    @property
+    def gamma(self) -> float:
+        """The sine's coefficient [m^2]."""
+        return 2.0 * float(self.u @ self.w)
+
+
+def knee_circle(pitch: Stage, knee: Stage, foot_offset: np.ndarray) -> KneeCircle | None:
+    """The :class:`KneeCircle` of a leg's pitch and knee stages and foot offset [m] (in the knee's
+    child frame), or ``None`` when the knee axis is not parallel to the pitch axis.
+    """
+    if abs(abs(float(pitch.axis @ knee.rotation @ knee.axis)) - 1.0) > PARALLEL_TOLERANCE:
+        return None
+    c0, c1, c2 = knee.rodrigues_terms
+    # The foot in the pitch joint's child frame: u + cos v + sin w.
+    u = knee.offset + c0 @ foot_offset
+    v, w = c1 @ foot_offset, c2 @ foot_offset
+    first = np.cross(pitch.axis, [1.0, 0.0, 0.0])
+    if np.linalg.norm(first) < 0.5:
+        first = np.cross(pitch.axis, [0.0, 1.0, 0.0])
+    first /= np.linalg.norm(first)
+    basis = np.stack([first, np.cross(pitch.axis, first)])
+    return KneeCircle(basis, basis @ u, basis @ v, basis @ w, float(pitch.axis @ u))
+
+
 def rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     """URDF ``rpy`` [rad] -> rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     roll, pitch, yaw = rpy

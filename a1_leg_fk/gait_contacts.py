@@ -122,7 +122,6 @@ class Contacts:
     heights_m: np.ndarray  # (N, 4) above the ground plane; NaN where not valid
     speeds_mps: np.ndarray  # (N, 4); NaN where not valid or no neighbour
     stance: np.ndarray  # (N, 4) bool
-    segments: np.ndarray  # (N, 4) int: gap-free run index per leg, -1 where not valid
     stances: tuple[tuple[Stance, ...], ...]  # per leg
     ground: GroundPlane
     thresholds: ContactThresholds
@@ -177,14 +176,6 @@ def prepare(
 
 
 # --- contacts ----------------------------------------------------------------------------------
-
-
-def segments_of(valid: np.ndarray) -> np.ndarray:
-    """Index of the gap-free run each sample belongs to (-1 where not valid), for one leg's (N,)
-    mask.
-    """
-    starts = valid & ~np.concatenate(([False], valid[:-1]))
-    return np.where(valid, np.cumsum(starts) - 1, -1)
 
 
 def still_speeds(times: np.ndarray, points: np.ndarray, window_s: float) -> np.ndarray:
@@ -253,6 +244,11 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
     return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
+def _segment_slices(valid: np.ndarray) -> list[slice]:
+    """The gap-free runs of one leg's (N,) validity mask, in time order, as row slices."""
+    return [slice(first, last + 1) for first, last, value in _runs(valid) if value]
+
+
 def _run_duration(times: np.ndarray, first: int, last: int) -> float:
     start = times[first] if first == 0 else 0.5 * (times[first - 1] + times[first])
     end = times[last] if last == times.size - 1 else 0.5 * (times[last] + times[last + 1])
@@ -304,12 +300,11 @@ def detect_contacts(
     times = stamps - stamps[0]
     valid = np.isfinite(feet).all(axis=2)
     legs = len(LEG_NAMES)
-    segments = np.column_stack([segments_of(valid[:, slot]) for slot in range(legs)])
+    segments = [_segment_slices(valid[:, slot]) for slot in range(legs)]
     speeds = np.full(valid.shape, np.nan)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
-            if rows.size >= 2:
+        for rows in segments[slot]:
+            if rows.stop - rows.start >= 2:
                 speeds[rows, slot] = still_speeds(
                     times[rows], feet[rows, slot], thresholds.speed_window_s
                 )
@@ -324,8 +319,7 @@ def detect_contacts(
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
     stance = np.zeros(valid.shape, dtype=bool)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
+        for rows in segments[slot]:
             stance[rows, slot] = drop_short_phases(
                 times[rows],
                 hysteresis(heights[rows, slot], speeds[rows, slot], thresholds),
@@ -339,10 +333,9 @@ def detect_contacts(
     )
     tolerance = max(EDGE_NOISE_DEVIATIONS * deviation, EDGE_NOISE_FLOOR_M)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
+        for rows in segments[slot]:
             stance[rows, slot] = trim_edges(heights[rows, slot], stance[rows, slot], tolerance)
-    stances = tuple(_stances(times, stance[:, slot], segments[:, slot]) for slot in range(legs))
+    stances = tuple(_stances(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:
         notes.append(
@@ -355,7 +348,6 @@ def detect_contacts(
         heights,
         speeds,
         stance,
-        segments,
         stances,
         ground,
         thresholds,
@@ -363,23 +355,23 @@ def detect_contacts(
     )
 
 
-def _stances(times: np.ndarray, stance: np.ndarray, segments: np.ndarray) -> tuple[Stance, ...]:
+def _stances(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tuple[Stance, ...]:
+    """One leg's stance phases from its (N,) stance mask, within each gap-free run ``segments``."""
     out = []
-    for segment in range(segments.max() + 1):
-        rows = np.flatnonzero(segments == segment)
+    for segment, rows in enumerate(segments):
         local = times[rows]
         for first, last, value in _runs(stance[rows]):
             if not value:
                 continue
-            start_seen, end_seen = first > 0, last < rows.size - 1
+            start_seen, end_seen = first > 0, last < local.size - 1
             t_on = 0.5 * (local[first - 1] + local[first]) if start_seen else local[first]
             t_off = 0.5 * (local[last] + local[last + 1]) if end_seen else local[last]
             out.append(
                 Stance(
                     float(t_on),
                     float(t_off),
-                    int(rows[first]),
-                    int(rows[last]),
+                    rows.start + first,
+                    rows.start + last,
                     start_seen,
                     end_seen,
                     segment,

@@ -249,10 +249,14 @@ def _segment_slices(valid: np.ndarray) -> list[slice]:
     return [slice(first, last + 1) for first, last, value in _runs(valid) if value]
 
 
-def _run_duration(times: np.ndarray, first: int, last: int) -> float:
+def _phase_span(times: np.ndarray, first: int, last: int) -> tuple[float, float]:
+    """``(start, end)`` [s] of the phase on samples ``first..last`` of a gap-free run's ``times``:
+    each edge midway between the phase's border sample and its neighbour, or the border sample's
+    own time at the run's start or end (an edge not observed).
+    """
     start = times[first] if first == 0 else 0.5 * (times[first - 1] + times[first])
     end = times[last] if last == times.size - 1 else 0.5 * (times[last] + times[last + 1])
-    return float(end - start)
+    return float(start), float(end)
 
 
 def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float) -> np.ndarray:
@@ -263,8 +267,10 @@ def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float)
     for value in (False, True):
         for first, last, run_value in _runs(stance):
             interior = first > 0 and last < stance.size - 1
-            if run_value == value and interior and _run_duration(times, first, last) < min_phase_s:
-                stance[first : last + 1] = not value
+            if run_value == value and interior:
+                start, end = _phase_span(times, first, last)
+                if end - start < min_phase_s:
+                    stance[first : last + 1] = not value
     return stance
 
 
@@ -363,17 +369,15 @@ def _stances(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tu
         for first, last, value in _runs(stance[rows]):
             if not value:
                 continue
-            start_seen, end_seen = first > 0, last < local.size - 1
-            t_on = 0.5 * (local[first - 1] + local[first]) if start_seen else local[first]
-            t_off = 0.5 * (local[last] + local[last + 1]) if end_seen else local[last]
+            t_on, t_off = _phase_span(local, first, last)
             out.append(
                 Stance(
-                    float(t_on),
-                    float(t_off),
+                    t_on,
+                    t_off,
                     rows.start + first,
                     rows.start + last,
-                    start_seen,
-                    end_seen,
+                    first > 0,
+                    last < local.size - 1,
                     segment,
                 )
             )

@@ -122,7 +122,6 @@ class Contacts:
     heights_m: np.ndarray  # (N, 4) above the ground plane; NaN where not valid
     speeds_mps: np.ndarray  # (N, 4); NaN where not valid or no neighbour
     stance: np.ndarray  # (N, 4) bool
-    segments: np.ndarray  # (N, 4) int: gap-free run index per leg, -1 where not valid
     stances: tuple[tuple[Stance, ...], ...]  # per leg
     ground: GroundPlane
     thresholds: ContactThresholds
@@ -177,14 +176,6 @@ def prepare(
 
 
 # --- contacts ----------------------------------------------------------------------------------
-
-
-def segments_of(valid: np.ndarray) -> np.ndarray:
-    """Index of the gap-free run each sample belongs to (-1 where not valid), for one leg's (N,)
-    mask.
-    """
-    starts = valid & ~np.concatenate(([False], valid[:-1]))
-    return np.where(valid, np.cumsum(starts) - 1, -1)
 
 
 def still_speeds(times: np.ndarray, points: np.ndarray, window_s: float) -> np.ndarray:
@@ -253,10 +244,19 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
     return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
-def _run_duration(times: np.ndarray, first: int, last: int) -> float:
+def _segment_slices(valid: np.ndarray) -> list[slice]:
+    """The gap-free runs of one leg's (N,) validity mask, in time order, as row slices."""
+    return [slice(first, last + 1) for first, last, value in _runs(valid) if value]
+
+
+def _phase_span(times: np.ndarray, first: int, last: int) -> tuple[float, float]:
+    """``(start, end)`` [s] of the phase on samples ``first..last`` of a gap-free run's ``times``:
+    each edge midway between the phase's border sample and its neighbour, or the border sample's
+    own time at the run's start or end (an edge not observed).
+    """
     start = times[first] if first == 0 else 0.5 * (times[first - 1] + times[first])
     end = times[last] if last == times.size - 1 else 0.5 * (times[last] + times[last + 1])
-    return float(end - start)
+    return float(start), float(end)
 
 
 def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float) -> np.ndarray:
@@ -267,8 +267,10 @@ def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float)
     for value in (False, True):
         for first, last, run_value in _runs(stance):
             interior = first > 0 and last < stance.size - 1
-            if run_value == value and interior and _run_duration(times, first, last) < min_phase_s:
-                stance[first : last + 1] = not value
+            if run_value == value and interior:
+                start, end = _phase_span(times, first, last)
+                if end - start < min_phase_s:
+                    stance[first : last + 1] = not value
     return stance
 
 
@@ -304,12 +306,11 @@ def detect_contacts(
     times = stamps - stamps[0]
     valid = np.isfinite(feet).all(axis=2)
     legs = len(LEG_NAMES)
-    segments = np.column_stack([segments_of(valid[:, slot]) for slot in range(legs)])
+    segments = [_segment_slices(valid[:, slot]) for slot in range(legs)]
     speeds = np.full(valid.shape, np.nan)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
-            if rows.size >= 2:
+        for rows in segments[slot]:
+            if rows.stop - rows.start >= 2:
                 speeds[rows, slot] = still_speeds(
                     times[rows], feet[rows, slot], thresholds.speed_window_s
                 )
@@ -324,8 +325,7 @@ def detect_contacts(
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
     stance = np.zeros(valid.shape, dtype=bool)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
+        for rows in segments[slot]:
             stance[rows, slot] = drop_short_phases(
                 times[rows],
                 hysteresis(heights[rows, slot], speeds[rows, slot], thresholds),
@@ -339,10 +339,9 @@ def detect_contacts(
     )
     tolerance = max(EDGE_NOISE_DEVIATIONS * deviation, EDGE_NOISE_FLOOR_M)
     for slot in range(legs):
-        for segment in range(segments[:, slot].max() + 1):
-            rows = np.flatnonzero(segments[:, slot] == segment)
+        for rows in segments[slot]:
             stance[rows, slot] = trim_edges(heights[rows, slot], stance[rows, slot], tolerance)
-    stances = tuple(_stances(times, stance[:, slot], segments[:, slot]) for slot in range(legs))
+    stances = tuple(_stances(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:
         notes.append(
@@ -355,7 +354,6 @@ def detect_contacts(
         heights,
         speeds,
         stance,
-        segments,
         stances,
         ground,
         thresholds,
@@ -363,25 +361,23 @@ def detect_contacts(
     )
 
 
-def _stances(times: np.ndarray, stance: np.ndarray, segments: np.ndarray) -> tuple[Stance, ...]:
+def _stances(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tuple[Stance, ...]:
+    """One leg's stance phases from its (N,) stance mask, within each gap-free run ``segments``."""
     out = []
-    for segment in range(segments.max() + 1):
-        rows = np.flatnonzero(segments == segment)
+    for segment, rows in enumerate(segments):
         local = times[rows]
         for first, last, value in _runs(stance[rows]):
             if not value:
                 continue
-            start_seen, end_seen = first > 0, last < rows.size - 1
-            t_on = 0.5 * (local[first - 1] + local[first]) if start_seen else local[first]
-            t_off = 0.5 * (local[last] + local[last + 1]) if end_seen else local[last]
+            t_on, t_off = _phase_span(local, first, last)
             out.append(
                 Stance(
-                    float(t_on),
-                    float(t_off),
-                    int(rows[first]),
-                    int(rows[last]),
-                    start_seen,
-                    end_seen,
+                    t_on,
+                    t_off,
+                    rows.start + first,
+                    rows.start + last,
+                    first > 0,
+                    last < local.size - 1,
                     segment,
                 )
             )

@@ -147,21 +147,19 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
             "never lifts", "the foot is in stance in every sample", duty_factor=1.0
         ), []
     strides, stance_times, steps, clearances = [], [], [], []
-    for this, following in itertools.pairwise(stances):
-        if this.segment != following.segment or not this.touchdown_observed:
+    footholds = [  # horizontal, world frame [m]
+        np.median(contacts.positions_m[s.first : s.last + 1, slot, :2], axis=0) for s in stances
+    ]
+    for (this, following), (start, end) in zip(
+        itertools.pairwise(stances), itertools.pairwise(footholds)
+    ):
+        if this.segment != following.segment:
             continue
-        strides.append((this.t_on, following.t_on))
-        stance_times.append(this.t_off - this.t_on)
-        start, end = (
-            np.median(contacts.positions_m[s.first : s.last + 1, slot, :2], axis=0)
-            for s in (this, following)
-        )
-        steps.append(float(np.linalg.norm(end - start)))
-    for this, following in itertools.pairwise(stances):
-        if this.segment == following.segment:
-            clearances.append(
-                float(np.max(contacts.heights_m[this.last + 1 : following.first, slot]))
-            )
+        clearances.append(float(np.max(contacts.heights_m[this.last + 1 : following.first, slot])))
+        if this.touchdown_observed:
+            strides.append((this.t_on, following.t_on))
+            stance_times.append(this.t_off - this.t_on)
+            steps.append(float(np.linalg.norm(end - start)))
     clearance = float(np.mean(clearances)) if clearances else None
     if not strides:
         return without_strides(
@@ -242,10 +240,14 @@ def name_gait(
     # Every phase (and so every consistency) is known from here on.
     measured = [phase for leg in LEG_NAMES[1:] if (phase := phases[leg]) is not None]
     r = min(value for value in consistency.values() if value is not None)
-    candidates = {}
-    for name, template in GAIT_TEMPLATES.items():
-        deviation = max(_circular_distance(m, t) for m, t in zip(measured, template))
-        candidates[name] = round(max(0.0, 1.0 - deviation / NO_MATCH_DEVIATION) * r, 4)
+    deviations = {  # largest phase deviation from each template [cycles]
+        name: max(_circular_distance(m, t) for m, t in zip(measured, template))
+        for name, template in GAIT_TEMPLATES.items()
+    }
+    candidates = {
+        name: round(max(0.0, 1.0 - deviation / NO_MATCH_DEVIATION) * r, 4)
+        for name, deviation in deviations.items()
+    }
     all_phases = [0.0, *measured]
     separation = min(
         _circular_distance(a, b) for i, a in enumerate(all_phases) for b in all_phases[i + 1 :]
@@ -259,11 +261,7 @@ def name_gait(
         name: fit
         for name, fit in candidates.items()
         if (name == "walk" and separation >= WALK_MIN_SEPARATION and fit > 0)
-        or (
-            name != "walk"
-            and max(_circular_distance(m, t) for m, t in zip(measured, GAIT_TEMPLATES[name]))
-            <= PHASE_TOLERANCE
-        )
+        or (name != "walk" and deviations[name] <= PHASE_TOLERANCE)
     }
     if r < MIN_CONSISTENCY:
         return (

@@ -40,7 +40,7 @@ WORLD_COLUMNS = [f"{leg}_w{axis}" for leg in LEG_NAMES for axis in AXES]
 
 
 @dataclass
-class _Target:
+class OutputTarget:
     """One output: its final path, and the temporary one it is written under: the same name in a
     hidden folder beside it (so a bag's storage file and metadata carry the final name).
     """
@@ -49,20 +49,25 @@ class _Target:
 
     @property
     def folder(self) -> Path:
+        """The hidden folder beside the final path, named after it and this process."""
         return self.final.with_name(f".{self.final.name}.partial-{os.getpid()}")
 
     @property
     def temporary(self) -> Path:
+        """Where the output is written until :meth:`commit`."""
         return self.folder / self.final.name
 
     def prepare(self) -> None:
+        """A fresh, empty hidden folder."""
         self.discard()
         self.folder.mkdir()
 
     def discard(self) -> None:
+        """Remove the hidden folder and what was written in it."""
         _remove(self.folder)
 
     def commit(self) -> None:
+        """Replace the final path (whatever is there) by the temporary output."""
         _remove(self.final)
         os.replace(self.temporary, self.final)
         self.folder.rmdir()
@@ -79,9 +84,9 @@ def _remove(path: Path) -> None:
 class Outputs:
     """The requested outputs, checked before anything is read."""
 
-    csv: _Target | None
-    bag: _Target | None
-    plot: _Target | None
+    csv: OutputTarget | None
+    bag: OutputTarget | None
+    plot: OutputTarget | None
     storage: str
     copy_input: bool
 
@@ -100,21 +105,21 @@ class Outputs:
         """:class:`LegFkError` for an output that exists (without ``force``), lies inside the input
         bag, or sits in a folder that does not exist.
         """
-        targets: list[_Target | None] = []
+        targets: list[OutputTarget | None] = []
         for option, value in (("--csv", csv), ("--output-bag", bag), ("--plot", plot)):
             if value is None:
                 targets.append(None)
                 continue
             path = Path(value)
-            _check_target(source, path, option, force)
-            targets.append(_Target(path))
+            check_output_path(source, path, option, force)
+            targets.append(OutputTarget(path))
         finals = [target.final.resolve() for target in targets if target is not None]
         if len(set(finals)) != len(finals):
             raise LegFkError("two outputs name the same path")
         csv_target, bag_target, plot_target = targets
         return cls(csv_target, bag_target, plot_target, storage=storage, copy_input=copy_input)
 
-    def all(self) -> list[_Target]:
+    def all(self) -> list[OutputTarget]:
         """The requested outputs."""
         return [target for target in (self.csv, self.bag, self.plot) if target is not None]
 
@@ -123,7 +128,10 @@ class Outputs:
         return [target.final for target in self.all() if target.final.exists()]
 
 
-def _check_target(source: Path, path: Path, option: str, force: bool) -> None:
+def check_output_path(source: Path, path: Path, option: str, force: bool) -> None:
+    """:class:`LegFkError` naming ``option`` if output ``path`` lies inside the input ``source``,
+    sits in a folder that does not exist, or exists (unless ``force``).
+    """
     resolved, input_path = path.resolve(), source.resolve()
     if resolved == input_path or input_path in resolved.parents:
         raise LegFkError(f"{option} {path}: inside the input bag {source}; write it elsewhere")

@@ -11,6 +11,7 @@ swing flag (:meth:`a1_leg_fk.demo_gait.Gait.swinging`), which the analysis never
 from __future__ import annotations
 
 import csv
+import errno
 import json
 from pathlib import Path
 
@@ -19,7 +20,8 @@ import pytest
 from bag_factory import BagSpec, JointStateMsg, T, header, write_bag
 from test_plots import colour_share, load_png
 
-from a1_leg_fk import cli
+from a1_leg_fk import cli, plots
+from a1_leg_fk.cli import gait as gait_command
 from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
@@ -170,3 +172,91 @@ def test_bad_thresholds_and_input(demo_run, capsys: pytest.CaptureFixture) -> No
     assert "off >= on" in capsys.readouterr().err
     assert cli.main(["gait", str(folder / "nope"), "--base-pose", "/base_pose"]) == 2
     assert capsys.readouterr().err.startswith("a1-leg-fk gait: ")
+
+
+def files_of(folder: Path) -> dict[str, tuple[int, bytes]]:
+    """Every file under ``folder``: its modification time [ns] and bytes."""
+    return {
+        str(path.relative_to(folder)): (path.stat().st_mtime_ns, path.read_bytes())
+        for path in sorted(folder.rglob("*"))
+        if path.is_file()
+    }
+
+
+def run_gait(folder: Path, *options: str) -> int:
+    return cli.main(
+        ["gait", str(folder / "demo"), "--base-pose", "/base_pose", "--quiet", *options]
+    )
+
+
+def never_read(options) -> None:
+    pytest.fail(f"read {options.input} although an output was bad")
+
+
+@pytest.mark.parametrize(
+    ("option", "name", "message"),
+    [
+        ("--json", "no_such_folder/gait.json", "folder {folder}/no_such_folder does not exist"),
+        ("--csv-contacts", ".", "{folder}: is a folder; give a file name"),
+        ("--plot", "gait.png", "exists already (use --force to replace it)"),
+        ("--json", "demo/gait.json", "inside the input bag"),
+    ],
+)
+def test_bad_output_is_refused_before_the_input_is_read(
+    demo_run, option, name, message, capsys: pytest.CaptureFixture, monkeypatch
+) -> None:
+    folder, *_ = demo_run
+    before = files_of(folder)
+    monkeypatch.setattr(gait_command, "trajectories_from_options", never_read)
+    assert run_gait(folder, option, str(folder / name)) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"a1-leg-fk gait: {option} ")
+    assert message.format(folder=folder) in captured.err
+    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    assert files_of(folder) == before  # the input and the earlier outputs untouched
+
+
+def test_missing_matplotlib_is_found_before_the_input_is_read(
+    demo_run, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch
+) -> None:
+    folder, *_ = demo_run
+
+    def no_matplotlib():
+        raise plots.MissingMatplotlib(plots.INSTALL_HINT)
+
+    monkeypatch.setattr(plots, "pyplot", no_matplotlib)
+    monkeypatch.setattr(gait_command, "trajectories_from_options", never_read)
+    assert run_gait(folder, "--plot", str(tmp_path / "gait.png")) == 2
+    assert capsys.readouterr().err == f"a1-leg-fk gait: {plots.INSTALL_HINT}\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unwritable_output_is_one_line_and_leaves_nothing(
+    demo_run, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch
+) -> None:
+    folder, *_ = demo_run
+
+    def disk_full(_contacts, path: Path) -> None:
+        path.write_text("time_s\n")  # a start, then the disk is full
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(gait_command, "write_contacts_csv", disk_full)
+    before = files_of(folder)
+    code = run_gait(
+        folder, "--json", str(tmp_path / "gait.json"), "--csv-contacts", str(tmp_path / "c.csv")
+    )
+    assert code == 2
+    error = capsys.readouterr().err
+    assert error == f"a1-leg-fk gait: cannot write {tmp_path / 'c.csv'}: No space left on device\n"
+    assert list(tmp_path.iterdir()) == []  # neither output, nor a temporary
+    assert files_of(folder) == before
+
+
+def test_force_replaces_an_existing_output(demo_run, tmp_path: Path) -> None:
+    folder, *_ = demo_run
+    target = tmp_path / "gait.json"
+    target.write_text("an older report\n")
+    assert run_gait(folder, "--json", str(target), "--force") == 0
+    assert target.read_text() == (folder / "gait.json").read_text()
+    assert [path.name for path in tmp_path.iterdir()] == ["gait.json"]  # no temporary left

@@ -2,9 +2,11 @@
 
 The feet come from :func:`a1_leg_fk.cli.bag.trajectories_from_options` (world frame, so
 ``--base-pose`` is required) and go through :mod:`a1_leg_fk.gait_analysis`. Prints a short report;
-``--json``, ``--plot`` and ``--csv-contacts`` write files. Exit codes: 0 done; 1 the bag could not
-be read to its end (the analysis covers what was read) or a plot could not be drawn; 2 bad usage or
-input (one line on stderr); 130 interrupted.
+``--json``, ``--plot`` and ``--csv-contacts`` write files: checked before the input is read (as
+``a1-leg-fk bag`` checks its outputs; an existing file is replaced only with ``--force``), written
+under hidden temporary names and renamed when complete. Exit codes: 0 done; 1 the bag could not be
+read to its end (the analysis covers what was read) or a plot could not be drawn; 2 bad usage,
+input or output (one line on stderr); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +28,9 @@ from a1_leg_fk.gait_analysis import Contacts, ContactThresholds, GaitReport, ana
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
+if TYPE_CHECKING:  # imported when the command runs, as a1-leg-fk bag does
+    from a1_leg_fk.recording_outputs import OutputTarget
+
 PROG = "a1-leg-fk gait"
 NEEDS_BASE_POSE = (
     "needs --base-pose TOPIC (nav_msgs/Odometry, geometry_msgs/PoseStamped or /tf): contacts "
@@ -32,6 +38,8 @@ NEEDS_BASE_POSE = (
     "feet have; base-frame feet move with the body (a stance foot sweeps backwards, a swing "
     "foot can look still)"
 )
+FILE_OPTIONS = {"--json": "json", "--csv-contacts": "csv_contacts", "--plot": "plot"}
+"""The options that name an output file, and their attribute in the parsed options."""
 THRESHOLD_HELP = {
     "height_on_m": "stance starts below this height above the ground level [m]",
     "height_off_m": "stance ends above this height [m]",
@@ -52,7 +60,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         description="Find each foot's stance phases from its world-frame height and speed "
         "(hysteresis, minimum phase, ground level estimated from the data), then per-leg "
         "metrics and the gait (walk, trot, pace, bound, pronk or unknown). Needs --base-pose. "
-        "Exit 0 done, 1 bag not read to its end or plot failed, 2 bad input.",
+        "Exit 0 done, 1 bag not read to its end or plot failed, 2 bad input or output.",
     )
     add_recording_arguments(gait)
     gait.add_argument(
@@ -70,6 +78,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="FILE",
         help="one row per sample: time, stance (0/1), height [m] and speed [m/s] per leg",
     )
+    gait.add_argument("--force", action="store_true", help="replace outputs that exist")
     gait.add_argument(
         "--unsorted",
         choices=("sort", "reject"),
@@ -91,6 +100,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk gait``: see the module docstring for exit codes."""
+    from a1_leg_fk.plots import pyplot
+
     del argv  # no ROS here
     try:
         if not options.base_pose:
@@ -98,6 +109,9 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         thresholds = ContactThresholds(
             **{item.name: getattr(options, item.name) for item in fields(ContactThresholds)}
         )
+        if options.plot:
+            pyplot()  # before the work: MissingMatplotlib says how to install it
+        targets = checked_outputs(options)
         trajectories = trajectories_from_options(options)
         if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
             raise LegFkError(f"{options.input}: no JointState rows with feet")
@@ -113,14 +127,37 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         return EXIT_INTERRUPTED
     for line in report_lines(report, trajectories.world_frame):
         print(line)
-    code = write_outputs(options, contacts, report, trajectories.world_frame)
+    code = write_outputs(options, targets, contacts, report, trajectories.world_frame)
     if trajectories.summary.stopped:
         print(
             f"{PROG}: {options.input}: stopped early: {trajectories.summary.stopped}",
             file=sys.stderr,
         )
-        return EXIT_FAILED
+        return EXIT_BAD_INPUT if code == EXIT_BAD_INPUT else EXIT_FAILED
     return code
+
+
+def checked_outputs(options: argparse.Namespace) -> dict[str, OutputTarget]:
+    """The requested output files by option, checked before the input is read.
+
+    :class:`LegFkError` for a path that is a folder, lies inside the input, sits in a folder that
+    does not exist, or exists without ``--force``; or for two options naming the same file.
+    """
+    from a1_leg_fk.recording_outputs import OutputTarget, check_output_path
+
+    targets = {}
+    for option, name in FILE_OPTIONS.items():
+        if getattr(options, name) is None:
+            continue
+        path = Path(getattr(options, name))
+        if path.is_dir():  # --force would remove the folder and all in it
+            raise LegFkError(f"{option} {path}: is a folder; give a file name")
+        check_output_path(Path(options.input), path, option, options.force)
+        targets[option] = OutputTarget(path)
+    finals = [target.final.resolve() for target in targets.values()]
+    if len(set(finals)) != len(finals):
+        raise LegFkError("two outputs name the same path")
+    return targets
 
 
 def _number(value: float | None, form: str) -> str:
@@ -161,26 +198,63 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
 
 
 def write_outputs(
-    options: argparse.Namespace, contacts: Contacts, report: GaitReport, world_frame: str | None
+    options: argparse.Namespace,
+    targets: dict[str, OutputTarget],
+    contacts: Contacts,
+    report: GaitReport,
+    world_frame: str | None,
 ) -> int:
-    """Write --json, --csv-contacts and --plot; EXIT_FAILED if the plot cannot be drawn."""
-    if options.json:
-        document = {"input": str(options.input), "world_frame": world_frame, **report.to_json()}
-        Path(options.json).write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
-        print(f"wrote:     {options.json}")
-    if options.csv_contacts:
-        write_contacts_csv(contacts, Path(options.csv_contacts))
-        print(f"wrote:     {options.csv_contacts}")
-    if options.plot:
-        from a1_leg_fk.plots import plot_gait_diagram
+    """Write ``targets`` (from :func:`checked_outputs`) under their temporary names, then rename
+    them to their final names; no temporary is left behind. EXIT_FAILED if the plot cannot be
+    drawn (the other files are written), EXIT_BAD_INPUT (one line on stderr) if a file cannot be
+    written (a folder not writable, a full disk).
+    """
+    code, drawn = EXIT_OK, []
+    try:
+        for option, target in targets.items():
+            target.prepare()
+            try:
+                _write_output(option, target.temporary, options, contacts, report, world_frame)
+            except LegFkError as error:  # the plot could not be drawn
+                print(f"{PROG}: {error}", file=sys.stderr)
+                code = EXIT_FAILED
+                continue
+            drawn.append(target)
+        for target in drawn:
+            target.commit()
+            print(f"wrote:     {target.final}")
+    except OSError as error:
+        print(
+            f"{PROG}: cannot write {target.final}: {error.strerror or error}",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
+    finally:
+        for target in targets.values():
+            target.discard()
+    return code
 
-        try:
-            plot_gait_diagram(contacts, report, options.plot, title=Path(options.input).name)
-        except LegFkError as error:
-            print(f"{PROG}: {error}", file=sys.stderr)
-            return EXIT_FAILED
-        print(f"wrote:     {options.plot}")
-    return EXIT_OK
+
+def _write_output(
+    option: str,
+    path: Path,
+    options: argparse.Namespace,
+    contacts: Contacts,
+    report: GaitReport,
+    world_frame: str | None,
+) -> None:
+    """Write the file of ``option`` (one of :data:`FILE_OPTIONS`) to ``path``; :class:`LegFkError`
+    if the plot cannot be drawn.
+    """
+    from a1_leg_fk.plots import plot_gait_diagram
+
+    if option == "--json":
+        document = {"input": str(options.input), "world_frame": world_frame, **report.to_json()}
+        path.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
+    elif option == "--csv-contacts":
+        write_contacts_csv(contacts, path)
+    else:
+        plot_gait_diagram(contacts, report, path, title=Path(options.input).name)
 
 
 def write_contacts_csv(contacts: Contacts, path: Path) -> None:

@@ -251,11 +251,12 @@ def _finish(
     """
     result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
-    feet = feet_of(recording.quadruped, angles)
-    rows = ~np.isnan(feet).all(axis=(1, 2))
+    known = np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)  # (N, 4)
+    rows = known.any(axis=1)  # a leg known, as the node needs to publish its foot
     if not rows.any():
         return
-    feet = feet[rows]
+    feet = recording.quadruped.fk_batch(np.nan_to_num(angles[rows]))
+    feet[~known[rows]] = math.nan
     rates = result.rates[result.accepted][rows]
     foot_velocities = velocities_of(recording.quadruped, angles[rows], rates)
     recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
@@ -266,18 +267,6 @@ def _finish(
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
     yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
-
-
-def feet_of(quadruped: Quadruped, angles: np.ndarray) -> np.ndarray:
-    """(N, 4, 3) feet [m], base frame, for (N, 12) angles [rad]; NaN for legs with a NaN angle."""
-    out = np.empty((angles.shape[0], LEGS, 3))
-    cos, sin = np.cos(angles), np.sin(angles)
-    for leg_slot, leg in enumerate(quadruped.legs):
-        columns = slice(leg_slot * JOINTS_PER_LEG, (leg_slot + 1) * JOINTS_PER_LEG)
-        trig = [value for pair in zip(cos[:, columns].T, sin[:, columns].T) for value in pair]
-        x, y, z = leg.position_from_trig(*trig)
-        out[:, leg_slot, 0], out[:, leg_slot, 1], out[:, leg_slot, 2] = x, y, z
-    return out
 
 
 def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:

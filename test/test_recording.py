@@ -169,12 +169,13 @@ def scenario() -> tuple[
                 leg_names = NAMES[3 * leg : 3 * leg + 3]
                 if leg not in bad_legs and all(n in by_name for n in leg_names):
                     rates[leg] = [by_name[n] for n in leg_names]
-        if not all(math.isnan(v) for v in state):
-            rows.append((stamp or bag_time, bag_time, list(state), rates))
+        if any(not any(math.isnan(v) for v in state[3 * leg : 3 * leg + 3]) for leg in range(4)):
+            rows.append((stamp or bag_time, bag_time, list(state), rates))  # a leg is known
 
     def q() -> list[float]:
         return rng.uniform(-1.0, 1.0, 12).tolist()
 
+    put(NAMES[1:3], q()[1:3])  # FR without its hip roll: no leg known, no row
     put(NAMES[:3], q()[:3])  # FR only: partial
     put(["arm_joint", *NAMES[3:9]], [0.5, *q()[3:9]])  # FL + RR and an unknown name
     put(NAMES, q()[:11], outcome="position_length_mismatch")

@@ -258,7 +258,7 @@ def _finish(
     feet = recording.quadruped.fk_batch(np.nan_to_num(angles[rows]))
     feet[~known[rows]] = math.nan
     rates = result.rates[result.accepted][rows]
-    foot_velocities = velocities_of(recording.quadruped, angles[rows], rates)
+    foot_velocities = velocities_of(recording.quadruped, angles[rows], known[rows], rates)
     recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
     stamps = stamps[result.accepted][rows]
     bag_times = bag_times[result.accepted][rows]
@@ -269,21 +269,18 @@ def _finish(
     yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
 
 
-def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all
-    finite.
+def velocities_of(
+    quadruped: Quadruped, angles: np.ndarray, known: np.ndarray, rates: np.ndarray
+) -> np.ndarray:
+    """(N, 4, 3) J(q)·q̇ [m/s], base frame, for (N, 12) angles [rad] and rates [rad/s]; NaN for
+    legs not ``known`` (N, 4), legs whose rates are not all finite, and overflowed results.
     """
     out = np.full((angles.shape[0], LEGS, 3), math.nan)
-    usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(
-        angles
-    ).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
+    usable = known & np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
     rows = usable.any(axis=1)
     if rows.any():
-        jacobians = quadruped.jacobians_batch(np.nan_to_num(angles[rows]))
-        velocity = np.einsum(
-            "nlij,nlj->nli",
-            jacobians,
-            np.nan_to_num(rates[rows]).reshape(-1, LEGS, JOINTS_PER_LEG),
+        velocity = quadruped.foot_velocities_batch(
+            np.nan_to_num(angles[rows]), np.nan_to_num(rates[rows])
         )
         with np.errstate(invalid="ignore"):
             velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan

@@ -148,9 +148,7 @@ def convert(
         if outputs.csv is not None:
             writers.append(CsvWriter(outputs.csv.temporary, recording))
         if outputs.bag is not None:
-            bag_writer = BagWriter(
-                outputs.bag.temporary, recording, outputs.storage, outputs.copy_input
-            )
+            bag_writer = BagWriter(outputs.bag.temporary, recording, outputs.storage)
             writers.append(bag_writer)
         blocks: list[FootBlock] = []
         stats = BlockStats()

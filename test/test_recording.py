@@ -233,6 +233,19 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
     assert result.world_positions is None and result.base_frame == "trunk"
 
 
+def test_an_empty_recorded_robot_description_means_the_embedded_a1(tmp_path: Path) -> None:
+    """As in the node, an empty description is none: the embedded A1, and the summary says so."""
+    spec = BagSpec()
+    spec.add("/robot_description", "std_msgs/msg/String", T0, T["std_msgs/msg/String"](""))
+    q = np.random.default_rng(5).uniform(-0.8, 0.8, 12).tolist()
+    spec.add_joint_state("/joint_states", T0 + 1, JointStateMsg(T0 + 1, NAMES, q))
+    result = read_foot_trajectories(write_bag(tmp_path / "empty", spec, "mcap"))
+    assert result.summary.model.startswith("embedded A1 (")
+    feet = [leg.chain.foot_link for leg in A1.legs]
+    with PyBulletRobot(pybullet_data.getDataPath() + "/a1/a1.urdf") as robot:
+        assert np.abs(result.positions[0] - robot.feet(NAMES, feet, q)).max() <= 1e-7
+
+
 def test_a_recorded_robot_description_is_used_and_matches_pybullet(tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     spec = BagSpec()

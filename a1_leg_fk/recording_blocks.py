@@ -57,6 +57,7 @@ def iter_foot_blocks(
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
+    recording.has_velocities = False  # this pass's
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
     bar = _progress_bar(total, progress)

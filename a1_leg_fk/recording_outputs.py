@@ -191,6 +191,7 @@ class CsvWriter:
 
     def __init__(self, path: Path, recording: Recording) -> None:
         self.path = path
+        self.recording = recording
         self.world = recording.base_pose is not None
         self.velocity_columns: bool | None = None  # not decided before the first rows
         self.file = open(path, "wb")  # noqa: SIM115 (open until close() or abort())
@@ -208,7 +209,7 @@ class CsvWriter:
     def write(self, block: FootBlock) -> None:
         """Append the rows of ``block``."""
         rows = len(block.stamps_ns)
-        velocities = bool(np.isfinite(block.velocities).any())
+        velocities = self.recording.has_velocities  # already set by this block if it has any
         if self.velocity_columns is None:
             self.velocity_columns = velocities
             self.file.write(self._header())

@@ -179,7 +179,7 @@ class _Batch:
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
-            if pending.count and (
+            if pending.stamps and (
                 changed
                 or order != pending.order
                 or len(positions) != pending.position_bytes
@@ -187,9 +187,8 @@ class _Batch:
             ):
                 yield from pending.finish(self)
                 pending = _Pending()
-            if not pending.count:
+            if not pending.stamps:
                 pending.start(self.decoder.names, order, len(positions), len(velocities))
-            pending.count += 1
             pending.stamps.append(stamp or bag_time)
             pending.bag_times.append(bag_time)
             pending.positions.append(positions)
@@ -204,7 +203,6 @@ class _Pending:
         self.names: list[str] = []
         self.order = "<"
         self.position_bytes = self.velocity_bytes = 0
-        self.count = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
@@ -218,14 +216,15 @@ class _Pending:
 
     def finish(self, batch: _Batch) -> Iterator[FootBlock]:
         """The rows of these messages (none if there are none)."""
-        if not self.count:
+        count = len(self.stamps)
+        if not count:
             return
         dtype = np.dtype(f"{self.order}f8")
         positions = np.frombuffer(b"".join(self.positions), dtype).reshape(
-            self.count, self.position_bytes // 8
+            count, self.position_bytes // 8
         )
         velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
-            self.count, self.velocity_bytes // 8
+            count, self.velocity_bytes // 8
         )
         yield from _finish(
             batch.recording,

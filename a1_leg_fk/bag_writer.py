@@ -36,7 +36,7 @@ class BagWriter:
     with the JointState's header stamp and bag time; optionally every input message too.
     """
 
-    def __init__(self, path: Path, recording: Recording, storage: str, copy_input: bool) -> None:
+    def __init__(self, path: Path, recording: Recording, storage: str) -> None:
         from rosbags.rosbag2 import StoragePlugin, Writer
         from rosbags.typesys import Stores, get_typestore
 
@@ -45,39 +45,34 @@ class BagWriter:
         plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
         self.writer = Writer(path, version=BAG_VERSION, storage_plugin=plugin)
         self.writer.open()
-        self.base_frame = recording.quadruped.base_frame
-        self.world_frame = (
+        # the CDR frame_id after the stamp of every base-frame and world-frame message
+        self.base_head = _frame_bytes(recording.quadruped.base_frame)
+        self.world_head = _frame_bytes(
             recording.base_pose.world_frame if recording.base_pose is not None else ""
         )
         self.topics: dict[str, Connection] = {}
-        self.copied: dict[int, Connection] = {}
-        self.copy_input = copy_input
+        self.copied: dict[int, tuple[Connection, Typestore]] = {}  # input id -> target, types
         self.ros1 = recording.ros1
 
-    def _connection(
-        self, topic: str, msgtype: str, typestore: Typestore | None = None
-    ) -> Connection:
+    def _connection(self, topic: str, msgtype: str) -> Connection:
         connection = self.topics.get(topic)
         if connection is None:
             connection = self.topics[topic] = self.writer.add_connection(
-                topic,
-                msgtype,
-                typestore=typestore or self.typestore,
-                offered_qos_profiles=[default_qos()],
+                topic, msgtype, typestore=self.typestore, offered_qos_profiles=[default_qos()]
             )
         return connection
 
     def write(self, block: FootBlock) -> None:
         """Write the feet of ``block`` as PointStamped (and velocity) messages."""
         groups = [
-            ("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_frame, block.positions)
+            ("/foot_positions", "geometry_msgs/msg/PointStamped", self.base_head, block.positions)
         ]
         if self.recording.has_velocities:  # already set by this block if it has any
             groups.append(
                 (
                     "/foot_velocities",
                     "geometry_msgs/msg/Vector3Stamped",
-                    self.base_frame,
+                    self.base_head,
                     block.velocities,
                 )
             )
@@ -86,19 +81,18 @@ class BagWriter:
                 (
                     "/foot_positions_world",
                     "geometry_msgs/msg/PointStamped",
-                    self.world_frame,
+                    self.world_head,
                     block.world_positions,
                 )
             )
         stamps, bag_times = block.stamps_ns.tolist(), block.bag_times_ns.tolist()
-        for prefix, msgtype, frame, values in groups:
+        for prefix, msgtype, head, values in groups:
             for leg_slot, leg in enumerate(LEG_NAMES):
                 leg_values = values[:, leg_slot]
                 rows = np.flatnonzero(np.isfinite(leg_values).all(axis=1))
                 if not len(rows):
                     continue
                 connection = self._connection(f"{prefix}/{leg}", msgtype)
-                head = _frame_bytes(frame)
                 for row, (x, y, z) in zip(rows.tolist(), leg_values[rows].tolist()):
                     sec, nanosec = divmod(stamps[row], 1_000_000_000)
                     self.writer.write(
@@ -109,21 +103,10 @@ class BagWriter:
 
     def copy(self, connection: Connection, bag_time: int, raw: bytes) -> None:
         """Copy one input message (ROS 1 messages converted to CDR)."""
-        target = self.copied.get(connection.id)
-        # ROS 1 messages are converted with the ROS 2 definitions of their types (std_msgs/Header
-        # loses its seq); other bags keep their own definitions.
-        typestore = (
-            self.typestore
-            if self.ros1 and connection.msgtype in self.typestore.fielddefs
-            else self.recording.reader.typestore
-        )
-        if target is None:
-            target = self.copied[connection.id] = self.writer.add_connection(
-                connection.topic,
-                connection.msgtype,
-                typestore=typestore,
-                offered_qos_profiles=_input_qos(connection),
-            )
+        copied = self.copied.get(connection.id)
+        if copied is None:
+            copied = self.copied[connection.id] = self._copy_target(connection)
+        target, typestore = copied
         data: bytes | memoryview = raw
         if self.ros1:
             try:
@@ -134,6 +117,23 @@ class BagWriter:
                     f"ROS 2: {error}"
                 ) from None
         self.writer.write(target, bag_time, data)
+
+    def _copy_target(self, connection: Connection) -> tuple[Connection, Typestore]:
+        """The output connection of an input connection, and the types it is written with."""
+        # ROS 1 messages are converted with the ROS 2 definitions of their types (std_msgs/Header
+        # loses its seq); other bags keep their own definitions.
+        typestore = (
+            self.typestore
+            if self.ros1 and connection.msgtype in self.typestore.fielddefs
+            else self.recording.reader.typestore
+        )
+        target = self.writer.add_connection(
+            connection.topic,
+            connection.msgtype,
+            typestore=typestore,
+            offered_qos_profiles=_input_qos(connection),
+        )
+        return target, typestore
 
     def close(self) -> None:
         """Finish the bag."""
@@ -188,6 +188,3 @@ def default_qos() -> Qos:
 def _input_qos(connection: Connection) -> list[Qos]:
     profiles = getattr(connection.ext, "offered_qos_profiles", None)
     return list(profiles) if profiles else [default_qos()]
-
-
-# --- the plot ------------------------------------------------------------------------------------

@@ -92,6 +92,7 @@ class FootTracker:
         self._legs = quadruped.legs
         self._lower = [j.lower if j.lower is not None else -math.inf for j in quadruped.joints]
         self._upper = [j.upper if j.upper is not None else math.inf for j in quadruped.joints]
+        self._lower_array, self._upper_array = np.array(self._lower), np.array(self._upper)  # rad
         self._layout = _NameLayout([], (), (), (), ())
         self._last_outcome = NO_LEG_JOINTS
         self.last_problem = ""  # what was wrong with the latest message, naming joints and values
@@ -194,10 +195,11 @@ class FootTracker:
                 result.accepted[row] = self._last_outcome == ACCEPTED
                 result.angles[row] = self.angles
                 for foot in feet:
-                    if foot.velocity is not None:
-                        for message_index, slot in layout.pairs:
-                            if slot // JOINTS_PER_LEG == foot.leg_slot:
-                                result.rates[row, slot] = message_rates[message_index]
+                    if foot.velocity is not None:  # then the leg's three rates are finite
+                        first = foot.leg_slot * JOINTS_PER_LEG
+                        result.rates[row, first : first + JOINTS_PER_LEG] = self._leg_rates(
+                            foot.leg_slot, layout, message_rates
+                        )
                 row += 1
         return result
 
@@ -216,7 +218,7 @@ class FootTracker:
         angles[:, slots] = values
         result.accepted[rows] = True
         self.angles = angles[-1].tolist()
-        lower, upper = np.array(self._lower)[slots], np.array(self._upper)[slots]
+        lower, upper = self._lower_array[slots], self._upper_array[slots]
         self.counts.messages += count
         self.counts.out_of_limit_messages += int(
             ((values < lower) | (values > upper)).any(axis=1).sum()

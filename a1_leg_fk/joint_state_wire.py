@@ -22,24 +22,10 @@ Uint32Reader = Callable[[bytes, int], tuple[int, ...]]
 """``struct.Struct.unpack_from`` of a uint32 in the message's byte order: ``(raw, offset)``."""
 _STAMP_CDR = {"<": struct.Struct("<iI"), ">": struct.Struct(">iI")}
 _STAMP_ROS1 = struct.Struct("<II")
-_DOUBLES = {"<": np.dtype("<f8"), ">": np.dtype(">f8")}
 
 
 class WireError(ValueError):
     """The bytes are not a JointState of the expected layout (truncated or corrupt)."""
-
-
-@dataclass(frozen=True)
-class WireJointState:
-    """One message's fields: stamp [ns] (header, 0 when unset), names (``None`` when the name
-    bytes equal the previous message's), positions [rad] and velocities [rad/s] as float64 arrays
-    (views of the message bytes in their byte order).
-    """
-
-    stamp_ns: int
-    names: list[str] | None
-    positions: np.ndarray
-    velocities: np.ndarray
 
 
 class JointStateDecoder:
@@ -55,22 +41,11 @@ class JointStateDecoder:
         """The name list of the latest decoded message."""
         return self._names
 
-    def decode(self, raw: bytes | memoryview) -> WireJointState:
-        """The fields of one serialized message; :class:`WireError` if it is cut short or
-        corrupt.
-        """
-        stamp_ns, changed, order, positions, velocities = self.fields(raw)
-        dtype = _DOUBLES[order]
-        return WireJointState(
-            stamp_ns,
-            self._names if changed else None,
-            np.frombuffer(positions, dtype),
-            np.frombuffer(velocities, dtype),
-        )
-
     def fields(self, raw: bytes | memoryview) -> tuple[int, bool, str, bytes, bytes]:
-        """``(stamp [ns], names changed, byte order "<" or ">", position bytes, velocity bytes)``:
-        the arrays as raw float64 bytes in that byte order, for callers that batch them.
+        """``(stamp [ns] (header, 0 when unset), names changed, byte order "<" or ">", position
+        bytes, velocity bytes)`` of one serialized message: the arrays as raw float64 bytes in
+        that byte order, for callers that batch them; the names are :attr:`names`.
+        :class:`WireError` if the message is cut short or corrupt.
         """
         raw = bytes(raw)
         try:

@@ -1,5 +1,5 @@
-"""PNG plots of the kinematics: one leg's reach envelope, the feet over the demo gait, and a gait
-diagram.
+"""PNG plots of the kinematics: one leg's reach envelope, the feet over the demo gait, a gait
+diagram, and the feet of a recording.
 
 matplotlib is optional: it is imported only when a plot is drawn (with the non-interactive Agg
 backend), and its absence raises :class:`MissingMatplotlib`, whose message says how to install it.
@@ -23,6 +23,8 @@ from a1_leg_fk.urdf import Joint, LegFkError
 
 if TYPE_CHECKING:  # matplotlib is imported only when a plot is drawn
     from matplotlib.figure import Figure
+
+    from a1_leg_fk.recording import FootTrajectories
 
 INSTALL_HINT = (
     "matplotlib is not installed: pip install matplotlib (or: sudo apt install python3-matplotlib)"
@@ -344,4 +346,36 @@ def plot_gait_diagram(
     heights.set_ylabel("foot height above the ground plane [m]")
     heights.grid(True, linewidth=0.4, alpha=0.6)
     heights.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _save(figure, plt, path)
+
+
+def plot_trajectories(trajectories: FootTrajectories, path: Path) -> Path:
+    """x, y, z [m] of each foot of a recording over time [s from the first stamp], in the world
+    frame when the recording has world feet, else the base frame.
+    """
+    plt = pyplot()
+    world_positions = trajectories.world_positions
+    world = world_positions is not None and bool(np.isfinite(world_positions).any())
+    values = world_positions if world_positions is not None and world else trajectories.positions
+    frame = trajectories.world_frame if world else trajectories.base_frame
+    figure, axes = plt.subplots(3, 1, sharex=True, figsize=(11, 8))
+    stamps = trajectories.stamps_ns
+    seconds = (stamps - stamps[0]) / 1e9 if len(stamps) else stamps
+    for axis_slot, (axis, name) in enumerate(zip(axes, "xyz")):
+        for slot, leg in enumerate(LEG_NAMES):
+            axis.plot(
+                seconds,
+                values[:, slot, axis_slot],
+                color=LEG_COLOURS[leg],
+                linewidth=0.8,
+                label=leg,
+            )
+        axis.set_ylabel(f"{name} [m]")
+        axis.grid(True, alpha=0.3)
+    axes[0].legend(loc="upper right", ncol=4, fontsize="small")
+    axes[-1].set_xlabel("time since the first JointState stamp [s]")
+    summary = trajectories.summary
+    figure.suptitle(
+        f"Feet in frame '{frame}': {Path(summary.path).name}, {summary.topic}, {summary.rows} rows"
+    )
     return _save(figure, plt, path)

@@ -132,34 +132,6 @@ class FootTrajectories:
     summary: RecordingSummary
 
 
-def summary_of(
-    recording: Recording,
-    rows: int,
-    rows_without_pose: int,
-    first: int | None,
-    last: int | None,
-    wall_time_s: float,
-) -> RecordingSummary:
-    """The summary of a finished pass."""
-    counts = cast("FootTracker", recording.tracker).counts  # set by iter_foot_blocks
-    return RecordingSummary(
-        str(recording.path),
-        recording.model_source,
-        recording.joint_states.topic,
-        recording.base_pose_topic,
-        counts.messages,
-        dict(counts.outcomes),
-        counts.non_finite_joints,
-        tuple(sorted(counts.unknown_names)),
-        rows,
-        rows_without_pose,
-        first,
-        last,
-        wall_time_s,
-        "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
-    )
-
-
 class BlockStats:
     """Counts rows, rows without a pose and the stamp range over a pass (for the summary)."""
 
@@ -181,13 +153,23 @@ class BlockStats:
         self.last = high if self.last is None else max(self.last, high)
 
     def summary(self, recording: Recording) -> RecordingSummary:
-        return summary_of(
-            recording,
+        """The summary of the finished pass over ``recording``."""
+        counts = cast("FootTracker", recording.tracker).counts  # set by iter_foot_blocks
+        return RecordingSummary(
+            str(recording.path),
+            recording.model_source,
+            recording.joint_states.topic,
+            recording.base_pose_topic,
+            counts.messages,
+            dict(counts.outcomes),
+            counts.non_finite_joints,
+            tuple(sorted(counts.unknown_names)),
             self.rows,
             self.rows_without_pose,
             self.first,
             self.last,
             time.perf_counter() - self.started,
+            "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
         )
 
 

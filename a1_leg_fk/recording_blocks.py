@@ -57,6 +57,7 @@ def iter_foot_blocks(
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
+    recording.has_velocities = False  # this pass's
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
     bar = _progress_bar(total, progress)
@@ -178,7 +179,7 @@ class _Batch:
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
-            if pending.count and (
+            if pending.stamps and (
                 changed
                 or order != pending.order
                 or len(positions) != pending.position_bytes
@@ -186,9 +187,8 @@ class _Batch:
             ):
                 yield from pending.finish(self)
                 pending = _Pending()
-            if not pending.count:
+            if not pending.stamps:
                 pending.start(self.decoder.names, order, len(positions), len(velocities))
-            pending.count += 1
             pending.stamps.append(stamp or bag_time)
             pending.bag_times.append(bag_time)
             pending.positions.append(positions)
@@ -203,7 +203,6 @@ class _Pending:
         self.names: list[str] = []
         self.order = "<"
         self.position_bytes = self.velocity_bytes = 0
-        self.count = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
@@ -217,14 +216,15 @@ class _Pending:
 
     def finish(self, batch: _Batch) -> Iterator[FootBlock]:
         """The rows of these messages (none if there are none)."""
-        if not self.count:
+        count = len(self.stamps)
+        if not count:
             return
         dtype = np.dtype(f"{self.order}f8")
         positions = np.frombuffer(b"".join(self.positions), dtype).reshape(
-            self.count, self.position_bytes // 8
+            count, self.position_bytes // 8
         )
         velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
-            self.count, self.velocity_bytes // 8
+            count, self.velocity_bytes // 8
         )
         yield from _finish(
             batch.recording,
@@ -251,13 +251,14 @@ def _finish(
     """
     result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
-    feet = feet_of(recording.quadruped, angles)
-    rows = ~np.isnan(feet).all(axis=(1, 2))
+    known = np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)  # (N, 4)
+    rows = known.any(axis=1)  # a leg known, as the node needs to publish its foot
     if not rows.any():
         return
-    feet = feet[rows]
+    feet = recording.quadruped.fk_batch(np.nan_to_num(angles[rows]))
+    feet[~known[rows]] = math.nan
     rates = result.rates[result.accepted][rows]
-    foot_velocities = velocities_of(recording.quadruped, angles[rows], rates)
+    foot_velocities = velocities_of(recording.quadruped, angles[rows], known[rows], rates)
     recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
     stamps = stamps[result.accepted][rows]
     bag_times = bag_times[result.accepted][rows]
@@ -268,33 +269,18 @@ def _finish(
     yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
 
 
-def feet_of(quadruped: Quadruped, angles: np.ndarray) -> np.ndarray:
-    """(N, 4, 3) feet [m], base frame, for (N, 12) angles [rad]; NaN for legs with a NaN angle."""
-    out = np.empty((angles.shape[0], LEGS, 3))
-    cos, sin = np.cos(angles), np.sin(angles)
-    for leg_slot, leg in enumerate(quadruped.legs):
-        columns = slice(leg_slot * JOINTS_PER_LEG, (leg_slot + 1) * JOINTS_PER_LEG)
-        trig = [value for pair in zip(cos[:, columns].T, sin[:, columns].T) for value in pair]
-        x, y, z = leg.position_from_trig(*trig)
-        out[:, leg_slot, 0], out[:, leg_slot, 1], out[:, leg_slot, 2] = x, y, z
-    return out
-
-
-def velocities_of(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(N, 4, 3) J(q)·q̇ [m/s], base frame; NaN for legs whose angles or rates are not all
-    finite.
+def velocities_of(
+    quadruped: Quadruped, angles: np.ndarray, known: np.ndarray, rates: np.ndarray
+) -> np.ndarray:
+    """(N, 4, 3) J(q)·q̇ [m/s], base frame, for (N, 12) angles [rad] and rates [rad/s]; NaN for
+    legs not ``known`` (N, 4), legs whose rates are not all finite, and overflowed results.
     """
     out = np.full((angles.shape[0], LEGS, 3), math.nan)
-    usable = np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2) & np.isfinite(
-        angles
-    ).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
+    usable = known & np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
     rows = usable.any(axis=1)
     if rows.any():
-        jacobians = quadruped.jacobians_batch(np.nan_to_num(angles[rows]))
-        velocity = np.einsum(
-            "nlij,nlj->nli",
-            jacobians,
-            np.nan_to_num(rates[rows]).reshape(-1, LEGS, JOINTS_PER_LEG),
+        velocity = quadruped.foot_velocities_batch(
+            np.nan_to_num(angles[rows]), np.nan_to_num(rates[rows])
         )
         with np.errstate(invalid="ignore"):
             velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan

@@ -98,22 +98,20 @@ def open_recording(
             raise LegFkError(
                 f"{path}: cannot read its robot_description topic: {one_line(error)}"
             ) from None
+        # an empty recorded description counts as none (as in the node): the embedded A1
+        name = f"robot_description topic {description_topic} in {path}"
+        robot = load_robot(
+            description or "",
+            str(urdf) if urdf else "",
+            foot_links,
+            joint_aliases,
+            description_name=name,
+        )
         if urdf:
-            robot = load_robot(
-                urdf_file=str(urdf), foot_links=foot_links, joint_aliases=joint_aliases
-            )
             source = f"--urdf {urdf}"
-        elif description is not None:
-            name = f"robot_description topic {description_topic} in {path}"
-            robot = load_robot(
-                description,
-                foot_links=foot_links,
-                joint_aliases=joint_aliases,
-                description_name=name,
-            )
+        elif description:
             source = name
         else:
-            robot = load_robot(foot_links=foot_links, joint_aliases=joint_aliases)
             source = f"embedded A1 ({robot.source})"
         poses = None
         if base_pose:

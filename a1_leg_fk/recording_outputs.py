@@ -10,7 +10,7 @@ import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Unpack
+from typing import Unpack
 
 import numpy as np
 
@@ -29,9 +29,6 @@ from a1_leg_fk.recording import (
     open_recording,
 )
 from a1_leg_fk.urdf import LegFkError
-
-if TYPE_CHECKING:  # rosbags is imported when a bag is written
-    from a1_leg_fk.recording import FootTrajectories
 
 AXES = ("x", "y", "z")
 POSITION_COLUMNS = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in AXES]
@@ -156,9 +153,7 @@ def convert(
         if outputs.csv is not None:
             writers.append(CsvWriter(outputs.csv.temporary, recording))
         if outputs.bag is not None:
-            bag_writer = BagWriter(
-                outputs.bag.temporary, recording, outputs.storage, outputs.copy_input
-            )
+            bag_writer = BagWriter(outputs.bag.temporary, recording, outputs.storage)
             writers.append(bag_writer)
         blocks: list[FootBlock] = []
         stats = BlockStats()
@@ -175,6 +170,8 @@ def convert(
             writer.close()
         summary = stats.summary(recording)
         if outputs.plot is not None:
+            from a1_leg_fk.plots import plot_trajectories  # matplotlib only for a plot
+
             plot_trajectories(collected(blocks, recording, summary), outputs.plot.temporary)
         for target in outputs.all():
             target.commit()
@@ -202,6 +199,7 @@ class CsvWriter:
 
     def __init__(self, path: Path, recording: Recording) -> None:
         self.path = path
+        self.recording = recording
         self.world = recording.base_pose is not None
         self.velocity_columns: bool | None = None  # not decided before the first rows
         self.file = open(path, "wb")  # noqa: SIM115 (open until close() or abort())
@@ -219,7 +217,7 @@ class CsvWriter:
     def write(self, block: FootBlock) -> None:
         """Append the rows of ``block``."""
         rows = len(block.stamps_ns)
-        velocities = bool(np.isfinite(block.velocities).any())
+        velocities = self.recording.has_velocities  # already set by this block if it has any
         if self.velocity_columns is None:
             self.velocity_columns = velocities
             self.file.write(self._header())
@@ -262,38 +260,3 @@ class CsvWriter:
                 out.write(b",".join(cells[:first] + empty + cells[first:]) + b"\n")
         os.replace(wide, self.path)
         self.file = open(self.path, "ab")  # noqa: SIM115 (open until close() or abort())
-
-
-# --- the output bag ------------------------------------------------------------------------------
-
-
-def plot_trajectories(trajectories: FootTrajectories, path: Path) -> Path:
-    """x, y, z of each foot over time [s from the first stamp]; world frame when available."""
-    from a1_leg_fk.plots import LEG_COLOURS, _save, pyplot
-
-    plt = pyplot()
-    world_positions = trajectories.world_positions
-    world = world_positions is not None and bool(np.isfinite(world_positions).any())
-    values = world_positions if world_positions is not None and world else trajectories.positions
-    frame = trajectories.world_frame if world else trajectories.base_frame
-    figure, axes = plt.subplots(3, 1, sharex=True, figsize=(11, 8))
-    stamps = trajectories.stamps_ns
-    seconds = (stamps - stamps[0]) / 1e9 if len(stamps) else stamps
-    for axis_slot, (axis, name) in enumerate(zip(axes, AXES)):
-        for leg_slot, leg in enumerate(LEG_NAMES):
-            axis.plot(
-                seconds,
-                values[:, leg_slot, axis_slot],
-                color=LEG_COLOURS[leg],
-                linewidth=0.8,
-                label=leg,
-            )
-        axis.set_ylabel(f"{name} [m]")
-        axis.grid(True, alpha=0.3)
-    axes[0].legend(loc="upper right", ncol=4, fontsize="small")
-    axes[-1].set_xlabel("time since the first JointState stamp [s]")
-    summary = trajectories.summary
-    figure.suptitle(
-        f"Feet in frame '{frame}': {Path(summary.path).name}, {summary.topic}, {summary.rows} rows"
-    )
-    return _save(figure, plt, path)

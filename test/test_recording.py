@@ -81,15 +81,17 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
         ),
     ):
         for repeat in range(2):  # the second time the names come from the cache
-            wire = decoder.decode(raw)
+            stamp_ns, changed, order, positions, velocities = decoder.fields(raw)
             assert (
-                wire.stamp_ns
+                stamp_ns
                 == reference.header.stamp.sec * 1_000_000_000 + reference.header.stamp.nanosec
             )
-            assert (wire.names if repeat == 0 else decoder.names) == list(reference.name)
-            assert wire.names is None or repeat == 0
-            assert wire.positions.tolist() == list(reference.position)
-            assert wire.velocities.tolist() == list(reference.velocity)
+            assert decoder.names == list(reference.name)
+            assert changed == (repeat == 0)
+            assert order == (">" if raw is big_endian else "<")
+            dtype = np.dtype(f"{order}f8")
+            assert np.frombuffer(positions, dtype).tolist() == list(reference.position)
+            assert np.frombuffer(velocities, dtype).tolist() == list(reference.velocity)
 
 
 # --- update_block is update, K times -------------------------------------------------------------
@@ -169,12 +171,13 @@ def scenario() -> tuple[
                 leg_names = NAMES[3 * leg : 3 * leg + 3]
                 if leg not in bad_legs and all(n in by_name for n in leg_names):
                     rates[leg] = [by_name[n] for n in leg_names]
-        if not all(math.isnan(v) for v in state):
-            rows.append((stamp or bag_time, bag_time, list(state), rates))
+        if any(not any(math.isnan(v) for v in state[3 * leg : 3 * leg + 3]) for leg in range(4)):
+            rows.append((stamp or bag_time, bag_time, list(state), rates))  # a leg is known
 
     def q() -> list[float]:
         return rng.uniform(-1.0, 1.0, 12).tolist()
 
+    put(NAMES[1:3], q()[1:3])  # FR without its hip roll: no leg known, no row
     put(NAMES[:3], q()[:3])  # FR only: partial
     put(["arm_joint", *NAMES[3:9]], [0.5, *q()[3:9]])  # FL + RR and an unknown name
     put(NAMES, q()[:11], outcome="position_length_mismatch")
@@ -228,6 +231,19 @@ def test_feet_of_a_bag_equal_fk_of_the_merged_state(tmp_path: Path, kind: str) -
             else:
                 assert np.isnan(got_velocity[leg]).all()
     assert result.world_positions is None and result.base_frame == "trunk"
+
+
+def test_an_empty_recorded_robot_description_means_the_embedded_a1(tmp_path: Path) -> None:
+    """As in the node, an empty description is none: the embedded A1, and the summary says so."""
+    spec = BagSpec()
+    spec.add("/robot_description", "std_msgs/msg/String", T0, T["std_msgs/msg/String"](""))
+    q = np.random.default_rng(5).uniform(-0.8, 0.8, 12).tolist()
+    spec.add_joint_state("/joint_states", T0 + 1, JointStateMsg(T0 + 1, NAMES, q))
+    result = read_foot_trajectories(write_bag(tmp_path / "empty", spec, "mcap"))
+    assert result.summary.model.startswith("embedded A1 (")
+    feet = [leg.chain.foot_link for leg in A1.legs]
+    with PyBulletRobot(pybullet_data.getDataPath() + "/a1/a1.urdf") as robot:
+        assert np.abs(result.positions[0] - robot.feet(NAMES, feet, q)).max() <= 1e-7
 
 
 def test_a_recorded_robot_description_is_used_and_matches_pybullet(tmp_path: Path) -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Unpack
@@ -99,22 +100,20 @@ class Outputs:
         copy_input: bool = False,
         force: bool = False,
     ) -> Outputs:
-        """:class:`LegFkError` for an output that exists (without ``force``), lies inside the input
-        bag, or sits in a folder that does not exist.
-        """
-        targets: list[OutputTarget | None] = []
-        for option, value in (("--csv", csv), ("--output-bag", bag), ("--plot", plot)):
-            if value is None:
-                targets.append(None)
-                continue
-            path = Path(value)
-            check_output_path(source, path, option, force)
-            targets.append(OutputTarget(path))
-        finals = [target.final.resolve() for target in targets if target is not None]
-        if len(set(finals)) != len(finals):
-            raise LegFkError("two outputs name the same path")
-        csv_target, bag_target, plot_target = targets
-        return cls(csv_target, bag_target, plot_target, storage=storage, copy_input=copy_input)
+        """The outputs as :func:`checked_targets` checks them (the bag is a folder)."""
+        targets = checked_targets(
+            source,
+            {"--csv": csv, "--output-bag": bag, "--plot": plot},
+            force,
+            folders={"--output-bag"},
+        )
+        return cls(
+            targets.get("--csv"),
+            targets.get("--output-bag"),
+            targets.get("--plot"),
+            storage=storage,
+            copy_input=copy_input,
+        )
 
     def all(self) -> list[OutputTarget]:
         """The requested outputs."""
@@ -125,10 +124,37 @@ class Outputs:
         return [target.final for target in self.all() if target.final.exists()]
 
 
-def check_output_path(source: Path, path: Path, option: str, force: bool) -> None:
-    """:class:`LegFkError` naming ``option`` if output ``path`` lies inside the input ``source``,
-    sits in a folder that does not exist, or exists (unless ``force``).
+def checked_targets(
+    source: Path,
+    paths: Mapping[str, str | None],
+    force: bool,
+    folders: Collection[str] = (),
+) -> dict[str, OutputTarget]:
+    """The requested outputs (``paths``: option -> path, ``None`` for not requested), each checked
+    by :func:`check_output_path` (the options in ``folders`` write a folder, the others a file)
+    before anything is read; :class:`LegFkError` also when two of them name the same path.
     """
+    targets = {}
+    for option, value in paths.items():
+        if value is not None:
+            path = Path(value)
+            check_output_path(source, path, option, force, folder=option in folders)
+            targets[option] = OutputTarget(path)
+    finals = [target.final.resolve() for target in targets.values()]
+    if len(set(finals)) != len(finals):
+        raise LegFkError("two outputs name the same path")
+    return targets
+
+
+def check_output_path(
+    source: Path, path: Path, option: str, force: bool, folder: bool = False
+) -> None:
+    """:class:`LegFkError` naming ``option`` if output ``path`` lies inside the input ``source``,
+    sits in a folder that does not exist, or exists (unless ``force``); for a file output
+    (``folder`` false), also if it is a folder, which ``--force`` would remove with all in it.
+    """
+    if not folder and path.is_dir():
+        raise LegFkError(f"{option} {path}: is a folder; give a file name")
     resolved, input_path = path.resolve(), source.resolve()
     if resolved == input_path or input_path in resolved.parents:
         raise LegFkError(f"{option} {path}: inside the input bag {source}; write it elsewhere")

@@ -247,6 +247,17 @@ def test_bad_inputs(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
         [],
     )
     assert out.read_text() == "keep me"
+    folder = tmp_path / "results"  # a file output naming a folder: --force must not remove it
+    (folder / "inner").mkdir(parents=True)
+    (folder / "inner" / "notes.txt").write_text("keep me too")
+    for option in ("--csv", "--plot"):
+        expect_bad(
+            capsys,
+            ["bag", str(two), option, str(folder), "--topic", "/a/joint_states", "--force"],
+            f"{option} {folder}: is a folder; give a file name",
+            [],
+        )
+    assert (folder / "inner" / "notes.txt").read_text() == "keep me too"
     assert (
         cli.main(
             [

@@ -143,21 +143,10 @@ def checked_outputs(options: argparse.Namespace) -> dict[str, OutputTarget]:
     :class:`LegFkError` for a path that is a folder, lies inside the input, sits in a folder that
     does not exist, or exists without ``--force``; or for two options naming the same file.
     """
-    from a1_leg_fk.recording_outputs import OutputTarget, check_output_path
+    from a1_leg_fk.recording_outputs import checked_targets
 
-    targets = {}
-    for option, name in FILE_OPTIONS.items():
-        if getattr(options, name) is None:
-            continue
-        path = Path(getattr(options, name))
-        if path.is_dir():  # --force would remove the folder and all in it
-            raise LegFkError(f"{option} {path}: is a folder; give a file name")
-        check_output_path(Path(options.input), path, option, options.force)
-        targets[option] = OutputTarget(path)
-    finals = [target.final.resolve() for target in targets.values()]
-    if len(set(finals)) != len(finals):
-        raise LegFkError("two outputs name the same path")
-    return targets
+    paths = {option: getattr(options, name) for option, name in FILE_OPTIONS.items()}
+    return checked_targets(Path(options.input), paths, options.force)
 
 
 def _number(value: float | None, form: str) -> str:

@@ -27,16 +27,29 @@ def rejected_messages(counts: TrackerCounts) -> int:
 
 @dataclass
 class PeriodCounter:
-    """Messages received and rejected between successive :meth:`take` calls."""
+    """Messages received and rejected between successive :meth:`take` calls, over the
+    cumulative counts of a tracker that may be replaced by a fresh one (:meth:`new_tracker`).
+    """
 
-    _previous: tuple[int, int] = (0, 0)
+    _previous: tuple[int, int] = (0, 0)  # the counts at the previous take (or tracker change)
+    _carried: tuple[int, int] = (0, 0)  # counted by replaced trackers since the previous take
 
     def take(self, counts: TrackerCounts) -> tuple[int, int]:
         """(received, rejected) since the previous call; the first call counts from zero."""
         now = (counts.messages, rejected_messages(counts))
-        since = (now[0] - self._previous[0], now[1] - self._previous[1])
-        self._previous = now
+        since = (
+            self._carried[0] + now[0] - self._previous[0],
+            self._carried[1] + now[1] - self._previous[1],
+        )
+        self._previous, self._carried = now, (0, 0)
         return since
+
+    def new_tracker(self, old: TrackerCounts) -> None:
+        """The tracker whose counts are ``old`` is being replaced by a fresh one (counts from
+        zero): what ``old`` counted since the previous take goes into the next take's result.
+        """
+        self._carried = self.take(old)
+        self._previous = (0, 0)
 
 
 @dataclass(frozen=True)

@@ -401,6 +401,7 @@ class FootFkNode(Node):
         it.
         """
         self._model = config
+        self._period.new_tracker(self._tracker.counts)
         self._tracker = FootTracker(config.quadruped)
         self._apply_settings()
         self._set_frame_ids()

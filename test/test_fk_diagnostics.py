@@ -70,6 +70,28 @@ def test_counts_rate_and_level_through_a_session():
     assert (level, summary) == (OK, "feet published") and values["input_rate_hz"] == "2.0"
 
 
+def test_a_new_tracker_counts_the_period_across_the_change():
+    """As foot_fk_node swaps the robot: one rejection reported, then messages for the old and the
+    new tracker within one period; the period holds exactly those, none negative."""
+    old, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
+    for _ in range(4):
+        old.update(NAMES, STANDING, [])
+    old.update(NAMES, STANDING[:11], [])  # rejected
+    level, _, values = fk_status(_report(old, counter))
+    assert level == WARN and values["input_rate_hz"] == "10.0"  # 5 messages in 0.5 s
+    old.update(NAMES, STANDING, [])  # one more for the old robot in the next period
+    counter.new_tracker(old.counts)
+    new = FootTracker(Quadruped.from_urdf())
+    new.update(NAMES, STANDING, [])
+    level, summary, values = fk_status(_report(new, counter))
+    assert (level, summary) == (OK, "feet published")
+    assert values["input_rate_hz"] == "4.0" and values["messages_received"] == 1  # 2 in 0.5 s
+    assert counter.take(new.counts) == (0, 0)
+    new.update(NAMES, STANDING[:11], [])
+    counter.new_tracker(new.counts)  # a rejection just before a change still counts
+    assert counter.take(FootTracker(Quadruped.from_urdf()).counts) == (1, 1)
+
+
 def test_joints_outside_limits_and_non_finite_values_warn():
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
     tracker.update(

@@ -28,7 +28,6 @@ from sensor_msgs.msg import JointState
 from a1_leg_fk import ros_glue
 from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
-from a1_leg_fk.node import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.robot_config import RobotConfig
 from a1_leg_fk.robot_source import (
     BASE_FRAME_PARAMETER,
@@ -37,6 +36,7 @@ from a1_leg_fk.robot_source import (
     parameter_value,
     string_list,
 )
+from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_ik"

@@ -33,7 +33,7 @@ from a1_leg_fk.robot_source import (
     BASE_FRAME_PARAMETER,
     ParameterSpec,
     RobotSource,
-    parameter_value,
+    parameter_values,
     string_list,
 )
 from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
@@ -89,10 +89,7 @@ class FootIkNode(Node):
 
     def _settings(self, changes: dict[str, object]) -> tuple[str, list[list[str]]]:
         """(accepted target frame, command names per leg) for the parameters with ``changes``."""
-        value = {
-            name: changes.get(name, parameter_value(self, name))
-            for name in ("base_frame", "command_joint_names")
-        }
+        value = parameter_values(self, ("command_joint_names",), changes)
         quadruped = self._model.quadruped
         names = string_list(value["command_joint_names"]) or list(quadruped.joint_names)
         if len(names) != len(quadruped.joint_names):
@@ -104,7 +101,7 @@ class FootIkNode(Node):
             names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG]
             for slot in range(len(LEG_NAMES))
         ]
-        return str(value["base_frame"]) or quadruped.base_frame, per_leg
+        return self._robot.base_frame(changes), per_leg
 
     def _apply_settings(self, settings: tuple[str, list[list[str]]]) -> None:
         self._base_frame, self._command_names = settings

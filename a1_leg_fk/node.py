@@ -36,7 +36,6 @@ from a1_leg_fk.robot_source import (
     BASE_FRAME_PARAMETER,
     ParameterSpec,
     RobotSource,
-    parameter_value,
 )
 from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.serialized_output import SerializedStamped
@@ -364,9 +363,7 @@ class FootFkNode(Node):
 
     def _apply_settings(self) -> None:
         """Read the node's parameters; rclpy has checked their types and ranges already."""
-        self._base_frame = (
-            str(parameter_value(self, "base_frame")) or self._model.quadruped.base_frame
-        )
+        self._base_frame = self._robot.base_frame({})
         self._publish_velocities = self._bool("publish_velocities")
         self._publish_markers_enabled = self._bool("publish_markers")
         self._marker_interval_s = 1.0 / self._float("marker_rate_hz")

@@ -68,8 +68,10 @@ class FootIkNode(Node):
         self._model: RobotConfig = self._robot.config
         self._apply_settings(self._settings({}))
         self._seeds: list[list[float] | None] = [None] * len(LEG_NAMES)
-        self._counts: Counter[str] = Counter()
-        self._last_status = ["none"] * len(LEG_NAMES)
+        self._counts: Counter[str] = Counter()  # targets_received, rejected_frame, ...
+        # per leg slot: targets answered with each status code; the latest (code, residual [m])
+        self._status_counts = [[0] * len(STATUS_NAMES) for _ in LEG_NAMES]
+        self._last_result: list[tuple[int, float] | None] = [None] * len(LEG_NAMES)
         self._warnings = ros_glue.WarnThrottle(self)
         self._pending_settings: tuple[str, list[list[str]]] | None = None
         self.add_on_set_parameters_callback(self._check_parameters)
@@ -159,13 +161,13 @@ class FootIkNode(Node):
                 f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)",
             )
             return
-        status = STATUS_NAMES[result.status]
-        self._counts[f"{leg}_{status}"] += 1
-        self._last_status[slot] = f"{status} ({result.residual_m:.3g} m)"
+        self._status_counts[slot][result.status] += 1
+        self._last_result[slot] = (result.status, result.residual_m)
         if result.status != OK:
             self._warnings.warn(
                 f"status/{leg}",
-                f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
+                f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is "
+                f"{STATUS_NAMES[result.status]}; "
                 f"publishing the nearest in-limit angles, {result.residual_m:.4f} m from it",
             )
         self._seeds[slot] = list(result.angles)
@@ -183,7 +185,7 @@ class FootIkNode(Node):
         if not counts["targets_received"]:
             level, summary = DiagnosticStatus.WARN, "no foot targets received yet"
         elif (
-            any(counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES[1:])
+            any(n for row in self._status_counts for code, n in enumerate(row) if code != OK)
             or counts["rejected_frame"]
         ):
             level, summary = (
@@ -198,12 +200,13 @@ class FootIkNode(Node):
         values = {
             "targets_received": counts["targets_received"],
             **{
-                f"{leg}_{status}": counts[f"{leg}_{status}"]
-                for leg in LEG_NAMES
-                for status in STATUS_NAMES
+                f"{leg}_{status}": self._status_counts[slot][code]
+                for slot, leg in enumerate(LEG_NAMES)
+                for code, status in enumerate(STATUS_NAMES)
             },
             **{
-                f"{leg}_last_status": self._last_status[slot] for slot, leg in enumerate(LEG_NAMES)
+                f"{leg}_last_status": _last_status(self._last_result[slot])
+                for slot, leg in enumerate(LEG_NAMES)
             },
             "rejected_frame": counts["rejected_frame"],
             "rejected_non_finite": counts["rejected_non_finite"],
@@ -217,6 +220,16 @@ class FootIkNode(Node):
             self, "foot inverse kinematics", level, summary, hardware_id, values
         )
         self._diagnostics.publish(array)
+
+
+def _last_status(last: tuple[int, float] | None) -> str:
+    """A leg's ``<leg>_last_status`` diagnostics value: "none", or the status name and the
+    residual [m] of its latest target.
+    """
+    if last is None:
+        return "none"
+    code, residual_m = last
+    return f"{STATUS_NAMES[code]} ({residual_m:.3g} m)"
 
 
 def main(args: Sequence[str] | None = None) -> int:

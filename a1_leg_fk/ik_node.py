@@ -26,6 +26,7 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 
 from a1_leg_fk import ros_glue
+from a1_leg_fk.fk_diagnostics import robot_description_status
 from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.robot_config import RobotConfig
@@ -192,11 +193,15 @@ class FootIkNode(Node):
                 DiagnosticStatus.WARN,
                 "some targets out of reach, outside the limits, or rejected",
             )
-        if self._robot.topic_rejected:
-            level, summary = (
-                DiagnosticStatus.WARN,
-                f"robot description on {self._robot.topic_name} rejected",
-            )
+        robot = self._robot
+        level, summary, description = robot_description_status(
+            level,
+            summary,
+            self._model.source,
+            robot.topic_name,
+            robot.topic_status,
+            robot.topic_rejected,
+        )
         values = {
             "targets_received": counts["targets_received"],
             **{
@@ -211,9 +216,7 @@ class FootIkNode(Node):
             "rejected_frame": counts["rejected_frame"],
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
-            "model": self._model.source,
-            "robot_description_topic": f"{self._robot.topic_name or 'none'}: "
-            f"{self._robot.topic_status}",
+            **description,
         }
         hardware_id = self._model.quadruped.model.name
         array = ros_glue.diagnostics(

@@ -7,7 +7,15 @@ import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from a1_leg_fk.fk_diagnostics import ERROR, OK, WARN, FkReport, PeriodCounter, fk_status
+from a1_leg_fk.fk_diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    FkReport,
+    PeriodCounter,
+    fk_status,
+    robot_description_status,
+)
 from a1_leg_fk.joint_state import FootTracker
 from a1_leg_fk.kinematics import Quadruped
 
@@ -125,3 +133,26 @@ def test_a_rejected_description_warns_and_a_verify_disagreement_is_an_error():
     assert level == ERROR and summary.startswith("verify_fk")
     _, _, values = fk_status(_report(tracker, counter, description_topic=""))
     assert values["robot_description_topic"] == "none: nothing received"
+
+
+def test_the_robot_description_part_keeps_or_overrides_any_node_status():
+    """The part foot_ik_node shares: its own level and summary kept, or a rejection's WARN."""
+    kept = robot_description_status(OK, "joint commands published", "a1.urdf", "", "x", False)
+    assert kept == (
+        OK,
+        "joint commands published",
+        {"model": "a1.urdf", "robot_description_topic": "none: x"},
+    )
+    level, summary, values = robot_description_status(
+        OK,
+        "anything",
+        "/r1/robot_description",
+        "/r2/robot_description",
+        "rejected: leg FR",
+        True,
+    )
+    assert (level, summary) == (WARN, "robot description on /r2/robot_description rejected")
+    assert values == {
+        "model": "/r1/robot_description",
+        "robot_description_topic": "/r2/robot_description: rejected: leg FR",
+    }

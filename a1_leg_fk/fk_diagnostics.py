@@ -4,6 +4,7 @@
 joints outside their limits, the robot description's and ``verify_fk``'s state) into a level, a
 one-line summary and the key/value pairs; :class:`PeriodCounter` gives the messages and
 rejections since the previous report. The node wraps the result in a DiagnosticArray.
+:func:`robot_description_status` is the robot-description part, shared with ``foot_ik_node``.
 """
 
 from __future__ import annotations
@@ -27,16 +28,29 @@ def rejected_messages(counts: TrackerCounts) -> int:
 
 @dataclass
 class PeriodCounter:
-    """Messages received and rejected between successive :meth:`take` calls."""
+    """Messages received and rejected between successive :meth:`take` calls, over the
+    cumulative counts of a tracker that may be replaced by a fresh one (:meth:`new_tracker`).
+    """
 
-    _previous: tuple[int, int] = (0, 0)
+    _previous: tuple[int, int] = (0, 0)  # the counts at the previous take (or tracker change)
+    _carried: tuple[int, int] = (0, 0)  # counted by replaced trackers since the previous take
 
     def take(self, counts: TrackerCounts) -> tuple[int, int]:
         """(received, rejected) since the previous call; the first call counts from zero."""
         now = (counts.messages, rejected_messages(counts))
-        since = (now[0] - self._previous[0], now[1] - self._previous[1])
-        self._previous = now
+        since = (
+            self._carried[0] + now[0] - self._previous[0],
+            self._carried[1] + now[1] - self._previous[1],
+        )
+        self._previous, self._carried = now, (0, 0)
         return since
+
+    def new_tracker(self, old: TrackerCounts) -> None:
+        """The tracker whose counts are ``old`` is being replaced by a fresh one (counts from
+        zero): what ``old`` counted since the previous take goes into the next take's result.
+        """
+        self._carried = self.take(old)
+        self._previous = (0, 0)
 
 
 @dataclass(frozen=True)
@@ -71,8 +85,14 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         level, summary = WARN, "no joint_states received yet"
     elif report.rejected_in_period or outside or counts.non_finite_joints:
         level, summary = WARN, "some joint_states rejected or joints outside limits"
-    if report.description_rejected:
-        level, summary = WARN, f"robot description on {report.description_topic} rejected"
+    level, summary, description = robot_description_status(
+        level,
+        summary,
+        report.model,
+        report.description_topic,
+        report.description_status,
+        report.description_rejected,
+    )
     if report.verify_disagreed:
         level, summary = ERROR, "verify_fk: FK disagrees with PyBullet beyond the tolerance"
     unknown = sorted(counts.unknown_names)[:MAX_LISTED_UNKNOWN_NAMES]
@@ -87,8 +107,22 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         "unknown_joint_names": ",".join(unknown) or "none",
         "stamp_jumps_back": report.stamp_jumps_back,
         "last_verify": report.last_verify,
-        "model": report.model,
-        "robot_description_topic": f"{report.description_topic or 'none'}: "
-        f"{report.description_status}",
+        **description,
     }
     return level, summary, values
+
+
+def robot_description_status(
+    level: bytes, summary: str, model: str, topic: str, status: str, rejected: bool
+) -> tuple[bytes, str, dict[str, object]]:
+    """A node's ``level`` and ``summary``, turned to WARN "robot description on ``topic``
+    rejected" when the latest description from ``topic`` was rejected, and the ``model`` and
+    ``robot_description_topic`` values ("``topic`` or none: ``status``") of its status.
+    """
+    if rejected:
+        level, summary = WARN, f"robot description on {topic} rejected"
+    return (
+        level,
+        summary,
+        {"model": model, "robot_description_topic": f"{topic or 'none'}: {status}"},
+    )

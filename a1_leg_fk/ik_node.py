@@ -26,17 +26,18 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 
 from a1_leg_fk import ros_glue
+from a1_leg_fk.fk_diagnostics import robot_description_status
 from a1_leg_fk.inverse import OK, STATUS_NAMES
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
-from a1_leg_fk.node import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.robot_config import RobotConfig
 from a1_leg_fk.robot_source import (
     BASE_FRAME_PARAMETER,
     ParameterSpec,
     RobotSource,
-    parameter_value,
+    parameter_values,
     string_list,
 )
+from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_ik"
@@ -68,8 +69,10 @@ class FootIkNode(Node):
         self._model: RobotConfig = self._robot.config
         self._apply_settings(self._settings({}))
         self._seeds: list[list[float] | None] = [None] * len(LEG_NAMES)
-        self._counts: Counter[str] = Counter()
-        self._last_status = ["none"] * len(LEG_NAMES)
+        self._counts: Counter[str] = Counter()  # targets_received, rejected_frame, ...
+        # per leg slot: targets answered with each status code; the latest (code, residual [m])
+        self._status_counts = [[0] * len(STATUS_NAMES) for _ in LEG_NAMES]
+        self._last_result: list[tuple[int, float] | None] = [None] * len(LEG_NAMES)
         self._warnings = ros_glue.WarnThrottle(self)
         self._pending_settings: tuple[str, list[list[str]]] | None = None
         self.add_on_set_parameters_callback(self._check_parameters)
@@ -89,10 +92,7 @@ class FootIkNode(Node):
 
     def _settings(self, changes: dict[str, object]) -> tuple[str, list[list[str]]]:
         """(accepted target frame, command names per leg) for the parameters with ``changes``."""
-        value = {
-            name: changes.get(name, parameter_value(self, name))
-            for name in ("base_frame", "command_joint_names")
-        }
+        value = parameter_values(self, ("command_joint_names",), changes)
         quadruped = self._model.quadruped
         names = string_list(value["command_joint_names"]) or list(quadruped.joint_names)
         if len(names) != len(quadruped.joint_names):
@@ -104,7 +104,7 @@ class FootIkNode(Node):
             names[slot * JOINTS_PER_LEG : (slot + 1) * JOINTS_PER_LEG]
             for slot in range(len(LEG_NAMES))
         ]
-        return str(value["base_frame"]) or quadruped.base_frame, per_leg
+        return self._robot.base_frame(changes), per_leg
 
     def _apply_settings(self, settings: tuple[str, list[list[str]]]) -> None:
         self._base_frame, self._command_names = settings
@@ -162,13 +162,13 @@ class FootIkNode(Node):
                 f"ignoring a target: {error} ({self._counts['rejected_non_finite']} so far)",
             )
             return
-        status = STATUS_NAMES[result.status]
-        self._counts[f"{leg}_{status}"] += 1
-        self._last_status[slot] = f"{status} ({result.residual_m:.3g} m)"
+        self._status_counts[slot][result.status] += 1
+        self._last_result[slot] = (result.status, result.residual_m)
         if result.status != OK:
             self._warnings.warn(
                 f"status/{leg}",
-                f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is {status}; "
+                f"leg {leg}: target ({point.x:.4f}, {point.y:.4f}, {point.z:.4f}) m is "
+                f"{STATUS_NAMES[result.status]}; "
                 f"publishing the nearest in-limit angles, {result.residual_m:.4f} m from it",
             )
         self._seeds[slot] = list(result.angles)
@@ -186,40 +186,53 @@ class FootIkNode(Node):
         if not counts["targets_received"]:
             level, summary = DiagnosticStatus.WARN, "no foot targets received yet"
         elif (
-            any(counts[f"{leg}_{status}"] for leg in LEG_NAMES for status in STATUS_NAMES[1:])
+            any(n for row in self._status_counts for code, n in enumerate(row) if code != OK)
             or counts["rejected_frame"]
         ):
             level, summary = (
                 DiagnosticStatus.WARN,
                 "some targets out of reach, outside the limits, or rejected",
             )
-        if self._robot.topic_rejected:
-            level, summary = (
-                DiagnosticStatus.WARN,
-                f"robot description on {self._robot.topic_name} rejected",
-            )
+        robot = self._robot
+        level, summary, description = robot_description_status(
+            level,
+            summary,
+            self._model.source,
+            robot.topic_name,
+            robot.topic_status,
+            robot.topic_rejected,
+        )
         values = {
             "targets_received": counts["targets_received"],
             **{
-                f"{leg}_{status}": counts[f"{leg}_{status}"]
-                for leg in LEG_NAMES
-                for status in STATUS_NAMES
+                f"{leg}_{status}": self._status_counts[slot][code]
+                for slot, leg in enumerate(LEG_NAMES)
+                for code, status in enumerate(STATUS_NAMES)
             },
             **{
-                f"{leg}_last_status": self._last_status[slot] for slot, leg in enumerate(LEG_NAMES)
+                f"{leg}_last_status": _last_status(self._last_result[slot])
+                for slot, leg in enumerate(LEG_NAMES)
             },
             "rejected_frame": counts["rejected_frame"],
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
-            "model": self._model.source,
-            "robot_description_topic": f"{self._robot.topic_name or 'none'}: "
-            f"{self._robot.topic_status}",
+            **description,
         }
         hardware_id = self._model.quadruped.model.name
         array = ros_glue.diagnostics(
             self, "foot inverse kinematics", level, summary, hardware_id, values
         )
         self._diagnostics.publish(array)
+
+
+def _last_status(last: tuple[int, float] | None) -> str:
+    """A leg's ``<leg>_last_status`` diagnostics value: "none", or the status name and the
+    residual [m] of its latest target.
+    """
+    if last is None:
+        return "none"
+    code, residual_m = last
+    return f"{STATUS_NAMES[code]} ({residual_m:.3g} m)"
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -19,7 +19,6 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.service import Service
 from sensor_msgs.msg import JointState
@@ -37,25 +36,14 @@ from a1_leg_fk.robot_source import (
     BASE_FRAME_PARAMETER,
     ParameterSpec,
     RobotSource,
-    parameter_value,
 )
+from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.serialized_output import SerializedStamped
 from a1_leg_fk.urdf import LegFkError
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0
 SUBSCRIBER_CHECK_PERIOD_S = 0.5
-OUTPUT_QOS = QoSProfile(depth=10)  # reliable: heard by reliable and best-effort subscribers
-JOINT_STATES_QOS = QoSProfile(
-    # The sensor-data profile (best effort: hears reliable and best-effort publishers alike), with
-    # a
-    # deeper queue than its 5, so that a burst of a 1 kHz stream is not overwritten while we work.
-    history=qos_profile_sensor_data.history,
-    depth=100,
-    reliability=ReliabilityPolicy.BEST_EFFORT,
-    durability=qos_profile_sensor_data.durability,
-)
-
 
 MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
 PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
@@ -375,9 +363,7 @@ class FootFkNode(Node):
 
     def _apply_settings(self) -> None:
         """Read the node's parameters; rclpy has checked their types and ranges already."""
-        self._base_frame = (
-            str(parameter_value(self, "base_frame")) or self._model.quadruped.base_frame
-        )
+        self._base_frame = self._robot.base_frame({})
         self._publish_velocities = self._bool("publish_velocities")
         self._publish_markers_enabled = self._bool("publish_markers")
         self._marker_interval_s = 1.0 / self._float("marker_rate_hz")
@@ -401,6 +387,7 @@ class FootFkNode(Node):
         it.
         """
         self._model = config
+        self._period.new_tracker(self._tracker.counts)
         self._tracker = FootTracker(config.quadruped)
         self._apply_settings()
         self._set_frame_ids()

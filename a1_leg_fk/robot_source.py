@@ -19,7 +19,7 @@ text published again (as robot_state_publisher does on parameter changes) does n
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -89,6 +89,15 @@ def parameter_value(node: Node, name: str) -> object:
         return node.get_parameter(name).value
     except ParameterUninitializedException:
         return []
+
+
+def parameter_values(
+    node: Node, names: Sequence[str], changes: Mapping[str, object]
+) -> dict[str, object]:
+    """The values of ``node``'s parameters ``names``: those in ``changes`` (being set, not stored
+    yet) over the stored ones (:func:`parameter_value`).
+    """
+    return {name: changes.get(name, parameter_value(node, name)) for name in names}
 
 
 def string_list(value: object) -> list[str]:
@@ -195,9 +204,15 @@ class RobotSource:
     # --- parameters ------------------------------------------------------------------------
 
     def _values(self, changes: dict[str, object]) -> dict[str, object]:
-        return {
-            name: changes.get(name, parameter_value(self._node, name)) for name in MODEL_PARAMETERS
-        }
+        return parameter_values(self._node, MODEL_PARAMETERS, changes)
+
+    def base_frame(self, changes: Mapping[str, object]) -> str:
+        """The frame of the feet and targets: the node's ``base_frame`` parameter
+        (:data:`BASE_FRAME_PARAMETER`, with ``changes`` over the stored value), or when it is
+        empty the root link of the current robot.
+        """
+        value = parameter_values(self._node, (BASE_FRAME_PARAMETER.name,), changes)
+        return str(value[BASE_FRAME_PARAMETER.name]) or self.config.quadruped.base_frame
 
     @staticmethod
     def _explicit(values: dict[str, object]) -> str:

@@ -1,6 +1,6 @@
 """ROS plumbing shared by ``foot_fk_node``, ``foot_ik_node`` and ``joint_state_demo``: the spin
-loop of ``main`` with its exit codes and its Ctrl-C/SIGTERM, one ``/diagnostics`` status, and
-warnings limited to one a second per kind.
+loop of ``main`` with its exit codes and its Ctrl-C/SIGTERM, the QoS profiles, one
+``/diagnostics`` status, and warnings limited to one a second per kind.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from rclpy.context import Context
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 
 from a1_leg_fk.stop_signals import StopSignals
@@ -26,6 +27,18 @@ WARNING_INTERVAL_S = 1.0
 """At most one warning a second for each kind of problem."""
 SPIN_SLICE_S = 0.1
 """The longest turn of a node's executor [s]: how late a Ctrl-C/SIGTERM is noticed at most."""
+OUTPUT_QOS = QoSProfile(depth=10)  # reliable: heard by reliable and best-effort subscribers
+JOINT_STATES_QOS = QoSProfile(
+    # The sensor-data profile (best effort: hears reliable and best-effort publishers alike), with
+    # a deeper queue than its 5, so that a burst of a 1 kHz stream is not overwritten while we
+    # work.
+    history=qos_profile_sensor_data.history,
+    depth=100,
+    reliability=ReliabilityPolicy.BEST_EFFORT,
+    durability=qos_profile_sensor_data.durability,
+)
+"""The nodes' QoS: ``OUTPUT_QOS`` for what they publish, ``JOINT_STATES_QOS`` for the streams
+they subscribe (joint_states, foot targets)."""
 
 
 class NodeOptions(TypedDict, total=False):

@@ -270,7 +270,7 @@ def receiver(output: str) -> None:
 
 
 def baseline(executor_name: str) -> None:
-    from a1_leg_fk.node import JOINT_STATES_QOS, OUTPUT_QOS
+    from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
 
     rclpy.init()
     node = Node("bench_echo_baseline")

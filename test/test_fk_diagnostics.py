@@ -7,7 +7,15 @@ import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from a1_leg_fk.fk_diagnostics import ERROR, OK, WARN, FkReport, PeriodCounter, fk_status
+from a1_leg_fk.fk_diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    FkReport,
+    PeriodCounter,
+    fk_status,
+    robot_description_status,
+)
 from a1_leg_fk.joint_state import FootTracker
 from a1_leg_fk.kinematics import Quadruped
 
@@ -70,6 +78,28 @@ def test_counts_rate_and_level_through_a_session():
     assert (level, summary) == (OK, "feet published") and values["input_rate_hz"] == "2.0"
 
 
+def test_a_new_tracker_counts_the_period_across_the_change():
+    """As foot_fk_node swaps the robot: one rejection reported, then messages for the old and the
+    new tracker within one period; the period holds exactly those, none negative."""
+    old, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
+    for _ in range(4):
+        old.update(NAMES, STANDING, [])
+    old.update(NAMES, STANDING[:11], [])  # rejected
+    level, _, values = fk_status(_report(old, counter))
+    assert level == WARN and values["input_rate_hz"] == "10.0"  # 5 messages in 0.5 s
+    old.update(NAMES, STANDING, [])  # one more for the old robot in the next period
+    counter.new_tracker(old.counts)
+    new = FootTracker(Quadruped.from_urdf())
+    new.update(NAMES, STANDING, [])
+    level, summary, values = fk_status(_report(new, counter))
+    assert (level, summary) == (OK, "feet published")
+    assert values["input_rate_hz"] == "4.0" and values["messages_received"] == 1  # 2 in 0.5 s
+    assert counter.take(new.counts) == (0, 0)
+    new.update(NAMES, STANDING[:11], [])
+    counter.new_tracker(new.counts)  # a rejection just before a change still counts
+    assert counter.take(FootTracker(Quadruped.from_urdf()).counts) == (1, 1)
+
+
 def test_joints_outside_limits_and_non_finite_values_warn():
     tracker, counter = FootTracker(Quadruped.from_urdf()), PeriodCounter()
     tracker.update(
@@ -103,3 +133,26 @@ def test_a_rejected_description_warns_and_a_verify_disagreement_is_an_error():
     assert level == ERROR and summary.startswith("verify_fk")
     _, _, values = fk_status(_report(tracker, counter, description_topic=""))
     assert values["robot_description_topic"] == "none: nothing received"
+
+
+def test_the_robot_description_part_keeps_or_overrides_any_node_status():
+    """The part foot_ik_node shares: its own level and summary kept, or a rejection's WARN."""
+    kept = robot_description_status(OK, "joint commands published", "a1.urdf", "", "x", False)
+    assert kept == (
+        OK,
+        "joint commands published",
+        {"model": "a1.urdf", "robot_description_topic": "none: x"},
+    )
+    level, summary, values = robot_description_status(
+        OK,
+        "anything",
+        "/r1/robot_description",
+        "/r2/robot_description",
+        "rejected: leg FR",
+        True,
+    )
+    assert (level, summary) == (WARN, "robot description on /r2/robot_description rejected")
+    assert values == {
+        "model": "/r1/robot_description",
+        "robot_description_topic": "/r2/robot_description: rejected: leg FR",
+    }

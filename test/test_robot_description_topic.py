@@ -242,3 +242,38 @@ def test_an_invalid_topic_parameter_stops_the_node_with_one_line(processes):
     output = processes.output(process)
     assert "cannot start: robot_description_topic 'bad//name' is not a valid topic name" in output
     assert "Traceback" not in output
+
+
+def test_the_first_diagnostics_after_a_robot_swap_count_the_period_right(processes, ros):
+    """A rejected message reported in an earlier period, then the robot is swapped: the next
+    status must neither count a negative rate nor a negative number of rejections (-1 is truthy:
+    a spurious WARN)."""
+    processes.start(node_command())
+    client = NodeClient(ros)
+    seen: list[DiagnosticArray] = []
+    ros.node.create_subscription(DiagnosticArray, "/diagnostics", seen.append, 10)
+    feet_in(client, PYBULLET_NAMES, STANDING, "trunk")
+    client.send(client.joint_state(PYBULLET_NAMES, STANDING[:11]))  # rejected: 11 positions
+    latest_diagnostics(client, "messages_position_length_mismatch", "1")
+    publish_description(ros, exported_quadruped("go2"))
+    feet_in(client, UNITREE_NAMES, STANDING, "base")
+    assert ros.spin_until(
+        lambda: any(
+            kv.key == "model" and kv.value == "/robot_description"
+            for array in seen
+            for kv in array.status[0].values
+        ),
+        10.0,
+    )
+    first = next(
+        array.status[0]
+        for array in seen
+        if {kv.key: kv.value for kv in array.status[0].values}["model"] == "/robot_description"
+    )
+    values = {kv.key: kv.value for kv in first.values}
+    assert float(values["input_rate_hz"]) >= 0.0, values
+    assert "messages_position_length_mismatch" not in values, values  # a fresh tracker's counts
+    if values["messages_received"] == "0":
+        assert first.message == "no joint_states received yet", values
+    else:
+        assert (first.level, first.message) == (DiagnosticStatus.OK, "feet published"), values

@@ -87,7 +87,6 @@ class FootTable:
     def __init__(self, topics: Sequence[str]) -> None:
         self.topics = list(topics)
         self.latest: dict[str, tuple[float, float, float, str] | None] = dict.fromkeys(LEG_NAMES)
-        self.received = dict.fromkeys(LEG_NAMES, 0)
         # (arrival time [s, monotonic], publication sequence number or None) within RATE_WINDOW_S
         self._arrivals: dict[str, deque[tuple[float, int | None]]] = {
             leg: deque() for leg in LEG_NAMES
@@ -99,7 +98,6 @@ class FootTable:
         def on_message(message: PointStamped, info: dict[str, int]) -> None:
             point = message.point
             self.latest[leg] = (point.x, point.y, point.z, message.header.frame_id)
-            self.received[leg] += 1
             arrivals = self._arrivals[leg]
             sequence = info.get("publication_sequence_number") if isinstance(info, dict) else None
             if (

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_OK
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, leg_slot
 
 if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
     from a1_leg_fk.kinematics import Quadruped
@@ -46,7 +46,7 @@ def add_parser(
         nargs="+",
         metavar="RAD",
         help=f"seed angles [rad]: the leg's {JOINTS_PER_LEG}, or all "
-        f"{JOINTS_PER_LEG * len(LEG_NAMES)} in slot order (FR, FL, RR, RL, root side first)",
+        f"{JOINT_COUNT} in slot order (FR, FL, RR, RL, root side first)",
     )
     parser.add_argument(
         "--urdf", metavar="FILE", help="robot description (default: the embedded Unitree A1)"
@@ -78,41 +78,22 @@ def report(
     quadruped: Quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None
 ) -> list[str]:
     """The lines ``a1-leg-fk ik`` prints (see the module docstring)."""
-    from a1_leg_fk.inverse import checked_point, range_middle
-    from a1_leg_fk.urdf import LegFkError
+    from a1_leg_fk.inverse import STATUS_NAMES, checked_point
 
-    slot = leg_slot(leg)
-    first = slot * JOINTS_PER_LEG
     target = checked_point(point, leg)
-    feet = quadruped.fk(
-        [range_middle(joint) for joint in quadruped.joints]
-    )  # the other legs: anywhere in reach
-    feet[slot] = target
-    full_seed = None
-    if seed is not None:
-        if len(seed) == JOINTS_PER_LEG:
-            full_seed = [0.0] * len(quadruped.joints)
-            full_seed[first : first + JOINTS_PER_LEG] = seed
-        elif len(seed) == len(quadruped.joints):
-            full_seed = list(seed)
-        else:
-            raise LegFkError(
-                f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {len(quadruped.joints)}, "
-                f"got {len(seed)}"
-            )
-    result = quadruped.ik(feet, full_seed)
+    result = quadruped.ik_leg(leg, target, leg_seed(leg, seed))
+    first = leg_slot(leg) * JOINTS_PER_LEG
     names = quadruped.joint_names[first : first + JOINTS_PER_LEG]
-    angles = result.angles[first : first + JOINTS_PER_LEG]
     lines = [
         (
             f"leg {leg}, target ({', '.join(f'{v:.6f}' for v in target)}) m in frame "
             f"'{quadruped.base_frame}' of {quadruped.model.source}"
         ),
-        f"status: {result.status[slot]}   residual: {result.residual_m[slot]:.3g} m",
+        f"status: {STATUS_NAMES[result.status]}   residual: {result.residual_m:.3g} m",
         "angles:",
         *(
             f"  {name:<24} {angle:+.9f} rad {math.degrees(angle):+11.4f} deg"
-            for name, angle in zip(names, angles)
+            for name, angle in zip(names, result.angles)
         ),
     ]
     solutions = quadruped.ik_solutions(leg, target)
@@ -126,3 +107,25 @@ def report(
         where = "inside the limits" if solution.inside_limits else "outside the limits"
         lines.append(f"  {number}. [{values}] rad  [{degrees}] deg  {where}")
     return lines
+
+
+def leg_seed(leg: str, seed: Sequence[float] | None) -> list[float] | None:
+    """``leg``'s three seed angles [rad] from ``--seed`` (the leg's 3 or all
+    :data:`JOINT_COUNT` in slot order), or ``None``; a wrong count or a non-finite value anywhere
+    raises :class:`LegFkError` naming ``--seed``.
+    """
+    from a1_leg_fk.urdf import LegFkError
+
+    if seed is None:
+        return None
+    if len(seed) not in (JOINTS_PER_LEG, JOINT_COUNT):
+        raise LegFkError(
+            f"--seed takes {JOINTS_PER_LEG} angles (leg {leg}) or {JOINT_COUNT}, got {len(seed)}"
+        )
+    for index, value in enumerate(seed):
+        if not math.isfinite(value):
+            raise LegFkError(f"--seed: value {index + 1} of {len(seed)} is {value}")
+    if len(seed) == JOINTS_PER_LEG:
+        return list(seed)
+    first = leg_slot(leg) * JOINTS_PER_LEG
+    return list(seed[first : first + JOINTS_PER_LEG])

@@ -188,9 +188,7 @@ def soak(args: argparse.Namespace) -> int:
         f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}",
         flush=True,
     )
-    node_process = start(
-        "foot_fk_node", shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log
-    )
+    node_process = start("foot_fk_node", shared.node_command(), node_log)
     collector = start(
         "collector",
         [sys.executable, __file__, "--collect", str(feet_file), str(stop)],

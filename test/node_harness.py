@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
-from functools import partial
 from pathlib import Path
 
 from conftest import RosProbe
@@ -15,7 +14,15 @@ from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command
+from shared import (
+    LEGS,
+    PYBULLET_NAMES,
+    ROOT,
+    STANDING,
+    UNITREE_NAMES,
+    ik_node_command,
+    node_command,
+)
 from std_srvs.srv import Trigger
 
 __all__ = [
@@ -25,15 +32,12 @@ __all__ = [
     "UNITREE_NAMES",
     "NodeClient",
     "distance",
+    "ik_node_command",
     "node_command",
     "package_root",
     "parse_tokens",
     "stamp_ns",
 ]
-
-node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
-"""``node_command(*ros_args)``: the installed foot_fk_node (else ``python -m``), with
-``--ros-args``."""
 
 
 class NodeClient:

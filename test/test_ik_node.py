@@ -12,23 +12,20 @@ from __future__ import annotations
 import signal
 import subprocess
 from collections import defaultdict
-from functools import partial
 
 import numpy as np
 import pytest
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped
-from node_harness import node_command, stamp_ns
+from node_harness import ik_node_command, node_command, stamp_ns
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES, installed_command
+from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
 from a1_leg_fk import ik_node, robot_source
-
-ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
 
 
 class Commands:

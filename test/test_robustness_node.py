@@ -20,7 +20,7 @@ from node_harness import NodeClient, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command, rss_mb
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, demo_command, rss_mb
 from std_srvs.srv import Trigger
 from test_fuzz_joint_state import SPECIAL_VALUES, UNKNOWN_NAMES
 
@@ -431,9 +431,7 @@ def test_node_first_then_publisher_dies_and_another_comes_back(processes, ros):
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert not any(client.positions[leg] for leg in LEGS)
     for generation in range(2):
-        publisher = processes.start(
-            installed_command("joint_state_demo", "a1_leg_fk.demo", "-p", "rate_hz:=100.0")
-        )
+        publisher = processes.start(demo_command("-p", "rate_hz:=100.0"))
         client.clear()
         assert client.wait_for_feet(20, timeout_s=20.0), (
             generation,

@@ -8,6 +8,7 @@ from collections import defaultdict
 from pathlib import Path
 
 from conftest import RosProbe
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
@@ -30,6 +31,7 @@ __all__ = [
     "PYBULLET_NAMES",
     "STANDING",
     "UNITREE_NAMES",
+    "Diagnostics",
     "NodeClient",
     "distance",
     "ik_node_command",
@@ -126,6 +128,41 @@ class NodeClient:
         return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[
             0
         ]
+
+
+class Diagnostics:
+    """A node's latest /diagnostics status, as a dict of its key/values plus its message.
+
+    ``name_suffix`` picks the status by the end of its name (the node's name comes first):
+    ``"foot kinematics"`` (foot_fk_node) or ``"foot inverse kinematics"`` (foot_ik_node). The
+    status's level (``DiagnosticStatus.OK``, ...) is :attr:`level`.
+    """
+
+    def __init__(self, probe: RosProbe, name_suffix: str = "foot kinematics") -> None:
+        self.probe = probe
+        self.name_suffix = name_suffix
+        self.received = 0
+        self.latest: dict[str, str] = {}
+        self.level: bytes | None = None
+        probe.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10)
+        )
+
+    def _on_message(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name.endswith(self.name_suffix):
+                self.latest = {kv.key: kv.value for kv in status.values}
+                self.latest["message"] = status.message
+                self.level = status.level
+                self.received += 1
+
+    def fresh(self, timeout_s: float = 5.0) -> dict[str, str]:
+        """The next status published from now on (the nodes publish once a second)."""
+        seen = self.received
+        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), (
+            "no /diagnostics from the node"
+        )
+        return dict(self.latest)
 
 
 LATCHED = QoSProfile(

@@ -15,8 +15,7 @@ import time
 
 import numpy as np
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
-from node_harness import NodeClient, node_command, stamp_ns
+from node_harness import Diagnostics, NodeClient, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
@@ -36,33 +35,6 @@ ROBOT = Quadruped.from_urdf()
 
 def open_fds(pid: int) -> int:
     return len(os.listdir(f"/proc/{pid}/fd"))
-
-
-class Diagnostics:
-    """The node's latest /diagnostics status, as a dict of its key/values plus its message."""
-
-    def __init__(self, probe) -> None:
-        self.probe = probe
-        self.received = 0
-        self.latest: dict[str, str] = {}
-        probe.node.create_subscription(
-            DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10)
-        )
-
-    def _on_message(self, msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if status.name.endswith("foot kinematics"):
-                self.latest = {kv.key: kv.value for kv in status.values}
-                self.latest["message"] = status.message
-                self.received += 1
-
-    def fresh(self, timeout_s: float = 5.0) -> dict[str, str]:
-        """The next status published from now on (the node publishes once a second)."""
-        seen = self.received
-        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), (
-            "no /diagnostics from the node"
-        )
-        return dict(self.latest)
 
 
 def start_node(processes, ros, env: dict[str, str] | None = None):

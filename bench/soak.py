@@ -103,11 +103,6 @@ def use_a_free_domain() -> IO[str] | None:
     return lock
 
 
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
-
-
 class Stream:
     """The message mix: good full messages, and ~bad_fraction of partial or bad ones."""
 
@@ -289,7 +284,7 @@ def soak(args: argparse.Namespace) -> int:
                     (
                         now - start_time,
                         shared.rss_mb(node_process.pid),
-                        cpu_seconds(node_process.pid),
+                        shared.cpu_seconds(node_process.pid),
                     )
                 )
                 next_sample += 1.0

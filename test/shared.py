@@ -9,6 +9,7 @@ The names are written from the naming conventions, independently of the package'
 from __future__ import annotations
 
 import fcntl
+import os
 import tempfile
 from functools import partial
 from pathlib import Path
@@ -41,6 +42,9 @@ ROOT = Path(__file__).resolve().parent.parent
 
 DOMAIN_IDS = range(1, 102)
 """ROS domain ids that are safe on one machine (higher ones clash with port ranges)."""
+
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
+"""Clock ticks per second: the unit of the CPU times in /proc."""
 
 DOMAIN_LOCK_FOLDER = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
 
@@ -104,3 +108,13 @@ def rss_mb(pid: int) -> float:
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024.0
     raise LookupError(f"no VmRSS for process {pid}")
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time [s] process ``pid`` has used so far, user + system (/proc/<pid>/stat: utime and
+    stime, fields 14 and 15, counted after the command name's closing parenthesis).
+
+    Raises FileNotFoundError (an OSError) when the process is gone.
+    """
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS

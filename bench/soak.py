@@ -164,6 +164,7 @@ def soak(args: argparse.Namespace) -> int:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
+    from node_harness import joint_state_message
     from rclpy.qos import QoSProfile
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
@@ -220,15 +221,6 @@ def soak(args: argparse.Namespace) -> int:
             raise RuntimeError("no /diagnostics from the node")
         return diagnostics[-1]
 
-    def message(names, positions, velocities) -> JointState:
-        msg = JointState(
-            name=list(names),
-            position=[float(v) for v in positions],
-            velocity=[float(v) for v in velocities],
-        )
-        msg.header.stamp = node.get_clock().now().to_msg()
-        return msg
-
     failures: list[str] = []
     try:
         if not verify.wait_for_service(timeout_sec=30.0) or not spin_until(
@@ -237,7 +229,12 @@ def soak(args: argparse.Namespace) -> int:
             raise RuntimeError("the node did not come up")
         if not spin_until(lambda: "ready" in (folder / "collector.log").read_text(), 60.0):
             raise RuntimeError("the foot collector did not come up")
-        publisher.publish(message(shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12))
+        now_ns = node.get_clock().now().nanoseconds
+        publisher.publish(
+            joint_state_message(
+                shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12, stamp_ns=now_ns
+            )
+        )
         spin_until(lambda: False, 0.5)
         before = fresh_diagnostics()
 
@@ -262,13 +259,12 @@ def soak(args: argparse.Namespace) -> int:
             behind = 0
             while next_due <= now and behind < 50:  # publish what is due (catch up a little)
                 good, names, positions, velocities = stream.next()
-                msg = message(names, positions, velocities)
-                stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-                if stamp <= last_stamp:  # keep stamps unique (they identify messages)
-                    stamp = last_stamp + 1
-                    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+                # Unique stamps (they identify messages): now, or just after the last one.
+                stamp = max(node.get_clock().now().nanoseconds, last_stamp + 1)
                 last_stamp = stamp
-                publisher.publish(msg)
+                publisher.publish(
+                    joint_state_message(names, positions, velocities, stamp_ns=stamp)
+                )
                 sent += 1
                 all_stamps.add(stamp)
                 if good:

@@ -1,13 +1,17 @@
 """Talking to a running ``foot_fk_node`` from a test: publish joint states, collect feet, call
-services."""
+services.
+
+Importing it claims no ROS domain (conftest's type is for the checker only), so a bench script
+(bench/soak.py) can use :func:`joint_state_message` on the domain it chose itself.
+"""
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from conftest import RosProbe
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import Parameter as ParameterMsg
@@ -26,6 +30,11 @@ from shared import (
 )
 from std_srvs.srv import Trigger
 
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from conftest import RosProbe
+
 __all__ = [
     "LEGS",
     "PYBULLET_NAMES",
@@ -35,11 +44,30 @@ __all__ = [
     "NodeClient",
     "distance",
     "ik_node_command",
+    "joint_state_message",
     "node_command",
     "package_root",
     "parse_tokens",
     "stamp_ns",
 ]
+
+
+def joint_state_message(
+    names: Iterable[str],
+    positions: Iterable[float],
+    velocities: Iterable[float] = (),
+    *,
+    stamp_ns: int,
+) -> JointState:
+    """A JointState of ``names`` with ``positions`` [rad] and ``velocities`` [rad/s], its header
+    stamped ``stamp_ns`` [ns]."""
+    msg = JointState(
+        name=list(names),
+        position=[float(v) for v in positions],
+        velocity=[float(v) for v in velocities],
+    )
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return msg
 
 
 class NodeClient:
@@ -75,14 +103,10 @@ class NodeClient:
     def joint_state(
         self, names, positions, velocities=(), stamp_ns: int | None = None
     ) -> JointState:
-        msg = JointState(
-            name=list(names),
-            position=[float(v) for v in positions],
-            velocity=[float(v) for v in velocities],
-        )
-        stamp_ns = self.probe.node.get_clock().now().nanoseconds if stamp_ns is None else stamp_ns
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
-        return msg
+        """:func:`joint_state_message` stamped ``stamp_ns`` [ns], else now (the probe's clock)."""
+        if stamp_ns is None:
+            stamp_ns = self.probe.node.get_clock().now().nanoseconds
+        return joint_state_message(names, positions, velocities, stamp_ns=stamp_ns)
 
     def wait_until_connected(self, timeout_s: float = 20.0) -> bool:
         """Publish the standing pose until the node's first FR foot comes back (discovery done)."""

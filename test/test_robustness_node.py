@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 import pytest
-from node_harness import Diagnostics, NodeClient, node_command, stamp_ns
+from node_harness import Diagnostics, NodeClient, joint_state_message, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
@@ -314,13 +314,8 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     ), [processes.output(p) for p in (*abusers, collector)]
 
     def joint_state(angles, rates) -> JointState:
-        msg = JointState(
-            name=PYBULLET_NAMES,
-            position=[float(a) for a in angles],
-            velocity=[float(r) for r in rates],
-        )
-        msg.header.stamp = ros.node.get_clock().now().to_msg()
-        return msg
+        now_ns = ros.node.get_clock().now().nanoseconds
+        return joint_state_message(PYBULLET_NAMES, angles, rates, stamp_ns=now_ns)
 
     publisher.publish(joint_state(STANDING, [0.0] * 12))  # a complete state, so verify can pass
     ros.spin_for(0.5)

@@ -18,6 +18,8 @@ from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parent.parent
 if (
     importlib.util.find_spec("a1_leg_fk") is None
@@ -27,7 +29,15 @@ sys.path.append(str(ROOT / "test"))  # appended: nothing in test/ may shadow an 
 
 import shared  # noqa: E402 (needs the path above)
 
-__all__ = ["REPEATS", "ROOT", "SPEED_POSE", "machine", "median_seconds_per_call", "shared"]
+__all__ = [
+    "REPEATS",
+    "ROOT",
+    "SPEED_POSE",
+    "machine",
+    "median_seconds_per_call",
+    "shared",
+    "trig_floor",
+]
 
 SPEED_POSE = [0.05, 0.8, -1.5, -0.05, 0.8, -1.5, 0.05, 0.9, -1.6, -0.05, 0.9, -1.6]
 """The configuration the speed benchmarks time [rad]: standing, with hip roll and unequal legs."""
@@ -64,20 +74,37 @@ def machine() -> str:
 
 
 def median_seconds_per_call(
-    functions: dict[str, Callable[[], object]], repeats: int = REPEATS, target_s: float = 0.05
+    functions: dict[str, Callable[[], object]],
+    repeats: int = REPEATS,
+    target_s: float = 0.05,
+    *,
+    calibrate: bool = True,
 ) -> dict[str, float]:
     """Median time per call [s] of each function over ``repeats`` runs of about ``target_s`` each.
 
     The runs are interleaved (one run of every function per round), so a slow spell of the
-    machine hits all of them alike and the ratios stay fair.
+    machine hits all of them alike and the ratios stay fair. ``calibrate=False``: one call per
+    run, no calibration, for calls known to take longer than ``target_s`` (a batch of 10^6).
     """
     timers = {name: timeit.Timer(function) for name, function in functions.items()}
-    numbers = {}
-    for name, timer in timers.items():
-        number, elapsed = timer.autorange()
-        numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
+    numbers = dict.fromkeys(timers, 1)
+    if calibrate:
+        for name, timer in timers.items():
+            number, elapsed = timer.autorange()
+            numbers[name] = max(1, int(number * target_s / max(elapsed, 1e-9)))
     runs: dict[str, list[float]] = {name: [] for name in functions}
     for _ in range(repeats):
         for name, timer in timers.items():
             runs[name].append(timer.timeit(numbers[name]) / numbers[name])
     return {name: statistics.median(times) for name, times in runs.items()}
+
+
+def trig_floor(angles: np.ndarray) -> Callable[[], None]:
+    """A call of ``np.sin`` and ``np.cos`` on ``angles`` [rad] alone: the floor under the time of
+    any method that needs their trigonometry."""
+
+    def sin_and_cos() -> None:
+        np.sin(angles)
+        np.cos(angles)
+
+    return sin_and_cos

@@ -18,12 +18,10 @@ Every reference is first checked against ``Quadruped.fk`` on the configuration i
 from __future__ import annotations
 
 import math
-import statistics
-import timeit
 from collections.abc import Callable
 
 import numpy as np
-from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared
+from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared, trig_floor
 
 from a1_leg_fk.kinematics import Quadruped
 
@@ -175,15 +173,12 @@ def main() -> None:
         atol=1e-12,
     )
 
-    def trig_only() -> None:
-        np.sin(batch)
-        np.cos(batch)
-
-    batch_runs, trig_runs = [], []
-    for _ in range(BATCH_REPEATS):  # interleaved, as above
-        batch_runs.append(timeit.timeit(lambda: quadruped.fk_batch(batch), number=1))
-        trig_runs.append(timeit.timeit(trig_only, number=1))
-    batch_seconds, trig_seconds = statistics.median(batch_runs), statistics.median(trig_runs)
+    batch_runs = median_seconds_per_call(  # interleaved, as above
+        {"fk_batch": lambda: quadruped.fk_batch(batch), "trig": trig_floor(batch)},
+        repeats=BATCH_REPEATS,
+        calibrate=False,
+    )
+    batch_seconds, trig_seconds = batch_runs["fk_batch"], batch_runs["trig"]
     throughput = BATCH_ROWS / batch_seconds / 1e6
     print(
         f"\nbatch of {BATCH_ROWS:,} configurations, (N, 12) float64 (median of {BATCH_REPEATS} "

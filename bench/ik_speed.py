@@ -15,11 +15,8 @@ Every timed answer is first checked: the angles of ``ik`` reproduce the targets 
 
 from __future__ import annotations
 
-import statistics
-import timeit
-
 import numpy as np
-from common import SPEED_POSE, machine, median_seconds_per_call
+from common import SPEED_POSE, machine, median_seconds_per_call, trig_floor
 
 from a1_leg_fk import inverse
 from a1_leg_fk.kinematics import Quadruped
@@ -73,16 +70,15 @@ def main() -> None:
         quadruped.fk_batch(check.angles) - targets
     ).max() <= 1e-9
 
-    def trig_only() -> None:
-        np.sin(angles)
-        np.cos(angles)
-
-    runs: dict[str, list[float]] = {"ik_batch": [], "fk_batch": [], "trig": []}
-    for _ in range(BATCH_REPEATS):  # interleaved
-        runs["ik_batch"].append(timeit.timeit(lambda: quadruped.ik_batch(targets), number=1))
-        runs["fk_batch"].append(timeit.timeit(lambda: quadruped.fk_batch(angles), number=1))
-        runs["trig"].append(timeit.timeit(trig_only, number=1))
-    seconds = {name: statistics.median(values) for name, values in runs.items()}
+    seconds = median_seconds_per_call(
+        {
+            "ik_batch": lambda: quadruped.ik_batch(targets),
+            "fk_batch": lambda: quadruped.fk_batch(angles),
+            "trig": trig_floor(angles),
+        },
+        repeats=BATCH_REPEATS,
+        calibrate=False,
+    )
     throughput = BATCH_ROWS / seconds["ik_batch"] / 1e6
     print(
         f"\nbatch of {BATCH_ROWS:,} in-limit configurations' feet, (N, 4, 3)"

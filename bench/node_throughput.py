@@ -49,13 +49,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from common import ROOT, machine
+from common import ROOT, machine, shared
 
 from a1_leg_fk.cli import common
 
 HERE = Path(__file__).resolve().parent
 ROLES = HERE / "throughput_roles.py"
-CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 LOSS_LIMIT = 0.001  # a ramp step passes below 0.1 % input and foot loss
 RATE_KEPT = 0.97  # ... and when the generator achieved 97 % of the step's rate
 DRAIN_S = 0.4  # after a phase, for the last outputs to arrive
@@ -83,7 +82,7 @@ def machine_busy_s() -> float:
     """CPU seconds the whole machine has been busy (all cores; /proc/stat, idle and iowait
     excluded)."""
     fields = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:9]]
-    return (sum(fields) - fields[3] - fields[4]) / CLOCK_TICKS
+    return (sum(fields) - fields[3] - fields[4]) / shared.CLOCK_TICKS
 
 
 class Child(common.Child):
@@ -142,10 +141,9 @@ class Child(common.Child):
 
     def cpu_s(self) -> float:
         try:
-            fields = Path(f"/proc/{self.process.pid}/stat").read_text().rsplit(")", 1)[1].split()
+            return shared.cpu_seconds(self.process.pid)
         except OSError:
             return float("nan")
-        return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # utime, stime (fields 14, 15)
 
     def timed_stop(self, sig: int = signal.SIGINT) -> tuple[int | None, float]:
         """Stop it; (exit code, None if it had to be killed; seconds from the signal to the

@@ -103,11 +103,6 @@ def use_a_free_domain() -> IO[str] | None:
     return lock
 
 
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
-
-
 class Stream:
     """The message mix: good full messages, and ~bad_fraction of partial or bad ones."""
 
@@ -169,6 +164,7 @@ def soak(args: argparse.Namespace) -> int:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
+    from node_harness import joint_state_message
     from rclpy.qos import QoSProfile
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
@@ -188,9 +184,7 @@ def soak(args: argparse.Namespace) -> int:
         f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}; logs in {folder}",
         flush=True,
     )
-    node_process = start(
-        "foot_fk_node", shared.installed_command("foot_fk_node", "a1_leg_fk.node"), node_log
-    )
+    node_process = start("foot_fk_node", shared.node_command(), node_log)
     collector = start(
         "collector",
         [sys.executable, __file__, "--collect", str(feet_file), str(stop)],
@@ -227,15 +221,6 @@ def soak(args: argparse.Namespace) -> int:
             raise RuntimeError("no /diagnostics from the node")
         return diagnostics[-1]
 
-    def message(names, positions, velocities) -> JointState:
-        msg = JointState(
-            name=list(names),
-            position=[float(v) for v in positions],
-            velocity=[float(v) for v in velocities],
-        )
-        msg.header.stamp = node.get_clock().now().to_msg()
-        return msg
-
     failures: list[str] = []
     try:
         if not verify.wait_for_service(timeout_sec=30.0) or not spin_until(
@@ -244,7 +229,12 @@ def soak(args: argparse.Namespace) -> int:
             raise RuntimeError("the node did not come up")
         if not spin_until(lambda: "ready" in (folder / "collector.log").read_text(), 60.0):
             raise RuntimeError("the foot collector did not come up")
-        publisher.publish(message(shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12))
+        now_ns = node.get_clock().now().nanoseconds
+        publisher.publish(
+            joint_state_message(
+                shared.PYBULLET_NAMES, shared.STANDING, [0.0] * 12, stamp_ns=now_ns
+            )
+        )
         spin_until(lambda: False, 0.5)
         before = fresh_diagnostics()
 
@@ -269,13 +259,12 @@ def soak(args: argparse.Namespace) -> int:
             behind = 0
             while next_due <= now and behind < 50:  # publish what is due (catch up a little)
                 good, names, positions, velocities = stream.next()
-                msg = message(names, positions, velocities)
-                stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-                if stamp <= last_stamp:  # keep stamps unique (they identify messages)
-                    stamp = last_stamp + 1
-                    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+                # Unique stamps (they identify messages): now, or just after the last one.
+                stamp = max(node.get_clock().now().nanoseconds, last_stamp + 1)
                 last_stamp = stamp
-                publisher.publish(msg)
+                publisher.publish(
+                    joint_state_message(names, positions, velocities, stamp_ns=stamp)
+                )
                 sent += 1
                 all_stamps.add(stamp)
                 if good:
@@ -291,7 +280,7 @@ def soak(args: argparse.Namespace) -> int:
                     (
                         now - start_time,
                         shared.rss_mb(node_process.pid),
-                        cpu_seconds(node_process.pid),
+                        shared.cpu_seconds(node_process.pid),
                     )
                 )
                 next_sample += 1.0

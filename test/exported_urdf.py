@@ -3,20 +3,24 @@ tests.
 
 Unitree's own descriptions (unitreerobotics/unitree_ros, ``robots/*_description/urdf/``) were read
 to learn their structure; none of their text is copied here. What they do that a hand-written URDF
-does not, each switchable so that a test can isolate it:
+does not, always present:
 
 - an XML declaration, then a SolidWorks-exporter comment header with ``key: value`` text;
-- CRLF line endings;
 - ``<axis xyz="0 0 0"/>`` (and ``dont_collapse="true"``) on fixed joints;
-- a shin collision link under the calf (``X_calflower`` -> ``X_calflower1``, Go2): a second leaf
-  link per leg with three movable joints above it, beside the real foot ``X_foot``;
-- rotor links (``X_hip_rotor``, ``X_thigh_rotor``, ``X_calf_rotor``, B2): fixed leaves with two,
-  one or no movable joint above them;
 - sensor and camera links (imu, lidar/radar, depth cameras with odd rpy), zero or 1e-15 masses,
   links with no ``<inertial>``;
 - ``<gazebo>`` blocks (plugins, ``<visual>`` inside ``<gazebo reference>``) and ``<transmission>``
   blocks whose ``<joint>`` children are not joints of the tree;
-- visuals that are ``package://`` meshes of packages that are not installed.
+- visuals that are ``package://`` meshes of packages that are not installed (unless
+  ``meshes=False``).
+
+Switchable, so that a test can isolate it:
+
+- CRLF line endings;
+- a shin collision link under the calf (``X_calflower`` -> ``X_calflower1``, Go2): a second leaf
+  link per leg with three movable joints above it, beside the real foot ``X_foot``;
+- rotor links (``X_hip_rotor``, ``X_thigh_rotor``, ``X_calf_rotor``, B2): fixed leaves with two,
+  one or no movable joint above them.
 
 Geometry: the published facts of each robot (origins, lengths, limits), listed in :data:`ROBOTS`.
 """
@@ -102,13 +106,9 @@ def exported_quadruped(
     robot: str = "go2",
     *,
     root: str = "base",
-    header: bool = True,
     crlf: bool = False,
-    zero_axis_on_fixed: bool = True,
     shin_links: bool = True,
     rotors: bool = False,
-    sensors: bool = True,
-    gazebo: bool = True,
     meshes: bool = True,
     mesh_folder: str = "package://not_installed_description/dae",
 ) -> str:
@@ -119,7 +119,7 @@ def exported_quadruped(
     ``mesh_folder`` is where the meshes would be: a ``package://`` URI or a file path.
     """
     geometry = ROBOTS[robot]
-    parts = [HEADER if header else "", f'<robot\n  name="{robot}_like_description">\n']
+    parts = [HEADER, f'<robot\n  name="{robot}_like_description">\n']
     parts.append(
         _link(
             root,
@@ -128,14 +128,11 @@ def exported_quadruped(
             com="0.021112 0 -0.005366",
         )
     )
-    if sensors:
-        parts.append(_sensors(root, zero_axis_on_fixed))
+    parts.append(_sensors(root))
     parts.extend(
-        _leg(leg, root, geometry, zero_axis_on_fixed, shin_links, rotors, meshes, mesh_folder)
-        for leg in LEGS
+        _leg(leg, root, geometry, shin_links, rotors, meshes, mesh_folder) for leg in LEGS
     )
-    if gazebo:
-        parts.append(_gazebo_and_transmissions(root))
+    parts.append(_gazebo_and_transmissions(root))
     parts.append("</robot>\n")
     text = "".join(parts)
     return text.replace("\n", "\r\n") if crlf else text
@@ -145,7 +142,6 @@ def _leg(
     leg: str,
     root: str,
     g: LegGeometry,
-    zero_axis: bool,
     shin_links: bool,
     rotors: bool,
     meshes: bool,
@@ -198,7 +194,6 @@ def _leg(
             f"{leg}_foot",
             f"0 0 {-g.calf_length!r}",
             "0 0 0",
-            zero_axis,
             dont_collapse=True,
         ),
     ]
@@ -219,7 +214,6 @@ def _leg(
                 f"{leg}_calflower",
                 "0.020 0 -0.148",
                 "0 0.05 0",
-                zero_axis,
             ),
             (
                 f'  <link\n    name="{leg}_calflower1">\n'
@@ -236,7 +230,6 @@ def _leg(
                 f"{leg}_calflower1",
                 "-0.01 0 -0.04",
                 "0 0.48 0",
-                zero_axis,
             ),
         ]
     if rotors:  # fixed leaves with 0, 1 and 2 movable joints above them; written with no <axis>
@@ -265,7 +258,7 @@ def _leg(
     return "".join(text)
 
 
-def _sensors(root: str, zero_axis: bool) -> str:
+def _sensors(root: str) -> str:
     links = []
     for name, origin, rpy, mass in (
         ("imu", "-0.02557 0 0.04232", "0 0 0", "0"),
@@ -276,7 +269,7 @@ def _sensors(root: str, zero_axis: bool) -> str:
         links.append(
             _link(name, "", mass=mass, com="0 0 0", inertia="0" if mass == "0" else "1.68E-27")
         )
-        links.append(_fixed(f"{name}_joint", root, name, origin, rpy, zero_axis))
+        links.append(_fixed(f"{name}_joint", root, name, origin, rpy))
     return "".join(links)
 
 
@@ -356,16 +349,10 @@ def _revolute(
 
 
 def _fixed(
-    name: str,
-    parent: str,
-    child: str,
-    xyz: str,
-    rpy: str,
-    zero_axis: bool,
-    dont_collapse: bool = False,
+    name: str, parent: str, child: str, xyz: str, rpy: str, dont_collapse: bool = False
 ) -> str:
+    """A fixed joint, written with the exporters' ``<axis xyz="0 0 0"/>``."""
     collapse = ' dont_collapse="true"' if dont_collapse else ""
-    axis = '    <axis\n      xyz="0 0 0" />\n' if zero_axis else ""
     return (
         f'  <joint\n    name="{name}"\n'
         f'    type="fixed"{collapse}>\n'
@@ -376,7 +363,8 @@ def _fixed(
         f'      link="{parent}" />\n'
         "    <child\n"
         f'      link="{child}" />\n'
-        f"{axis}  </joint>\n"
+        '    <axis\n      xyz="0 0 0" />\n'
+        "  </joint>\n"
     )
 
 

@@ -1,39 +1,73 @@
 """Talking to a running ``foot_fk_node`` from a test: publish joint states, collect feet, call
-services."""
+services.
+
+Importing it claims no ROS domain (conftest's type is for the checker only), so a bench script
+(bench/soak.py) can use :func:`joint_state_message` on the domain it chose itself.
+"""
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
-from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from conftest import RosProbe
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command
+from shared import (
+    LEGS,
+    PYBULLET_NAMES,
+    ROOT,
+    STANDING,
+    UNITREE_NAMES,
+    ik_node_command,
+    node_command,
+)
 from std_srvs.srv import Trigger
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    from conftest import RosProbe
 
 __all__ = [
     "LEGS",
     "PYBULLET_NAMES",
     "STANDING",
     "UNITREE_NAMES",
+    "Diagnostics",
     "NodeClient",
     "distance",
+    "ik_node_command",
+    "joint_state_message",
     "node_command",
     "package_root",
     "parse_tokens",
     "stamp_ns",
 ]
 
-node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
-"""``node_command(*ros_args)``: the installed foot_fk_node (else ``python -m``), with
-``--ros-args``."""
+
+def joint_state_message(
+    names: Iterable[str],
+    positions: Iterable[float],
+    velocities: Iterable[float] = (),
+    *,
+    stamp_ns: int,
+) -> JointState:
+    """A JointState of ``names`` with ``positions`` [rad] and ``velocities`` [rad/s], its header
+    stamped ``stamp_ns`` [ns]."""
+    msg = JointState(
+        name=list(names),
+        position=[float(v) for v in positions],
+        velocity=[float(v) for v in velocities],
+    )
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return msg
 
 
 class NodeClient:
@@ -69,14 +103,10 @@ class NodeClient:
     def joint_state(
         self, names, positions, velocities=(), stamp_ns: int | None = None
     ) -> JointState:
-        msg = JointState(
-            name=list(names),
-            position=[float(v) for v in positions],
-            velocity=[float(v) for v in velocities],
-        )
-        stamp_ns = self.probe.node.get_clock().now().nanoseconds if stamp_ns is None else stamp_ns
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
-        return msg
+        """:func:`joint_state_message` stamped ``stamp_ns`` [ns], else now (the probe's clock)."""
+        if stamp_ns is None:
+            stamp_ns = self.probe.node.get_clock().now().nanoseconds
+        return joint_state_message(names, positions, velocities, stamp_ns=stamp_ns)
 
     def wait_until_connected(self, timeout_s: float = 20.0) -> bool:
         """Publish the standing pose until the node's first FR foot comes back (discovery done)."""
@@ -122,6 +152,41 @@ class NodeClient:
         return self.probe.call(self.parameters_client, request, timeout_s, attempt_s=10.0).results[
             0
         ]
+
+
+class Diagnostics:
+    """A node's latest /diagnostics status, as a dict of its key/values plus its message.
+
+    ``name_suffix`` picks the status by the end of its name (the node's name comes first):
+    ``"foot kinematics"`` (foot_fk_node) or ``"foot inverse kinematics"`` (foot_ik_node). The
+    status's level (``DiagnosticStatus.OK``, ...) is :attr:`level`.
+    """
+
+    def __init__(self, probe: RosProbe, name_suffix: str = "foot kinematics") -> None:
+        self.probe = probe
+        self.name_suffix = name_suffix
+        self.received = 0
+        self.latest: dict[str, str] = {}
+        self.level: bytes | None = None
+        probe.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10)
+        )
+
+    def _on_message(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name.endswith(self.name_suffix):
+                self.latest = {kv.key: kv.value for kv in status.values}
+                self.latest["message"] = status.message
+                self.level = status.level
+                self.received += 1
+
+    def fresh(self, timeout_s: float = 5.0) -> dict[str, str]:
+        """The next status published from now on (the nodes publish once a second)."""
+        seen = self.received
+        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), (
+            "no /diagnostics from the node"
+        )
+        return dict(self.latest)
 
 
 LATCHED = QoSProfile(

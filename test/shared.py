@@ -1,15 +1,17 @@
 """What the tests and the bench/ scripts share: the A1's names and standing pose, the machine-wide
 ROS-domain lock, and the package's installed executables.
 
-Standard library only (no pytest, no ROS, no a1_leg_fk), so a bench script imports it as it is.
+Standard library only at import time (no pytest, no ROS, no a1_leg_fk), so a bench script imports
+it as it is; the commands ask the package's own ``child_command`` where its scripts are.
 The names are written from the naming conventions, independently of the package's own tables.
 """
 
 from __future__ import annotations
 
 import fcntl
-import sys
+import os
 import tempfile
+from functools import partial
 from pathlib import Path
 from typing import IO
 
@@ -41,6 +43,9 @@ ROOT = Path(__file__).resolve().parent.parent
 DOMAIN_IDS = range(1, 102)
 """ROS domain ids that are safe on one machine (higher ones clash with port ranges)."""
 
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
+"""Clock ticks per second: the unit of the CPU times in /proc."""
+
 DOMAIN_LOCK_FOLDER = Path(tempfile.gettempdir()) / "a1_leg_fk_test_domains"
 
 
@@ -71,11 +76,27 @@ def known(value: float | None) -> float:
 
 
 def installed_command(script: str, module: str, *ros_args: str) -> list[str]:
-    """The console script ``script`` installed beside this Python (as ``ros2 run`` would start it),
-    else ``python -m module``; followed by ``--ros-args ros_args...`` when any are given."""
-    installed = Path(sys.executable).parent / script
-    command = [str(installed)] if installed.exists() else [sys.executable, "-m", module]
-    return command + (["--ros-args", *ros_args] if ros_args else [])
+    """The console script ``script`` installed beside this Python (or in colcon's
+    ``lib/a1_leg_fk/``, as ``ros2 run`` would start it), else ``python -m module``, as
+    :func:`a1_leg_fk.cli.common.child_command` finds it for ``a1-leg-fk demo``; followed by
+    ``--ros-args ros_args...`` when any are given."""
+    from a1_leg_fk.cli.common import ROS_ARGS_FLAG, child_command
+
+    return child_command(script, module) + ([ROS_ARGS_FLAG, *ros_args] if ros_args else [])
+
+
+node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
+"""``node_command(*ros_args)``: the installed foot_fk_node (its script enters
+``a1_leg_fk.executables``), else ``python -m a1_leg_fk.node``."""
+
+ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
+"""``ik_node_command(*ros_args)``: the installed foot_ik_node, else ``python -m``."""
+
+demo_command = partial(installed_command, "joint_state_demo", "a1_leg_fk.demo")
+"""``demo_command(*ros_args)``: the installed joint_state_demo, else ``python -m``."""
+
+cli_command = partial(installed_command, "a1-leg-fk", "a1_leg_fk.cli")
+"""``cli_command(*ros_args)``: the installed ``a1-leg-fk``, else ``python -m a1_leg_fk.cli``."""
 
 
 def rss_mb(pid: int) -> float:
@@ -87,3 +108,13 @@ def rss_mb(pid: int) -> float:
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024.0
     raise LookupError(f"no VmRSS for process {pid}")
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time [s] process ``pid`` has used so far, user + system (/proc/<pid>/stat: utime and
+    stime, fields 14 and 15, counted after the command name's closing parenthesis).
+
+    Raises FileNotFoundError (an OSError) when the process is gone.
+    """
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS

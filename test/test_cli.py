@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from shared import LEGS, installed_command
+from shared import LEGS, cli_command, node_command
 from shared import STAND_LEG as STAND
 
 from a1_leg_fk.cli import build_parser, main
@@ -24,8 +24,8 @@ TWISTED = (0.1, 0.5, -1.2, -0.2, 1.0, -2.0, 0.3, 0.2, -1.0, -0.1, 1.2, -1.8)
 ROW = re.compile(r"^(FR|FL|RR|RL)\s+(-?\d+\.\d)\s+(-?\d+\.\d)\s+(-?\d+\.\d)\s", re.MULTILINE)
 
 
-CLI = installed_command("a1-leg-fk", "a1_leg_fk.cli")
-NODE = installed_command("foot_fk_node", "a1_leg_fk.node")
+CLI = cli_command()
+NODE = node_command()
 
 
 def stand_by_hand_mm(leg: str) -> tuple[float, float, float]:

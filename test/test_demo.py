@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from shared import PYBULLET_NAMES, UNITREE_NAMES, installed_command, known
+from shared import PYBULLET_NAMES, UNITREE_NAMES, demo_command, known
 
 from a1_leg_fk.demo import joint_names
 from a1_leg_fk.kinematics import Quadruped
@@ -18,7 +18,7 @@ ROBOT = Quadruped.from_urdf()
 WINDOW_S = 2.0
 
 
-DEMO = installed_command("joint_state_demo", "a1_leg_fk.demo")
+DEMO = demo_command()
 
 
 def test_joint_names_for_both_namings() -> None:

@@ -17,8 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from node_harness import node_command
-from shared import installed_command
+from shared import demo_command, ik_node_command, node_command
 
 DELAYS_S = (0.0, 0.05, 0.15, 0.3, 0.5, 0.8)
 """After the SIGTERM handler is in place [s]: the imports, rclpy.init, the node's construction,
@@ -28,8 +27,8 @@ CATCH_TIMEOUT_S = 10.0
 
 EXECUTABLES = {
     "foot_fk_node": node_command(),
-    "foot_ik_node": installed_command("foot_ik_node", "a1_leg_fk.ik_node"),
-    "joint_state_demo": installed_command("joint_state_demo", "a1_leg_fk.demo"),
+    "foot_ik_node": ik_node_command(),
+    "joint_state_demo": demo_command(),
 }
 
 

@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 import pytest
+from conftest import raises_leg_fk_error
 from shared import LEGS, known
 
 from a1_leg_fk.gait_analysis import ContactThresholds, analyze_gait, detect_contacts
-from a1_leg_fk.urdf import LegFkError
 
 PHASES = {  # touchdown phase of FR, FL, RR, RL (cycles); walk: lateral sequence LH, LF, RH, RF
     "trot": (0.0, 0.5, 0.5, 0.0),
@@ -186,7 +186,7 @@ def test_unsorted_stamps_are_sorted_or_rejected() -> None:
     contacts, shuffled = analyze_gait(stamps[order], feet[order])
     assert shuffled.legs == reference.legs
     assert any("sorted" in note for note in contacts.notes)
-    with pytest.raises(LegFkError, match="not increasing"):
+    with raises_leg_fk_error("not increasing"):
         detect_contacts(stamps[order], feet[order], unsorted="reject")
     repeated = np.concatenate((stamps[:10], stamps[9:]))
     contacts = detect_contacts(repeated, np.concatenate((feet[:10], feet[9:])))
@@ -195,11 +195,11 @@ def test_unsorted_stamps_are_sorted_or_rejected() -> None:
 
 def test_too_few_samples_and_bad_shapes() -> None:
     stamps, feet, _ = synthetic("trot", 0.5, 100, seconds=1.0)
-    with pytest.raises(LegFkError, match="too few samples"):
+    with raises_leg_fk_error("too few samples"):
         detect_contacts(stamps[:4], feet[:4])
-    with pytest.raises(LegFkError, match=r"\(N, 4, 3\)"):
+    with raises_leg_fk_error("(N, 4, 3)"):
         detect_contacts(stamps, feet[:, :3])
-    with pytest.raises(LegFkError, match="off >= on"):
+    with raises_leg_fk_error("off >= on"):
         ContactThresholds(height_on_m=0.05, height_off_m=0.03)
 
 

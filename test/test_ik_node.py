@@ -12,23 +12,19 @@ from __future__ import annotations
 import signal
 import subprocess
 from collections import defaultdict
-from functools import partial
 
 import numpy as np
 import pytest
 import yaml
-from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped
-from node_harness import node_command, stamp_ns
+from node_harness import Diagnostics, ik_node_command, node_command, stamp_ns
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES, installed_command
+from shared import LEGS, PYBULLET_NAMES, ROOT, UNITREE_NAMES
 from test_demo import DEMO
 from test_kinematics import a1_foot_closed_form
 
 from a1_leg_fk import ik_node, robot_source
-
-ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
 
 
 class Commands:
@@ -36,12 +32,9 @@ class Commands:
 
     def __init__(self, ros) -> None:
         self.commands: list[JointState] = []
-        self.diagnostics: list[DiagnosticArray] = []
+        self.diagnostics = Diagnostics(ros, "foot inverse kinematics")
         ros.node.create_subscription(
             JointState, "joint_commands", self.commands.append, QoSProfile(depth=5000)
-        )
-        ros.node.create_subscription(
-            DiagnosticArray, "/diagnostics", self.diagnostics.append, QoSProfile(depth=100)
         )
         self.publishers = {
             leg: ros.node.create_publisher(
@@ -49,13 +42,6 @@ class Commands:
             )
             for leg in LEGS
         }
-
-    def ik_values(self) -> dict[str, str]:
-        for array in reversed(self.diagnostics):
-            for status in array.status:
-                if "inverse kinematics" in status.name:
-                    return {value.key: value.value for value in status.values}
-        return {}
 
 
 @pytest.mark.slow
@@ -99,8 +85,8 @@ def test_closed_loop_demo_fk_ik_returns_the_demo_angles(processes, ros) -> None:
         len(demo_states),
         len(commands.commands),
     )
-    assert ros.spin_until(lambda: commands.ik_values().get("FR_ok", "0") != "0", 5.0)
-    values = commands.ik_values()
+    assert ros.spin_until(lambda: commands.diagnostics.latest.get("FR_ok", "0") != "0", 5.0)
+    values = commands.diagnostics.latest
     assert values["FR_unreachable"] == values["FR_outside_limits"] == "0"
     for process in (demo, fk, ik):
         assert processes.interrupt(process) == 0, processes.output(process)
@@ -141,7 +127,9 @@ def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:
     assert send_until_answered("RL", target, 1)
     assert list(commands.commands[0].name) == UNITREE_NAMES[9:12]
     assert np.isfinite(commands.commands[0].position).all()
-    assert ros.spin_until(lambda: commands.ik_values().get("RL_unreachable", "0") != "0", 5.0)
+    assert ros.spin_until(
+        lambda: commands.diagnostics.latest.get("RL_unreachable", "0") != "0", 5.0
+    )
 
     # A foreign frame: nothing published, a warning naming the frame.
     commands.commands.clear()
@@ -150,7 +138,9 @@ def test_own_targets_names_stamps_statuses_and_frames(processes, ros) -> None:
         commands.publishers["FL"].publish(target)
         ros.spin_for(0.1)
     assert not commands.commands
-    assert ros.spin_until(lambda: commands.ik_values().get("rejected_frame", "0") != "0", 5.0)
+    assert ros.spin_until(
+        lambda: commands.diagnostics.latest.get("rejected_frame", "0") != "0", 5.0
+    )
     assert processes.interrupt(ik) == 0
     output = processes.output(ik)
     assert "'odom'" in output and "unreachable" in output and "Traceback" not in output

@@ -14,12 +14,12 @@ import numpy as np
 import pybullet_data
 import pytest
 from conftest import Processes
-from diagnostic_msgs.msg import DiagnosticArray
 from node_harness import (
     LEGS,
     PYBULLET_NAMES,
     STANDING,
     UNITREE_NAMES,
+    Diagnostics,
     NodeClient,
     distance,
     node_command,
@@ -382,9 +382,8 @@ def test_signal_exits_zero_quickly_without_traceback(a1_node, sig):
 def test_diagnostics_and_markers_reach_subscribers(a1_node):
     client = a1_node.client
     node = client.probe.node
-    diagnostics: list[DiagnosticArray] = []
+    diagnostics = Diagnostics(client.probe)
     markers: list[MarkerArray] = []
-    node.create_subscription(DiagnosticArray, "/diagnostics", diagnostics.append, 10)
     node.create_subscription(MarkerArray, "foot_markers", markers.append, 10)
     client.send(client.joint_state(PYBULLET_NAMES, STANDING[:11]))  # rejected
     client.probe.spin_for(0.1)
@@ -393,12 +392,10 @@ def test_diagnostics_and_markers_reach_subscribers(a1_node):
         bool
     ):  # keep feeding good joint states until a marker array and a diagnostics report came
         client.send(client.joint_state(PYBULLET_NAMES, STANDING))
-        return bool(markers) and any(
-            _diagnostic_values(d).get("feet_published", "0") != "0" for d in diagnostics
-        )
+        return bool(markers) and diagnostics.latest.get("feet_published", "0") != "0"
 
     assert client.probe.spin_until(fed, 10.0)
-    values = _diagnostic_values(diagnostics[-1])
+    values = diagnostics.latest
     assert int(values["messages_received"]) >= int(values["messages_accepted"]) >= 1
     assert values["messages_position_length_mismatch"] == "1"
     assert values["joints_outside_limits"] == "none"
@@ -413,10 +410,6 @@ def test_diagnostics_and_markers_reach_subscribers(a1_node):
     fr_strip = next(m for m in strips if m.ns.endswith("FR"))
     assert distance(fr_strip.points[0], (0.183, -0.047, 0.0)) < 1e-9  # the hip joint's URDF origin
     assert distance(fr_strip.points[-1], STANDING_FR) < 1e-4
-
-
-def _diagnostic_values(array: DiagnosticArray) -> dict[str, str]:
-    return {kv.key: kv.value for status in array.status for kv in status.values}
 
 
 def test_joint_states_qos_can_be_overridden_to_reliable(processes, ros):

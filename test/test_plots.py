@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from shared import installed_command
+from shared import cli_command
 
 from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
@@ -18,7 +18,7 @@ from a1_leg_fk.urdf import LegFkError
 ROBOT = Quadruped.from_urdf()
 
 
-CLI = installed_command("a1-leg-fk", "a1_leg_fk.cli")
+CLI = cli_command()
 
 
 def load_png(path: Path) -> np.ndarray:

@@ -15,12 +15,11 @@ import time
 
 import numpy as np
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
-from node_harness import NodeClient, node_command, stamp_ns
+from node_harness import Diagnostics, NodeClient, joint_state_message, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
-from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, installed_command, rss_mb
+from shared import LEGS, PYBULLET_NAMES, ROOT, STANDING, UNITREE_NAMES, demo_command, rss_mb
 from std_srvs.srv import Trigger
 from test_fuzz_joint_state import SPECIAL_VALUES, UNKNOWN_NAMES
 
@@ -36,33 +35,6 @@ ROBOT = Quadruped.from_urdf()
 
 def open_fds(pid: int) -> int:
     return len(os.listdir(f"/proc/{pid}/fd"))
-
-
-class Diagnostics:
-    """The node's latest /diagnostics status, as a dict of its key/values plus its message."""
-
-    def __init__(self, probe) -> None:
-        self.probe = probe
-        self.received = 0
-        self.latest: dict[str, str] = {}
-        probe.node.create_subscription(
-            DiagnosticArray, "/diagnostics", self._on_message, QoSProfile(depth=10)
-        )
-
-    def _on_message(self, msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if status.name.endswith("foot kinematics"):
-                self.latest = {kv.key: kv.value for kv in status.values}
-                self.latest["message"] = status.message
-                self.received += 1
-
-    def fresh(self, timeout_s: float = 5.0) -> dict[str, str]:
-        """The next status published from now on (the node publishes once a second)."""
-        seen = self.received
-        assert self.probe.spin_until(lambda: self.received > seen, timeout_s), (
-            "no /diagnostics from the node"
-        )
-        return dict(self.latest)
 
 
 def start_node(processes, ros, env: dict[str, str] | None = None):
@@ -342,13 +314,8 @@ def test_verify_fk_from_5_clients_while_joint_states_stream_at_500_hz(processes,
     ), [processes.output(p) for p in (*abusers, collector)]
 
     def joint_state(angles, rates) -> JointState:
-        msg = JointState(
-            name=PYBULLET_NAMES,
-            position=[float(a) for a in angles],
-            velocity=[float(r) for r in rates],
-        )
-        msg.header.stamp = ros.node.get_clock().now().to_msg()
-        return msg
+        now_ns = ros.node.get_clock().now().nanoseconds
+        return joint_state_message(PYBULLET_NAMES, angles, rates, stamp_ns=now_ns)
 
     publisher.publish(joint_state(STANDING, [0.0] * 12))  # a complete state, so verify can pass
     ros.spin_for(0.5)
@@ -431,9 +398,7 @@ def test_node_first_then_publisher_dies_and_another_comes_back(processes, ros):
     assert client.verify_client.wait_for_service(timeout_sec=20.0), processes.output(node)
     assert not any(client.positions[leg] for leg in LEGS)
     for generation in range(2):
-        publisher = processes.start(
-            installed_command("joint_state_demo", "a1_leg_fk.demo", "-p", "rate_hz:=100.0")
-        )
+        publisher = processes.start(demo_command("-p", "rate_hz:=100.0"))
         client.clear()
         assert client.wait_for_feet(20, timeout_s=20.0), (
             generation,

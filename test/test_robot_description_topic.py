@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from exported_urdf import FEET, exported_quadruped, reference_robot, unitree_style_a1
-from node_harness import LATCHED, NodeClient, distance, node_command, stamp_ns
+from node_harness import LATCHED, Diagnostics, NodeClient, distance, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
 from rosgraph_msgs.msg import Clock
 from shared import A1_FEET, LEGS, PYBULLET_NAMES, STANDING, UNITREE_NAMES
@@ -57,23 +57,12 @@ def assert_feet(messages, expected) -> None:
 def latest_diagnostics(
     client: NodeClient, key: str, contains: str, timeout_s: float = 10.0
 ) -> dict[str, Any]:
-    seen: list[DiagnosticArray] = []
-    client.probe.node.create_subscription(DiagnosticArray, "/diagnostics", seen.append, 10)
-
-    def found() -> bool:
-        return bool(seen) and contains in {
-            kv.key: kv.value for kv in seen[-1].status[0].values
-        }.get(key, "")
-
-    assert client.probe.spin_until(found, timeout_s), (
-        list(seen[-1].status[0].values) if seen else "none"
-    )
-    status = seen[-1].status[0]
-    return {
-        "level": status.level,
-        "message": status.message,
-        **{kv.key: kv.value for kv in status.values},
-    }
+    """The foot_fk_node's latest status once its ``key`` contains ``contains``, with its level."""
+    diagnostics = Diagnostics(client.probe)
+    assert client.probe.spin_until(
+        lambda: contains in diagnostics.latest.get(key, ""), timeout_s
+    ), diagnostics.latest or "none"
+    return {"level": diagnostics.level, **diagnostics.latest}
 
 
 def test_a_description_published_before_the_node_starts_is_used_with_no_parameter(processes, ros):

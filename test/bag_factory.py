@@ -16,6 +16,8 @@ from rosbags.typesys import Stores, get_typestore
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 ROS1_TYPESTORE = get_typestore(Stores.ROS1_NOETIC)
 T = TYPESTORE.types
+T0 = 1_700_000_000_000_000_000
+"""The tests' first stamp [ns] (November 2023)."""
 
 
 @dataclass
@@ -30,12 +32,8 @@ class JointStateMsg:
 
 
 def joint_state(message: JointStateMsg):
-    header = T["std_msgs/msg/Header"](
-        T["builtin_interfaces/msg/Time"](*divmod(message.stamp_ns, 1_000_000_000)),
-        message.frame_id,
-    )
     return T["sensor_msgs/msg/JointState"](
-        header,
+        header(message.stamp_ns, message.frame_id),
         list(message.names),
         np.array(message.positions, dtype=float),
         np.array(message.velocities, dtype=float),
@@ -46,6 +44,13 @@ def joint_state(message: JointStateMsg):
 def header(stamp_ns: int, frame: str):
     return T["std_msgs/msg/Header"](
         T["builtin_interfaces/msg/Time"](*divmod(stamp_ns, 1_000_000_000)), frame
+    )
+
+
+def pose(position: Sequence[float], xyzw: Sequence[float]):
+    """A ``geometry_msgs/msg/Pose``: position [m] and orientation quaternion (x, y, z, w)."""
+    return T["geometry_msgs/msg/Pose"](
+        T["geometry_msgs/msg/Point"](*position), T["geometry_msgs/msg/Quaternion"](*xyzw)
     )
 
 

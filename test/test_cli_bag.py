@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pybullet_data
 import pytest
-from bag_factory import TYPESTORE, BagSpec, JointStateMsg, T, header, write_bag
+from bag_factory import T0, TYPESTORE, BagSpec, JointStateMsg, T, header, pose, write_bag
 from pybullet_reference import PyBulletRobot
 from rosbags.highlevel import AnyReader
 from shared import LEGS
@@ -25,7 +25,6 @@ from a1_leg_fk.kinematics import Quadruped
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
-T0 = 1_700_000_000_000_000_000
 
 
 def steady_bag(
@@ -416,15 +415,12 @@ def test_world_feet_in_csv_and_output_bag(tmp_path: Path) -> None:
         q = rng.uniform(-1, 1, 12).tolist()
         angles.append(q)
         spec.add_joint_state("/joint_states", stamp + 1, JointStateMsg(stamp, NAMES, q))
-        pose = T["geometry_msgs/msg/Pose"](
-            T["geometry_msgs/msg/Point"](1.0 + index, 2.0, 0.5),
-            T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 1.0, 0.0),
-        )
+        base = pose((1.0 + index, 2.0, 0.5), (0.0, 0.0, 1.0, 0.0))
         spec.add(
             "/pose",
             "geometry_msgs/msg/PoseStamped",
             stamp,
-            T["geometry_msgs/msg/PoseStamped"](header(stamp, "map"), pose),
+            T["geometry_msgs/msg/PoseStamped"](header(stamp, "map"), base),
         )
     bag = write_bag(tmp_path / "in", spec, "sqlite3")
     out, out_bag = tmp_path / "feet.csv", tmp_path / "feet_bag"

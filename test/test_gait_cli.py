@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bag_factory import BagSpec, JointStateMsg, T, header, write_bag
+from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
 from test_plots import colour_share, load_png
 
 from a1_leg_fk import cli, plots
@@ -31,7 +31,6 @@ JOINT_RATE_HZ = 250.0
 POSE_RATE_HZ = 100.0
 SECONDS = 6.0
 FOOT_RADIUS_M = 0.02
-START_NS = 1_700_000_000_000_000_000
 GAIT = Gait(limits_of(Quadruped.from_urdf()))
 
 
@@ -56,24 +55,21 @@ def demo_bag(path: Path) -> tuple[np.ndarray, np.ndarray]:
     )
     spec = BagSpec()
     for t, row in zip(times, angles):
-        stamp = START_NS + round(t * 1e9)
+        stamp = T0 + round(t * 1e9)
         spec.add_joint_state(
             "/joint_states", stamp, JointStateMsg(stamp, quadruped.joint_names, row)
         )
     pose_times = np.arange(0.0, SECONDS, 1.0 / POSE_RATE_HZ)
     for t in pose_times:
-        stamp = START_NS + round(t * 1e9)
-        pose = T["geometry_msgs/msg/Pose"](
-            T["geometry_msgs/msg/Point"](
-                float(np.interp(t, times, base_x)), 0.0, float(np.interp(t, times, base_z))
-            ),
-            T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
-        )
+        stamp = T0 + round(t * 1e9)
+        position = (float(np.interp(t, times, base_x)), 0.0, float(np.interp(t, times, base_z)))
         spec.add(
             "/base_pose",
             "geometry_msgs/msg/PoseStamped",
             stamp,
-            T["geometry_msgs/msg/PoseStamped"](header(stamp, "odom"), pose),
+            T["geometry_msgs/msg/PoseStamped"](
+                header(stamp, "odom"), pose(position, (0.0, 0.0, 0.0, 1.0))
+            ),
         )
     write_bag(path, spec)
     return times, swinging

@@ -13,12 +13,14 @@ import pybullet_data
 import pytest
 from bag_factory import (
     ROS1_TYPESTORE,
+    T0,
     TYPESTORE,
     BagSpec,
     JointStateMsg,
     T,
     header,
     joint_state,
+    pose,
     write_bag,
 )
 from hypothesis import given, settings
@@ -34,7 +36,6 @@ A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
 ALIENGO_URDF = Path(pybullet_data.getDataPath()) / "aliengo" / "aliengo.urdf"
 KINDS = ("mcap", "sqlite3", "ros1")
-T0 = 1_700_000_000_000_000_000
 
 
 def bag_path(tmp_path: Path, kind: str, name: str = "run") -> Path:
@@ -284,9 +285,7 @@ def rotation_z(angle: float) -> np.ndarray:
 
 def pose_message(kind: str, stamp: int, position: list[float], yaw: float):
     """A base pose of ``kind`` in frame ``odom`` (a rotation about z by ``yaw``)."""
-    point = T["geometry_msgs/msg/Point"](*position)
-    quaternion = T["geometry_msgs/msg/Quaternion"](0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-    pose = T["geometry_msgs/msg/Pose"](point, quaternion)
+    base = pose(position, (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)))
     covariance = np.zeros(36)
     if kind == "nav_msgs/msg/Odometry":
         twist = T["geometry_msgs/msg/TwistWithCovariance"](
@@ -298,17 +297,17 @@ def pose_message(kind: str, stamp: int, position: list[float], yaw: float):
         return T[kind](
             header(stamp, "odom"),
             "trunk",
-            T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance),
+            T["geometry_msgs/msg/PoseWithCovariance"](base, covariance),
             twist,
         )
     if kind == "geometry_msgs/msg/PoseStamped":
-        return T[kind](header(stamp, "odom"), pose)
+        return T[kind](header(stamp, "odom"), base)
     if kind == "geometry_msgs/msg/PoseWithCovarianceStamped":
         return T[kind](
-            header(stamp, "odom"), T["geometry_msgs/msg/PoseWithCovariance"](pose, covariance)
+            header(stamp, "odom"), T["geometry_msgs/msg/PoseWithCovariance"](base, covariance)
         )
     transform = T["geometry_msgs/msg/Transform"](
-        T["geometry_msgs/msg/Vector3"](*position), quaternion
+        T["geometry_msgs/msg/Vector3"](*position), base.orientation
     )
     other = T["geometry_msgs/msg/TransformStamped"](header(stamp, "trunk"), "FR_hip", transform)
     mine = T["geometry_msgs/msg/TransformStamped"](header(stamp, "/odom"), "/trunk", transform)

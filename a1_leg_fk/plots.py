@@ -15,16 +15,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from a1_leg_fk.demo_gait import STAND_POSE, Gait, limits_of
-from a1_leg_fk.gait_analysis import Contacts, GaitReport
-from a1_leg_fk.kinematics import Quadruped
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
-from a1_leg_fk.urdf import Joint, LegFkError
+from a1_leg_fk.gait.analysis import Contacts, GaitReport
+from a1_leg_fk.gait.demo_gait import STAND_POSE, Gait, limits_of
+from a1_leg_fk.kinematics.quadruped import Quadruped
+from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES, leg_slot
+from a1_leg_fk.model.urdf import Joint, LegFkError
 
 if TYPE_CHECKING:  # matplotlib is imported only when a plot is drawn
     from matplotlib.figure import Figure
 
-    from a1_leg_fk.recording import FootTrajectories
+    from a1_leg_fk.recording.trajectories import FootTrajectories
 
 INSTALL_HINT = (
     "matplotlib is not installed: pip install matplotlib (or: sudo apt install python3-matplotlib)"

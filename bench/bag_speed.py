@@ -32,7 +32,7 @@ import numpy as np
 from common import machine
 
 from a1_leg_fk import cli
-from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.kinematics.quadruped import Quadruped
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 T0 = 1_700_000_000_000_000_000

@@ -23,7 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from common import REPEATS, SPEED_POSE, machine, median_seconds_per_call, shared, trig_floor
 
-from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.kinematics.quadruped import Quadruped
 
 BATCH_ROWS = 1_000_000
 BATCH_REPEATS = 5

@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 from common import SPEED_POSE, machine, median_seconds_per_call, trig_floor
 
-from a1_leg_fk import inverse
-from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.kinematics.ik import four_legs
+from a1_leg_fk.kinematics.quadruped import Quadruped
 
 BATCH_ROWS = 1_000_000
 BATCH_REPEATS = 3
@@ -33,8 +33,8 @@ def main() -> None:
     assert (
         result.status == ("ok",) * 4 and np.abs(quadruped.fk(result.angles) - feet).max() <= 1e-9
     )
-    searching = [inverse.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
-    searched = inverse.solve_feet(searching, feet.ravel().tolist(), None)
+    searching = [four_legs.LegSolver(leg, use_closed_form=False) for leg in quadruped.legs]
+    searched = four_legs.solve_feet(searching, feet.ravel().tolist(), None)
     assert (
         searched.status == ("ok",) * 4
         and np.abs(quadruped.fk(searched.angles) - feet).max() <= 1e-9
@@ -44,7 +44,7 @@ def main() -> None:
         {
             "Quadruped.ik(feet)  [closed form]": lambda: quadruped.ik(feet),
             "Quadruped.fk(q)": lambda: quadruped.fk(SPEED_POSE),
-            "damped least squares, same targets": lambda: inverse.solve_feet(
+            "damped least squares, same targets": lambda: four_legs.solve_feet(
                 searching, feet.ravel().tolist(), None
             ),
         },
@@ -66,7 +66,7 @@ def main() -> None:
     angles = np.random.default_rng(0).uniform(lower, upper, size=(BATCH_ROWS, 12))
     targets = quadruped.fk_batch(angles)
     check = quadruped.ik_batch(targets)
-    assert (check.status == inverse.OK).all() and np.abs(
+    assert (check.status == four_legs.OK).all() and np.abs(
         quadruped.fk_batch(check.angles) - targets
     ).max() <= 1e-9
 

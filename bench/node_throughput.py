@@ -8,9 +8,9 @@ Exit status 0 after the table, whether or not the goals are met (they are printe
 
 Processes (bench/throughput_roles.py): a load generator (JointState, 12 joints with positions and
 velocities, stamp = send time, header.frame_id = sequence number, paced on perf_counter), the
-node under test (``python -m a1_leg_fk.node``, or the bare echo baseline), a receiver of the eight
-output topics (raw CDR, its own wait set; latency uses the DDS reception time, so the receiver's
-Python speed does not enter it) and, in one phase, a ``verify_fk`` caller at 20 Hz.
+node under test (``python -m a1_leg_fk.ros.foot_fk_node``, or the bare echo baseline), a receiver
+of the eight output topics (raw CDR, its own wait set; latency uses the DDS reception time, so the
+receiver's Python speed does not enter it) and, in one phase, a ``verify_fk`` caller at 20 Hz.
 
 Scenarios
 1. node, startup: the generator already publishes (100 Hz) when the node process is started;
@@ -204,7 +204,7 @@ class Scenario:
         time.sleep(0.5)
         if self.target == "node":
             if self.args.executor == "node":
-                command = [python, "-m", "a1_leg_fk.node"]
+                command = [python, "-m", "a1_leg_fk.ros.foot_fk_node"]
             else:
                 command = [python, str(ROLES), "node", self.args.executor]
         else:

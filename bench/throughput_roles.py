@@ -270,7 +270,7 @@ def receiver(output: str) -> None:
 
 
 def baseline(executor_name: str) -> None:
-    from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
+    from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 
     rclpy.init()
     node = Node("bench_echo_baseline")
@@ -326,9 +326,10 @@ def baseline(executor_name: str) -> None:
 
 
 def make_executor(name: str) -> rclpy.executors.Executor:
-    """``node``: whatever ``a1_leg_fk.node`` uses; else ``events``, ``single`` or ``multi``."""
+    """``node``: whatever ``a1_leg_fk.ros.foot_fk_node`` uses; else ``events``, ``single`` or
+    ``multi``."""
     if name == "node":
-        from a1_leg_fk.ros_glue import make_executor as node_executor
+        from a1_leg_fk.ros.glue import make_executor as node_executor
 
         return node_executor()
     if name == "events":
@@ -343,9 +344,9 @@ def make_executor(name: str) -> rclpy.executors.Executor:
 
 
 def node_with_executor(executor_name: str, ros_args: list[str]) -> int:
-    """``a1_leg_fk.node.main`` with another executor (for comparing executors)."""
-    import a1_leg_fk.node as node_module
-    import a1_leg_fk.ros_glue as glue_module
+    """``a1_leg_fk.ros.foot_fk_node.main`` with another executor (for comparing executors)."""
+    import a1_leg_fk.ros.foot_fk_node as node_module
+    import a1_leg_fk.ros.glue as glue_module
 
     if executor_name != "node":
         glue_module.make_executor = lambda: make_executor(executor_name)

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from shared import claim_domain_id
 
-from a1_leg_fk.urdf import LegFkError
+from a1_leg_fk.model.urdf import LegFkError
 
 # Set before rclpy is imported anywhere, so the in-test nodes and every child share the domain.
 DOMAIN_ID, _DOMAIN_LOCK = claim_domain_id()

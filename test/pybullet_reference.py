@@ -1,7 +1,7 @@
 """PyBullet's own answer, for tests: a URDF in a DIRECT client of its own, base fixed at the
 origin.
 
-Independent of :mod:`a1_leg_fk.pybullet_check` (the code under test): joints and links are found by
+Independent of :mod:`a1_leg_fk.verify` (the code under test): joints and links are found by
 name, angles set with ``resetJointState`` and link frames read with ``getLinkState(...)[4]``.
 """
 

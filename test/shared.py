@@ -85,14 +85,14 @@ def installed_command(script: str, module: str, *ros_args: str) -> list[str]:
     return child_command(script, module) + ([ROS_ARGS_FLAG, *ros_args] if ros_args else [])
 
 
-node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.node")
+node_command = partial(installed_command, "foot_fk_node", "a1_leg_fk.ros.foot_fk_node")
 """``node_command(*ros_args)``: the installed foot_fk_node (its script enters
-``a1_leg_fk.executables``), else ``python -m a1_leg_fk.node``."""
+``a1_leg_fk.ros.executables``), else ``python -m a1_leg_fk.ros.foot_fk_node``."""
 
-ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ik_node")
+ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ros.foot_ik_node")
 """``ik_node_command(*ros_args)``: the installed foot_ik_node, else ``python -m``."""
 
-demo_command = partial(installed_command, "joint_state_demo", "a1_leg_fk.demo")
+demo_command = partial(installed_command, "joint_state_demo", "a1_leg_fk.ros.joint_state_demo")
 """``demo_command(*ros_args)``: the installed joint_state_demo, else ``python -m``."""
 
 cli_command = partial(installed_command, "a1-leg-fk", "a1_leg_fk.cli")

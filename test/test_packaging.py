@@ -43,9 +43,9 @@ EXEC_DEPENDS = {
 }
 TEST_DEPENDS = {"python3-pytest", "python3-hypothesis"}
 CONSOLE_SCRIPTS = {
-    "foot_fk_node": "a1_leg_fk.executables:foot_fk_node",
-    "foot_ik_node": "a1_leg_fk.executables:foot_ik_node",
-    "joint_state_demo": "a1_leg_fk.executables:joint_state_demo",
+    "foot_fk_node": "a1_leg_fk.ros.executables:foot_fk_node",
+    "foot_ik_node": "a1_leg_fk.ros.executables:foot_ik_node",
+    "joint_state_demo": "a1_leg_fk.ros.executables:joint_state_demo",
     "a1-leg-fk": "a1_leg_fk.cli:main",
 }
 # Every node parameter with its default. String arrays have no value a params file can state

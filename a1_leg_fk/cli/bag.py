@@ -1,9 +1,9 @@
 """``a1-leg-fk bag``: a recorded run (ROS bag) -> the feet as CSV, a new bag, a PNG, a summary.
 
-A thin layer over :mod:`a1_leg_fk.recording` and :mod:`a1_leg_fk.recording_outputs`. Exit codes:
-0 done; 1 the bag could not be read to its end (what was read is written, the reason printed);
-2 bad usage or input (one line on stderr, nothing written); 130 interrupted (nothing left under
-the final output names).
+A thin layer over :mod:`a1_leg_fk.recording.trajectories` and :mod:`a1_leg_fk.recording.outputs`.
+Exit codes: 0 done; 1 the bag could not be read to its end (what was read is written, the reason
+printed); 2 bad usage or input (one line on stderr, nothing written); 130 interrupted (nothing left
+under the final output names).
 """
 
 from __future__ import annotations
@@ -20,13 +20,13 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     non_negative,
 )
-from a1_leg_fk.recording import (
+from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.trajectories import (
     DEFAULT_MAX_POSE_GAP_S,
     FootTrajectories,
     RecordingChoices,
     read_foot_trajectories,
 )
-from a1_leg_fk.urdf import LegFkError
 
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
@@ -76,7 +76,9 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def recording_options(options: argparse.Namespace) -> RecordingChoices:
-    """The keyword arguments of :func:`~a1_leg_fk.recording.open_recording` from parsed options."""
+    """The keyword arguments of :func:`~a1_leg_fk.recording.trajectories.open_recording` from
+    parsed options.
+    """
     return {
         "topic": options.topic,
         "urdf": options.urdf,
@@ -141,7 +143,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk bag``: see the module docstring for exit codes."""
     from a1_leg_fk.plots import pyplot
-    from a1_leg_fk.recording_outputs import Outputs, convert
+    from a1_leg_fk.recording.outputs import Outputs, convert
 
     del argv  # no ROS here
     try:

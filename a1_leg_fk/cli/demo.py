@@ -120,8 +120,8 @@ class Demo:
         kept = "kept only if something fails" if self.temporary_log_dir else "kept"
         say(f"\n[1/4] starting the two nodes (their output goes to {log_dir}/, {kept})")
         for name, module in (
-            ("foot_fk_node", "a1_leg_fk.node"),
-            ("joint_state_demo", "a1_leg_fk.demo"),
+            ("foot_fk_node", "a1_leg_fk.ros.foot_fk_node"),
+            ("joint_state_demo", "a1_leg_fk.ros.joint_state_demo"),
         ):
             if stop.is_set():
                 return EXIT_INTERRUPTED

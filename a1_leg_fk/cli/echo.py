@@ -24,7 +24,7 @@ from a1_leg_fk.cli.common import (
     prefixed,
     with_ros,
 )
-from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.model.legs import LEG_NAMES
 
 if TYPE_CHECKING:  # imported by subscribe_feet, once ROS is up
     from geometry_msgs.msg import PointStamped

@@ -1,7 +1,7 @@
 """``a1-leg-fk gait``: a recorded run (ROS bag) -> contacts, stride metrics and the gait's name.
 
 The feet come from :func:`a1_leg_fk.cli.bag.trajectories_from_options` (world frame, so
-``--base-pose`` is required) and go through :mod:`a1_leg_fk.gait_analysis`. Prints a short report;
+``--base-pose`` is required) and go through :mod:`a1_leg_fk.gait.analysis`. Prints a short report;
 ``--json``, ``--plot`` and ``--csv-contacts`` write files: checked before the input is read (as
 ``a1-leg-fk bag`` checks its outputs; an existing file is replaced only with ``--force``), written
 under hidden temporary names and renamed when complete. Exit codes: 0 done; 1 the bag could not be
@@ -24,12 +24,12 @@ import numpy as np
 
 from a1_leg_fk.cli.bag import add_recording_arguments, trajectories_from_options
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
-from a1_leg_fk.gait_analysis import Contacts, ContactThresholds, GaitReport, analyze_gait
-from a1_leg_fk.legs import LEG_NAMES
-from a1_leg_fk.urdf import LegFkError
+from a1_leg_fk.gait.analysis import Contacts, ContactThresholds, GaitReport, analyze_gait
+from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # imported when the command runs, as a1-leg-fk bag does
-    from a1_leg_fk.recording_outputs import OutputTarget
+    from a1_leg_fk.recording.outputs import OutputTarget
 
 PROG = "a1-leg-fk gait"
 NEEDS_BASE_POSE = (
@@ -143,7 +143,7 @@ def checked_outputs(options: argparse.Namespace) -> dict[str, OutputTarget]:
     :class:`LegFkError` for a path that is a folder, lies inside the input, sits in a folder that
     does not exist, or exists without ``--force``; or for two options naming the same file.
     """
-    from a1_leg_fk.recording_outputs import checked_targets
+    from a1_leg_fk.recording.outputs import checked_targets
 
     paths = {option: getattr(options, name) for option, name in FILE_OPTIONS.items()}
     return checked_targets(Path(options.input), paths, options.force)

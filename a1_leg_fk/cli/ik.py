@@ -14,10 +14,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_OK
-from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, leg_slot
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, leg_slot
 
 if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
-    from a1_leg_fk.kinematics import Quadruped
+    from a1_leg_fk.kinematics.quadruped import Quadruped
 
 
 def add_parser(
@@ -58,8 +58,8 @@ def add_parser(
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """Solve and print; one line on stderr and exit 2 for bad input."""
     del argv  # no ROS here
-    from a1_leg_fk.kinematics import Quadruped
-    from a1_leg_fk.urdf import LegFkError
+    from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.model.urdf import LegFkError
 
     try:
         quadruped = Quadruped.from_urdf(options.urdf)
@@ -78,7 +78,7 @@ def report(
     quadruped: Quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None
 ) -> list[str]:
     """The lines ``a1-leg-fk ik`` prints (see the module docstring)."""
-    from a1_leg_fk.inverse import STATUS_NAMES, checked_point
+    from a1_leg_fk.kinematics.ik.four_legs import STATUS_NAMES, checked_point
 
     target = checked_point(point, leg)
     result = quadruped.ik_leg(leg, target, leg_seed(leg, seed))
@@ -114,7 +114,7 @@ def leg_seed(leg: str, seed: Sequence[float] | None) -> list[float] | None:
     :data:`JOINT_COUNT` in slot order), or ``None``; a wrong count or a non-finite value anywhere
     raises :class:`LegFkError` naming ``--seed``.
     """
-    from a1_leg_fk.urdf import LegFkError
+    from a1_leg_fk.model.urdf import LegFkError
 
     if seed is None:
         return None

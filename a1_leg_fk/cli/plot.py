@@ -10,8 +10,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from a1_leg_fk.cli.common import EXIT_FAILED, EXIT_OK, PROG
-from a1_leg_fk.legs import LEG_NAMES
-from a1_leg_fk.urdf import LegFkError
+from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -41,7 +41,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     del argv  # no ROS here
     try:
         from a1_leg_fk import plots
-        from a1_leg_fk.kinematics import Quadruped
+        from a1_leg_fk.kinematics.quadruped import Quadruped
 
         plots.pyplot()  # fail early, with the install hint, when matplotlib is missing
         quadruped = Quadruped.from_urdf(options.urdf)

@@ -1,0 +1,299 @@
+"""The pass over a recording's JointState messages: their serialized bytes (no deserialization)
+in blocks of :data:`BLOCK_MESSAGES`, through :class:`~a1_leg_fk.tracking.FootTracker`'s rules,
+to :class:`FootBlock` rows of feet [m] and foot velocities [m/s] in the base frame (and in the
+world frame with a base pose). No ROS install: ``rosbags`` and ``tqdm`` come with the open bag.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, cdr_layout
+from a1_leg_fk.recording.reader import Recording, one_line
+from a1_leg_fk.tracking import FootTracker
+
+if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import Connection
+    from tqdm import tqdm
+
+    from a1_leg_fk.kinematics.quadruped import Quadruped
+
+BLOCK_MESSAGES = 4096
+LEGS = len(LEG_NAMES)
+
+
+@dataclass(frozen=True)
+class FootBlock:
+    """Rows of consecutive accepted messages: like
+    :class:`~a1_leg_fk.recording.trajectories.FootTrajectories` (stamps [ns], feet [m] and foot
+    velocities [m/s] in the base frame, world feet [m]), velocities always an array (NaN where the
+    message gives none).
+    """
+
+    stamps_ns: np.ndarray
+    bag_times_ns: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    world_positions: np.ndarray | None
+
+
+def iter_foot_blocks(
+    recording: Recording,
+    *,
+    progress: bool = False,
+    on_message: Callable[[Connection, int, bytes], None] | None = None,
+) -> Iterator[FootBlock]:
+    """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
+    called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
+
+    A truncated or corrupt bag ends the pass early: what was read is yielded, and
+    ``recording.stopped`` says where and why.
+    """
+    reader, joint_states = recording.reader, recording.joint_states
+    tracker = recording.tracker = FootTracker(recording.quadruped)
+    recording.has_velocities = False  # this pass's
+    connections = [] if on_message else [joint_states]
+    total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
+    bar = _progress_bar(total, progress)
+    batch = _Batch(recording, tracker, JointStateDecoder(ros1=recording.ros1))
+    read = shown = 0
+    try:
+        for connection, bag_time, raw in _guarded(recording, _raw_messages(reader, connections)):
+            read += 1
+            if on_message is not None:
+                on_message(connection, bag_time, raw)
+                if connection is not joint_states:
+                    continue
+            if batch.raws and (len(raw) != batch.length or len(batch.raws) >= BLOCK_MESSAGES):
+                if bar is not None:
+                    bar.update(read - shown)
+                    shown = read
+                yield from batch.blocks()
+            batch.add(raw, bag_time)
+        yield from batch.blocks()
+    except _Corrupt as error:
+        recording.stopped = str(error)
+    finally:
+        if bar is not None:
+            bar.update(read - shown)
+            bar.close()
+
+
+def _raw_messages(
+    reader: AnyReader, connections: list[Connection]
+) -> Iterator[tuple[Connection, int, bytes]]:
+    """(connection, bag time [ns], raw bytes) in bag order; a single bag's reader directly (no
+    merge of several).
+    """
+    if len(reader.readers) == 1:
+        return reader.readers[0].messages(connections=connections)
+    return reader.messages(connections=connections)
+
+
+def _guarded(
+    recording: Recording, messages: Iterator[tuple[Connection, int, bytes]]
+) -> Iterator[tuple[Connection, int, bytes]]:
+    """``messages`` until the storage cannot be read further (truncated, corrupt): then
+    ``recording.stopped`` says where and why, and the iteration ends.
+    """
+    bag_time = None
+    try:
+        for item in messages:
+            bag_time = item[1]
+            yield item
+    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for broken storage)
+        recording.stopped = f"cannot read past bag time {bag_time} ns: {one_line(error)}"
+
+
+class _Corrupt(Exception):
+    """A JointState message that cannot be decoded; the pass stops there."""
+
+
+class _Batch:
+    """Consecutive JointState messages of one length, as raw bytes. A steady stream (same name
+    list, lengths and layout, little-endian CDR) is decoded with numpy for the whole batch;
+    anything else message by message.
+    """
+
+    def __init__(
+        self, recording: Recording, tracker: FootTracker, decoder: JointStateDecoder
+    ) -> None:
+        self.recording, self.tracker, self.decoder = recording, tracker, decoder
+        self.raws: list[bytes] = []
+        self.bag_times: list[int] = []
+        self.length = -1
+
+    def add(self, raw: bytes, bag_time: int) -> None:
+        if not self.raws:
+            self.length = len(raw)
+        self.raws.append(raw)
+        self.bag_times.append(bag_time)
+
+    def blocks(self) -> Iterator[FootBlock]:
+        """The rows of the batch's messages; empties the batch. :class:`_Corrupt` after the rows
+        before a message that cannot be decoded.
+        """
+        raws, bag_times = self.raws, self.bag_times
+        self.raws, self.bag_times = [], []
+        if not raws:
+            return
+        arrays = None if self.recording.ros1 else self._vectorised(raws, bag_times)
+        if arrays is not None:
+            yield from _finish(self.recording, self.tracker, self.decoder.names, *arrays)
+            return
+        yield from self._one_by_one(raws, bag_times)
+
+    def _vectorised(
+        self, raws: list[bytes], bag_times: list[int]
+    ) -> tuple[np.ndarray, ...] | None:
+        layout = cdr_layout(bytes(raws[0]))
+        if layout is None:
+            return None
+        matrix = np.frombuffer(b"".join(raws), dtype=np.uint8).reshape(len(raws), self.length)
+        template = matrix[0, layout.fixed]
+        if not (matrix[:, layout.fixed] == template).all():
+            return None
+        self.decoder.fields(raws[0])  # the names, for the rules (and the next message's check)
+        stamps = (
+            np.ascontiguousarray(matrix[:, 4:8]).view("<i4")[:, 0].astype(np.int64) * 1_000_000_000
+            + np.ascontiguousarray(matrix[:, 8:12]).view("<u4")[:, 0]
+        )
+        bag_times_ns = np.array(bag_times, dtype=np.int64)
+        stamps = np.where(stamps == 0, bag_times_ns, stamps)
+        positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
+        velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
+        return stamps, bag_times_ns, positions, velocities
+
+    def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
+        fields = self.decoder.fields
+        pending = _Pending()
+        for raw, bag_time in zip(raws, bag_times):
+            try:
+                stamp, changed, order, positions, velocities = fields(raw)
+            except WireError as error:
+                yield from pending.finish(self)
+                raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
+            if pending.stamps and (
+                changed
+                or order != pending.order
+                or len(positions) != pending.position_bytes
+                or len(velocities) != pending.velocity_bytes
+            ):
+                yield from pending.finish(self)
+                pending = _Pending()
+            if not pending.stamps:
+                pending.start(self.decoder.names, order, len(positions), len(velocities))
+            pending.stamps.append(stamp or bag_time)
+            pending.bag_times.append(bag_time)
+            pending.positions.append(positions)
+            pending.velocities.append(velocities)
+        yield from pending.finish(self)
+
+
+class _Pending:
+    """Consecutive messages with one name list and the same array lengths, kept as bytes."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+        self.order = "<"
+        self.position_bytes = self.velocity_bytes = 0
+        self.stamps: list[int] = []
+        self.bag_times: list[int] = []
+        self.positions: list[bytes] = []
+        self.velocities: list[bytes] = []
+
+    def start(
+        self, names: list[str], order: str, position_bytes: int, velocity_bytes: int
+    ) -> None:
+        self.names, self.order = names, order
+        self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
+
+    def finish(self, batch: _Batch) -> Iterator[FootBlock]:
+        """The rows of these messages (none if there are none)."""
+        count = len(self.stamps)
+        if not count:
+            return
+        dtype = np.dtype(f"{self.order}f8")
+        positions = np.frombuffer(b"".join(self.positions), dtype).reshape(
+            count, self.position_bytes // 8
+        )
+        velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
+            count, self.velocity_bytes // 8
+        )
+        yield from _finish(
+            batch.recording,
+            batch.tracker,
+            self.names,
+            np.array(self.stamps, dtype=np.int64),
+            np.array(self.bag_times, dtype=np.int64),
+            positions.astype(np.float64),
+            velocities.astype(np.float64),
+        )
+
+
+def _finish(
+    recording: Recording,
+    tracker: FootTracker,
+    names: list[str],
+    stamps: np.ndarray,
+    bag_times: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+) -> Iterator[FootBlock]:
+    """Run the rules over consecutive messages with one name list and yield their rows (if any).
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length).
+    """
+    result = tracker.update_block(names, positions, velocities)
+    angles = result.angles[result.accepted]
+    known = np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)  # (N, 4)
+    rows = known.any(axis=1)  # a leg known, as the node needs to publish its foot
+    if not rows.any():
+        return
+    feet = recording.quadruped.fk_batch(np.nan_to_num(angles[rows]))
+    feet[~known[rows]] = math.nan
+    rates = result.rates[result.accepted][rows]
+    foot_velocities = velocities_of(recording.quadruped, angles[rows], known[rows], rates)
+    recording.has_velocities = recording.has_velocities or bool(np.isfinite(foot_velocities).any())
+    stamps = stamps[result.accepted][rows]
+    bag_times = bag_times[result.accepted][rows]
+    world = None
+    if recording.base_pose is not None:
+        origin, rotation = recording.base_pose.at(stamps)
+        world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
+    yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
+
+
+def velocities_of(
+    quadruped: Quadruped, angles: np.ndarray, known: np.ndarray, rates: np.ndarray
+) -> np.ndarray:
+    """(N, 4, 3) J(q)·q̇ [m/s], base frame, for (N, 12) angles [rad] and rates [rad/s]; NaN for
+    legs not ``known`` (N, 4), legs whose rates are not all finite, and overflowed results.
+    """
+    out = np.full((angles.shape[0], LEGS, 3), math.nan)
+    usable = known & np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
+    rows = usable.any(axis=1)
+    if rows.any():
+        velocity = quadruped.foot_velocities_batch(
+            np.nan_to_num(angles[rows]), np.nan_to_num(rates[rows])
+        )
+        with np.errstate(invalid="ignore"):
+            velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan
+        out[rows] = velocity
+    return out
+
+
+def _progress_bar(total: int, enabled: bool) -> tqdm[None] | None:
+    if not enabled:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, unit="msg", unit_scale=True, mininterval=0.5, smoothing=0.1)

@@ -1,0 +1,277 @@
+"""Opening a recording: the bag (a ROS 2 directory, ``.mcap``, ``.db3`` or ROS 1 ``.bag``, a
+truncated MCAP file from a copy of its complete records), the JointState topic, the robot model
+(``--urdf``, else the bag's ``robot_description``, else the embedded A1) and the base pose
+(:mod:`a1_leg_fk.recording.base_pose`). No ROS install: ``rosbags`` is imported when a bag is
+opened.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, TypedDict
+
+from a1_leg_fk.kinematics.robot_config import load_robot
+from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_S, BasePoses
+from a1_leg_fk.recording.mcap_salvage import salvage
+
+if TYPE_CHECKING:  # rosbags is imported when a bag is opened
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import Connection
+
+    from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.tracking import FootTracker
+
+ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+DESCRIPTION_TYPE = "std_msgs/msg/String"
+
+
+class RecordingChoices(TypedDict, total=False):
+    """The choices of :func:`open_recording` (its keyword arguments)."""
+
+    topic: str | None
+    urdf: str | Path | None
+    foot_links: Sequence[str]
+    joint_aliases: Sequence[str]
+    base_pose: str | None
+    max_pose_gap_s: float
+
+
+@dataclass
+class Recording:
+    """An open bag with the choices made for it; iterate with
+    :func:`~a1_leg_fk.recording.blocks.iter_foot_blocks`.
+    """
+
+    reader: AnyReader  # open
+    path: Path
+    joint_states: Connection
+    quadruped: Quadruped
+    model_source: str
+    base_pose: BasePoses | None
+    base_pose_topic: str | None
+    ros1: bool
+    has_velocities: bool = False  # set while reading: some row had a finite foot velocity
+    stopped: str = ""
+    salvage_note: str = ""  # what was read of a truncated MCAP file
+    tracker: FootTracker | None = None  # the rules' state and counts of the current pass
+
+
+def _rosbags() -> ModuleType:
+    """``rosbags.highlevel``, or a :class:`LegFkError` that says how to install rosbags."""
+    try:
+        from rosbags import highlevel
+    except ImportError as error:
+        raise LegFkError(ROSBAGS_HINT) from error
+    return highlevel
+
+
+def open_recording(
+    path: str | Path,
+    *,
+    topic: str | None = None,
+    urdf: str | Path | None = None,
+    foot_links: Sequence[str] = (),
+    joint_aliases: Sequence[str] = (),
+    base_pose: str | None = None,
+    max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
+) -> Recording:
+    """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
+    problem for bad input. Close with :func:`close_recording`.
+    """
+    path = Path(path)
+    reader, salvage_note = _open_reader(path)
+    try:
+        joint_states = _pick_topic(
+            reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
+        )
+        try:
+            description, description_topic = (
+                (None, "") if urdf else _recorded_description(reader, joint_states)
+            )
+        except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
+            raise LegFkError(
+                f"{path}: cannot read its robot_description topic: {one_line(error)}"
+            ) from None
+        # an empty recorded description counts as none (as in the node): the embedded A1
+        name = f"robot_description topic {description_topic} in {path}"
+        robot = load_robot(
+            description or "",
+            str(urdf) if urdf else "",
+            foot_links,
+            joint_aliases,
+            description_name=name,
+        )
+        if urdf:
+            source = f"--urdf {urdf}"
+        elif description:
+            source = name
+        else:
+            source = f"embedded A1 ({robot.source})"
+        poses = None
+        if base_pose:
+            pose_connection = _pick_topic(
+                reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose"
+            )
+            try:
+                poses = BasePoses.read(
+                    reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s
+                )
+            except LegFkError:
+                raise
+            except Exception as error:  # noqa: BLE001 (rosbags: a corrupt pose message or storage)
+                raise LegFkError(
+                    f"--base-pose {base_pose}: cannot read it: {one_line(error)}"
+                ) from None
+        return Recording(
+            reader,
+            path,
+            joint_states,
+            robot.quadruped,
+            source,
+            poses,
+            base_pose,
+            not reader.is2,
+            salvage_note=salvage_note,
+        )
+    except BaseException:
+        _close_reader(reader)
+        raise
+
+
+def close_recording(recording: Recording) -> None:
+    """Close the bag (and remove the copy of a salvaged one)."""
+    _close_reader(recording.reader)
+
+
+def _close_reader(reader: AnyReader) -> None:
+    reader.close()
+    folder = getattr(reader, "salvage_folder", None)
+    if folder is not None:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _open_reader(path: Path) -> tuple[AnyReader, str]:
+    """An open reader of the bag at ``path``, and ``""`` or a note on what was salvaged of a
+    truncated MCAP file (read from a copy of its complete records).
+    """
+    highlevel = _rosbags()
+    if not path.exists():
+        raise LegFkError(f"{path}: no such file or directory")
+    opened = _storage_file(path) if path.is_dir() else path
+    try:
+        reader = highlevel.AnyReader([opened])
+        reader.open()
+        return reader, ""
+    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for unreadable files)
+        problem = f"{path}: cannot open as a ROS bag: {one_line(error)}"
+    mcaps = (
+        sorted(opened.glob("*.mcap"))
+        if opened.is_dir()
+        else [opened]
+        if opened.suffix == ".mcap"
+        else []
+    )
+    salvaged = _salvaged_reader(highlevel, mcaps[0]) if len(mcaps) == 1 else None
+    if salvaged is None:
+        raise LegFkError(problem)
+    return salvaged
+
+
+def _salvaged_reader(highlevel: ModuleType, mcap: Path) -> tuple[AnyReader, str] | None:
+    """A reader of the complete records of a truncated MCAP file (copied to a temporary folder,
+    removed when the reader closes), or None.
+    """
+    folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_salvage_"))
+    try:
+        kept = salvage(mcap, folder / mcap.name)
+        reader = highlevel.AnyReader([kept.path]) if kept is not None else None
+        if reader is not None:
+            reader.open()
+    except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
+        reader = None
+    if reader is None or kept is None:
+        shutil.rmtree(folder, ignore_errors=True)
+        return None
+    reader.salvage_folder = folder  # removed by _close_reader
+    note = (
+        f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
+        f"{kept.size:,} bytes (the complete records)"
+    )
+    return reader, note
+
+
+def _storage_file(directory: Path) -> Path:
+    """What to open for a bag directory: itself when it has ``metadata.yaml``, else its one
+    storage file (``.mcap`` or ``.db3``).
+    """
+    if (directory / "metadata.yaml").exists():
+        return directory
+    storage = sorted(child for child in directory.iterdir() if child.suffix in (".db3", ".mcap"))
+    if not storage:
+        raise LegFkError(
+            f"{directory}: a directory without a ROS 2 bag (no metadata.yaml, no .db3 or .mcap "
+            "file)"
+        )
+    if len(storage) > 1:
+        raise LegFkError(
+            f"{directory}: no metadata.yaml and {len(storage)} storage files; give one of them: "
+            f"{', '.join(p.name for p in storage)}"
+        )
+    return storage[0]
+
+
+def one_line(error: BaseException) -> str:
+    """An error's message on one line (whitespace runs as one space), at most 300 characters."""
+    text = " ".join(str(error).split()) or type(error).__name__
+    return text[:300]
+
+
+def _pick_topic(
+    reader: AnyReader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
+) -> Connection:
+    """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""
+    topics = {connection.topic: connection.msgtype for connection in reader.connections}
+    listing = ", ".join(f"{name} ({kind})" for name, kind in sorted(topics.items())) or "none"
+    if wanted is not None:
+        if wanted not in topics:
+            raise LegFkError(f"{option} {wanted}: no such topic in {path}; topics: {listing}")
+        if topics[wanted] not in types:
+            raise LegFkError(
+                f"{option} {wanted} is {topics[wanted]}, expected {' or '.join(types)}"
+            )
+        chosen = wanted
+    else:
+        candidates = sorted(name for name, kind in topics.items() if kind in types)
+        if not candidates:
+            raise LegFkError(f"{path}: no {' or '.join(types)} topic; topics: {listing}")
+        if len(candidates) > 1:
+            raise LegFkError(
+                f"{path}: several {what} topics, choose one with {option}: {', '.join(candidates)}"
+            )
+        chosen = candidates[0]
+    return next(connection for connection in reader.connections if connection.topic == chosen)
+
+
+def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
+    """The latest ``robot_description`` message before the first JointState, and its topic."""
+    connections = [
+        c
+        for c in reader.connections
+        if c.msgtype == DESCRIPTION_TYPE and c.topic.split("/")[-1] == "robot_description"
+    ]
+    if not connections:
+        return None, ""
+    latest, topic = None, ""
+    for connection, _, raw in reader.messages(connections=[*connections, joint_states]):
+        if connection is joint_states:
+            break
+        message: Any = reader.deserialize(raw, connection.msgtype)  # a std_msgs/msg/String
+        latest, topic = message.data, connection.topic
+    return latest, topic

@@ -1,0 +1,128 @@
+"""The ``/diagnostics`` status of ``foot_fk_node``, as a pure function (no ROS imports).
+
+:func:`fk_status` turns what the node knows at one report (the :class:`FootTracker` counts, the
+joints outside their limits, the robot description's and ``verify_fk``'s state) into a level, a
+one-line summary and the key/value pairs; :class:`PeriodCounter` gives the messages and
+rejections since the previous report. The node wraps the result in a DiagnosticArray.
+:func:`robot_description_status` is the robot-description part, shared with ``foot_ik_node``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from a1_leg_fk.tracking import REJECTIONS, TrackerCounts
+
+OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"
+"""``diagnostic_msgs/msg/DiagnosticStatus`` levels (byte constants, as the message defines
+them)."""
+
+MAX_LISTED_UNKNOWN_NAMES = 20
+
+
+def rejected_messages(counts: TrackerCounts) -> int:
+    """Messages rejected so far, for any of :data:`a1_leg_fk.tracking.REJECTIONS`."""
+    return sum(counts.outcomes[rejection] for rejection in REJECTIONS)
+
+
+@dataclass
+class PeriodCounter:
+    """Messages received and rejected between successive :meth:`take` calls, over the
+    cumulative counts of a tracker that may be replaced by a fresh one (:meth:`new_tracker`).
+    """
+
+    _previous: tuple[int, int] = (0, 0)  # the counts at the previous take (or tracker change)
+    _carried: tuple[int, int] = (0, 0)  # counted by replaced trackers since the previous take
+
+    def take(self, counts: TrackerCounts) -> tuple[int, int]:
+        """(received, rejected) since the previous call; the first call counts from zero."""
+        now = (counts.messages, rejected_messages(counts))
+        since = (
+            self._carried[0] + now[0] - self._previous[0],
+            self._carried[1] + now[1] - self._previous[1],
+        )
+        self._previous, self._carried = now, (0, 0)
+        return since
+
+    def new_tracker(self, old: TrackerCounts) -> None:
+        """The tracker whose counts are ``old`` is being replaced by a fresh one (counts from
+        zero): what ``old`` counted since the previous take goes into the next take's result.
+        """
+        self._carried = self.take(old)
+        self._previous = (0, 0)
+
+
+@dataclass(frozen=True)
+class FkReport:
+    """What the node knows at one report. ``period_s`` [s] is the time between reports;
+    ``received_in_period``/``rejected_in_period`` come from :meth:`PeriodCounter.take`.
+    """
+
+    counts: TrackerCounts
+    received_in_period: int
+    rejected_in_period: int
+    period_s: float
+    joints_outside_limits: Sequence[str]
+    stamp_jumps_back: int
+    model: str
+    description_topic: str  # the resolved topic name, "" when none is followed
+    description_status: str
+    description_rejected: bool
+    last_verify: str
+    verify_disagreed: bool  # the latest verify_fk found a foot beyond the tolerance
+
+
+def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
+    """(level, summary, values) of the report. ERROR when verify_fk disagreed with PyBullet; else
+    WARN for a rejected robot description, no joint state yet, or rejected messages in the
+    period, non-finite values or joints outside limits; else OK.
+    """
+    counts = report.counts
+    outside = report.joints_outside_limits
+    level, summary = OK, "feet published"
+    if not counts.messages:
+        level, summary = WARN, "no joint_states received yet"
+    elif report.rejected_in_period or outside or counts.non_finite_joints:
+        level, summary = WARN, "some joint_states rejected or joints outside limits"
+    level, summary, description = robot_description_status(
+        level,
+        summary,
+        report.model,
+        report.description_topic,
+        report.description_status,
+        report.description_rejected,
+    )
+    if report.verify_disagreed:
+        level, summary = ERROR, "verify_fk: FK disagrees with PyBullet beyond the tolerance"
+    unknown = sorted(counts.unknown_names)[:MAX_LISTED_UNKNOWN_NAMES]
+    values: dict[str, object] = {
+        "messages_received": counts.messages,
+        **{f"messages_{outcome}": n for outcome, n in sorted(counts.outcomes.items())},
+        "non_finite_joint_values": counts.non_finite_joints,
+        "feet_published": counts.feet,
+        "input_rate_hz": f"{report.received_in_period / report.period_s:.1f}",
+        "joints_outside_limits": ",".join(outside) or "none",
+        "messages_out_of_limits": counts.out_of_limit_messages,
+        "unknown_joint_names": ",".join(unknown) or "none",
+        "stamp_jumps_back": report.stamp_jumps_back,
+        "last_verify": report.last_verify,
+        **description,
+    }
+    return level, summary, values
+
+
+def robot_description_status(
+    level: bytes, summary: str, model: str, topic: str, status: str, rejected: bool
+) -> tuple[bytes, str, dict[str, object]]:
+    """A node's ``level`` and ``summary``, turned to WARN "robot description on ``topic``
+    rejected" when the latest description from ``topic`` was rejected, and the ``model`` and
+    ``robot_description_topic`` values ("``topic`` or none: ``status``") of its status.
+    """
+    if rejected:
+        level, summary = WARN, f"robot description on {topic} rejected"
+    return (
+        level,
+        summary,
+        {"model": model, "robot_description_topic": f"{topic or 'none'}: {status}"},
+    )

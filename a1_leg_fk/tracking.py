@@ -1,0 +1,323 @@
+"""JointState handling without ROS types: merge partial messages, reject bad ones, compute feet.
+
+:class:`FootTracker` is what the node calls for every ``sensor_msgs/JointState``. It takes the
+message's ``name``, ``position`` and ``velocity`` sequences and returns the feet to publish:
+one per leg that the message touched and whose three joints are all known. The name -> slot
+mapping is cached and rebuilt only when the message's name list changes, so a steady stream
+costs one list comparison plus the generated FK arithmetic.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from a1_leg_fk.kinematics.quadruped import Quadruped
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG
+
+# Message outcomes; every message received ends in exactly one of them.
+ACCEPTED = "accepted"
+NO_LEG_JOINTS = "no_leg_joints"  # only names the model does not know (e.g. an arm's joints)
+POSITION_LENGTH_MISMATCH = "position_length_mismatch"
+VELOCITY_LENGTH_MISMATCH = "velocity_length_mismatch"
+DUPLICATE_NAMES = "duplicate_names"
+ALL_POSITIONS_NON_FINITE = "all_positions_non_finite"
+REJECTIONS = (
+    POSITION_LENGTH_MISMATCH,
+    VELOCITY_LENGTH_MISMATCH,
+    DUPLICATE_NAMES,
+    ALL_POSITIONS_NON_FINITE,
+)
+MAX_REMEMBERED_UNKNOWN_NAMES = 1000  # a flood of new names must not grow memory
+
+
+@dataclass(frozen=True)
+class Foot:
+    """One leg's foot from one message: position [m] and, if the message had the leg's three
+    joint velocities, velocity [m/s]; base frame, relative to the base.
+    """
+
+    leg_slot: int
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float] | None
+
+
+@dataclass(frozen=True)
+class BlockResult:
+    """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;
+    ``angles`` (K, 12) [rad], the merged state after each message (NaN for joints not yet known);
+    ``rates`` (K, 12) [rad/s], the message's joint velocities where the node publishes that leg's
+    velocity for it, NaN elsewhere.
+    """
+
+    accepted: np.ndarray
+    angles: np.ndarray
+    rates: np.ndarray
+
+
+@dataclass
+class TrackerCounts:
+    """What the tracker has seen since it was created."""
+
+    messages: int = 0
+    outcomes: Counter[str] = field(default_factory=Counter)  # outcome -> messages
+    non_finite_joints: int = 0  # joint values rejected for NaN/inf (their legs were not published)
+    feet: int = 0  # feet returned for publishing
+    out_of_limit_messages: int = 0  # messages that left some joint outside its URDF limits
+    unknown_names: set[str] = field(default_factory=set)
+
+
+@dataclass(frozen=True)
+class _NameLayout:
+    """What a message's name list means: (message index, slot) pairs and the legs it touches."""
+
+    names: list[str]
+    pairs: tuple[tuple[int, int], ...]
+    legs: tuple[int, ...]
+    unknown: tuple[str, ...]
+    duplicates: tuple[str, ...]
+
+
+class FootTracker:
+    """Merges JointState messages into the latest 12-angle state and computes the touched feet."""
+
+    def __init__(self, quadruped: Quadruped) -> None:
+        self.quadruped = quadruped
+        self.angles: list[float] = [math.nan] * JOINT_COUNT  # rad; NaN until first known
+        self.counts = TrackerCounts()
+        self._legs = quadruped.legs
+        self._lower = [j.lower if j.lower is not None else -math.inf for j in quadruped.joints]
+        self._upper = [j.upper if j.upper is not None else math.inf for j in quadruped.joints]
+        self._lower_array, self._upper_array = np.array(self._lower), np.array(self._upper)  # rad
+        self._layout = _NameLayout([], (), (), (), ())
+        self._last_outcome = NO_LEG_JOINTS
+        self.last_problem = ""  # what was wrong with the latest message, naming joints and values
+        self.new_unknown_names: list[str] = []  # first seen since take_new_unknown_names()
+
+    @property
+    def complete(self) -> bool:
+        """True once every one of the 12 joints has had a finite angle."""
+        return not any(math.isnan(angle) for angle in self.angles)
+
+    def joints_outside_limits(self) -> list[str]:
+        """URDF names of the joints whose latest angle lies outside their limits."""
+        return [
+            self.quadruped.joint_names[slot]
+            for slot, angle in enumerate(self.angles)
+            if not math.isnan(angle) and not self._lower[slot] <= angle <= self._upper[slot]
+        ]
+
+    def update(
+        self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float]
+    ) -> list[Foot]:
+        """Merge one message; return the feet to publish (possibly none). Never raises on bad data.
+
+        ``names``, ``positions`` [rad] and ``velocities`` [rad/s] are the JointState fields;
+        ``velocities`` may be empty. Check :attr:`last_outcome` for what happened.
+        """
+        counts = self.counts
+        counts.messages += 1
+        self.last_problem = ""
+        layout = self._layout
+        if names != layout.names:
+            layout = self._layout = self._describe(list(names))
+        outcome = self._check(layout, len(names), len(positions), len(velocities))
+        if outcome is not None:
+            return self._finish(outcome, [])
+        angles, lower, upper = self.angles, self._lower, self._upper
+        bad_legs: set[int] = set()
+        merged = 0
+        out_of_limit = False
+        for index, slot in layout.pairs:
+            angle = positions[index]
+            if math.isfinite(angle):
+                angles[slot] = angle
+                merged += 1
+                out_of_limit = out_of_limit or not lower[slot] <= angle <= upper[slot]
+            else:
+                bad_legs.add(slot // JOINTS_PER_LEG)
+                counts.non_finite_joints += 1
+                self.last_problem = f"position {angle} of joint '{names[index]}' is not finite"
+        if not merged:
+            return self._finish(ALL_POSITIONS_NON_FINITE, [])
+        counts.out_of_limit_messages += out_of_limit
+        feet = [
+            self._foot(leg_slot, layout, velocities)
+            for leg_slot in layout.legs
+            if leg_slot not in bad_legs and not self._leg_unknown(leg_slot)
+        ]
+        return self._finish(ACCEPTED, feet)
+
+    def update_block(
+        self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray
+    ) -> BlockResult:
+        """:meth:`update` for K consecutive messages that share one name list, as arrays.
+
+        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] is (K, len(names)) or
+        (K, 0). Outcomes, counts and the merged state end up exactly as after K calls of
+        :meth:`update`; messages whose leg joints are all finite are merged with numpy, the others
+        go through :meth:`update` one by one.
+        """
+        rows = positions.shape[0]
+        layout = self._layout
+        if names != layout.names:
+            layout = self._layout = self._describe(list(names))
+        result = BlockResult(
+            np.zeros(rows, bool),
+            np.empty((rows, JOINT_COUNT)),
+            np.full((rows, JOINT_COUNT), math.nan),
+        )
+        outcome = self._check(layout, len(names), positions.shape[1], velocities.shape[1])
+        if outcome is not None:
+            self.counts.messages += rows
+            self._finish_many(outcome, rows, 0)
+            result.angles[:] = self.angles
+            return result
+        index = np.array([i for i, _ in layout.pairs])
+        slots = np.array([slot for _, slot in layout.pairs])
+        values = positions[:, index]
+        finite = np.isfinite(values).all(axis=1)
+        row = 0
+        while row < rows:
+            if finite[row]:
+                end = row + int(np.argmin(finite[row:])) if not finite[row:].all() else rows
+                self._merge_finite(layout, values[row:end], slots, result, slice(row, end))
+                if velocities.shape[1]:
+                    result.rates[row:end, slots] = velocities[row:end, index]
+                row = end
+            else:
+                message_rates = velocities[row].tolist()
+                feet = self.update(names, positions[row].tolist(), message_rates)
+                result.accepted[row] = self._last_outcome == ACCEPTED
+                result.angles[row] = self.angles
+                for foot in feet:
+                    if foot.velocity is not None:  # then the leg's three rates are finite
+                        first = foot.leg_slot * JOINTS_PER_LEG
+                        result.rates[row, first : first + JOINTS_PER_LEG] = self._leg_rates(
+                            foot.leg_slot, layout, message_rates
+                        )
+                row += 1
+        return result
+
+    def _merge_finite(
+        self,
+        layout: _NameLayout,
+        values: np.ndarray,
+        slots: np.ndarray,
+        result: BlockResult,
+        rows: slice,
+    ) -> None:
+        """Merge messages whose leg joints are all finite (``values`` (n, pairs) [rad])."""
+        count = values.shape[0]
+        angles = result.angles[rows]
+        angles[:] = self.angles
+        angles[:, slots] = values
+        result.accepted[rows] = True
+        self.angles = angles[-1].tolist()
+        lower, upper = self._lower_array[slots], self._upper_array[slots]
+        self.counts.messages += count
+        self.counts.out_of_limit_messages += int(
+            ((values < lower) | (values > upper)).any(axis=1).sum()
+        )
+        per_leg = angles.reshape(count, len(self._legs), JOINTS_PER_LEG)
+        feet = sum(
+            int((~np.isnan(per_leg[:, leg_slot]).any(axis=1)).sum()) for leg_slot in layout.legs
+        )
+        self.last_problem = ""
+        self._finish_many(ACCEPTED, count, feet)
+
+    def _finish_many(self, outcome: str, messages: int, feet: int) -> None:
+        self._last_outcome = outcome
+        self.counts.outcomes[outcome] += messages
+        self.counts.feet += feet
+
+    @property
+    def last_outcome(self) -> str:
+        """The outcome of the latest message (one of ACCEPTED, NO_LEG_JOINTS or REJECTIONS)."""
+        return self._last_outcome
+
+    def _finish(self, outcome: str, feet: list[Foot]) -> list[Foot]:
+        self._last_outcome = outcome
+        self.counts.outcomes[outcome] += 1
+        self.counts.feet += len(feet)
+        return feet
+
+    def _check(
+        self, layout: _NameLayout, names: int, positions: int, velocities: int
+    ) -> str | None:
+        """The message's rejection (setting :attr:`last_problem`), NO_LEG_JOINTS, or None if
+        usable.
+        """
+        if positions != names:
+            self.last_problem = f"{names} names but {positions} positions"
+            return POSITION_LENGTH_MISMATCH
+        if velocities and velocities != names:
+            self.last_problem = f"{names} names but {velocities} velocities"
+            return VELOCITY_LENGTH_MISMATCH
+        if layout.duplicates:
+            self.last_problem = f"joints given more than once: {list(layout.duplicates[:10])}"
+            return DUPLICATE_NAMES
+        if not layout.pairs:
+            return NO_LEG_JOINTS
+        return None
+
+    def _leg_unknown(self, leg_slot: int) -> bool:
+        first = leg_slot * JOINTS_PER_LEG
+        return any(math.isnan(angle) for angle in self.angles[first : first + JOINTS_PER_LEG])
+
+    def _foot(self, leg_slot: int, layout: _NameLayout, velocities: Sequence[float]) -> Foot:
+        first = leg_slot * JOINTS_PER_LEG
+        q0, q1, q2 = self.angles[first : first + JOINTS_PER_LEG]
+        leg = self._legs[leg_slot]
+        rates = self._leg_rates(leg_slot, layout, velocities) if velocities else None
+        if rates is None:
+            return Foot(leg_slot, leg.position(q0, q1, q2), None)
+        x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
+        finite = (
+            math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)
+        )  # huge rates can overflow
+        return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
+
+    @staticmethod
+    def _leg_rates(
+        leg_slot: int, layout: _NameLayout, velocities: Sequence[float]
+    ) -> list[float] | None:
+        """The leg's three joint velocities from this message, or None unless all are finite."""
+        rates = [math.nan] * JOINTS_PER_LEG
+        first = leg_slot * JOINTS_PER_LEG
+        for index, slot in layout.pairs:
+            if first <= slot < first + JOINTS_PER_LEG:
+                rates[slot - first] = velocities[index]
+        return rates if all(math.isfinite(rate) for rate in rates) else None
+
+    def _describe(self, names: list[str]) -> _NameLayout:
+        slots = self.quadruped.name_to_slot
+        pairs, unknown, seen, duplicates = [], [], set(), []
+        for index, name in enumerate(names):
+            slot = slots.get(name)
+            if slot is None:
+                unknown.append(name)
+                continue
+            if slot in seen:
+                duplicates.append(name)
+            seen.add(slot)
+            pairs.append((index, slot))
+        self._remember_unknown(unknown)
+        legs = tuple(sorted({slot // JOINTS_PER_LEG for _, slot in pairs}))
+        return _NameLayout(names, tuple(pairs), legs, tuple(unknown), tuple(duplicates))
+
+    def _remember_unknown(self, names: list[str]) -> None:
+        known_unknown = self.counts.unknown_names
+        for name in names:
+            if name not in known_unknown and len(known_unknown) < MAX_REMEMBERED_UNKNOWN_NAMES:
+                known_unknown.add(name)
+                self.new_unknown_names.append(name)
+
+    def take_new_unknown_names(self) -> list[str]:
+        """Names seen for the first time since the last call (for warn-once logging)."""
+        names, self.new_unknown_names = self.new_unknown_names, []
+        return names

@@ -1,0 +1,77 @@
+"""foot_fk_node's parameter ranges (FloatingPointRange, enforced by rclpy), on a node in this
+process."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from rclpy.parameter import Parameter
+
+from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.ros.foot_fk_node import FootFkNode
+
+# The ranges the README and config/params.yaml document (inclusive).
+DOCUMENTED_RANGES = {
+    "marker_rate_hz": (0.001, 1000.0),
+    "max_publish_rate_hz": (0.0, 1_000_000.0),
+    "verify_tolerance_m": (1e-12, 1.0),
+}
+
+
+@pytest.fixture
+def node(ros):
+    started = FootFkNode(
+        context=ros.context, parameter_overrides=[Parameter("enable_verify", value=False)]
+    )
+    yield started
+    started.destroy_node()
+
+
+def _outside(lowest: float, highest: float) -> list[float]:
+    just_below = lowest / 2 if lowest > 0 else -1e-9
+    return [just_below, highest * 2, -1.0, math.nan, math.inf, -math.inf]
+
+
+@pytest.mark.parametrize("name", sorted(DOCUMENTED_RANGES))
+def test_values_outside_the_documented_range_are_rejected_naming_the_parameter_and_old_value_kept(
+    node, name
+):
+    old = node.get_parameter(name).value
+    for value in _outside(*DOCUMENTED_RANGES[name]):
+        result = node.set_parameters([Parameter(name, value=value)])[0]
+        assert not result.successful, (name, value)
+        assert name in result.reason and "out of range" in result.reason, result.reason
+        assert node.get_parameter(name).value == old
+
+
+@pytest.mark.parametrize("name", sorted(DOCUMENTED_RANGES))
+def test_both_bounds_are_accepted(node, name):
+    for bound in DOCUMENTED_RANGES[name]:
+        result = node.set_parameters([Parameter(name, value=bound)])[0]
+        assert result.successful, result.reason
+        assert node.get_parameter(name).value == bound
+
+
+def test_the_settings_follow_accepted_values(node):
+    node.set_parameters(
+        [Parameter("marker_rate_hz", value=4.0), Parameter("max_publish_rate_hz", value=0.0)]
+    )
+    assert node._marker_interval_s == 0.25 and node._min_publish_interval_s == 0.0
+    node.set_parameters([Parameter("max_publish_rate_hz", value=50.0)])
+    assert node._min_publish_interval_s == 0.02
+
+
+def test_an_out_of_range_value_at_start_is_a_leg_fk_error_naming_the_parameter(ros):
+    with pytest.raises(LegFkError, match=r"marker_rate_hz.*out of range"):
+        FootFkNode(
+            context=ros.context, parameter_overrides=[Parameter("marker_rate_hz", value=0.0)]
+        )
+
+
+def test_preserialized_output_can_be_turned_off_and_on_at_run_time(node):
+    assert node._serialized is not None  # on by default (and usable with this rmw)
+    assert node.set_parameters([Parameter("preserialized_output", value=False)])[0].successful
+    assert node._serialized is None
+    assert node.set_parameters([Parameter("preserialized_output", value=True)])[0].successful
+    assert node._serialized is not None

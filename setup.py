@@ -19,6 +19,8 @@ setup(
     name=package_name,
     version=version,
     packages=find_packages(exclude=["test", "test.*"]),
+    # PEP 561: users' type checkers read the package's annotations.
+    package_data={package_name: ["py.typed"]},
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
@@ -36,9 +38,9 @@ setup(
     python_requires=">=3.10",
     entry_points={
         "console_scripts": [
-            "foot_fk_node = a1_leg_fk.executables:foot_fk_node",
-            "foot_ik_node = a1_leg_fk.executables:foot_ik_node",
-            "joint_state_demo = a1_leg_fk.executables:joint_state_demo",
+            "foot_fk_node = a1_leg_fk.ros.executables:foot_fk_node",
+            "foot_ik_node = a1_leg_fk.ros.executables:foot_ik_node",
+            "joint_state_demo = a1_leg_fk.ros.executables:joint_state_demo",
             "a1-leg-fk = a1_leg_fk.cli:main",
         ],
     },

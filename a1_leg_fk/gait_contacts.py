@@ -4,9 +4,12 @@ Pure numpy (no ROS, no file I/O); :func:`detect_contacts` takes ``stamps_s`` (N,
 ``world_feet`` (N, 4, 3) [m] as described in :mod:`a1_leg_fk.gait_analysis`. A foot is in stance
 when it is near the ground and nearly still:
 
+* **Thresholds** per foot, derived from its own speed and height distributions
+  (:mod:`a1_leg_fk.gait_thresholds`; the configured values are bounds), or as configured with
+  ``adaptive=False``.
 * **Ground.** A plane ``z = level + gx (x - x0) + gy (y - y0)`` fitted to the samples where a foot
-  is still (speed below ``speed_on_mps``): least squares, then refitted on the lower half of the
-  residuals three times (so a still swing apex does not lift it), and finally shifted to the
+  is still (speed below its ``speed_on_mps``): least squares, then refitted on the lower half of
+  the residuals three times (so a still swing apex does not lift it), and finally shifted to the
   ``ground_percentile`` percentile of the residuals of all still samples. The level is that of the
   *foot frame* in stance (ground + foot radius), so neither the floor height nor the foot radius
   need be known; a slope of a few degrees is followed. Heights are ``z - plane(x, y)``.
@@ -16,7 +19,8 @@ when it is near the ground and nearly still:
   span that ends at it and the span that starts at it: a foot just landed is still over the span
   ahead, a foot about to lift is still over the span behind, so the spans do not shorten stances.
 * **Hysteresis.** Swing -> stance when height < ``height_on_m`` and speed < ``speed_on_mps``;
-  stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps``.
+  stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps`` (the foot's own
+  thresholds).
 * **Minimum phase.** Interior swings, then interior stances, shorter than ``min_phase_s`` are
   merged into their neighbours.
 * **Edges.** Each stance's first/last samples are trimmed to those within three noise deviations
@@ -35,6 +39,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from a1_leg_fk.gait_thresholds import height_thresholds, speed_thresholds
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.urdf import LegFkError
 
@@ -50,7 +55,13 @@ SLOPE_RCOND = 0.01
 
 @dataclass(frozen=True)
 class ContactThresholds:
-    """The contact detector's settings; defaults for the A1 at 20..1000 Hz (README: why these)."""
+    """The contact detector's settings; defaults for the A1 at 20..1000 Hz (README: why these).
+
+    With ``adaptive`` (default) each foot's on/off heights and speeds are derived from the
+    recording (:mod:`a1_leg_fk.gait_thresholds`): ``height_on_m`` and ``speed_on_mps`` are then
+    floors, ``height_on_max_m`` and ``speed_on_max_mps`` ceilings, and the off values keep their
+    gap (height) and ratio (speed) above on. Without, every foot uses the values as given.
+    """
 
     height_on_m: float = 0.02
     height_off_m: float = 0.035
@@ -59,6 +70,9 @@ class ContactThresholds:
     min_phase_s: float = 0.04
     ground_percentile: float = 5.0
     speed_window_s: float = 0.02
+    height_on_max_m: float = 0.05
+    speed_on_max_mps: float = 0.6
+    adaptive: bool = True
 
     def __post_init__(self) -> None:
         for name, value in asdict(self).items():
@@ -70,6 +84,12 @@ class ContactThresholds:
             raise LegFkError(
                 f"hysteresis needs off >= on: height {self.height_on_m} / {self.height_off_m} m, "
                 f"speed {self.speed_on_mps} / {self.speed_off_mps} m/s"
+            )
+        if self.height_on_max_m < self.height_on_m or self.speed_on_max_mps < self.speed_on_mps:
+            raise LegFkError(
+                f"adaptive bounds need max >= on: height {self.height_on_m} / "
+                f"{self.height_on_max_m} m, speed {self.speed_on_mps} / "
+                f"{self.speed_on_max_mps} m/s"
             )
         if self.ground_percentile > 100:
             raise LegFkError(f"ground_percentile must be in 0..100, got {self.ground_percentile}")
@@ -124,8 +144,10 @@ class Contacts:
     stance: np.ndarray  # (N, 4) bool
     stances: tuple[tuple[Stance, ...], ...]  # per leg
     ground: GroundPlane
-    thresholds: ContactThresholds
+    thresholds: ContactThresholds  # as configured (floors and ceilings when adaptive)
     notes: tuple[str, ...] = ()
+    # the thresholds each foot was judged by (derived from the data when adaptive), per leg
+    leg_thresholds: tuple[ContactThresholds, ...] = ()
 
 
 # --- input -------------------------------------------------------------------------------------
@@ -314,8 +336,9 @@ def detect_contacts(
                 speeds[rows, slot] = still_speeds(
                     times[rows], feet[rows, slot], thresholds.speed_window_s
                 )
+    per_leg = speed_thresholds(speeds, thresholds)
     with np.errstate(invalid="ignore"):
-        still = valid & (speeds < thresholds.speed_on_mps)
+        still = valid & (speeds < np.array([leg.speed_on_mps for leg in per_leg]))
     if still.sum() < 3:
         raise LegFkError(
             f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} "
@@ -323,12 +346,13 @@ def detect_contacts(
         )
     ground = fit_ground(feet[still], thresholds.ground_percentile)
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
+    per_leg = height_thresholds(heights, speeds, per_leg)
     stance = np.zeros(valid.shape, dtype=bool)
     for slot in range(legs):
         for rows in segments[slot]:
             stance[rows, slot] = drop_short_phases(
                 times[rows],
-                hysteresis(heights[rows, slot], speeds[rows, slot], thresholds),
+                hysteresis(heights[rows, slot], speeds[rows, slot], per_leg[slot]),
                 thresholds.min_phase_s,
             )
     stance_heights = heights[stance]
@@ -358,6 +382,7 @@ def detect_contacts(
         ground,
         thresholds,
         tuple(notes),
+        tuple(per_leg),
     )
 
 

@@ -1,0 +1,114 @@
+"""Contact thresholds derived from the recording itself: each foot's stance is the low, slow mode
+of its own height and speed distributions.
+
+Pure numpy (no ROS, no file I/O). Fixed thresholds fail on real data: a retargeted or a slipping
+stance foot moves at 0.2-0.4 m/s, and a foot can stand a centimetre higher than the others. So,
+for each foot (legs in :data:`a1_leg_fk.legs.LEG_NAMES` order):
+
+* **Speed.** The foot's speeds [m/s] split into a slow mode (stance) and a fast one (swing) by
+  Otsu's method on ``log(speed)`` -- the split that maximises the variance between the two modes,
+  found in one pass over the sorted values. The split is the foot's ``speed_on_mps``, kept within
+  the configured ``speed_on_mps`` (floor) and ``speed_on_max_mps`` (ceiling); ``speed_off_mps``
+  keeps the configured off/on ratio.
+* **Height** [m] above the ground plane, over the foot's slow samples (mostly stance; a still swing
+  apex is a minority): their median plus ``HEIGHT_SPREAD`` robust deviations (1.4826 MAD) is the
+  foot's ``height_on_m``, within the configured ``height_on_m`` (floor) and ``height_on_max_m``
+  (ceiling); ``height_off_m`` keeps the configured gap above ``on``.
+
+A foot with fewer than ``MIN_SAMPLES`` finite samples keeps the floors. With
+``ContactThresholds(adaptive=False)`` every foot uses the configured values as they are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # gait_contacts imports this module
+    from a1_leg_fk.gait_contacts import ContactThresholds
+
+MIN_SAMPLES = 20
+"""Fewer finite samples of a foot than this give no distribution to split: the floors are used."""
+SPEED_FLOOR_MPS = 1e-3
+"""Speeds below this [m/s] count as this in the log-speed split (a foot still to the last bit)."""
+HEIGHT_SPREAD = 4.0
+"""Robust deviations of the slow samples' heights above their median that still count as down."""
+MAD_TO_SIGMA = 1.4826
+
+
+def otsu_split(values: np.ndarray) -> float:
+    """The value splitting ``values`` (1-D, finite, at least 2) into two modes with the largest
+    variance between them (Otsu's method): the midpoint between the last value of the lower mode
+    and the first of the upper one.
+    """
+    ordered = np.sort(np.asarray(values, dtype=float))
+    n = ordered.size
+    below = np.arange(1, n)  # candidate splits: the first k values are the lower mode
+    sums = np.cumsum(ordered)[:-1]
+    mean_low = sums / below
+    mean_high = (ordered.sum() - sums) / (n - below)
+    between = below * (n - below) * (mean_high - mean_low) ** 2
+    k = int(np.argmax(between)) + 1
+    return float(0.5 * (ordered[k - 1] + ordered[k]))
+
+
+def speed_split(speeds: np.ndarray) -> float | None:
+    """The split [m/s] between one foot's slow and fast speeds (Otsu on ``log(speed)``), or
+    ``None`` with fewer than :data:`MIN_SAMPLES` finite speeds.
+    """
+    finite = speeds[np.isfinite(speeds)]
+    if finite.size < MIN_SAMPLES:
+        return None
+    return float(np.exp(otsu_split(np.log(np.maximum(finite, SPEED_FLOOR_MPS)))))
+
+
+def height_top(heights: np.ndarray) -> float | None:
+    """The top [m] of one foot's stance heights ``heights`` (its slow samples): median plus
+    :data:`HEIGHT_SPREAD` robust deviations, or ``None`` with fewer than :data:`MIN_SAMPLES`.
+    """
+    finite = heights[np.isfinite(heights)]
+    if finite.size < MIN_SAMPLES:
+        return None
+    median = float(np.median(finite))
+    deviation = MAD_TO_SIGMA * float(np.median(np.abs(finite - median)))
+    return median + HEIGHT_SPREAD * deviation
+
+
+def speed_thresholds(speeds: np.ndarray, bounds: ContactThresholds) -> list[ContactThresholds]:
+    """Per foot: ``bounds`` with ``speed_on_mps``/``speed_off_mps`` from that foot's speeds (N, 4)
+    [m/s] (NaN: unknown), see the module docstring; ``bounds`` itself when not adaptive.
+    """
+    out = []
+    for slot in range(speeds.shape[1]):
+        split = speed_split(speeds[:, slot]) if bounds.adaptive else None
+        if split is None:
+            out.append(bounds)
+            continue
+        on = min(max(split, bounds.speed_on_mps), bounds.speed_on_max_mps)
+        ratio = bounds.speed_off_mps / bounds.speed_on_mps if bounds.speed_on_mps > 0 else 1.0
+        out.append(replace(bounds, speed_on_mps=on, speed_off_mps=max(on * ratio, on)))
+    return out
+
+
+def height_thresholds(
+    heights: np.ndarray, speeds: np.ndarray, per_leg: list[ContactThresholds]
+) -> list[ContactThresholds]:
+    """Per foot: ``per_leg[slot]`` with ``height_on_m``/``height_off_m`` from that foot's heights
+    (N, 4) [m] where its speed (N, 4) [m/s] is below its ``speed_on_mps``; see the module
+    docstring.
+    """
+    out = []
+    for slot, leg in enumerate(per_leg):
+        with np.errstate(invalid="ignore"):
+            slow = speeds[:, slot] < leg.speed_on_mps
+        top = height_top(heights[slow, slot]) if leg.adaptive else None
+        if top is None:
+            out.append(leg)
+            continue
+        on = min(max(top, leg.height_on_m), leg.height_on_max_m)
+        out.append(
+            replace(leg, height_on_m=on, height_off_m=on + leg.height_off_m - leg.height_on_m)
+        )
+    return out

@@ -44,18 +44,24 @@ def synthetic(
     seconds: float = 8.0,
     seed: int = 0,
     pause: tuple[float, float] | None = None,
+    phases: tuple[float, float, float, float] | None = None,
+    duty: float | None = None,
+    slip_mps: float = 0.0,
 ):
     """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the
     first stamp]).
 
     ``pause=(at, length)`` [s] freezes the gait from ``at`` for ``length`` (the true stances then
-    hold for gait time, not for the stamps).
+    hold for gait time, not for the stamps). ``phases`` (FR, FL, RR, RL touchdowns [cycles]) and
+    ``duty`` replace the gait's own; ``slip_mps`` slides each stance foot forward at that speed
+    through its foothold (as retargeted motion and slipping robots do), the swing taking it back.
     """
     rng = np.random.default_rng(seed)
     dt = 1.0 / rate_hz
     times = np.arange(0.0, seconds, dt)
     times[1:] += rng.uniform(-0.2, 0.2, times.size - 1) * dt
-    duty = DUTY[gait]
+    duty = duty or DUTY[gait]
+    pattern = phases or PHASES[gait]
     swing = (1.0 - duty) * PERIOD_S
     a, b = (math.tan(math.radians(d)) for d in SLOPE_DEG)
     radius_dz = FOOT_RADIUS_M * math.sqrt(
@@ -68,14 +74,18 @@ def synthetic(
         at, length = pause
         times = np.where(times < at, times, np.maximum(at, times - length))
     for leg in range(4):
-        touchdowns = (PHASES[gait][leg] + np.arange(-2, int(seconds / PERIOD_S) + 3)) * PERIOD_S
+        touchdowns = (pattern[leg] + np.arange(-2, int(seconds / PERIOD_S) + 3)) * PERIOD_S
         holds = HIPS_XY[leg, 0] + speed * (touchdowns + 0.5 * duty * PERIOD_S)
         k = np.searchsorted(touchdowns, times, side="right") - 1
         since = times - touchdowns[k]
         x, lift = holds[k].copy(), np.zeros(times.size)
         swinging = since > duty * PERIOD_S
         s = (since[swinging] - duty * PERIOD_S) / swing
-        x[swinging] += (holds[k[swinging] + 1] - holds[k[swinging]]) * (1 - np.cos(np.pi * s)) / 2
+        blend = (1 - np.cos(np.pi * s)) / 2
+        x[swinging] += (holds[k[swinging] + 1] - holds[k[swinging]]) * blend
+        half_slide = 0.5 * slip_mps * duty * PERIOD_S
+        x += np.where(swinging, 0.0, slip_mps * since - half_slide)
+        x[swinging] += half_slide * (1 - 2 * blend)
         lift[swinging] = CLEARANCE_M * np.sin(np.pi * s)
         y = np.full(times.size, HIPS_XY[leg, 1])
         feet[:, leg] = np.column_stack((x, y, GROUND_Z0_M + a * x + b * y + radius_dz + lift))

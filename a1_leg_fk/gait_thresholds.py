@@ -7,9 +7,11 @@ for each foot (legs in :data:`a1_leg_fk.legs.LEG_NAMES` order):
 
 * **Speed.** The foot's speeds [m/s] split into a slow mode (stance) and a fast one (swing) by
   Otsu's method on ``log(speed)`` -- the split that maximises the variance between the two modes,
-  found in one pass over the sorted values. The split is the foot's ``speed_on_mps``, kept within
-  the configured ``speed_on_mps`` (floor) and ``speed_on_max_mps`` (ceiling); ``speed_off_mps``
-  keeps the configured off/on ratio.
+  found in one pass over the sorted values. The foot's ``speed_on_mps`` is the top of the slow
+  mode (its ``SLOW_PERCENTILE`` percentile times ``SPEED_MARGIN``; at most the split), so a landing
+  foot still decelerating does not count as down; it is kept within the configured
+  ``speed_on_mps`` (floor) and ``speed_on_max_mps`` (ceiling); ``speed_off_mps`` keeps the
+  configured off/on ratio.
 * **Height** [m] above the ground plane, over the foot's slow samples (mostly stance; a still swing
   apex is a minority): their median plus ``HEIGHT_SPREAD`` robust deviations (1.4826 MAD) is the
   foot's ``height_on_m``, within the configured ``height_on_m`` (floor) and ``height_on_max_m``
@@ -33,6 +35,9 @@ MIN_SAMPLES = 20
 """Fewer finite samples of a foot than this give no distribution to split: the floors are used."""
 SPEED_FLOOR_MPS = 1e-3
 """Speeds below this [m/s] count as this in the log-speed split (a foot still to the last bit)."""
+SLOW_PERCENTILE = 90.0
+SPEED_MARGIN = 1.5
+"""The slow mode's top: this percentile of its speeds, times this margin [m/s]."""
 HEIGHT_SPREAD = 4.0
 """Robust deviations of the slow samples' heights above their median that still count as down."""
 MAD_TO_SIGMA = 1.4826
@@ -54,14 +59,17 @@ def otsu_split(values: np.ndarray) -> float:
     return float(0.5 * (ordered[k - 1] + ordered[k]))
 
 
-def speed_split(speeds: np.ndarray) -> float | None:
-    """The split [m/s] between one foot's slow and fast speeds (Otsu on ``log(speed)``), or
-    ``None`` with fewer than :data:`MIN_SAMPLES` finite speeds.
+def slow_top(speeds: np.ndarray) -> float | None:
+    """The top [m/s] of one foot's slow mode: below the split from the fast mode (Otsu on
+    ``log(speed)``), :data:`SPEED_MARGIN` times its :data:`SLOW_PERCENTILE` percentile; ``None``
+    with fewer than :data:`MIN_SAMPLES` finite speeds.
     """
     finite = speeds[np.isfinite(speeds)]
     if finite.size < MIN_SAMPLES:
         return None
-    return float(np.exp(otsu_split(np.log(np.maximum(finite, SPEED_FLOOR_MPS)))))
+    split = float(np.exp(otsu_split(np.log(np.maximum(finite, SPEED_FLOOR_MPS)))))
+    slow = finite[finite <= split]
+    return min(split, SPEED_MARGIN * float(np.percentile(slow, SLOW_PERCENTILE)))
 
 
 def height_top(heights: np.ndarray) -> float | None:
@@ -82,11 +90,11 @@ def speed_thresholds(speeds: np.ndarray, bounds: ContactThresholds) -> list[Cont
     """
     out = []
     for slot in range(speeds.shape[1]):
-        split = speed_split(speeds[:, slot]) if bounds.adaptive else None
-        if split is None:
+        top = slow_top(speeds[:, slot]) if bounds.adaptive else None
+        if top is None:
             out.append(bounds)
             continue
-        on = min(max(split, bounds.speed_on_mps), bounds.speed_on_max_mps)
+        on = min(max(top, bounds.speed_on_mps), bounds.speed_on_max_mps)
         ratio = bounds.speed_off_mps / bounds.speed_on_mps if bounds.speed_on_mps > 0 else 1.0
         out.append(replace(bounds, speed_on_mps=on, speed_off_mps=max(on * ratio, on)))
     return out

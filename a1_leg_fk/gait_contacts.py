@@ -60,7 +60,7 @@ class ContactThresholds:
     With ``adaptive`` (default) each foot's on/off heights and speeds are derived from the
     recording (:mod:`a1_leg_fk.gait_thresholds`): ``height_on_m`` and ``speed_on_mps`` are then
     floors, ``height_on_max_m`` and ``speed_on_max_mps`` ceilings, and the off values keep their
-    gap (height) and ratio (speed) above on. Without, every foot uses the values as given.
+    gap above on. Without, every foot uses the values as given.
     """
 
     height_on_m: float = 0.02

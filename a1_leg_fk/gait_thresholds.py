@@ -11,7 +11,7 @@ for each foot (legs in :data:`a1_leg_fk.legs.LEG_NAMES` order):
   mode (its ``SLOW_PERCENTILE`` percentile times ``SPEED_MARGIN``; at most the split), so a landing
   foot still decelerating does not count as down; it is kept within the configured
   ``speed_on_mps`` (floor) and ``speed_on_max_mps`` (ceiling); ``speed_off_mps`` keeps the
-  configured off/on ratio.
+  configured gap above on.
 * **Height** [m] above the ground plane, over the foot's slow samples (mostly stance; a still swing
   apex is a minority): their median plus ``HEIGHT_SPREAD`` robust deviations (1.4826 MAD) is the
   foot's ``height_on_m``, within the configured ``height_on_m`` (floor) and ``height_on_max_m``
@@ -95,8 +95,8 @@ def speed_thresholds(speeds: np.ndarray, bounds: ContactThresholds) -> list[Cont
             out.append(bounds)
             continue
         on = min(max(top, bounds.speed_on_mps), bounds.speed_on_max_mps)
-        ratio = bounds.speed_off_mps / bounds.speed_on_mps if bounds.speed_on_mps > 0 else 1.0
-        out.append(replace(bounds, speed_on_mps=on, speed_off_mps=max(on * ratio, on)))
+        gap = bounds.speed_off_mps - bounds.speed_on_mps
+        out.append(replace(bounds, speed_on_mps=on, speed_off_mps=on + gap))
     return out
 
 

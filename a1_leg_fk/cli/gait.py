@@ -46,7 +46,7 @@ THRESHOLD_HELP = {
     "height_off_m": "stance ends above this height [m] (derived: the same gap above on)",
     "speed_on_mps": "stance starts below this foot speed [m/s]; the floor of each foot's derived "
     "value unless --fixed-thresholds",
-    "speed_off_mps": "stance ends above this foot speed [m/s] (derived: the same ratio to on)",
+    "speed_off_mps": "stance ends above this foot speed [m/s] (derived: the same gap above on)",
     "height_on_max_m": "the ceiling of each foot's derived stance-start height [m]",
     "speed_on_max_mps": "the ceiling of each foot's derived stance-start speed [m/s]",
     "min_phase_s": "shorter swings, then stances, are merged into their neighbours [s]",

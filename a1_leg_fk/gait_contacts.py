@@ -56,11 +56,8 @@ SLOPE_RCOND = 0.01
 @dataclass(frozen=True)
 class ContactThresholds:
     """The contact detector's settings; defaults for the A1 at 20..1000 Hz (README: why these).
-
-    With ``adaptive`` (default) each foot's on/off heights and speeds are derived from the
-    recording (:mod:`a1_leg_fk.gait_thresholds`): ``height_on_m`` and ``speed_on_mps`` are then
-    floors, ``height_on_max_m`` and ``speed_on_max_mps`` ceilings, and the off values keep their
-    gap above on. Without, every foot uses the values as given.
+    ``adaptive``: each foot's on/off values derived from the data, these as bounds
+    (:mod:`a1_leg_fk.gait_thresholds`); else every foot uses them as given.
     """
 
     height_on_m: float = 0.02
@@ -87,9 +84,8 @@ class ContactThresholds:
             )
         if self.height_on_max_m < self.height_on_m or self.speed_on_max_mps < self.speed_on_mps:
             raise LegFkError(
-                f"adaptive bounds need max >= on: height {self.height_on_m} / "
-                f"{self.height_on_max_m} m, speed {self.speed_on_mps} / "
-                f"{self.speed_on_max_mps} m/s"
+                f"bounds need max >= on: height {self.height_on_m} / {self.height_on_max_m} m, "
+                f"speed {self.speed_on_mps} / {self.speed_on_max_mps} m/s"
             )
         if self.ground_percentile > 100:
             raise LegFkError(f"ground_percentile must be in 0..100, got {self.ground_percentile}")
@@ -340,9 +336,10 @@ def detect_contacts(
     with np.errstate(invalid="ignore"):
         still = valid & (speeds < np.array([leg.speed_on_mps for leg in per_leg]))
     if still.sum() < 3:
+        gate = max(leg.speed_on_mps for leg in per_leg)
         raise LegFkError(
-            f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} "
-            "samples): cannot find the ground; are these world-frame feet?"
+            f"no foot is ever still (speed < {gate:.3g} m/s in {int(still.sum())} samples): "
+            "cannot find the ground; are these world-frame feet?"
         )
     ground = fit_ground(feet[still], thresholds.ground_percentile)
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)

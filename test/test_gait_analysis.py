@@ -211,6 +211,8 @@ def test_too_few_samples_and_bad_shapes() -> None:
         detect_contacts(stamps, feet[:, :3])
     with raises_leg_fk_error("off >= on"):
         ContactThresholds(height_on_m=0.05, height_off_m=0.03)
+    with raises_leg_fk_error("max >= on", "0.15 / 0.1 m/s"):
+        ContactThresholds(speed_on_max_mps=0.1)
 
 
 def test_leg_that_never_touches_down_or_never_lifts() -> None:

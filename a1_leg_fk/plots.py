@@ -319,9 +319,18 @@ def plot_gait_diagram(
         f"{leg} {value:.2f}" if value is not None else f"{leg} -"
         for leg, value in report.phase_vs_fr.items()
     )
+    naming = report.naming
+    region = (
+        f", {naming.region}" if naming and naming.region and naming.region != report.gait else ""
+    )
+    limb = (
+        f", limb phase {naming.limb_phase:.2f}"
+        if naming is not None and naming.limb_phase is not None
+        else ""
+    )
     diagram.set_title(
-        f"{title + ': ' if title else ''}gait {report.gait} (fit {report.gait_fit:.2f}); "
-        f"touchdown phase vs FR: {phases}"
+        f"{title + ': ' if title else ''}gait {report.gait}{region} (fit {report.gait_fit:.2f}"
+        f"{limb}); touchdown phase vs FR: {phases}"
     )
     ground = contacts.ground
     heights.axhline(
@@ -332,10 +341,16 @@ def plot_gait_diagram(
         f"{ground.origin_xy[0]:.2f}, {ground.origin_xy[1]:.2f} m, slope {ground.slope_deg:.1f} "
         "deg",
     )
-    for value, text in ((thresholds.height_on_m, "on"), (thresholds.height_off_m, "off")):
+    used = contacts.leg_thresholds or (thresholds,)
+    for values, text in (
+        ([t.height_on_m for t in used], "on"),
+        ([t.height_off_m for t in used], "off"),
+    ):
+        value = max(values)  # per foot when derived: the highest drawn, the range written
+        span = f"{min(values):.3f}..{value:.3f}" if min(values) < value else f"{value:g}"
         heights.axhline(value, color="0.4", linestyle="--", linewidth=0.8)
         heights.annotate(
-            f"height {text} {value:g} m",
+            f"height {text} {span} m",
             (contacts.times_s[0], value),
             xytext=(2, 2),
             textcoords="offset points",

@@ -41,10 +41,14 @@ NEEDS_BASE_POSE = (
 FILE_OPTIONS = {"--json": "json", "--csv-contacts": "csv_contacts", "--plot": "plot"}
 """The options that name an output file, and their attribute in the parsed options."""
 THRESHOLD_HELP = {
-    "height_on_m": "stance starts below this height above the ground level [m]",
-    "height_off_m": "stance ends above this height [m]",
-    "speed_on_mps": "stance starts below this foot speed [m/s]",
-    "speed_off_mps": "stance ends above this foot speed [m/s]",
+    "height_on_m": "stance starts below this height above the ground level [m]; the floor of "
+    "each foot's derived value unless --fixed-thresholds",
+    "height_off_m": "stance ends above this height [m] (derived: the same gap above on)",
+    "speed_on_mps": "stance starts below this foot speed [m/s]; the floor of each foot's derived "
+    "value unless --fixed-thresholds",
+    "speed_off_mps": "stance ends above this foot speed [m/s] (derived: the same gap above on)",
+    "height_on_max_m": "the ceiling of each foot's derived stance-start height [m]",
+    "speed_on_max_mps": "the ceiling of each foot's derived stance-start speed [m/s]",
     "min_phase_s": "shorter swings, then stances, are merged into their neighbours [s]",
     "ground_percentile": "the ground level is this percentile of the still feet's heights [%%]",
     "speed_window_s": "speeds are difference quotients over at least this span [s]",
@@ -59,7 +63,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "clearance, gait name",
         description="Find each foot's stance phases from its world-frame height and speed "
         "(hysteresis, minimum phase, ground level estimated from the data), then per-leg "
-        "metrics and the gait (walk, trot, pace, bound, pronk or unknown). Needs --base-pose. "
+        "metrics and the gait named in Hildebrand's terms (limb phase, duty factor: walk, amble, "
+        "trot, pace; bound, half-bound, gallop, pronk; or unknown). Needs --base-pose. "
         "Exit 0 done, 1 bag not read to its end or plot failed, 2 bad input or output.",
     )
     add_recording_arguments(gait)
@@ -85,8 +90,16 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         default="sort",
         help="stamps that go back in time: sort them (default, reported) or reject the input",
     )
+    gait.add_argument(
+        "--fixed-thresholds",
+        action="store_true",
+        help="judge every foot by the threshold options as given, instead of deriving each "
+        "foot's from its own height and speed distributions (bounded by them)",
+    )
     defaults = ContactThresholds()
     for item in fields(ContactThresholds):
+        if item.name == "adaptive":
+            continue
         gait.add_argument(
             f"--{item.name.replace('_', '-')}",
             dest=item.name,
@@ -107,7 +120,12 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         if not options.base_pose:
             raise LegFkError(NEEDS_BASE_POSE)
         thresholds = ContactThresholds(
-            **{item.name: getattr(options, item.name) for item in fields(ContactThresholds)}
+            **{
+                item.name: getattr(options, item.name)
+                for item in fields(ContactThresholds)
+                if item.name != "adaptive"
+            },
+            adaptive=not options.fixed_thresholds,
         )
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
@@ -153,17 +171,33 @@ def _number(value: float | None, form: str) -> str:
     return "-" if value is None else format(value, form)
 
 
+def threshold_summary(report: GaitReport) -> str:
+    """The thresholds each leg was judged by, in one line: height on/off [m], speed on/off
+    [m/s].
+    """
+    kind = "derived per foot" if report.thresholds.adaptive else "fixed"
+    used = "; ".join(
+        f"{leg} {t.height_on_m:.3f}/{t.height_off_m:.3f} m {t.speed_on_mps:.2f}/"
+        f"{t.speed_off_mps:.2f} m/s"
+        for leg, t in zip(LEG_NAMES, report.leg_thresholds)
+    )
+    return f"thresholds ({kind}, on/off): {used}"
+
+
 def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
     """The printed report: gait, ground, one row per leg, notes."""
     phases = ", ".join(
         f"{leg} {_number(value, '.2f')}" for leg, value in report.phase_vs_fr.items()
     )
+    naming = report.naming
+    limb_phase = naming.limb_phase if naming else None
     lines = [
         f"gait:      {report.gait} (fit {report.gait_fit:.2f}; {report.gait_reason})",
         (
-            f"phases:    touchdown vs FR: {phases}; mean duty factor "
-            f"{_number(report.duty_factor, '.3f')}"
+            f"phases:    touchdown vs FR: {phases}; limb phase {_number(limb_phase, '.2f')}; "
+            f"mean duty factor {_number(report.duty_factor, '.3f')}"
         ),
+        f"contacts:  {threshold_summary(report)}",
         (
             f"ground:    level {report.ground.level_m:.4f} m in "
             f"{world_frame or 'the world frame'} (foot frame in stance), slope "

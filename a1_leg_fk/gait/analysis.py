@@ -23,12 +23,12 @@ import numpy as np
 
 from a1_leg_fk.gait.contacts import (
     Contacts,
-    ContactThresholds,
     GroundPlane,
     Stance,
     detect_contacts,
 )
 from a1_leg_fk.gait.metrics import GaitReport, LegMetrics, gait_metrics
+from a1_leg_fk.gait.thresholds import ContactThresholds
 
 __all__ = [
     "ContactThresholds",
@@ -46,7 +46,7 @@ __all__ = [
 def analyze_gait(
     stamps_s: np.ndarray,
     world_feet: np.ndarray,
-    thresholds: ContactThresholds = ContactThresholds(),  # noqa: B008 (a frozen dataclass)
+    thresholds: ContactThresholds = ContactThresholds(),
     unsorted: str = "sort",
 ) -> tuple[Contacts, GaitReport]:
     """:func:`detect_contacts` then :func:`gait_metrics`: contacts and the gait report in one

@@ -4,9 +4,12 @@ Pure numpy (no ROS, no file I/O); :func:`detect_contacts` takes ``stamps_s`` (N,
 ``world_feet`` (N, 4, 3) [m] as described in :mod:`a1_leg_fk.gait.analysis`. A foot is in stance
 when it is near the ground and nearly still:
 
+* **Thresholds** per foot, derived from its own speed and height distributions
+  (:mod:`a1_leg_fk.gait.thresholds`; the configured values are bounds), or as configured with
+  ``adaptive=False``.
 * **Ground.** A plane ``z = level + gx (x - x0) + gy (y - y0)`` fitted to the samples where a foot
-  is still (speed below ``speed_on_mps``): least squares, then refitted on the lower half of the
-  residuals three times (so a still swing apex does not lift it), and finally shifted to the
+  is still (speed below its ``speed_on_mps``): least squares, then refitted on the lower half of
+  the residuals three times (so a still swing apex does not lift it), and finally shifted to the
   ``ground_percentile`` percentile of the residuals of all still samples. The level is that of the
   *foot frame* in stance (ground + foot radius), so neither the floor height nor the foot radius
   need be known; a slope of a few degrees is followed. Heights are ``z - plane(x, y)``.
@@ -16,7 +19,8 @@ when it is near the ground and nearly still:
   span that ends at it and the span that starts at it: a foot just landed is still over the span
   ahead, a foot about to lift is still over the span behind, so the spans do not shorten stances.
 * **Hysteresis.** Swing -> stance when height < ``height_on_m`` and speed < ``speed_on_mps``;
-  stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps``.
+  stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps`` (the foot's own
+  thresholds).
 * **Minimum phase.** Interior swings, then interior stances, shorter than ``min_phase_s`` are
   merged into their neighbours.
 * **Edges.** Each stance's first/last samples are trimmed to those within three noise deviations
@@ -31,10 +35,11 @@ Times are in seconds from the first stamp.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
@@ -46,33 +51,6 @@ EDGE_NOISE_FLOOR_M = 0.001
 SLOPE_RCOND = 0.01
 """Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set
 0)."""
-
-
-@dataclass(frozen=True)
-class ContactThresholds:
-    """The contact detector's settings; defaults for the A1 at 20..1000 Hz (README: why these)."""
-
-    height_on_m: float = 0.02
-    height_off_m: float = 0.035
-    speed_on_mps: float = 0.15
-    speed_off_mps: float = 0.3
-    min_phase_s: float = 0.04
-    ground_percentile: float = 5.0
-    speed_window_s: float = 0.02
-
-    def __post_init__(self) -> None:
-        for name, value in asdict(self).items():
-            if not math.isfinite(value) or value < 0:
-                raise LegFkError(
-                    f"contact threshold {name} must be a finite number >= 0, got {value}"
-                )
-        if self.height_off_m < self.height_on_m or self.speed_off_mps < self.speed_on_mps:
-            raise LegFkError(
-                f"hysteresis needs off >= on: height {self.height_on_m} / {self.height_off_m} m, "
-                f"speed {self.speed_on_mps} / {self.speed_off_mps} m/s"
-            )
-        if self.ground_percentile > 100:
-            raise LegFkError(f"ground_percentile must be in 0..100, got {self.ground_percentile}")
 
 
 @dataclass(frozen=True)
@@ -124,8 +102,10 @@ class Contacts:
     stance: np.ndarray  # (N, 4) bool
     stances: tuple[tuple[Stance, ...], ...]  # per leg
     ground: GroundPlane
-    thresholds: ContactThresholds
+    thresholds: ContactThresholds  # as configured (floors and ceilings when adaptive)
     notes: tuple[str, ...] = ()
+    # the thresholds each foot was judged by (derived from the data when adaptive), per leg
+    leg_thresholds: tuple[ContactThresholds, ...] = ()
 
 
 # --- input -------------------------------------------------------------------------------------
@@ -314,21 +294,24 @@ def detect_contacts(
                 speeds[rows, slot] = still_speeds(
                     times[rows], feet[rows, slot], thresholds.speed_window_s
                 )
+    per_leg = speed_thresholds(speeds, thresholds)
     with np.errstate(invalid="ignore"):
-        still = valid & (speeds < thresholds.speed_on_mps)
+        still = valid & (speeds < np.array([leg.speed_on_mps for leg in per_leg]))
     if still.sum() < 3:
+        gate = max(leg.speed_on_mps for leg in per_leg)
         raise LegFkError(
-            f"no foot is ever still (speed < {thresholds.speed_on_mps} m/s in {int(still.sum())} "
-            "samples): cannot find the ground; are these world-frame feet?"
+            f"no foot is ever still (speed < {gate:.3g} m/s in {int(still.sum())} samples): "
+            "cannot find the ground; are these world-frame feet?"
         )
     ground = fit_ground(feet[still], thresholds.ground_percentile)
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
+    per_leg = height_thresholds(heights, speeds, per_leg)
     stance = np.zeros(valid.shape, dtype=bool)
     for slot in range(legs):
         for rows in segments[slot]:
             stance[rows, slot] = drop_short_phases(
                 times[rows],
-                hysteresis(heights[rows, slot], speeds[rows, slot], thresholds),
+                hysteresis(heights[rows, slot], speeds[rows, slot], per_leg[slot]),
                 thresholds.min_phase_s,
             )
     stance_heights = heights[stance]
@@ -358,6 +341,7 @@ def detect_contacts(
         ground,
         thresholds,
         tuple(notes),
+        tuple(per_leg),
     )
 
 

@@ -10,7 +10,8 @@ pause to stand, are left out and counted as irregular), stride period and freque
 touchdown), step length (horizontal distance between consecutive touchdown positions, each the
 median position of its stance), swing clearance (peak height of each complete swing above the
 ground plane); for the robot, each leg's touchdown phase relative to FR's strides (0..1, circular
-mean, with its consistency ``R`` in 0..1) and the gait named from the phases and the duty factor.
+mean, with its consistency ``R`` in 0..1) and the gait named from the phases and the duty factor
+in Hildebrand's terms (:mod:`a1_leg_fk.gait.naming`: limb phase, region, fit).
 Times are in seconds from the first stamp.
 """
 
@@ -22,28 +23,16 @@ from typing import Any
 
 import numpy as np
 
-from a1_leg_fk.gait.contacts import Contacts, ContactThresholds, GroundPlane
+from a1_leg_fk.gait.contacts import Contacts, GroundPlane
+from a1_leg_fk.gait.naming import GaitName, name_gait
+from a1_leg_fk.gait.thresholds import ContactThresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 
-GAIT_TEMPLATES: dict[str, tuple[float, float, float]] = {
-    "trot": (0.5, 0.5, 0.0),
-    "pace": (0.5, 0.0, 0.5),
-    "bound": (0.0, 0.5, 0.5),
-    "pronk": (0.0, 0.0, 0.0),
-}
-"""Touchdown phase of (FL, RR, RL) relative to FR for the two-beat gaits (and pronk)."""
-PHASE_TOLERANCE = 0.1
-"""Largest circular phase deviation [cycles] from a template that still names the gait."""
-NO_MATCH_DEVIATION = 0.25
-"""A phase deviation [cycles] of a quarter cycle or more fits a template not at all (fit 0)."""
-WALK_MIN_SEPARATION = 0.125
-"""A walk's four touchdowns are at least this far apart [cycles] (evenly spread: 0.25)."""
-WALK_MIN_DUTY = 0.5
+USED_THRESHOLDS = ("height_on_m", "height_off_m", "speed_on_mps", "speed_off_mps")
+"""The per-leg thresholds a report gives (derived from the data when adaptive)."""
 IRREGULAR_STRIDE = 0.5
 """A stride longer or shorter than the leg's median by more than this fraction (a pause, a stumble)
 is left out of the stride metrics and the phases, and counted as irregular."""
-MIN_CONSISTENCY = 0.6
-"""Phase consistency R (mean resultant length) below this names no gait (phases drift)."""
 
 
 @dataclass(frozen=True)
@@ -81,8 +70,10 @@ class GaitReport:
     phase_consistency: dict[str, float | None]
     duty_factor: float | None  # mean over legs with one
     ground: GroundPlane
-    thresholds: ContactThresholds
+    thresholds: ContactThresholds  # as configured
     notes: tuple[str, ...] = field(default=())
+    naming: GaitName | None = None  # region, limb phase, symmetry (gait_naming)
+    leg_thresholds: tuple[ContactThresholds, ...] = ()  # what each leg was judged by
 
     def to_json(self) -> dict[str, Any]:
         """A JSON-ready dict without NaN or infinity (missing values are ``None`` with a
@@ -111,6 +102,15 @@ class GaitReport:
                 "slope_deg": self.ground.slope_deg,
             },
             "thresholds": asdict(self.thresholds),
+            "thresholds_used": {
+                leg: {key: getattr(used, key) for key in USED_THRESHOLDS}
+                for leg, used in zip(LEG_NAMES, self.leg_thresholds)
+            },
+            "gait_region": self.naming.region if self.naming else "",
+            "gait_symmetric": self.naming.symmetric if self.naming else None,
+            "limb_phase": self.naming.limb_phase if self.naming else None,
+            "limb_phase_left": self.naming.limb_phase_left if self.naming else None,
+            "limb_phase_right": self.naming.limb_phase_right if self.naming else None,
             "notes": list(self.notes),
         }
 
@@ -193,11 +193,6 @@ def _circular_mean(phases: list[float]) -> tuple[float, float]:
     return float(np.angle(vector) / (2 * np.pi) % 1.0), float(abs(vector))
 
 
-def _circular_distance(a: float, b: float) -> float:
-    d = abs(a - b) % 1.0
-    return min(d, 1.0 - d)
-
-
 def relative_phases(
     contacts: Contacts, fr_strides: list[tuple[float, float]]
 ) -> tuple[dict[str, float | None], dict[str, float | None]]:
@@ -220,62 +215,6 @@ def relative_phases(
     return phases, consistency
 
 
-def name_gait(
-    phases: dict[str, float | None], consistency: dict[str, float | None], duty: float | None
-) -> tuple[str, float, str, dict[str, float]]:
-    """``(name, fit 0..1, reason, fit of every candidate)`` from the phases vs FR and the duty
-    factor.
-    """
-    if any(value is None for value in phases.values()):
-        missing = [leg for leg, value in phases.items() if value is None]
-        return (
-            "unknown",
-            0.0,
-            (
-                f"no touchdown phase for {', '.join(missing)} (needs strides of FR and "
-                "touchdowns of each leg)"
-            ),
-            {},
-        )
-    # Every phase (and so every consistency) is known from here on.
-    measured = [phase for leg in LEG_NAMES[1:] if (phase := phases[leg]) is not None]
-    r = min(value for value in consistency.values() if value is not None)
-    deviations = {  # largest phase deviation from each template [cycles]
-        name: max(_circular_distance(m, t) for m, t in zip(measured, template))
-        for name, template in GAIT_TEMPLATES.items()
-    }
-    candidates = {
-        name: round(max(0.0, 1.0 - deviation / NO_MATCH_DEVIATION) * r, 4)
-        for name, deviation in deviations.items()
-    }
-    all_phases = [0.0, *measured]
-    separation = min(
-        _circular_distance(a, b) for i, a in enumerate(all_phases) for b in all_phases[i + 1 :]
-    )
-    candidates["walk"] = (
-        round(min(1.0, separation / 0.25) * r, 4)
-        if duty is not None and duty > WALK_MIN_DUTY
-        else 0.0
-    )
-    accepted = {
-        name: fit
-        for name, fit in candidates.items()
-        if (name == "walk" and separation >= WALK_MIN_SEPARATION and fit > 0)
-        or (name != "walk" and deviations[name] <= PHASE_TOLERANCE)
-    }
-    if r < MIN_CONSISTENCY:
-        return (
-            "unknown",
-            0.0,
-            f"touchdown phases are not consistent (R = {r:.2f} < {MIN_CONSISTENCY})",
-            candidates,
-        )
-    if not accepted:
-        return "unknown", 0.0, "no gait's phase pattern fits within its tolerance", candidates
-    best = max(accepted, key=accepted.__getitem__)
-    return best, accepted[best], "phases match " + best, candidates
-
-
 def gait_metrics(contacts: Contacts) -> GaitReport:
     """Per-leg metrics, phases vs FR and the gait's name from :func:`detect_contacts`'s result."""
     results = [_leg_metrics(contacts, slot) for slot in range(len(LEG_NAMES))]
@@ -285,12 +224,12 @@ def gait_metrics(contacts: Contacts) -> GaitReport:
     ]
     duty = float(np.mean(duties)) if duties else None
     phases, consistency = relative_phases(contacts, results[0][1])
-    name, fit, reason, candidates = name_gait(phases, consistency, duty)
+    naming = name_gait(phases, consistency, duty)
     return GaitReport(
-        name,
-        fit,
-        reason,
-        candidates,
+        naming.name,
+        naming.fit,
+        naming.reason,
+        naming.candidates,
         legs,
         phases,
         consistency,
@@ -298,4 +237,6 @@ def gait_metrics(contacts: Contacts) -> GaitReport:
         contacts.ground,
         contacts.thresholds,
         contacts.notes,
+        naming,
+        contacts.leg_thresholds,
     )

@@ -256,3 +256,33 @@ def test_force_replaces_an_existing_output(demo_run, tmp_path: Path) -> None:
     assert run_gait(folder, "--json", str(target), "--force") == 0
     assert target.read_text() == (folder / "gait.json").read_text()
     assert [path.name for path in tmp_path.iterdir()] == ["gait.json"]  # no temporary left
+
+
+def test_limb_phase_region_and_thresholds_are_reported(
+    demo_run, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    # The demo trots: diagonal feet together, so each fore foot lands half a stride after the
+    # hind foot of its side (limb phase 0.5); its duty factor is ~0.53 (sin^2 lifts), a walking
+    # trot. The summary and the JSON say so, and give each foot's thresholds.
+    folder, *_ = demo_run
+    document = json.loads((folder / "gait.json").read_text())
+    assert document["gait_region"] == "walking trot" and document["gait_symmetric"] is True
+    for key in ("limb_phase", "limb_phase_left", "limb_phase_right"):
+        assert abs(document[key] - 0.5) < 0.05, key
+    bounds = document["thresholds"]
+    assert bounds["adaptive"] is True
+    for used in document["thresholds_used"].values():
+        assert bounds["speed_on_mps"] <= used["speed_on_mps"] <= bounds["speed_on_max_mps"]
+        assert bounds["height_on_m"] <= used["height_on_m"] <= bounds["height_on_max_m"]
+    capsys.readouterr()
+    fixed = tmp_path / "fixed.json"
+    assert run_gait(folder, "--fixed-thresholds", "--json", str(fixed)) == 0
+    out = capsys.readouterr().out
+    assert "; limb phase 0." in out and "walking trot" in out
+    assert "contacts:  thresholds (fixed, on/off): FR 0.020/0.035 m 0.15/0.30 m/s;" in out
+    fixed_document = json.loads(fixed.read_text())
+    assert fixed_document["thresholds"]["adaptive"] is False
+    assert all(
+        {key: bounds[key] for key in used} == used
+        for used in fixed_document["thresholds_used"].values()
+    )

@@ -1,10 +1,10 @@
 """gait_analysis against synthetic gaits whose true stance intervals the test itself knows.
 
-The generator below is written from the gait definitions, not from the implementation: each leg
-touches down at ``(offset + k) * period``, stays on a fixed foothold for ``duty * period``, then
-swings to the next foothold (horizontal cosine blend, vertical ``clearance * sin``) while the body
-moves at ``speed``. The ground is a plane inclined a few degrees, not at z = 0, and the foot frame
-sits a foot radius above it; stamps jitter; positions get Gaussian noise.
+The generator (test/synthetic_gaits.py) is written from the gait definitions, not from the code:
+each leg touches down at ``(offset + k) * period``, stays on a fixed foothold for ``duty *
+period``, then swings to the next foothold (horizontal cosine blend, vertical ``clearance * sin``)
+while the body moves at ``speed``. The ground is a plane inclined a few degrees, not at z = 0, and
+the foot frame sits a foot radius above it; stamps jitter; positions get Gaussian noise.
 """
 
 from __future__ import annotations
@@ -16,71 +16,21 @@ import numpy as np
 import pytest
 from conftest import raises_leg_fk_error
 from shared import LEGS, known
+from synthetic_gaits import (
+    CLEARANCE_M,
+    DUTY,
+    FOOT_RADIUS_M,
+    GROUND_Z0_M,
+    NOISE_M,
+    PERIOD_S,
+    PHASES,
+    SLOPE_DEG,
+    synthetic,
+)
 
 from a1_leg_fk.gait.analysis import ContactThresholds, analyze_gait, detect_contacts
 
-PHASES = {  # touchdown phase of FR, FL, RR, RL (cycles); walk: lateral sequence LH, LF, RH, RF
-    "trot": (0.0, 0.5, 0.5, 0.0),
-    "pace": (0.0, 0.5, 0.0, 0.5),
-    "bound": (0.0, 0.0, 0.5, 0.5),
-    "pronk": (0.0, 0.0, 0.0, 0.0),
-    "walk": (0.0, 0.5, 0.75, 0.25),
-}
-DUTY = {"trot": 0.5, "pace": 0.5, "bound": 0.4, "pronk": 0.4, "walk": 0.75}
-HIPS_XY = np.array([[0.18, -0.13], [0.18, 0.13], [-0.18, -0.13], [-0.18, 0.13]])
-PERIOD_S = 0.4731  # not a multiple of any sampling interval, so events fall all over the grid
-CLEARANCE_M = 0.07
-FOOT_RADIUS_M = 0.02
-SLOPE_DEG = (3.0, 1.0)  # about x and y
-GROUND_Z0_M = 0.31
-NOISE_M = 0.0005
 DEFAULTS = ContactThresholds()
-
-
-def synthetic(
-    gait: str,
-    speed: float,
-    rate_hz: float,
-    seconds: float = 8.0,
-    seed: int = 0,
-    pause: tuple[float, float] | None = None,
-):
-    """(stamps [s], world feet (N, 4, 3) [m], true stances per leg [(t_on, t_off)] [s from the
-    first stamp]).
-
-    ``pause=(at, length)`` [s] freezes the gait from ``at`` for ``length`` (the true stances then
-    hold for gait time, not for the stamps).
-    """
-    rng = np.random.default_rng(seed)
-    dt = 1.0 / rate_hz
-    times = np.arange(0.0, seconds, dt)
-    times[1:] += rng.uniform(-0.2, 0.2, times.size - 1) * dt
-    duty = DUTY[gait]
-    swing = (1.0 - duty) * PERIOD_S
-    a, b = (math.tan(math.radians(d)) for d in SLOPE_DEG)
-    radius_dz = FOOT_RADIUS_M * math.sqrt(
-        1 + a * a + b * b
-    )  # sphere centre above an inclined plane
-    feet = np.empty((times.size, 4, 3))
-    truth = []
-    stamps = times
-    if pause is not None:
-        at, length = pause
-        times = np.where(times < at, times, np.maximum(at, times - length))
-    for leg in range(4):
-        touchdowns = (PHASES[gait][leg] + np.arange(-2, int(seconds / PERIOD_S) + 3)) * PERIOD_S
-        holds = HIPS_XY[leg, 0] + speed * (touchdowns + 0.5 * duty * PERIOD_S)
-        k = np.searchsorted(touchdowns, times, side="right") - 1
-        since = times - touchdowns[k]
-        x, lift = holds[k].copy(), np.zeros(times.size)
-        swinging = since > duty * PERIOD_S
-        s = (since[swinging] - duty * PERIOD_S) / swing
-        x[swinging] += (holds[k[swinging] + 1] - holds[k[swinging]]) * (1 - np.cos(np.pi * s)) / 2
-        lift[swinging] = CLEARANCE_M * np.sin(np.pi * s)
-        y = np.full(times.size, HIPS_XY[leg, 1])
-        feet[:, leg] = np.column_stack((x, y, GROUND_Z0_M + a * x + b * y + radius_dz + lift))
-        truth.append([(on, on + duty * PERIOD_S) for on in touchdowns])
-    return stamps + 1234.5, feet + rng.normal(0.0, NOISE_M, feet.shape), truth
 
 
 def vertical_speed(gait: str) -> float:
@@ -201,6 +151,8 @@ def test_too_few_samples_and_bad_shapes() -> None:
         detect_contacts(stamps, feet[:, :3])
     with raises_leg_fk_error("off >= on"):
         ContactThresholds(height_on_m=0.05, height_off_m=0.03)
+    with raises_leg_fk_error("max >= on", "0.15 / 0.1 m/s"):
+        ContactThresholds(speed_on_max_mps=0.1)
 
 
 def test_leg_that_never_touches_down_or_never_lifts() -> None:

@@ -62,12 +62,8 @@ def _choose_types(reader: AnyReader, path: Path) -> str:
     if not reader.is2:
         renamed = any(getattr(bag, "renamed_old_header", False) for bag in reader.readers)
         return "recorded in the bag" + (f" ({OLD_HEADER} read as {HEADER})" if renamed else "")
-    undefined = [c for c in reader.connections if c.msgdef.format == MessageDefinitionFormat.NONE]
-    if not undefined:
-        return "recorded in the bag"
-    if len(undefined) < len(reader.connections):
-        names = sorted({c.msgtype for c in undefined})
-        return f"recorded in the bag, except {', '.join(names)} (not defined in it)"
+    if any(c.msgdef.format != MessageDefinitionFormat.NONE for c in reader.connections):
+        return "recorded in the bag"  # rosbags defines the types from the definitions there are
     distro, source = recorded_distro(reader, path)
     chosen = distro if distro in _bundled_distros() else DEFAULT_DISTRO
     reader.typestore = get_typestore(Stores(f"ros2_{chosen}"))

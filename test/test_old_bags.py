@@ -12,6 +12,7 @@ the joints, with nothing written.
 from __future__ import annotations
 
 import sqlite3
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -149,23 +150,36 @@ def test_base_poses_from_a_humble_bag(tmp_path: Path, msgtype: str) -> None:
 
 
 @pytest.mark.parametrize(
-    ("distro", "types"),
+    ("distro", "where", "types"),
     [
-        ("iron", BUNDLED.replace("Humble", "Iron") + "ROS distro 'iron' from run_0.db3)"),
+        ("iron", "db3", BUNDLED.replace("Humble", "Iron") + "ROS distro 'iron' from run_0.db3)"),
         (
             "rolling",
+            "db3",
             BUNDLED + "ROS distro 'rolling' from run_0.db3 has no bundled types: Humble is the "
             "default)",
         ),
+        (
+            "jazzy",
+            "metadata.yaml",
+            BUNDLED.replace("Humble", "Jazzy") + "ROS distro 'jazzy' from metadata.yaml)",
+        ),
     ],
 )
-def test_the_recorded_distro_chooses_the_types(tmp_path: Path, distro: str, types: str) -> None:
+def test_the_recorded_distro_chooses_the_types(
+    tmp_path: Path, distro: str, where: str, types: str
+) -> None:
+    """The distro in metadata.yaml (rosbag2 writes it from metadata version 8 on) comes first,
+    then the one in the .db3's schema table (Humble's says humble)."""
     spec = BagSpec()
     walking(spec, count=3)
     path = write_bag(tmp_path / "run", spec, "humble")
-    with sqlite3.connect(path / "run_0.db3") as db:
-        db.execute("UPDATE schema SET ros_distro = ?", (distro,))
-    db.close()
+    if where == "db3":
+        with closing(sqlite3.connect(path / "run_0.db3")) as db, db:
+            db.execute("UPDATE schema SET ros_distro = ?", (distro,))
+    else:
+        metadata = path / "metadata.yaml"
+        metadata.write_text(metadata.read_text() + f"  ros_distro: {distro}\n")
     result = read_foot_trajectories(path)
     assert result.summary.types == types and result.summary.rows == 3
 

@@ -145,8 +145,8 @@ def test_base_poses_from_a_humble_bag(tmp_path: Path, msgtype: str) -> None:
     result = read_foot_trajectories(path, base_pose=topic)
     assert result.world_frame == "odom" and result.summary.rows_without_pose == 0
     assert result.world_positions is not None
-    for got, q, (position, yaw) in zip(result.world_positions, angles, poses, strict=True):
-        assert np.abs(got - (position + A1.fk(q) @ rotation_z(yaw).T)).max() <= 1e-12
+    for got, q, (origin, yaw) in zip(result.world_positions, angles, poses, strict=True):
+        assert np.abs(got - (origin + A1.fk(q) @ rotation_z(yaw).T)).max() <= 1e-12
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,7 @@ the joints, with nothing written.
 
 from __future__ import annotations
 
+import json
 import sqlite3
 from contextlib import closing
 from pathlib import Path
@@ -31,6 +32,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from a1_leg_fk import cli
+from a1_leg_fk.demo_gait import Gait, limits_of
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.recording import read_foot_trajectories
 
@@ -292,3 +294,24 @@ def test_leg_joints_after_other_messages_are_read(tmp_path: Path) -> None:
     assert result.summary.rows == 4 and result.summary.outcomes["no_leg_joints"] == 5
     for row, q in zip(result.positions, angles, strict=True):
         assert np.abs(row - A1.fk(q)).max() <= 1e-12
+
+
+def test_gait_reads_a_humble_bag_as_a_current_one(tmp_path: Path) -> None:
+    """The demo's gait (joint_state_demo's), base held still, through both kinds of bag: the
+    same report."""
+    gait = Gait(limits_of(A1))
+    spec = BagSpec()
+    for index in range(600):  # 6 s: standing up (feet still), then trotting
+        stamp = T0 + index * 10 * MS
+        angles = gait.angles(index * 0.01)
+        spec.add_joint_state("/joint_states", stamp, JointStateMsg(stamp, NAMES, angles))
+        pose = pose_message("nav_msgs/msg/Odometry", stamp, [0.0, 0.0, 0.3], 0.0)
+        spec.add("/odom", "nav_msgs/msg/Odometry", stamp, pose)
+    reports = []
+    for kind in ("humble", "mcap"):
+        bag = write_bag(tmp_path / kind, spec, kind)
+        out = tmp_path / f"{kind}.json"
+        assert cli.main(["gait", str(bag), "--base-pose", "/odom", "--json", str(out)]) == 0
+        reports.append(json.loads(out.read_text()))
+        reports[-1].pop("input")
+    assert reports[0] == reports[1] and reports[0]["world_frame"] == "odom"

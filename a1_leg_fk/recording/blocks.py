@@ -14,8 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, cdr_layout
-from a1_leg_fk.recording.reader import Recording, one_line
+from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording, one_line
 from a1_leg_fk.tracking import FootTracker
 
 if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
@@ -54,7 +55,9 @@ def iter_foot_blocks(
     called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
 
     A truncated or corrupt bag ends the pass early: what was read is yielded, and
-    ``recording.stopped`` says where and why.
+    ``recording.stopped`` says where and why. :class:`LegFkError` at the end of a pass in which
+    no message named a joint of the model's legs (a bag of another robot): then every row
+    (there are none) and output would be empty.
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
@@ -84,6 +87,29 @@ def iter_foot_blocks(
         if bar is not None:
             bar.update(read - shown)
             bar.close()
+    if tracker.counts.messages and not batch.leg_joint_named:
+        raise LegFkError(no_leg_joints_problem(recording, batch.first_names))
+
+
+def no_leg_joints_problem(recording: Recording, names: list[str]) -> str:
+    """What is wrong with a JointState topic none of whose messages names a leg joint of the
+    model (``names``: the first message's names), and the ways out; one line.
+    """
+    topic = recording.joint_states.topic
+    others = sorted(
+        c.topic
+        for c in recording.reader.connections
+        if c.msgtype == JOINT_STATE_TYPE and c.topic != topic
+    )
+    shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
+    return (
+        f"{recording.path}: no JointState message on {topic} names a leg joint of the model "
+        f"({recording.model_source}): it expects {', '.join(recording.quadruped.joint_names)}; "
+        f"its messages name {shown or 'no joint'} ({len(names)} names). If the robot is a "
+        "quadruped, map its names with --joint-aliases NAME=joint or give its model with "
+        "--urdf FILE; or choose another JointState topic with --topic"
+        + (f" (the bag also has {', '.join(others)})" if others else "")
+    )
 
 
 def _raw_messages(
@@ -129,6 +155,16 @@ class _Batch:
         self.raws: list[bytes] = []
         self.bag_times: list[int] = []
         self.length = -1
+        self.leg_joint_named = False  # some message so far named a joint of the model's legs
+        self.first_names: list[str] = []  # the first non-empty name list, for the error
+
+    def seen(self, names: list[str]) -> None:
+        """Note the name list of messages about to go through the rules."""
+        if self.leg_joint_named:
+            return
+        slots = self.recording.quadruped.name_to_slot
+        self.leg_joint_named = any(name in slots for name in names)
+        self.first_names = self.first_names or list(names)
 
     def add(self, raw: bytes, bag_time: int) -> None:
         if not self.raws:
@@ -146,6 +182,7 @@ class _Batch:
             return
         arrays = None if self.recording.ros1 else self._vectorised(raws, bag_times)
         if arrays is not None:
+            self.seen(self.decoder.names)
             yield from _finish(self.recording, self.tracker, self.decoder.names, *arrays)
             return
         yield from self._one_by_one(raws, bag_times)
@@ -227,6 +264,7 @@ class _Pending:
         velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
             count, self.velocity_bytes // 8
         )
+        batch.seen(self.names)
         yield from _finish(
             batch.recording,
             batch.tracker,

@@ -30,6 +30,7 @@ from a1_leg_fk.recording.trajectories import (
     iter_foot_blocks,
     open_recording,
 )
+from a1_leg_fk.recording.typestores import require_types
 
 AXES = ("x", "y", "z")
 POSITION_COLUMNS = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in AXES]
@@ -174,6 +175,9 @@ def convert(
     writers: list[CsvWriter | BagWriter] = []
     bag_writer = None
     try:
+        if outputs.copy_input:
+            wanted = {c.msgtype: f"--copy-input: {c.topic}" for c in recording.reader.connections}
+            require_types(recording.reader, source, wanted, recording.types)
         for target in outputs.all():
             target.prepare()
         if outputs.csv is not None:

@@ -19,6 +19,7 @@ from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_S, BasePoses
 from a1_leg_fk.recording.mcap_salvage import salvage
+from a1_leg_fk.recording.typestores import open_reader, require_types
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.highlevel import AnyReader
@@ -57,6 +58,7 @@ class Recording:
     base_pose: BasePoses | None
     base_pose_topic: str | None
     ros1: bool
+    types: str = ""  # which message types the bag is read with (recording.typestores)
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
     stopped: str = ""
     salvage_note: str = ""  # what was read of a truncated MCAP file
@@ -86,11 +88,13 @@ def open_recording(
     problem for bad input. Close with :func:`close_recording`.
     """
     path = Path(path)
-    reader, salvage_note = _open_reader(path)
+    reader, salvage_note, types = _open_reader(path)
     try:
         joint_states = _pick_topic(
             reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
         )
+        if not urdf:
+            require_types(reader, path, _description_types(reader), types)
         try:
             description, description_topic = (
                 (None, "") if urdf else _recorded_description(reader, joint_states)
@@ -119,6 +123,9 @@ def open_recording(
             pose_connection = _pick_topic(
                 reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose"
             )
+            require_types(
+                reader, path, {pose_connection.msgtype: f"--base-pose {base_pose}"}, types
+            )
             try:
                 poses = BasePoses.read(
                     reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s
@@ -138,6 +145,7 @@ def open_recording(
             poses,
             base_pose,
             not reader.is2,
+            types,
             salvage_note=salvage_note,
         )
     except BaseException:
@@ -157,18 +165,18 @@ def _close_reader(reader: AnyReader) -> None:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _open_reader(path: Path) -> tuple[AnyReader, str]:
-    """An open reader of the bag at ``path``, and ``""`` or a note on what was salvaged of a
-    truncated MCAP file (read from a copy of its complete records).
+def _open_reader(path: Path) -> tuple[AnyReader, str, str]:
+    """An open reader of the bag at ``path``, ``""`` or a note on what was salvaged of a
+    truncated MCAP file (read from a copy of its complete records), and which types it is read
+    with (:mod:`a1_leg_fk.recording.typestores`).
     """
-    highlevel = _rosbags()
+    _rosbags()
     if not path.exists():
         raise LegFkError(f"{path}: no such file or directory")
     opened = _storage_file(path) if path.is_dir() else path
     try:
-        reader = highlevel.AnyReader([opened])
-        reader.open()
-        return reader, ""
+        reader, types = open_reader(opened)
+        return reader, "", types
     except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for unreadable files)
         problem = f"{path}: cannot open as a ROS bag: {one_line(error)}"
     mcaps = (
@@ -178,33 +186,31 @@ def _open_reader(path: Path) -> tuple[AnyReader, str]:
         if opened.suffix == ".mcap"
         else []
     )
-    salvaged = _salvaged_reader(highlevel, mcaps[0]) if len(mcaps) == 1 else None
+    salvaged = _salvaged_reader(mcaps[0]) if len(mcaps) == 1 else None
     if salvaged is None:
         raise LegFkError(problem)
     return salvaged
 
 
-def _salvaged_reader(highlevel: ModuleType, mcap: Path) -> tuple[AnyReader, str] | None:
+def _salvaged_reader(mcap: Path) -> tuple[AnyReader, str, str] | None:
     """A reader of the complete records of a truncated MCAP file (copied to a temporary folder,
-    removed when the reader closes), or None.
+    removed when the reader closes), its note and types (as :func:`_open_reader`), or None.
     """
     folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_salvage_"))
     try:
         kept = salvage(mcap, folder / mcap.name)
-        reader = highlevel.AnyReader([kept.path]) if kept is not None else None
-        if reader is not None:
-            reader.open()
+        reader, types = open_reader(kept.path) if kept is not None else (None, "")
     except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
         reader = None
     if reader is None or kept is None:
         shutil.rmtree(folder, ignore_errors=True)
         return None
-    reader.salvage_folder = folder  # removed by _close_reader
+    reader.salvage_folder = folder  # type: ignore[attr-defined]  # removed by _close_reader
     note = (
         f"{mcap} is truncated or has no readable summary: read its first {kept.kept:,} of "
         f"{kept.size:,} bytes (the complete records)"
     )
-    return reader, note
+    return reader, note, types
 
 
 def _storage_file(directory: Path) -> Path:
@@ -259,13 +265,24 @@ def _pick_topic(
     return next(connection for connection in reader.connections if connection.topic == chosen)
 
 
-def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
-    """The latest ``robot_description`` message before the first JointState, and its topic."""
-    connections = [
+def _description_connections(reader: AnyReader) -> list[Connection]:
+    """The bag's ``robot_description`` topics (``std_msgs/msg/String``, any namespace)."""
+    return [
         c
         for c in reader.connections
         if c.msgtype == DESCRIPTION_TYPE and c.topic.split("/")[-1] == "robot_description"
     ]
+
+
+def _description_types(reader: AnyReader) -> dict[str, str]:
+    """The type a recorded robot description needs (none without one), for require_types."""
+    topics = [c.topic for c in _description_connections(reader)]
+    return {DESCRIPTION_TYPE: f"robot_description topic {topics[0]}"} if topics else {}
+
+
+def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
+    """The latest ``robot_description`` message before the first JointState, and its topic."""
+    connections = _description_connections(reader)
     if not connections:
         return None, ""
     latest, topic = None, ""

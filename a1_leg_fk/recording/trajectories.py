@@ -58,6 +58,7 @@ class RecordingSummary:
     last_stamp_ns: int | None
     wall_time_s: float
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
+    types: str = ""  # which message types the bag was read with (recording.typestores)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -82,6 +83,7 @@ class RecordingSummary:
             f"file:      {self.path}",
             f"model:     {self.model}",
             f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
+            f"types:     {self.types}",
             (
                 f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
                 f"{sum(self.rejected.values())} rejected ({rejected}), "
@@ -93,10 +95,10 @@ class RecordingSummary:
         ]
         if self.non_finite_joints:
             lines.insert(
-                4, f"non-finite joint values: {self.non_finite_joints} (their legs held back)"
+                5, f"non-finite joint values: {self.non_finite_joints} (their legs held back)"
             )
         if self.unknown_names:
-            lines.insert(4, f"ignored names: {list(self.unknown_names[:20])}")
+            lines.insert(5, f"ignored names: {list(self.unknown_names[:20])}")
         if self.base_pose_topic:
             lines.append(
                 f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a "
@@ -171,6 +173,7 @@ class BlockStats:
             self.last,
             time.perf_counter() - self.started,
             "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
+            recording.types,
         )
 
 

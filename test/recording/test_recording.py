@@ -19,9 +19,9 @@ from bag_factory import (
     BagSpec,
     JointStateMsg,
     T,
-    header,
     joint_state,
-    pose,
+    pose_message,
+    rotation_z,
     write_bag,
 )
 from hypothesis import given, settings
@@ -277,42 +277,6 @@ def test_a_recorded_robot_description_is_used_and_matches_pybullet(tmp_path: Pat
         for got, q in zip(result.positions, angles):
             assert np.abs(got - robot.feet(NAMES, feet, q)).max() <= 1e-7
             assert np.abs(got - A1.fk(q)).max() > 1e-3  # not the A1
-
-
-def rotation_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def pose_message(kind: str, stamp: int, position: list[float], yaw: float):
-    """A base pose of ``kind`` in frame ``odom`` (a rotation about z by ``yaw``)."""
-    base = pose(position, (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)))
-    covariance = np.zeros(36)
-    if kind == "nav_msgs/msg/Odometry":
-        twist = T["geometry_msgs/msg/TwistWithCovariance"](
-            T["geometry_msgs/msg/Twist"](
-                T["geometry_msgs/msg/Vector3"](0, 0, 0), T["geometry_msgs/msg/Vector3"](0, 0, 0)
-            ),
-            covariance,
-        )
-        return T[kind](
-            header(stamp, "odom"),
-            "trunk",
-            T["geometry_msgs/msg/PoseWithCovariance"](base, covariance),
-            twist,
-        )
-    if kind == "geometry_msgs/msg/PoseStamped":
-        return T[kind](header(stamp, "odom"), base)
-    if kind == "geometry_msgs/msg/PoseWithCovarianceStamped":
-        return T[kind](
-            header(stamp, "odom"), T["geometry_msgs/msg/PoseWithCovariance"](base, covariance)
-        )
-    transform = T["geometry_msgs/msg/Transform"](
-        T["geometry_msgs/msg/Vector3"](*position), base.orientation
-    )
-    other = T["geometry_msgs/msg/TransformStamped"](header(stamp, "trunk"), "FR_hip", transform)
-    mine = T["geometry_msgs/msg/TransformStamped"](header(stamp, "/odom"), "/trunk", transform)
-    return T[kind]([other, mine])
 
 
 @pytest.mark.parametrize(

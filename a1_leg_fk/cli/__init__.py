@@ -13,12 +13,15 @@ __ns:=/robot1`` moves this tool's own node, and with it every relative name it u
 
 Exit codes: 0 success; 1 failure (verify said no, a demo child died, a plot could not be made);
 2 nobody answered in time (or bad usage); 130 interrupted (Ctrl-C or SIGTERM), except ``echo``,
-for which Ctrl-C is the normal way to stop (0).
+for which Ctrl-C is the normal way to stop (0); 141 stdout closed by its reader (``| head``), with
+no traceback.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -31,6 +34,9 @@ from a1_leg_fk.cli.common import (
     BadRosArguments,
     our_arguments,
 )
+
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
+"""The exit code when stdout's reader went away, as a shell reports a process ended by SIGPIPE."""
 
 COMMANDS = (echo, verify, plot, demo, bag, gait, ik)
 """The sub-command modules, in the order ``--help`` lists them."""
@@ -61,6 +67,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     options = build_parser().parse_args(ours)
     try:
-        return int(options.handler(options, arguments))
+        code = int(options.handler(options, arguments))
+        sys.stdout.flush()  # here, so that a closed pipe is caught below, not at exit
     except KeyboardInterrupt:  # a Ctrl-C that arrived outside the commands' own handling
         return EXIT_OK if options.command == "echo" else EXIT_INTERRUPTED
+    except BrokenPipeError:  # stdout closed by its reader (`a1-leg-fk gait ... | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit either
+        return EXIT_BROKEN_PIPE
+    return code

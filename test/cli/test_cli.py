@@ -419,3 +419,17 @@ def _running(pid: int) -> bool:
         return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
     except psutil.NoSuchProcess:
         return False
+
+
+def test_a_reader_that_closes_the_pipe_gets_no_traceback() -> None:
+    """``a1-leg-fk ik ... | head -0``: the reader is gone before the first line; the command ends
+    as a process killed by SIGPIPE would (141), with nothing on stderr."""
+    command = [*cli_command(), "ik", "FL", "0.183", "0.132", "-0.38"]
+    reader_gone = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert reader_gone.stdout is not None
+    reader_gone.stdout.close()
+    _, stderr = reader_gone.communicate(timeout=60)
+    assert reader_gone.returncode == 128 + signal.SIGPIPE
+    assert stderr == ""

@@ -18,7 +18,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -36,6 +36,9 @@ from a1_leg_fk.legs import (
     leg_slot,
 )
 from a1_leg_fk.urdf import Joint, LegFkError, RobotModel, load_urdf
+
+if TYPE_CHECKING:
+    from a1_leg_fk.estimation.forces import FootForces
 
 Angles = Sequence[float] | np.ndarray
 """Joint angles [rad] (or rates [rad/s]): a sequence of numbers or a 1-D numpy array."""
@@ -260,6 +263,35 @@ class Quadruped:
             and joint.upper is not None
             and not joint.lower <= value <= joint.upper
         ]
+
+    @cached_property
+    def _forces(self) -> FootForces:
+        # estimation sits above kinematics: imported here, on first use, so that importing this
+        # module never loads it (and there is no import cycle)
+        from a1_leg_fk.estimation.forces import FootForces
+
+        return FootForces(self)
+
+    def foot_forces(
+        self, angles: Angles, efforts: Angles, gravity_base: Sequence[float] | None = None
+    ) -> np.ndarray:
+        """(4, 3) the force [N] the ground exerts on each foot, base frame, from 12 joint angles
+        [rad] and efforts [N m] (the torque each motor applies to its child link, as
+        ``JointState.effort``), quasi-static; ``gravity_base`` [m/s^2] is gravity in the base
+        frame (default: base level, ``(0, 0, -9.80665)``). A leg whose angles or efforts are
+        not finite, or whose knee is near straight, is NaN. See
+        :mod:`a1_leg_fk.estimation.forces`.
+        """
+        return self._forces.estimate(angles, efforts, gravity_base)
+
+    def foot_forces_batch(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> np.ndarray:
+        """:meth:`foot_forces` for (N, 12) angles [rad] and efforts [N m], gravity (3,) or (N, 3)
+        [m/s^2] in the base frame: (N, 4, 3) forces [N], NaN where a leg has none.
+        """
+        forces: np.ndarray = self._forces.estimate_batch(angles, efforts, gravity_base).forces
+        return forces
 
     @cached_property
     def _ik_solvers(self) -> tuple[inverse.LegSolver, ...]:

@@ -1,0 +1,322 @@
+"""Foot forces from joint efforts: the legs as a force sensor, quasi-static, without ROS.
+
+A leg at rest (or slow enough that its own inertia does not matter) balances three torques at
+each joint: the motor's effort ``tau``, gravity on the leg's own links, and the ground's force
+``F`` on the foot acting through the foot Jacobian ``J``::
+
+    g(q) = tau + J(q)^T F      =>      F = J(q)^-T (g(q) - tau)
+
+Conventions (those of ``sensor_msgs/JointState`` and ros2_control, and of PyBullet's applied motor
+torque): ``tau`` [N m] is the torque the joint's motor applies to its child link about the joint
+axis (positive by the right-hand rule about the URDF ``<axis>``); ``g(q)`` [N m] is the generalised
+gravity force, the effort that holds the leg still against gravity with the foot in the air
+(minus the torque gravity exerts on the links below the joint); ``F`` [N] is the force the ground
+exerts on the foot, in the base frame (the URDF root link); gravity is an acceleration vector
+[m/s^2] in the base frame (default: ``-z`` at standard gravity, the base level).
+
+The ground pushes where it touches the foot: a foot with a collision sphere of radius ``r`` in the
+URDF touches flat ground at ``r`` along gravity from the foot link's origin, and the Jacobian is
+that of this point (on the A1, ignoring the 2 cm radius costs up to ~2.5 N per foot in static
+poses tilted by 0.15 rad).
+
+``g(q)`` comes from the URDF's ``<inertial>`` masses and centres of mass: every link below a leg's
+first movable joint belongs to the *segment* of the nearest movable joint above it (links under a
+movable joint outside the leg's chain are taken at that joint's zero angle).
+
+Near a singular Jacobian (the knee straight) the solve amplifies any effort error without bound:
+there, and where the efforts or angles of a leg are missing or not finite, a leg gets no force
+(NaN), and the result says which and why.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from a1_leg_fk.kinematics import BATCH_CHUNK_ROWS, CompiledLeg, Quadruped
+from a1_leg_fk.leg_stages import rpy_matrix
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.urdf import LegFkError, RobotModel
+
+STANDARD_GRAVITY = 9.80665
+"""[m/s^2]"""
+LEVEL_GRAVITY = (0.0, 0.0, -STANDARD_GRAVITY)
+"""Gravity in the base frame [m/s^2] when nothing tells its direction: the base level."""
+MIN_JACOBIAN_CONDITION = 0.05
+"""A leg whose Jacobian columns ``j0, j1, j2`` give ``|det J| / (|j0| |j1| |j2|)`` below this gets
+no force. On the A1 the measure is 0.65 standing (knee -1.5 rad), 0.43 at the knee's straightest
+limit (-0.916 rad), 0.048 at -0.1 rad and 0 straight; at 0.05 the smallest singular value of J is
+~9 mm, so an effort error of 1 N m already moves the force by ~110 N."""
+LEGS = len(LEG_NAMES)
+
+
+@dataclass(frozen=True)
+class ForceEstimate:
+    """Foot forces for N configurations.
+
+    ``forces`` (N, 4, 3) [N]: the force the ground exerts on each foot, base frame, NaN where
+    the leg has none; ``missing`` (N, 4): the leg's angles or efforts are missing or not finite;
+    ``singular`` (N, 4): its Jacobian is too near singular (:data:`MIN_JACOBIAN_CONDITION`).
+    """
+
+    forces: np.ndarray
+    missing: np.ndarray
+    singular: np.ndarray
+
+
+@dataclass(frozen=True)
+class _LegStatics:
+    """One leg's constants: per stage its Rodrigues terms, offset [m] and axis, and its segment's
+    mass [kg] and first moment (mass times centre of mass) [kg m] in the stage's child frame.
+    """
+
+    terms: tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]
+    offsets: tuple[np.ndarray, ...]
+    axes: tuple[np.ndarray, ...]
+    masses: tuple[float, ...]
+    moments: tuple[np.ndarray, ...]
+
+
+class FootForces:
+    """Quasi-static foot forces of a :class:`~a1_leg_fk.kinematics.Quadruped` from its joint
+    efforts (see the module text for the conventions).
+    """
+
+    def __init__(
+        self,
+        quadruped: Quadruped,
+        min_condition: float = MIN_JACOBIAN_CONDITION,
+        foot_radius_m: float | None = None,
+    ) -> None:
+        """Collect each leg's segment masses from the quadruped's URDF; ``min_condition`` gates
+        near-singular Jacobians; ``foot_radius_m`` [m] (default: each foot link's collision
+        sphere, see :func:`foot_radius_m`) places the contact point.
+        """
+        self.quadruped = quadruped
+        self.min_condition = min_condition
+        self.foot_radii_m = tuple(
+            foot_radius(quadruped.model, leg.chain.foot_link) if foot_radius_m is None
+            else foot_radius_m
+            for leg in quadruped.legs
+        )  # fmt: skip
+        self._legs = tuple(_leg_statics(quadruped.model, leg) for leg in quadruped.legs)
+        self.total_mass_kg = sum(i.mass for i in quadruped.model.inertials.values())
+        """The robot's mass [kg]: every ``<inertial>`` of the URDF."""
+        if not self.total_mass_kg > 0.0:
+            raise LegFkError(
+                f"{quadruped.model.source}: no link has a mass (<inertial><mass>); foot forces "
+                "need the masses of the legs"
+            )
+
+    def leg_masses_kg(self, leg: int) -> tuple[float, ...]:
+        """The masses [kg] of leg slot ``leg``'s three segments, root side first."""
+        return self._legs[leg].masses
+
+    def estimate(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> np.ndarray:
+        """(4, 3) foot forces [N, base frame] for 12 angles [rad] and 12 efforts [N m] (slot
+        order); a leg with no force is NaN. ``gravity_base``: (3,) [m/s^2] in the base frame.
+        """
+        angles_row = _row(angles, "joint angles")
+        efforts_row = _row(efforts, "joint efforts")
+        forces: np.ndarray = self.estimate_batch(angles_row, efforts_row, gravity_base).forces[0]
+        return forces
+
+    def estimate_batch(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> ForceEstimate:
+        """Foot forces for (N, 12) angles [rad] and efforts [N m]; ``gravity_base`` (3,) or
+        (N, 3) [m/s^2] in the base frame (default :data:`LEVEL_GRAVITY`). Non-finite values
+        make their leg :attr:`ForceEstimate.missing`, never an error.
+        """
+        q = _batch(angles, "angles")
+        tau = _batch(efforts, "efforts")
+        if tau.shape != q.shape:
+            raise LegFkError(f"efforts have shape {tau.shape}, angles {q.shape}")
+        gravity = _gravity(gravity_base, q.shape[0])
+        rows = q.shape[0]
+        forces = np.full((rows, LEGS, 3), math.nan)
+        singular = np.zeros((rows, LEGS), dtype=bool)
+        finite = np.isfinite(q) & np.isfinite(tau)
+        missing = ~finite.reshape(rows, LEGS, JOINTS_PER_LEG).all(axis=2)
+        missing |= ~np.isfinite(gravity).all(axis=1)[:, None]
+        q, tau = np.where(finite, q, 0.0), np.where(finite, tau, 0.0)
+        gravity = np.nan_to_num(gravity)
+        for start in range(0, rows, BATCH_CHUNK_ROWS):
+            block = slice(start, min(start + BATCH_CHUNK_ROWS, rows))
+            cos, sin = np.cos(q[block]), np.sin(q[block])
+            for slot, leg in enumerate(self.quadruped.legs):
+                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+                forces[block, slot], singular[block, slot] = self._leg_forces(
+                    slot, leg, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
+                )
+        singular &= ~missing
+        forces[missing | singular] = math.nan
+        return ForceEstimate(forces, missing, singular)
+
+    def gravity_torques_batch(
+        self, angles: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> np.ndarray:
+        """(N, 12) g(q) [N m]: the efforts that hold the legs still in the air, for (N, 12)
+        angles [rad] and gravity (3,) or (N, 3) [m/s^2] in the base frame.
+        """
+        q = _batch(angles, "angles")
+        if not np.isfinite(q).all():
+            raise LegFkError("angles: NaN or infinite values")
+        gravity = _gravity(gravity_base, q.shape[0])
+        cos, sin = np.cos(q), np.sin(q)
+        out = np.empty_like(q)
+        for slot, statics in enumerate(self._legs):
+            joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+            out[:, joints] = _gravity_torques(statics, cos[:, joints], sin[:, joints], gravity)
+        return out
+
+    def _leg_forces(
+        self,
+        slot: int,
+        leg: CompiledLeg,
+        cos: np.ndarray,
+        sin: np.ndarray,
+        efforts: np.ndarray,
+        gravity: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(K, 3) forces [N] and (K,) singular flags of one leg: J^T F = g - tau, by Cramer, J
+        that of the contact point.
+        """
+        torques, axes = _statics(self._legs[slot], cos, sin, gravity)
+        rhs = torques - efforts
+        jacobian = leg.jacobians_batch(cos, sin)
+        radius = self.foot_radii_m[slot]
+        if radius:  # the contact point moves as the foot turns: J_c = J - [d]x J_w, d its offset
+            down = gravity * (radius / np.linalg.norm(gravity, axis=1, keepdims=True))
+            for k in range(JOINTS_PER_LEG):
+                jacobian[:, :, k] -= np.cross(down, axes[k])
+        j0, j1, j2 = jacobian[:, :, 0], jacobian[:, :, 1], jacobian[:, :, 2]
+        c12, c20, c01 = np.cross(j1, j2), np.cross(j2, j0), np.cross(j0, j1)
+        det = np.einsum("ki,ki->k", j0, c12)
+        scale = np.prod(np.linalg.norm(jacobian, axis=1), axis=1)
+        singular = ~(np.abs(det) >= self.min_condition * scale)
+        safe = np.where(singular, 1.0, det)[:, None]
+        forces = (rhs[:, 0:1] * c12 + rhs[:, 1:2] * c20 + rhs[:, 2:3] * c01) / safe
+        return forces, singular
+
+
+def _gravity_torques(
+    statics: _LegStatics, cos: np.ndarray, sin: np.ndarray, gravity: np.ndarray
+) -> np.ndarray:
+    """(K, 3) g(q) [N m] of one leg for (K, 3) cosines and sines and (K, 3) gravity [m/s^2]."""
+    return _statics(statics, cos, sin, gravity)[0]
+
+
+def _statics(
+    statics: _LegStatics, cos: np.ndarray, sin: np.ndarray, gravity: np.ndarray
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """(K, 3) g(q) [N m] and the three (K, 3) joint axes (base frame) of one leg."""
+    rows = cos.shape[0]
+    rotation = np.broadcast_to(np.eye(3), (rows, 3, 3))
+    origin = np.zeros((rows, 3))
+    origins, axes, moments = [], [], []
+    for k, ((c0, c1, c2), offset, axis, mass, moment) in enumerate(
+        zip(statics.terms, statics.offsets, statics.axes, statics.masses, statics.moments)
+    ):
+        origin = origin + rotation @ offset
+        turn = c0 + cos[:, k, None, None] * c1 + sin[:, k, None, None] * c2
+        rotation = rotation @ turn
+        origins.append(origin)
+        axes.append(rotation @ axis)
+        moments.append(mass * origin + rotation @ moment)
+    out = np.empty((rows, 3))
+    below_moment = np.zeros((rows, 3))
+    below_mass = 0.0
+    for k in reversed(range(JOINTS_PER_LEG)):
+        below_moment = below_moment + moments[k]
+        below_mass += statics.masses[k]
+        lever = below_moment - below_mass * origins[k]  # [kg m], from the joint's origin
+        # gravity's torque about the axis is (lever x gravity) . axis; g(q) is minus that
+        out[:, k] = -np.einsum("ki,ki->k", np.cross(lever, gravity), axes[k])
+    return out, axes
+
+
+def foot_radius(model: RobotModel, foot_link: str) -> float:
+    """The radius [m] of ``foot_link``'s collision sphere centred on its origin (within 1 mm), or
+    0 (a point foot) if it has none.
+    """
+    for sphere in model.spheres.get(foot_link, ()):
+        if math.dist(sphere.center, (0.0, 0.0, 0.0)) <= 1e-3:
+            return sphere.radius
+    return 0.0
+
+
+def _leg_statics(model: RobotModel, leg: CompiledLeg) -> _LegStatics:
+    movable = leg.chain.movable
+    masses, moments = [], []
+    for k, joint in enumerate(movable):
+        stop = movable[k + 1].name if k + 1 < len(movable) else None
+        mass, moment = _segment(model, joint.child, stop)
+        masses.append(mass)
+        moments.append(moment)
+    return _LegStatics(
+        tuple(stage.rodrigues_terms for stage in leg.stages),
+        tuple(stage.offset for stage in leg.stages),
+        tuple(stage.axis for stage in leg.stages),
+        tuple(masses),
+        tuple(moments),
+    )
+
+
+def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:
+    """Mass [kg] and first moment [kg m] (in ``link``'s frame) of ``link`` and everything below
+    it, except below the joint named ``stop_joint``; other joints at their zero angle.
+    """
+    mass, moment = 0.0, np.zeros(3)
+    pending = [(link, np.eye(3), np.zeros(3))]
+    while pending:
+        name, rotation, origin = pending.pop()
+        inertial = model.inertials.get(name)
+        if inertial is not None:
+            mass += inertial.mass
+            moment += inertial.mass * (origin + rotation @ np.array(inertial.center))
+        pending.extend(
+            (
+                joint.child,
+                rotation @ rpy_matrix(joint.origin_rpy),
+                origin + rotation @ np.array(joint.origin_xyz),
+            )
+            for joint in model.joints.values()
+            if joint.parent == name and joint.name != stop_joint
+        )
+    return mass, moment
+
+
+def _row(values: ArrayLike, what: str) -> np.ndarray:
+    try:
+        row = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers: {error}") from error
+    if row.shape != (JOINT_COUNT,):
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers (3 per leg), got {row.shape}")
+    return row[np.newaxis]
+
+
+def _batch(values: ArrayLike, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"{what} must be an (N, {JOINT_COUNT}) array: {error}") from error
+    if array.ndim != 2 or array.shape[1] != JOINT_COUNT:
+        raise LegFkError(f"{what} must have shape (N, {JOINT_COUNT}), got {array.shape}")
+    return array
+
+
+def _gravity(gravity_base: ArrayLike | None, rows: int) -> np.ndarray:
+    """(rows, 3) gravity [m/s^2] from None (level), a (3,) vector or a (rows, 3) array."""
+    gravity = np.asarray(LEVEL_GRAVITY if gravity_base is None else gravity_base, dtype=float)
+    if gravity.shape == (3,):
+        return np.broadcast_to(gravity, (rows, 3))
+    if gravity.shape != (rows, 3):
+        raise LegFkError(f"gravity_base must have shape (3,) or ({rows}, 3), got {gravity.shape}")
+    return gravity

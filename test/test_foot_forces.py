@@ -1,0 +1,308 @@
+"""Foot forces and contacts from joint efforts, judged by PyBullet.
+
+- g(q) against PyBullet's inverse dynamics (fixed base, zero velocity and acceleration);
+- static poses of a free-base A1 on a plane (body height, roll, pitch, three-leg stances):
+  efforts = PyBullet's applied motor torques, truth = the contact forces of the plane on each foot;
+- trots (A1 and a Go2-like robot, default thresholds): stance from the contact rule against
+  PyBullet's contacts (a contact point with a positive normal force);
+- bad input: NaN, missing or wrong-length efforts.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pybullet
+import pytest
+from conftest import raises_leg_fk_error
+from exported_urdf import exported_quadruped
+from pybullet_sim import (
+    A1_URDF,
+    GRAVITY,
+    QuadrupedSim,
+    gravity_in_root,
+    quaternion_rpy,
+    rotation,
+    stack,
+)
+from shared import STAND_LEG
+
+from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
+from a1_leg_fk.estimation.forces import FootForces
+from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import LEG_NAMES
+
+MAX_TORQUE_NM = 33.5
+POSITION_GAIN = 0.3
+SETTLE_STEPS = 300
+POSES = 40
+TROT_HZ = 2.5
+KNEE_LIFT_RAD = 0.4
+TROT_S = 3.5
+COMPARE_FROM_S = 0.25
+DIAGONAL_PAIR = {"FR": 0, "RL": 0, "FL": 1, "RR": 1}
+
+
+def go2_like(folder: Path) -> tuple[Quadruped, Path]:
+    """The Go2-like fixture (15.0 kg, 0.213 m thigh and calf; the A1 is 12.5 kg, 0.2 m), with
+    primitive geometry only: a 1 cm collision sphere on every link, the feet's included.
+    """
+    text = exported_quadruped("go2", meshes=False, shin_links=False)
+    path = folder / "go2_primitives.urdf"
+    path.write_text(text, encoding="utf-8")
+    return Quadruped.from_urdf(text), path
+
+
+def feet_of(quadruped: Quadruped) -> list[str]:
+    return [leg.chain.foot_link for leg in quadruped.legs]
+
+
+def in_base(forces_world: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+    """(N, 4, 3) world forces -> base frame, for (N, 4) root orientations (x, y, z, w)."""
+    rotations = np.array([rotation(o) for o in orientations])
+    return np.einsum("nlj,nji->nli", forces_world, rotations)
+
+
+def static_poses(quadruped: Quadruped, radius_m: float, seed: int = 3):
+    """(root position, orientation, angles) of POSES stances the IK can reach: body height
+    0.20-0.32 m, roll and pitch within +-0.15 rad, every other pose on three legs (the body moved
+    away from the lifted foot, which is 5 cm up).
+    """
+    footprint = quadruped.fk(list(STAND_LEG) * 4)[:, :2]
+    rng = np.random.default_rng(seed)
+    poses = []
+    while len(poses) < POSES:
+        height = rng.uniform(0.20, 0.32)
+        roll, pitch = rng.uniform(-0.15, 0.15, 2)
+        lifted = None if len(poses) % 2 == 0 else len(poses) // 2 % 4
+        origin = np.array([0.0, 0.0, height])
+        world = np.c_[footprint, np.full(4, radius_m)]
+        if lifted is not None:
+            origin[:2] -= 0.045 * np.sign(footprint[lifted])
+            world[lifted, 2] += 0.05
+        orientation = quaternion_rpy(roll, pitch)
+        result = quadruped.ik((world - origin) @ rotation(orientation))
+        if all(status == "ok" for status in result.status):
+            poses.append((origin, orientation, result.angles))
+    return poses
+
+
+def settle(sim: QuadrupedSim, origin, orientation, angles) -> dict[str, np.ndarray]:
+    """Hold a pose until it is at rest; the last 10 samples."""
+    sim.place(origin, orientation, angles)
+    samples = [sim.step(angles, MAX_TORQUE_NM, POSITION_GAIN) for _ in range(SETTLE_STEPS)]
+    return stack(samples[-10:])
+
+
+def test_gravity_torques_match_pybullet_inverse_dynamics(tmp_path: Path) -> None:
+    go2, go2_path = go2_like(tmp_path)
+    rng = np.random.default_rng(11)
+    for quadruped, path in ((Quadruped.from_urdf(), A1_URDF), (go2, go2_path)):
+        client = pybullet.connect(pybullet.DIRECT)
+        try:
+            pybullet.setGravity(0, 0, -GRAVITY, physicsClientId=client)
+            body = pybullet.loadURDF(str(path), useFixedBase=True, physicsClientId=client)
+            infos = [
+                pybullet.getJointInfo(body, j, physicsClientId=client)
+                for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+            ]
+            names = [info[1].decode() for info in infos if info[2] != pybullet.JOINT_FIXED]
+            assert names == list(quadruped.joint_names)
+            model = FootForces(quadruped)
+            for _ in range(5):
+                angles = rng.uniform(-1.0, 1.0, 12)
+                angles[2::3] = rng.uniform(-2.5, -1.0, 4)
+                theirs = pybullet.calculateInverseDynamics(
+                    body, angles.tolist(), [0.0] * 12, [0.0] * 12, physicsClientId=client
+                )
+                ours = model.gravity_torques_batch(angles[None], (0, 0, -GRAVITY))[0]
+                np.testing.assert_allclose(ours, theirs, atol=1e-9)
+        finally:
+            pybullet.disconnect(client)
+
+
+def test_static_poses_match_pybullet_contact_forces() -> None:
+    quadruped = Quadruped.from_urdf()
+    model = FootForces(quadruped)
+    point_feet = FootForces(quadruped, foot_radius_m=0.0)
+    assert model.foot_radii_m == (0.02,) * 4  # the toes' collision spheres
+    errors, level_errors, point_errors = [], [], []
+    with QuadrupedSim(A1_URDF, quadruped.joint_names, feet_of(quadruped)) as sim:
+        for origin, orientation, angles in static_poses(quadruped, 0.02):
+            rest = settle(sim, origin, orientation, angles)
+            assert not rest["other_contact"].any()
+            assert np.abs(rest["rates"]).max() < 0.02  # at rest [rad/s]
+            truth = in_base(rest["foot_forces"], rest["root_orientation"]).mean(axis=0)
+            q, tau = rest["angles"].mean(axis=0), rest["torques"].mean(axis=0)
+            gravity = gravity_in_root(rest["root_orientation"][-1])
+            level = (0.0, 0.0, -GRAVITY)  # no IMU: the base assumed level
+            for estimator, out, g in (
+                (model, errors, gravity),
+                (model, level_errors, level),
+                (point_feet, point_errors, gravity),
+            ):
+                forces = estimator.estimate(q, tau, g)
+                out.append(np.linalg.norm(forces - truth, axis=1))
+    errors, level_errors, point_errors = map(np.array, (errors, level_errors, point_errors))
+    print(
+        f"{POSES} static poses, |F - PyBullet| per foot: with the IMU's gravity max "
+        f"{errors.max():.3f} N, rms {np.sqrt((errors**2).mean()):.4f} N; base assumed level: max "
+        f"{level_errors.max():.2f} N; point feet (no 2 cm radius): max {point_errors.max():.2f} N"
+    )
+    assert errors.max() <= 2.0
+    assert level_errors.max() <= 2.0
+    assert point_errors.max() > errors.max()  # the contact point matters
+
+
+def test_the_harness_friction_sign() -> None:
+    """PyBullet's lateral friction on body A points against its lateralFrictionDir: pushing the
+    standing robot forwards, the plane must push its feet backwards by as much.
+    """
+    quadruped = Quadruped.from_urdf()
+    with QuadrupedSim(A1_URDF, quadruped.joint_names, feet_of(quadruped)) as sim:
+        origin, orientation, angles = static_poses(quadruped, 0.02)[0]
+        settle(sim, origin, orientation, angles)
+        for _ in range(200):
+            sim.push([20.0, 0.0, 0.0])
+            sample = sim.step(angles, MAX_TORQUE_NM, POSITION_GAIN)
+    total = sample.foot_forces.sum(axis=0)
+    weight = FootForces(quadruped).total_mass_kg * GRAVITY
+    np.testing.assert_allclose(total, [-20.0, 0.0, weight], atol=0.5)
+
+
+def trot(quadruped: Quadruped, path: Path | str, stand_height: float) -> dict[str, np.ndarray]:
+    """A trot in place (diagonal pairs half a cycle apart; a swing leg bends its knee and turns
+    its hip pitch by half that), position-controlled, recorded at 500 Hz.
+    """
+
+    def targets(t: float) -> list[float]:
+        out = []
+        for leg in LEG_NAMES:
+            phase = 2 * math.pi * TROT_HZ * (t - 0.5) + math.pi * DIAGONAL_PAIR[leg]
+            bend = KNEE_LIFT_RAD * max(0.0, math.sin(phase)) if t > 0.5 else 0.0
+            out += [STAND_LEG[0], STAND_LEG[1] + bend / 2, STAND_LEG[2] - bend]
+        return out
+
+    with QuadrupedSim(path, quadruped.joint_names, feet_of(quadruped)) as sim:
+        sim.place([0, 0, stand_height], [0, 0, 0, 1], targets(0.0))
+        steps = round(TROT_S / sim.step_s)
+        samples = [
+            sim.step(targets(sim.time_s), MAX_TORQUE_NM, POSITION_GAIN) for _ in range(steps)
+        ]
+    return stack(samples)
+
+
+@pytest.mark.parametrize("robot", ["a1", "go2_like"])
+def test_trot_contacts_agree_with_pybullet(robot: str, tmp_path: Path) -> None:
+    if robot == "a1":
+        quadruped, path = Quadruped.from_urdf(), A1_URDF
+    else:
+        quadruped, path = go2_like(tmp_path)
+    stand_height = 0.02 - quadruped.fk(list(STAND_LEG) * 4)[:, 2].mean() + 0.01
+    record = trot(quadruped, path, stand_height)
+    model = FootForces(quadruped)
+    gravity = np.array([gravity_in_root(o) for o in record["root_orientation"]])
+    forces = model.estimate_batch(record["angles"], record["torques"], gravity).forces
+    normal = normal_forces(forces, gravity)
+    truth_base = in_base(record["foot_forces"], record["root_orientation"])
+    true_normal = normal_forces(truth_base, gravity)
+    weight = model.total_mass_kg * GRAVITY
+    thresholds = ContactThresholds.for_weight(weight)
+    stance = ContactRule(thresholds).update_batch(normal) >= 0.5
+    compared = record["stamp_s"] >= COMPARE_FROM_S
+    truth = true_normal > 0.0
+    agreement = (stance == truth)[compared].mean(axis=0)
+    overall = (stance == truth)[compared].mean()
+    in_stance = compared[:, None] & truth
+    rms = math.sqrt(((normal - true_normal)[in_stance] ** 2).mean())
+    print(
+        f"{robot} ({model.total_mass_kg:.2f} kg) trot, {int(compared.sum())} samples: thresholds "
+        f"{thresholds.touchdown_n:.1f}/{thresholds.liftoff_n:.1f} N; stance agrees with "
+        f"PyBullet's contacts on "
+        + ", ".join(f"{leg} {share:.2%}" for leg, share in zip(LEG_NAMES, agreement))
+        + f" (all {overall:.2%}); normal-force rms error in stance {rms:.2f} N"
+        + f" = {100 * rms / weight:.1f} % of weight"
+    )
+    assert not record["other_contact"].any()
+    assert 0.3 < truth[compared].mean() < 0.8  # a trot: feet both in the air and on the ground
+    assert overall >= 0.97
+    assert (agreement >= 0.95).all()
+    assert rms < 0.1 * weight
+
+
+def test_bad_efforts_give_no_force_for_that_leg_only() -> None:
+    quadruped = Quadruped.from_urdf()
+    angles = np.tile(list(STAND_LEG) * 4, (4, 1))
+    efforts = np.tile([0.5, 2.0, -6.0] * 4, (4, 1))
+    efforts[1, 4] = math.nan  # FL
+    efforts[2, 9] = math.inf  # RL
+    angles[3, 0] = math.nan  # FR's angle
+    estimate = FootForces(quadruped).estimate_batch(angles, efforts)
+    np.testing.assert_array_equal(
+        estimate.missing,
+        [[0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 1], [1, 0, 0, 0]],
+    )
+    assert np.isnan(estimate.forces[estimate.missing]).all()
+    assert np.isfinite(estimate.forces[~estimate.missing]).all()
+    np.testing.assert_allclose(estimate.forces[1:, 2], estimate.forces[[0, 0, 0], 2])  # RR intact
+    straight = np.array(list(STAND_LEG) * 4)
+    straight[2] = 0.0  # FR's knee straight: singular
+    single = quadruped.foot_forces(straight, efforts[0])
+    assert np.isnan(single[0]).all() and np.isfinite(single[1:]).all()
+    with raises_leg_fk_error("efforts must be 12 numbers"):
+        quadruped.foot_forces(straight, [1.0] * 11)
+    with raises_leg_fk_error("gravity_base must have shape"):
+        quadruped.foot_forces_batch(angles, efforts, np.zeros((3, 3)))
+
+
+def test_foot_forces_balance_a_hand_computed_pose() -> None:
+    """A massless leg: with the gravity torques zero, ``J^T F = -tau`` exactly (Jacobian by finite
+    differences of our FK, a reference independent of the solve).
+    """
+    quadruped = Quadruped.from_urdf()
+    angles = np.array([0.1, 0.7, -1.4, -0.1, 0.9, -1.7, 0.05, 0.8, -1.5, 0.0, 1.0, -1.9])
+    force = np.array([[3.0, -2.0, 40.0], [1.0, 4.0, 25.0], [-2.0, 0.0, 30.0], [0.0, 1.5, 35.0]])
+    step = 1e-6
+    jacobians = np.zeros((4, 3, 3))
+    for joint in range(12):
+        delta = np.zeros(12)
+        delta[joint] = step
+        column = (quadruped.fk(angles + delta) - quadruped.fk(angles - delta)) / (2 * step)
+        jacobians[joint // 3, :, joint % 3] = column[joint // 3]
+    efforts = -np.einsum("lji,lj->li", jacobians, force).ravel()
+    model = FootForces(quadruped, foot_radius_m=0.0)
+    gravity_free = model.estimate(angles, efforts, (0.0, 0.0, -1e-12))
+    np.testing.assert_allclose(gravity_free, force, atol=1e-5)
+
+
+def test_contact_rule_hysteresis_batch_equals_stream() -> None:
+    thresholds = ContactThresholds(touchdown_n=10.0, liftoff_n=5.0)
+    normal = np.array([0.0, 6.0, 9.9, 10.0, 7.0, 5.0, 4.9, 7.0, math.nan, 12.0, math.nan, 3.0])
+    forces = np.stack([normal, normal[::-1], np.full(12, 20.0), np.zeros(12)], axis=1)
+    batch = ContactRule(thresholds).update_batch(forces)
+    stream_rule = ContactRule(thresholds)
+    stream = np.array([stream_rule.update(row) for row in forces])
+    np.testing.assert_array_equal(batch, stream)
+    stance = batch[:, 0] >= 0.5
+    # swing until 10 N, stance down to 5 N, swing below; NaN keeps the state, with no value
+    assert stance.tolist() == [0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 0, 0]
+    assert np.isnan(batch[[8, 10], 0]).all()
+    assert batch[0, 0] == 0.0 and batch[3, 0] == 1.0 and batch[2, 0] == pytest.approx(0.495)
+    assert (batch[:, 2] == 1.0).all() and (batch[:, 3] == 0.0).all()
+    split = ContactRule(thresholds)
+    halves = np.concatenate([split.update_batch(forces[:5]), split.update_batch(forces[5:])])
+    np.testing.assert_array_equal(halves, batch)
+
+
+def test_default_thresholds_scale_with_weight(tmp_path: Path) -> None:
+    a1 = FootForces(Quadruped.from_urdf()).total_mass_kg
+    go2 = FootForces(go2_like(tmp_path)[0]).total_mass_kg
+    assert a1 == pytest.approx(12.458)  # pybullet_data's a1.urdf, summed by hand
+    assert go2 == pytest.approx(6.921 + 4 * (0.678 + 1.152 + 0.154 + 0.04))
+    low, high = (ContactThresholds.for_weight(m * GRAVITY) for m in (a1, go2))
+    assert high.touchdown_n / low.touchdown_n == pytest.approx(go2 / a1)
+    assert ContactThresholds.for_weight(100.0, touchdown_n=20.0).touchdown_n == 20.0
+    with raises_leg_fk_error("liftoff"):
+        ContactThresholds(5.0, 6.0)

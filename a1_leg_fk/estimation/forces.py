@@ -31,11 +31,14 @@ there, and where the efforts or angles of a leg are missing or not finite, a leg
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from a1_leg_fk.fk_codegen import compile_source, leg_source
 from a1_leg_fk.kinematics import BATCH_CHUNK_ROWS, CompiledLeg, Quadruped
 from a1_leg_fk.leg_stages import rpy_matrix
 from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
@@ -67,17 +70,48 @@ class ForceEstimate:
     singular: np.ndarray
 
 
-@dataclass(frozen=True)
+Columns = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""A (K,) array per component x, y, z: K vectors."""
+
+
 class _LegStatics:
-    """One leg's constants: per stage its Rodrigues terms, offset [m] and axis, and its segment's
-    mass [kg] and first moment (mass times centre of mass) [kg m] in the stage's child frame.
+    """One leg's generated functions (see :mod:`a1_leg_fk.fk_codegen`): per segment with mass,
+    the Jacobian of its centre of mass; per joint, its axis in the base frame.
     """
 
-    terms: tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]
-    offsets: tuple[np.ndarray, ...]
-    axes: tuple[np.ndarray, ...]
-    masses: tuple[float, ...]
-    moments: tuple[np.ndarray, ...]
+    def __init__(self, model: RobotModel, leg: CompiledLeg) -> None:
+        movable = leg.chain.movable
+        self.masses: list[float] = []
+        self.com_jacobians: list[tuple[float, Callable[..., tuple[Any, ...]]]] = []
+        for k, joint in enumerate(movable):
+            stop = movable[k + 1].name if k + 1 < len(movable) else None
+            mass, moment = _segment(model, joint.child, stop)
+            self.masses.append(mass)
+            if mass > 0.0:  # the centre of mass, a point in stage k's child frame
+                source = leg_source(leg.stages[: k + 1], moment / mass)
+                code = compile_source(source, f"CoM of {leg.chain.leg} segment {k}", self)
+                self.com_jacobians.append((mass, code["jacobian_from_trig"]))
+        # a stage without its offset turns a vector as the leg turns it
+        turns = tuple(replace(stage, offset=np.zeros(3)) for stage in leg.stages)
+        self.axes: list[Callable[..., tuple[Any, Any, Any]]] = [
+            compile_source(
+                leg_source(turns[: k + 1], stage.axis), f"axis {stage.joint.name}", self
+            )["position_from_trig"]
+            for k, stage in enumerate(leg.stages)
+        ]
+
+    def gravity_torques(self, trig: tuple[np.ndarray, ...], gravity: Columns) -> Columns:
+        """g(q) [N m], one (K,) array per joint, for the legs' (c0, s0, c1, s1, c2, s2) and
+        gravity [m/s^2]: minus the torque gravity exerts on the links below each joint.
+        """
+        gx, gy, gz = gravity
+        torques = [np.zeros_like(gx) for _ in range(JOINTS_PER_LEG)]
+        for mass, jacobian in self.com_jacobians:
+            columns = jacobian(*trig)
+            for k in range(len(columns) // 3):
+                x, y, z = columns[3 * k : 3 * k + 3]
+                torques[k] -= mass * (x * gx + y * gy + z * gz)
+        return torques[0], torques[1], torques[2]
 
 
 class FootForces:
@@ -102,7 +136,7 @@ class FootForces:
             else foot_radius_m
             for leg in quadruped.legs
         )  # fmt: skip
-        self._legs = tuple(_leg_statics(quadruped.model, leg) for leg in quadruped.legs)
+        self._legs = tuple(_LegStatics(quadruped.model, leg) for leg in quadruped.legs)
         self.total_mass_kg = sum(i.mass for i in quadruped.model.inertials.values())
         """The robot's mass [kg]: every ``<inertial>`` of the URDF."""
         if not self.total_mass_kg > 0.0:
@@ -113,7 +147,7 @@ class FootForces:
 
     def leg_masses_kg(self, leg: int) -> tuple[float, ...]:
         """The masses [kg] of leg slot ``leg``'s three segments, root side first."""
-        return self._legs[leg].masses
+        return tuple(self._legs[leg].masses)
 
     def estimate(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
@@ -172,7 +206,11 @@ class FootForces:
         out = np.empty_like(q)
         for slot, statics in enumerate(self._legs):
             joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-            out[:, joints] = _gravity_torques(statics, cos[:, joints], sin[:, joints], gravity)
+            g = gravity.T
+            torques = statics.gravity_torques(
+                _trig(cos[:, joints], sin[:, joints]), (g[0], g[1], g[2])
+            )
+            out[:, joints] = np.stack(torques, axis=1)
         return out
 
     def _leg_forces(
@@ -187,58 +225,42 @@ class FootForces:
         """(K, 3) forces [N] and (K,) singular flags of one leg: J^T F = g - tau, by Cramer, J
         that of the contact point.
         """
-        torques, axes = _statics(self._legs[slot], cos, sin, gravity)
-        rhs = torques - efforts
-        jacobian = leg.jacobians_batch(cos, sin)
+        statics, trig, g = self._legs[slot], _trig(cos, sin), gravity.T
+        torques = statics.gravity_torques(trig, (g[0], g[1], g[2]))
+        rhs = [torques[k] - efforts[:, k] for k in range(JOINTS_PER_LEG)]
+        flat = leg.jacobian_from_trig(*trig)
+        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
         radius = self.foot_radii_m[slot]
-        if radius:  # the contact point moves as the foot turns: J_c = J - [d]x J_w, d its offset
-            down = gravity * (radius / np.linalg.norm(gravity, axis=1, keepdims=True))
-            for k in range(JOINTS_PER_LEG):
-                jacobian[:, :, k] -= np.cross(down, axes[k])
-        j0, j1, j2 = jacobian[:, :, 0], jacobian[:, :, 1], jacobian[:, :, 2]
-        c12, c20, c01 = np.cross(j1, j2), np.cross(j2, j0), np.cross(j0, j1)
-        det = np.einsum("ki,ki->k", j0, c12)
-        scale = np.prod(np.linalg.norm(jacobian, axis=1), axis=1)
-        singular = ~(np.abs(det) >= self.min_condition * scale)
-        safe = np.where(singular, 1.0, det)[:, None]
-        forces = (rhs[:, 0:1] * c12 + rhs[:, 1:2] * c20 + rhs[:, 2:3] * c01) / safe
+        if radius:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
+            scale = radius / np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+            down = (g[0] * scale, g[1] * scale, g[2] * scale)
+            for k, axis in enumerate(statics.axes):
+                turn = _cross(down, axis(*trig))
+                columns[k] = tuple(np.subtract(columns[k][i], turn[i]) for i in range(3))
+        j0, j1, j2 = columns
+        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
+        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
+        lengths = [np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) for c in columns]
+        singular = ~(np.abs(det) >= self.min_condition * lengths[0] * lengths[1] * lengths[2])
+        inverse = 1.0 / np.where(singular, 1.0, det)
+        forces = np.empty((cos.shape[0], 3))
+        for i in range(3):
+            forces[:, i] = (rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i]) * inverse
         return forces, singular
 
 
-def _gravity_torques(
-    statics: _LegStatics, cos: np.ndarray, sin: np.ndarray, gravity: np.ndarray
-) -> np.ndarray:
-    """(K, 3) g(q) [N m] of one leg for (K, 3) cosines and sines and (K, 3) gravity [m/s^2]."""
-    return _statics(statics, cos, sin, gravity)[0]
+def _trig(cos: np.ndarray, sin: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(c0, s0, c1, s1, c2, s2) of a leg's (K, 3) cosines and sines."""
+    return cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
 
 
-def _statics(
-    statics: _LegStatics, cos: np.ndarray, sin: np.ndarray, gravity: np.ndarray
-) -> tuple[np.ndarray, list[np.ndarray]]:
-    """(K, 3) g(q) [N m] and the three (K, 3) joint axes (base frame) of one leg."""
-    rows = cos.shape[0]
-    rotation = np.broadcast_to(np.eye(3), (rows, 3, 3))
-    origin = np.zeros((rows, 3))
-    origins, axes, moments = [], [], []
-    for k, ((c0, c1, c2), offset, axis, mass, moment) in enumerate(
-        zip(statics.terms, statics.offsets, statics.axes, statics.masses, statics.moments)
-    ):
-        origin = origin + rotation @ offset
-        turn = c0 + cos[:, k, None, None] * c1 + sin[:, k, None, None] * c2
-        rotation = rotation @ turn
-        origins.append(origin)
-        axes.append(rotation @ axis)
-        moments.append(mass * origin + rotation @ moment)
-    out = np.empty((rows, 3))
-    below_moment = np.zeros((rows, 3))
-    below_mass = 0.0
-    for k in reversed(range(JOINTS_PER_LEG)):
-        below_moment = below_moment + moments[k]
-        below_mass += statics.masses[k]
-        lever = below_moment - below_mass * origins[k]  # [kg m], from the joint's origin
-        # gravity's torque about the axis is (lever x gravity) . axis; g(q) is minus that
-        out[:, k] = -np.einsum("ki,ki->k", np.cross(lever, gravity), axes[k])
-    return out, axes
+def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
+    """``a x b`` component by component (numpy's cross is slow on (K, 3) arrays)."""
+    return (
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    )
 
 
 def foot_radius(model: RobotModel, foot_link: str) -> float:
@@ -249,23 +271,6 @@ def foot_radius(model: RobotModel, foot_link: str) -> float:
         if math.dist(sphere.center, (0.0, 0.0, 0.0)) <= 1e-3:
             return sphere.radius
     return 0.0
-
-
-def _leg_statics(model: RobotModel, leg: CompiledLeg) -> _LegStatics:
-    movable = leg.chain.movable
-    masses, moments = [], []
-    for k, joint in enumerate(movable):
-        stop = movable[k + 1].name if k + 1 < len(movable) else None
-        mass, moment = _segment(model, joint.child, stop)
-        masses.append(mass)
-        moments.append(moment)
-    return _LegStatics(
-        tuple(stage.rodrigues_terms for stage in leg.stages),
-        tuple(stage.offset for stage in leg.stages),
-        tuple(stage.axis for stage in leg.stages),
-        tuple(masses),
-        tuple(moments),
-    )
 
 
 def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:

@@ -1,7 +1,9 @@
 """The pass over a recording's JointState messages: their serialized bytes (no deserialization)
 in blocks of :data:`BLOCK_MESSAGES`, through :class:`~a1_leg_fk.joint_state.FootTracker`'s rules,
 to :class:`FootBlock` rows of feet [m] and foot velocities [m/s] in the base frame (and in the
-world frame with a base pose). No ROS install: ``rosbags`` and ``tqdm`` come with the open bag.
+world frame with a base pose; with ``recording.forces``, foot forces [N] and contacts from the
+efforts, :mod:`a1_leg_fk.recording_forces`). No ROS install: ``rosbags`` and ``tqdm`` come
+with the open bag.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from a1_leg_fk.joint_state import FootTracker
-from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout
+from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError, cdr_layout, effort_span
 from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.recording_open import Recording, one_line
 
@@ -33,7 +35,9 @@ LEGS = len(LEG_NAMES)
 class FootBlock:
     """Rows of consecutive accepted messages: like :class:`~a1_leg_fk.recording.FootTrajectories`
     (stamps [ns], feet [m] and foot velocities [m/s] in the base frame, world feet [m]), velocities
-    always an array (NaN where the message gives none).
+    always an array (NaN where the message gives none); with ``recording.forces``, ``forces``
+    (N, 4, 3) [N, base frame], ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts``
+    (N, 4) probabilities (NaN where none).
     """
 
     stamps_ns: np.ndarray
@@ -41,6 +45,9 @@ class FootBlock:
     positions: np.ndarray
     velocities: np.ndarray
     world_positions: np.ndarray | None
+    forces: np.ndarray | None = None
+    normal_forces: np.ndarray | None = None
+    contacts: np.ndarray | None = None
 
 
 def iter_foot_blocks(
@@ -57,6 +64,8 @@ def iter_foot_blocks(
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
+    if recording.forces is not None:
+        recording.forces.restart()
     recording.has_velocities = False  # this pass's
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
@@ -151,7 +160,7 @@ class _Batch:
 
     def _vectorised(
         self, raws: list[bytes], bag_times: list[int]
-    ) -> tuple[np.ndarray, ...] | None:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None:
         layout = cdr_layout(bytes(raws[0]))
         if layout is None:
             return None
@@ -168,14 +177,19 @@ class _Batch:
         stamps = np.where(stamps == 0, bag_times_ns, stamps)
         positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
         velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
-        return stamps, bag_times_ns, positions, velocities
+        efforts = None
+        if self.recording.forces is not None:
+            efforts = np.ascontiguousarray(matrix[:, effort_span(raws[0])[1]]).view("<f8")
+        return stamps, bag_times_ns, positions, velocities, efforts
 
     def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
         fields = self.decoder.fields
         pending = _Pending()
+        forces = self.recording.forces is not None
         for raw, bag_time in zip(raws, bag_times):
             try:
                 stamp, changed, order, positions, velocities = fields(raw)
+                efforts = bytes(raw)[effort_span(raw, self.recording.ros1)[1]] if forces else b""
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
@@ -184,15 +198,19 @@ class _Batch:
                 or order != pending.order
                 or len(positions) != pending.position_bytes
                 or len(velocities) != pending.velocity_bytes
+                or len(efforts) != pending.effort_bytes
             ):
                 yield from pending.finish(self)
                 pending = _Pending()
             if not pending.stamps:
-                pending.start(self.decoder.names, order, len(positions), len(velocities))
+                pending.start(
+                    self.decoder.names, order, len(positions), len(velocities), len(efforts)
+                )
             pending.stamps.append(stamp or bag_time)
             pending.bag_times.append(bag_time)
             pending.positions.append(positions)
             pending.velocities.append(velocities)
+            pending.efforts.append(efforts)
         yield from pending.finish(self)
 
 
@@ -202,17 +220,24 @@ class _Pending:
     def __init__(self) -> None:
         self.names: list[str] = []
         self.order = "<"
-        self.position_bytes = self.velocity_bytes = 0
+        self.position_bytes = self.velocity_bytes = self.effort_bytes = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
         self.velocities: list[bytes] = []
+        self.efforts: list[bytes] = []
 
     def start(
-        self, names: list[str], order: str, position_bytes: int, velocity_bytes: int
+        self,
+        names: list[str],
+        order: str,
+        position_bytes: int,
+        velocity_bytes: int,
+        effort_bytes: int,
     ) -> None:
         self.names, self.order = names, order
         self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
+        self.effort_bytes = effort_bytes
 
     def finish(self, batch: _Batch) -> Iterator[FootBlock]:
         """The rows of these messages (none if there are none)."""
@@ -226,6 +251,9 @@ class _Pending:
         velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
             count, self.velocity_bytes // 8
         )
+        efforts = np.frombuffer(b"".join(self.efforts), dtype).reshape(
+            count, self.effort_bytes // 8
+        )
         yield from _finish(
             batch.recording,
             batch.tracker,
@@ -234,6 +262,7 @@ class _Pending:
             np.array(self.bag_times, dtype=np.int64),
             positions.astype(np.float64),
             velocities.astype(np.float64),
+            efforts.astype(np.float64) if batch.recording.forces is not None else None,
         )
 
 
@@ -245,9 +274,11 @@ def _finish(
     bag_times: np.ndarray,
     positions: np.ndarray,
     velocities: np.ndarray,
+    efforts: np.ndarray | None = None,
 ) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
-    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length).
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
+    another length; efforts only with ``recording.forces``).
     """
     result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
@@ -266,7 +297,11 @@ def _finish(
     if recording.base_pose is not None:
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
-    yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
+    forces = None
+    if recording.forces is not None and efforts is not None:
+        slot_efforts = recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
+        forces = recording.forces.rows(stamps, angles[rows], slot_efforts)
+    yield FootBlock(stamps, bag_times, feet, foot_velocities, world, *(forces or (None,) * 3))
 
 
 def velocities_of(

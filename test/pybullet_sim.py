@@ -27,6 +27,8 @@ import pybullet_data
 A1_URDF = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
 STEP_S = 1.0 / 500.0
 GRAVITY = 9.81
+DIAGONAL_PAIR = (0, 1, 1, 0)
+"""Per leg (FR, FL, RR, RL): which half of a trot's cycle it swings in."""
 
 
 @dataclass(frozen=True)
@@ -208,6 +210,42 @@ class QuadrupedSim:
             self.body, -1, list(force_world), list(center), pybullet.WORLD_FRAME,
             physicsClientId=self.client,
         )  # fmt: skip
+
+
+def trot_targets(
+    t: float, stand: Sequence[float], hz: float, knee_lift_rad: float, start_s: float = 0.5
+) -> list[float]:
+    """12 joint targets [rad] at time ``t`` [s]: every leg at ``stand`` (hip roll, hip pitch,
+    knee), then from ``start_s`` a trot in place: diagonal pairs half a cycle apart, a swing leg
+    bends its knee by up to ``knee_lift_rad`` and turns its hip pitch by half that.
+    """
+    targets = []
+    for pair in DIAGONAL_PAIR:
+        phase = 2 * math.pi * hz * (t - start_s) + math.pi * pair
+        bend = knee_lift_rad * max(0.0, math.sin(phase)) if t > start_s else 0.0
+        targets += [stand[0], stand[1] + bend / 2, stand[2] - bend]
+    return targets
+
+
+def record_trot(
+    sim: QuadrupedSim,
+    stand: Sequence[float],
+    stand_height_m: float,
+    seconds: float,
+    hz: float = 2.5,
+    knee_lift_rad: float = 0.4,
+    max_torque_nm: float = 33.5,
+    position_gain: float = 0.3,
+) -> dict[str, np.ndarray]:
+    """Drop the robot standing from ``stand_height_m`` [m] (root origin) and trot in place
+    (:func:`trot_targets`) for ``seconds``; every step's :class:`Sample`, stacked.
+    """
+    sim.place([0, 0, stand_height_m], [0, 0, 0, 1], trot_targets(0.0, stand, hz, knee_lift_rad))
+    samples = [
+        sim.step(trot_targets(sim.time_s, stand, hz, knee_lift_rad), max_torque_nm, position_gain)
+        for _ in range(round(seconds / sim.step_s))
+    ]
+    return stack(samples)
 
 
 def quaternion_rpy(roll: float, pitch: float, yaw: float = 0.0) -> tuple[float, ...]:

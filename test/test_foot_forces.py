@@ -24,6 +24,7 @@ from pybullet_sim import (
     QuadrupedSim,
     gravity_in_root,
     quaternion_rpy,
+    record_trot,
     rotation,
     stack,
 )
@@ -42,7 +43,6 @@ TROT_HZ = 2.5
 KNEE_LIFT_RAD = 0.4
 TROT_S = 3.5
 COMPARE_FROM_S = 0.25
-DIAGONAL_PAIR = {"FR": 0, "RL": 0, "FL": 1, "RR": 1}
 
 
 def go2_like(folder: Path) -> tuple[Quadruped, Path]:
@@ -172,28 +172,6 @@ def test_the_harness_friction_sign() -> None:
     np.testing.assert_allclose(total, [-20.0, 0.0, weight], atol=0.5)
 
 
-def trot(quadruped: Quadruped, path: Path | str, stand_height: float) -> dict[str, np.ndarray]:
-    """A trot in place (diagonal pairs half a cycle apart; a swing leg bends its knee and turns
-    its hip pitch by half that), position-controlled, recorded at 500 Hz.
-    """
-
-    def targets(t: float) -> list[float]:
-        out = []
-        for leg in LEG_NAMES:
-            phase = 2 * math.pi * TROT_HZ * (t - 0.5) + math.pi * DIAGONAL_PAIR[leg]
-            bend = KNEE_LIFT_RAD * max(0.0, math.sin(phase)) if t > 0.5 else 0.0
-            out += [STAND_LEG[0], STAND_LEG[1] + bend / 2, STAND_LEG[2] - bend]
-        return out
-
-    with QuadrupedSim(path, quadruped.joint_names, feet_of(quadruped)) as sim:
-        sim.place([0, 0, stand_height], [0, 0, 0, 1], targets(0.0))
-        steps = round(TROT_S / sim.step_s)
-        samples = [
-            sim.step(targets(sim.time_s), MAX_TORQUE_NM, POSITION_GAIN) for _ in range(steps)
-        ]
-    return stack(samples)
-
-
 @pytest.mark.parametrize("robot", ["a1", "go2_like"])
 def test_trot_contacts_agree_with_pybullet(robot: str, tmp_path: Path) -> None:
     if robot == "a1":
@@ -201,7 +179,8 @@ def test_trot_contacts_agree_with_pybullet(robot: str, tmp_path: Path) -> None:
     else:
         quadruped, path = go2_like(tmp_path)
     stand_height = 0.02 - quadruped.fk(list(STAND_LEG) * 4)[:, 2].mean() + 0.01
-    record = trot(quadruped, path, stand_height)
+    with QuadrupedSim(path, quadruped.joint_names, feet_of(quadruped)) as sim:
+        record = record_trot(sim, STAND_LEG, stand_height, TROT_S, TROT_HZ, KNEE_LIFT_RAD)
     model = FootForces(quadruped)
     gravity = np.array([gravity_in_root(o) for o in record["root_orientation"]])
     forces = model.estimate_batch(record["angles"], record["torques"], gravity).forces

@@ -29,6 +29,10 @@ if TYPE_CHECKING:  # rosbags is imported when a bag is read
 IMU_TYPE = "sensor_msgs/msg/Imu"
 
 
+class MissingEfforts(LegFkError):
+    """The recording's JointStates carry no joint efforts."""
+
+
 @dataclass(frozen=True)
 class ImuGravity:
     """Gravity [m/s^2] in the base frame over time, from an IMU's orientation (the IMU aligned
@@ -168,7 +172,7 @@ def check_has_efforts(reader: AnyReader, connection: Connection, ros1: bool) -> 
         except WireError as error:
             raise LegFkError(f"{connection.topic}: {error}") from None
         if span.stop == span.start:
-            raise LegFkError(
+            raise MissingEfforts(
                 f"{connection.topic}: its JointState messages carry no efforts (the first one's "
                 "effort array is empty); --forces needs joint efforts"
             )

@@ -14,10 +14,10 @@ gravity force, the effort that holds the leg still against gravity with the foot
 exerts on the foot, in the base frame (the URDF root link); gravity is an acceleration vector
 [m/s^2] in the base frame (default: ``-z`` at standard gravity, the base level).
 
-The ground pushes where it touches the foot: a foot with a collision sphere of radius ``r`` in the
-URDF touches flat ground at ``r`` along gravity from the foot link's origin, and the Jacobian is
-that of this point (on the A1, ignoring the 2 cm radius costs up to ~2.5 N per foot in static
-poses tilted by 0.15 rad).
+The ground pushes where it touches the foot: a foot with a collision sphere (radius ``r``, its
+centre in the foot link's frame) in the URDF touches flat ground ``r`` along gravity from the
+sphere's centre, and the Jacobian is that of this point (on the A1, ignoring the 2 cm radius
+costs up to ~2.6 N per foot in static poses tilted by 0.15 rad).
 
 ``g(q)`` comes from the URDF's ``<inertial>`` masses and centres of mass: every link below a leg's
 first movable joint belongs to the *segment* of the nearest movable joint above it (links under a
@@ -42,7 +42,7 @@ from a1_leg_fk.fk_codegen import compile_source, leg_source
 from a1_leg_fk.kinematics import BATCH_CHUNK_ROWS, CompiledLeg, Quadruped
 from a1_leg_fk.leg_stages import rpy_matrix
 from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
-from a1_leg_fk.urdf import LegFkError, RobotModel
+from a1_leg_fk.urdf import LegFkError, RobotModel, Sphere
 
 STANDARD_GRAVITY = 9.80665
 """[m/s^2]"""
@@ -76,10 +76,17 @@ Columns = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 class _LegStatics:
     """One leg's generated functions (see :mod:`a1_leg_fk.fk_codegen`): per segment with mass,
-    the Jacobian of its centre of mass; per joint, its axis in the base frame.
+    the Jacobian of its centre of mass; per joint, its axis in the base frame; the Jacobian of the
+    foot sphere's centre, and the sphere's radius [m].
     """
 
-    def __init__(self, model: RobotModel, leg: CompiledLeg) -> None:
+    def __init__(self, model: RobotModel, leg: CompiledLeg, radius_m: float | None) -> None:
+        sphere = foot_sphere(model, leg.chain.foot_link) if radius_m is None else None
+        self.radius_m = sphere.radius if sphere is not None else radius_m or 0.0
+        center = _foot_point(leg, np.array(sphere.center) if sphere is not None else np.zeros(3))
+        self.contact_jacobian: Callable[..., tuple[Any, ...]] = compile_source(
+            leg_source(leg.stages, center), f"foot sphere of {leg.chain.leg}", self
+        )["jacobian_from_trig"]
         movable = leg.chain.movable
         self.masses: list[float] = []
         self.com_jacobians: list[tuple[float, Callable[..., tuple[Any, ...]]]] = []
@@ -126,17 +133,17 @@ class FootForces:
         foot_radius_m: float | None = None,
     ) -> None:
         """Collect each leg's segment masses from the quadruped's URDF; ``min_condition`` gates
-        near-singular Jacobians; ``foot_radius_m`` [m] (default: each foot link's collision
-        sphere, see :func:`foot_radius_m`) places the contact point.
+        near-singular Jacobians. The contact point: by default on each foot link's collision
+        sphere (:func:`foot_sphere`); with ``foot_radius_m`` [m], on a sphere of that radius
+        centred on the foot link's origin (0: the origin itself).
         """
         self.quadruped = quadruped
         self.min_condition = min_condition
-        self.foot_radii_m = tuple(
-            foot_radius(quadruped.model, leg.chain.foot_link) if foot_radius_m is None
-            else foot_radius_m
-            for leg in quadruped.legs
-        )  # fmt: skip
-        self._legs = tuple(_LegStatics(quadruped.model, leg) for leg in quadruped.legs)
+        self._legs = tuple(
+            _LegStatics(quadruped.model, leg, foot_radius_m) for leg in quadruped.legs
+        )
+        self.foot_radii_m = tuple(leg.radius_m for leg in self._legs)
+        """Each foot's contact sphere radius [m]."""
         self.total_mass_kg = sum(i.mass for i in quadruped.model.inertials.values())
         """The robot's mass [kg]: every ``<inertial>`` of the URDF."""
         if not self.total_mass_kg > 0.0:
@@ -183,10 +190,10 @@ class FootForces:
         for start in range(0, rows, BATCH_CHUNK_ROWS):
             block = slice(start, min(start + BATCH_CHUNK_ROWS, rows))
             cos, sin = np.cos(q[block]), np.sin(q[block])
-            for slot, leg in enumerate(self.quadruped.legs):
+            for slot in range(LEGS):
                 joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
                 forces[block, slot], singular[block, slot] = self._leg_forces(
-                    slot, leg, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
+                    slot, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
                 )
         singular &= ~missing
         forces[missing | singular] = math.nan
@@ -216,7 +223,6 @@ class FootForces:
     def _leg_forces(
         self,
         slot: int,
-        leg: CompiledLeg,
         cos: np.ndarray,
         sin: np.ndarray,
         efforts: np.ndarray,
@@ -228,9 +234,9 @@ class FootForces:
         statics, trig, g = self._legs[slot], _trig(cos, sin), gravity.T
         torques = statics.gravity_torques(trig, (g[0], g[1], g[2]))
         rhs = [torques[k] - efforts[:, k] for k in range(JOINTS_PER_LEG)]
-        flat = leg.jacobian_from_trig(*trig)
+        flat = statics.contact_jacobian(*trig)
         columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
-        radius = self.foot_radii_m[slot]
+        radius = statics.radius_m
         if radius:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
             scale = radius / np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
             down = (g[0] * scale, g[1] * scale, g[2] * scale)
@@ -263,14 +269,22 @@ def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
     )
 
 
-def foot_radius(model: RobotModel, foot_link: str) -> float:
-    """The radius [m] of ``foot_link``'s collision sphere centred on its origin (within 1 mm), or
-    0 (a point foot) if it has none.
-    """
-    for sphere in model.spheres.get(foot_link, ()):
-        if math.dist(sphere.center, (0.0, 0.0, 0.0)) <= 1e-3:
-            return sphere.radius
-    return 0.0
+def foot_sphere(model: RobotModel, foot_link: str) -> Sphere | None:
+    """The largest collision sphere of ``foot_link``, or ``None`` (a point foot at its origin)."""
+    spheres = model.spheres.get(foot_link, ())
+    return max(spheres, key=lambda sphere: sphere.radius) if spheres else None
+
+
+def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:
+    """``point`` [m] of the foot link's frame in the last movable joint's child frame."""
+    joints = leg.chain.joints
+    last_movable = max(i for i, joint in enumerate(joints) if joint.movable)
+    rotation, offset = np.eye(3), np.zeros(3)
+    for joint in joints[last_movable + 1 :]:
+        offset = offset + rotation @ np.array(joint.origin_xyz)
+        rotation = rotation @ rpy_matrix(joint.origin_rpy)
+    result: np.ndarray = offset + rotation @ point
+    return result
 
 
 def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:

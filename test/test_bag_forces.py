@@ -10,6 +10,7 @@ import csv
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -56,8 +57,8 @@ def write_trot_bag(path: Path, record: dict[str, np.ndarray], kind: str, efforts
     recorded = bag_efforts(record["torques"]) if efforts else [[]] * len(record["angles"])
     imu = T["sensor_msgs/msg/Imu"]
     vector = T["geometry_msgs/msg/Vector3"]
-    for row, stamp in enumerate(T0 + STEP_NS * np.arange(len(record["angles"]))):
-        stamp = int(stamp)
+    for row in range(len(record["angles"])):
+        stamp = T0 + STEP_NS * row
         spec.add_joint_state(
             "/joint_states",
             stamp + 5,
@@ -145,11 +146,11 @@ def test_bag_forces_equal_the_python_api(
     with AnyReader([out_bag]) as reader:
         topics = {c.topic: c for c in reader.connections}
         assert topics["/foot_forces/FR"].msgtype == "geometry_msgs/msg/WrenchStamped"
-        fr = [
+        fr: list[Any] = [
             reader.deserialize(raw, "geometry_msgs/msg/WrenchStamped")
             for _, _, raw in reader.messages(connections=[topics["/foot_forces/FR"]])
         ]
-        states = [
+        states: list[Any] = [
             reader.deserialize(raw, "sensor_msgs/msg/JointState")
             for _, _, raw in reader.messages(connections=[topics["/foot_contacts"]])
         ]

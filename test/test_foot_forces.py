@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pybullet
@@ -45,11 +46,25 @@ TROT_S = 3.5
 COMPARE_FROM_S = 0.25
 
 
+GO2_FOOT_SPHERE = ("0.022", "-0.002 0 0")
+"""Radius and centre [m] of the published Go2 description's foot spheres: 2 mm behind the foot
+link's origin."""
+
+
 def go2_like(folder: Path) -> tuple[Quadruped, Path]:
     """The Go2-like fixture (15.0 kg, 0.213 m thigh and calf; the A1 is 12.5 kg, 0.2 m), with
-    primitive geometry only: a 1 cm collision sphere on every link, the feet's included.
+    primitive geometry only (a 1 cm collision sphere on every link) and the Go2's feet
+    (:data:`GO2_FOOT_SPHERE`). Without the shin links: they have no ``<inertial>``, and PyBullet
+    gives such a link 1 kg (urdfdom: none).
     """
-    text = exported_quadruped("go2", meshes=False, shin_links=False)
+    robot = ElementTree.fromstring(exported_quadruped("go2", meshes=False, shin_links=False))
+    for link in robot.iter("link"):
+        if link.get("name", "").endswith("_foot"):
+            collision = link.find("collision")
+            assert collision is not None
+            collision.find("origin").set("xyz", GO2_FOOT_SPHERE[1])  # type: ignore[union-attr]
+            collision.find("geometry/sphere").set("radius", GO2_FOOT_SPHERE[0])  # type: ignore[union-attr]
+    text = ElementTree.tostring(robot, encoding="unicode")
     path = folder / "go2_primitives.urdf"
     path.write_text(text, encoding="utf-8")
     return Quadruped.from_urdf(text), path
@@ -65,15 +80,15 @@ def in_base(forces_world: np.ndarray, orientations: np.ndarray) -> np.ndarray:
     return np.einsum("nlj,nji->nli", forces_world, rotations)
 
 
-def static_poses(quadruped: Quadruped, radius_m: float, seed: int = 3):
-    """(root position, orientation, angles) of POSES stances the IK can reach: body height
+def static_poses(quadruped: Quadruped, radius_m: float, seed: int = 3, count: int = POSES):
+    """(root position, orientation, angles) of ``count`` stances the IK can reach: body height
     0.20-0.32 m, roll and pitch within +-0.15 rad, every other pose on three legs (the body moved
     away from the lifted foot, which is 5 cm up).
     """
     footprint = quadruped.fk(list(STAND_LEG) * 4)[:, :2]
     rng = np.random.default_rng(seed)
-    poses = []
-    while len(poses) < POSES:
+    poses: list[tuple[np.ndarray, tuple[float, ...], np.ndarray]] = []
+    while len(poses) < count:
         height = rng.uniform(0.20, 0.32)
         roll, pitch = rng.uniform(-0.15, 0.15, 2)
         lifted = None if len(poses) % 2 == 0 else len(poses) // 2 % 4
@@ -123,14 +138,18 @@ def test_gravity_torques_match_pybullet_inverse_dynamics(tmp_path: Path) -> None
             pybullet.disconnect(client)
 
 
-def test_static_poses_match_pybullet_contact_forces() -> None:
-    quadruped = Quadruped.from_urdf()
+@pytest.mark.parametrize("robot", ["a1", "go2_like"])
+def test_static_poses_match_pybullet_contact_forces(robot: str, tmp_path: Path) -> None:
+    if robot == "a1":
+        quadruped, path, radius, count = Quadruped.from_urdf(), A1_URDF, 0.02, POSES
+    else:
+        (quadruped, path), radius, count = go2_like(tmp_path), 0.022, POSES // 2
     model = FootForces(quadruped)
     point_feet = FootForces(quadruped, foot_radius_m=0.0)
-    assert model.foot_radii_m == (0.02,) * 4  # the toes' collision spheres
-    errors, level_errors, point_errors = [], [], []
-    with QuadrupedSim(A1_URDF, quadruped.joint_names, feet_of(quadruped)) as sim:
-        for origin, orientation, angles in static_poses(quadruped, 0.02):
+    assert model.foot_radii_m == (radius,) * 4  # the feet's collision spheres
+    found: tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]] = ([], [], [])
+    with QuadrupedSim(path, quadruped.joint_names, feet_of(quadruped)) as sim:
+        for origin, orientation, angles in static_poses(quadruped, radius, count=count):
             rest = settle(sim, origin, orientation, angles)
             assert not rest["other_contact"].any()
             assert np.abs(rest["rates"]).max() < 0.02  # at rest [rad/s]
@@ -139,17 +158,17 @@ def test_static_poses_match_pybullet_contact_forces() -> None:
             gravity = gravity_in_root(rest["root_orientation"][-1])
             level = (0.0, 0.0, -GRAVITY)  # no IMU: the base assumed level
             for estimator, out, g in (
-                (model, errors, gravity),
-                (model, level_errors, level),
-                (point_feet, point_errors, gravity),
+                (model, found[0], gravity),
+                (model, found[1], level),
+                (point_feet, found[2], gravity),
             ):
                 forces = estimator.estimate(q, tau, g)
                 out.append(np.linalg.norm(forces - truth, axis=1))
-    errors, level_errors, point_errors = map(np.array, (errors, level_errors, point_errors))
+    errors, level_errors, point_errors = (np.array(values) for values in found)
     print(
-        f"{POSES} static poses, |F - PyBullet| per foot: with the IMU's gravity max "
+        f"{robot}: {count} static poses, |F - PyBullet| per foot: with the IMU's gravity max "
         f"{errors.max():.3f} N, rms {np.sqrt((errors**2).mean()):.4f} N; base assumed level: max "
-        f"{level_errors.max():.2f} N; point feet (no 2 cm radius): max {point_errors.max():.2f} N"
+        f"{level_errors.max():.2f} N; point feet (no foot sphere): max {point_errors.max():.2f} N"
     )
     assert errors.max() <= 2.0
     assert level_errors.max() <= 2.0

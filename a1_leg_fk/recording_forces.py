@@ -15,7 +15,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.estimation.forces import LEVEL_GRAVITY, STANDARD_GRAVITY, FootForces
+from a1_leg_fk.estimation.forces import (
+    LEVEL_GRAVITY,
+    STANDARD_GRAVITY,
+    FootForces,
+    gravity_in_base,
+)
 from a1_leg_fk.joint_state_wire import WireError, effort_span
 from a1_leg_fk.legs import JOINT_COUNT
 from a1_leg_fk.urdf import LegFkError
@@ -79,16 +84,6 @@ class ImuGravity:
             stamps_ns - self.stamps_ns[before] <= self.stamps_ns[after] - stamps_ns, before, after
         )
         return self.gravity[nearer]
-
-
-def gravity_in_base(quaternions: np.ndarray) -> np.ndarray:
-    """(M, 3) world gravity ``(0, 0, -g)`` [m/s^2] in the frame of a base at (M, 4) unit
-    quaternions (x, y, z, w): ``-g`` times the third row of the base's rotation matrix.
-    """
-    x, y, z, w = quaternions.T
-    row = np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1)
-    result: np.ndarray = -STANDARD_GRAVITY * row
-    return result
 
 
 @dataclass

@@ -32,7 +32,7 @@ from pybullet_sim import (
 from shared import STAND_LEG
 
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.estimation.forces import FootForces
+from a1_leg_fk.estimation.forces import FootForces, gravity_in_base
 from a1_leg_fk.kinematics import Quadruped
 from a1_leg_fk.legs import LEG_NAMES
 
@@ -304,3 +304,12 @@ def test_default_thresholds_scale_with_weight(tmp_path: Path) -> None:
     assert ContactThresholds.for_weight(100.0, touchdown_n=20.0).touchdown_n == 20.0
     with raises_leg_fk_error("liftoff"):
         ContactThresholds(5.0, 6.0)
+
+
+def test_gravity_in_base_from_orientation() -> None:
+    """Gravity in the base frame from the base's orientation, against PyBullet's rotation."""
+    quaternions = np.array(
+        [quaternion_rpy(*angles) for angles in np.random.default_rng(2).uniform(-1, 1, (20, 3))]
+    )
+    expected = [rotation(q).T @ [0.0, 0.0, -9.80665] for q in quaternions]
+    np.testing.assert_allclose(gravity_in_base(quaternions), expected, atol=1e-12)

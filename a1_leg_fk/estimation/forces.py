@@ -269,6 +269,16 @@ def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
     )
 
 
+def gravity_in_base(quaternions: np.ndarray) -> np.ndarray:
+    """(M, 3) world gravity ``(0, 0, -g)`` [m/s^2] in the frame of a base at (M, 4) unit
+    quaternions (x, y, z, w): ``-g`` times the third row of the base's rotation matrix.
+    """
+    x, y, z, w = quaternions.T
+    row = np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1)
+    result: np.ndarray = -STANDARD_GRAVITY * row
+    return result
+
+
 def foot_sphere(model: RobotModel, foot_link: str) -> Sphere | None:
     """The largest collision sphere of ``foot_link``, or ``None`` (a point foot at its origin)."""
     spheres = model.spheres.get(foot_link, ())

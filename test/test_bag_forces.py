@@ -213,3 +213,22 @@ def test_gait_auto_contacts_without_efforts_are_kinematic(
     assert cli.main([*arguments, "--json", str(report), "--quiet"]) == 0
     assert json.loads(report.read_text())["contacts"] == "kinematic"
     assert cli.main([*arguments, "--contacts", "force", "--quiet"]) == 2
+
+
+def test_efforts_by_name_partial_unknown_and_wrong_length() -> None:
+    """Efforts go to their joints by name (aliases too); joints a message does not name, and all
+    joints of a message whose effort array does not match its names, have none.
+    """
+    from a1_leg_fk.recording_forces import ForcePass
+
+    forces = ForcePass(A1, None)
+    names = ["arm_joint", "FL_calf_joint", "FR_hip_joint", NAMES[1]]  # an alias, an unknown name
+    efforts = forces.slot_efforts(names, np.array([[9.0, 1.0, 2.0, 3.0], [9.0, 4.0, 5.0, 6.0]]))
+    expected = np.full((2, 12), math.nan)
+    expected[:, 5], expected[:, 0], expected[:, 1] = [1.0, 4.0], [2.0, 5.0], [3.0, 6.0]
+    np.testing.assert_array_equal(efforts, expected)
+    assert np.isnan(forces.slot_efforts(names, np.ones((2, 3)))).all()
+    angles = np.tile(list(STAND_LEG) * 4, (2, 1))
+    result = forces.rows(np.array([T0, T0 + 1]), angles, efforts)
+    assert np.isnan(result[0]).all()  # no leg has its three efforts
+    assert forces.counts.missing == 8 and forces.counts.estimated == 0

@@ -26,6 +26,11 @@ movable joint outside the leg's chain are taken at that joint's zero angle).
 Near a singular Jacobian (the knee straight) the solve amplifies any effort error without bound:
 there, and where the efforts or angles of a leg are missing or not finite, a leg gets no force
 (NaN), and the result says which and why.
+
+The math is built from the compiled legs of :mod:`a1_leg_fk.kinematics` (the same generated
+straight-line code: the Jacobians of each segment's centre of mass and of the contact point), so
+this module sits above kinematics and imports it; ``Quadruped.foot_forces`` is a thin method that
+imports this module on first use, so that importing the kinematics never loads it.
 """
 
 from __future__ import annotations

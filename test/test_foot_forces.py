@@ -313,3 +313,21 @@ def test_gravity_in_base_from_orientation() -> None:
     )
     expected = [rotation(q).T @ [0.0, 0.0, -9.80665] for q in quaternions]
     np.testing.assert_allclose(gravity_in_base(quaternions), expected, atol=1e-12)
+
+
+def test_one_configuration_equals_the_batch() -> None:
+    """``foot_forces`` (floats, the per-message path) and ``foot_forces_batch`` (numpy) agree,
+    NaN legs included.
+    """
+    quadruped = Quadruped.from_urdf()
+    rng = np.random.default_rng(4)
+    angles = np.tile(list(STAND_LEG) * 4, (30, 1)) + rng.uniform(-0.4, 0.4, (30, 12))
+    efforts = rng.uniform(-10.0, 10.0, (30, 12))
+    angles[3, 2] = 0.0  # FR singular
+    efforts[4, 7] = math.nan  # RR
+    gravity = np.c_[rng.uniform(-2.0, 2.0, (30, 2)), np.full(30, -9.5)]
+    batch = quadruped.foot_forces_batch(angles, efforts, gravity)
+    single = np.array([quadruped.foot_forces(*row) for row in zip(angles, efforts, gravity)])
+    np.testing.assert_allclose(single, batch, rtol=1e-12, atol=1e-9)
+    assert np.isnan(batch[3, 0]).all() and np.isnan(batch[4, 2]).all()
+    assert np.isfinite(batch).all(axis=2).sum() == 30 * 4 - 2

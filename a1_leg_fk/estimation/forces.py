@@ -75,8 +75,10 @@ class ForceEstimate:
     singular: np.ndarray
 
 
-Columns = tuple[np.ndarray, np.ndarray, np.ndarray]
-"""A (K,) array per component x, y, z: K vectors."""
+Columns = tuple[Any, Any, Any]
+"""Components x, y, z: floats, or (K,) arrays for K vectors."""
+Values = Sequence[Any] | np.ndarray
+"""Per joint or per axis: floats, or (K,) arrays (the rows of an array)."""
 
 
 class _LegStatics:
@@ -112,18 +114,44 @@ class _LegStatics:
             for k, stage in enumerate(leg.stages)
         ]
 
-    def gravity_torques(self, trig: tuple[np.ndarray, ...], gravity: Columns) -> Columns:
-        """g(q) [N m], one (K,) array per joint, for the legs' (c0, s0, c1, s1, c2, s2) and
-        gravity [m/s^2]: minus the torque gravity exerts on the links below each joint.
+    def gravity_torques(self, trig: Values, gravity: Values) -> list[Any]:
+        """g(q) [N m], per joint, for the leg's (c0, s0, c1, s1, c2, s2) and gravity [m/s^2]
+        (floats, or (K,) arrays): minus the torque gravity exerts on the links below each joint.
         """
         gx, gy, gz = gravity
-        torques = [np.zeros_like(gx) for _ in range(JOINTS_PER_LEG)]
+        torques: list[Any] = [0.0] * JOINTS_PER_LEG
         for mass, jacobian in self.com_jacobians:
             columns = jacobian(*trig)
             for k in range(len(columns) // 3):
                 x, y, z = columns[3 * k : 3 * k + 3]
-                torques[k] -= mass * (x * gx + y * gy + z * gz)
-        return torques[0], torques[1], torques[2]
+                torques[k] = torques[k] - mass * (x * gx + y * gy + z * gz)
+        return torques
+
+    def solve(
+        self, trig: Values, efforts: Values, gravity: Values
+    ) -> tuple[tuple[Any, Any, Any], Any, Any]:
+        """``J^T F = g - tau`` by Cramer's rule, J that of the contact point, on floats or (K,)
+        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``.
+        """
+        gx, gy, gz = gravity
+        torques = self.gravity_torques(trig, gravity)
+        rhs = [torques[k] - efforts[k] for k in range(JOINTS_PER_LEG)]
+        flat = self.contact_jacobian(*trig)
+        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
+        if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
+            scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
+            down = (gx * scale, gy * scale, gz * scale)
+            for k, axis in enumerate(self.axes):
+                turn = _cross(down, axis(*trig))
+                columns[k] = tuple(columns[k][i] - turn[i] for i in range(3))
+        j0, j1, j2 = columns
+        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
+        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
+        size = 1.0
+        for c in columns:
+            size = size * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) ** 0.5
+        scaled = tuple(rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i] for i in range(3))
+        return (scaled[0], scaled[1], scaled[2]), det, size
 
 
 class FootForces:
@@ -167,10 +195,21 @@ class FootForces:
         """(4, 3) foot forces [N, base frame] for 12 angles [rad] and 12 efforts [N m] (slot
         order); a leg with no force is NaN. ``gravity_base``: (3,) [m/s^2] in the base frame.
         """
-        angles_row = _row(angles, "joint angles")
-        efforts_row = _row(efforts, "joint efforts")
-        forces: np.ndarray = self.estimate_batch(angles_row, efforts_row, gravity_base).forces[0]
-        return forces
+        q = _row(angles, "joint angles")[0].tolist()
+        tau = _row(efforts, "joint efforts")[0].tolist()
+        gravity = _gravity(gravity_base, 1)[0].tolist()
+        out = [[math.nan] * 3 for _ in range(LEGS)]
+        if all(math.isfinite(value) for value in gravity):
+            for slot, statics in enumerate(self._legs):
+                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+                values = q[joints] + tau[joints]
+                if not all(math.isfinite(value) for value in values):
+                    continue
+                trig = [f(angle) for angle in q[joints] for f in (math.cos, math.sin)]
+                scaled, det, size = statics.solve(trig, tau[joints], gravity)
+                if abs(det) >= self.min_condition * size:
+                    out[slot] = [value / det for value in scaled]
+        return np.array(out)
 
     def estimate_batch(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
@@ -219,10 +258,8 @@ class FootForces:
         for slot, statics in enumerate(self._legs):
             joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
             g = gravity.T
-            torques = statics.gravity_torques(
-                _trig(cos[:, joints], sin[:, joints]), (g[0], g[1], g[2])
-            )
-            out[:, joints] = np.stack(torques, axis=1)
+            torques = statics.gravity_torques(_trig(cos[:, joints], sin[:, joints]), g)
+            out[:, joints] = np.stack(np.broadcast_arrays(*torques), axis=1)
         return out
 
     def _leg_forces(
@@ -233,30 +270,13 @@ class FootForces:
         efforts: np.ndarray,
         gravity: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(K, 3) forces [N] and (K,) singular flags of one leg: J^T F = g - tau, by Cramer, J
-        that of the contact point.
-        """
-        statics, trig, g = self._legs[slot], _trig(cos, sin), gravity.T
-        torques = statics.gravity_torques(trig, (g[0], g[1], g[2]))
-        rhs = [torques[k] - efforts[:, k] for k in range(JOINTS_PER_LEG)]
-        flat = statics.contact_jacobian(*trig)
-        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
-        radius = statics.radius_m
-        if radius:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
-            scale = radius / np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-            down = (g[0] * scale, g[1] * scale, g[2] * scale)
-            for k, axis in enumerate(statics.axes):
-                turn = _cross(down, axis(*trig))
-                columns[k] = tuple(np.subtract(columns[k][i], turn[i]) for i in range(3))
-        j0, j1, j2 = columns
-        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
-        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
-        lengths = [np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) for c in columns]
-        singular = ~(np.abs(det) >= self.min_condition * lengths[0] * lengths[1] * lengths[2])
+        """(K, 3) forces [N] and (K,) singular flags of one leg (:meth:`_LegStatics.solve`)."""
+        scaled, det, size = self._legs[slot].solve(_trig(cos, sin), efforts.T, gravity.T)
+        singular = ~(np.abs(det) >= self.min_condition * size)
         inverse = 1.0 / np.where(singular, 1.0, det)
         forces = np.empty((cos.shape[0], 3))
         for i in range(3):
-            forces[:, i] = (rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i]) * inverse
+            forces[:, i] = scaled[i] * inverse
         return forces, singular
 
 

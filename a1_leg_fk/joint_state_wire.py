@@ -181,12 +181,13 @@ def _packed_doubles(raw: bytes, offset: int) -> tuple[bytes, int]:
     return raw[offset + 4 : end], end
 
 
-def effort_span(raw: bytes, ros1: bool = False) -> tuple[str, slice]:
+def effort_span(raw: bytes | memoryview, ros1: bool = False) -> tuple[str, slice]:
     """``(byte order, slice)`` of the ``effort`` array's float64 bytes in one serialized
     JointState (CDR, or ROS 1 with ``ros1``); :class:`WireError` if the message is malformed.
 
     Messages of one layout (:func:`cdr_layout`) share the slice.
     """
+    raw = bytes(raw)
     try:
         if ros1:
             u32 = _UINT32["<"].unpack_from

@@ -163,7 +163,7 @@ def check_has_efforts(reader: AnyReader, connection: Connection, ros1: bool) -> 
     """:class:`LegFkError` if the first JointState of ``connection`` has no efforts."""
     for _, _, raw in reader.messages(connections=[connection]):
         try:
-            span = effort_span(bytes(raw), ros1)[1]
+            span = effort_span(raw, ros1)[1]
         except WireError as error:
             raise LegFkError(f"{connection.topic}: {error}") from None
         if span.stop == span.start:

@@ -1,9 +1,10 @@
 """Batch foot-force speed of a1_leg_fk, against fk_batch measured in the same run.
 
-Run: ``.venv/bin/python bench/force_speed.py`` (about 15 s). A batch of 2.5 x 10^5
+Run: ``.venv/bin/python bench/force_speed.py`` (about 20 s). A batch of 2.5 x 10^5
 configurations (10^6 legs) with efforts and a per-row gravity direction: the median time of
 ``Quadruped.foot_forces_batch`` and of ``Quadruped.fk_batch`` on the same angles, interleaved;
-prints legs/s (target >= 1 M legs/s) and the ratio of the two times.
+prints legs/s (target >= 1 M legs/s) and the ratio of the two times. Then one configuration (the
+per-message path): ``Quadruped.foot_forces`` against ``Quadruped.fk``.
 
 The forces are first checked on a sample of rows against the one-configuration path
 ``Quadruped.foot_forces``.
@@ -12,7 +13,7 @@ The forces are first checked on a sample of rows against the one-configuration p
 from __future__ import annotations
 
 import numpy as np
-from common import machine, median_seconds_per_call
+from common import SPEED_POSE, machine, median_seconds_per_call
 
 from a1_leg_fk.kinematics import Quadruped
 
@@ -62,6 +63,15 @@ def main() -> None:
         f"  foot_forces_batch / fk_batch = {forces_s / fk_s:.2f}x; "
         f"{legs_per_s / 1e6:.2f} M legs/s (target >= 1 M legs/s: "
         f"{'met' if legs_per_s >= 1e6 else 'NOT met'})"
+    )
+    q, tau, g = SPEED_POSE, efforts[0].tolist(), gravity[0].tolist()
+    single = median_seconds_per_call(
+        {"foot_forces": lambda: quadruped.foot_forces(q, tau, g), "fk": lambda: quadruped.fk(q)}
+    )
+    print(
+        f"\none configuration: Quadruped.foot_forces {single['foot_forces'] * 1e6:.1f} us, "
+        f"Quadruped.fk {single['fk'] * 1e6:.2f} us: "
+        f"{single['foot_forces'] / single['fk']:.1f}x"
     )
 
 

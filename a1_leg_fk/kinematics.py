@@ -282,7 +282,8 @@ class Quadruped:
         not finite, or whose knee is near straight, is NaN. See
         :mod:`a1_leg_fk.estimation.forces`.
         """
-        return self._forces.estimate(angles, efforts, gravity_base)
+        forces: np.ndarray = self._forces.estimate(angles, efforts, gravity_base).forces
+        return forces
 
     def foot_forces_batch(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None

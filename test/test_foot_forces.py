@@ -162,7 +162,7 @@ def test_static_poses_match_pybullet_contact_forces(robot: str, tmp_path: Path) 
                 (model, found[1], level),
                 (point_feet, found[2], gravity),
             ):
-                forces = estimator.estimate(q, tau, g)
+                forces = estimator.estimate(q, tau, g).forces
                 out.append(np.linalg.norm(forces - truth, axis=1))
     errors, level_errors, point_errors = (np.array(values) for values in found)
     print(
@@ -249,6 +249,9 @@ def test_bad_efforts_give_no_force_for_that_leg_only() -> None:
     straight[2] = 0.0  # FR's knee straight: singular
     single = quadruped.foot_forces(straight, efforts[0])
     assert np.isnan(single[0]).all() and np.isfinite(single[1:]).all()
+    reasons = FootForces(quadruped).estimate(straight, efforts[1])  # FL's effort NaN
+    assert reasons.singular.tolist() == [True, False, False, False]
+    assert reasons.missing.tolist() == [False, True, False, False]
     with raises_leg_fk_error("efforts must be 12 numbers"):
         quadruped.foot_forces(straight, [1.0] * 11)
     with raises_leg_fk_error("gravity_base must have shape"):
@@ -271,7 +274,7 @@ def test_foot_forces_balance_a_hand_computed_pose() -> None:
         jacobians[joint // 3, :, joint % 3] = column[joint // 3]
     efforts = -np.einsum("lji,lj->li", jacobians, force).ravel()
     model = FootForces(quadruped, foot_radius_m=0.0)
-    gravity_free = model.estimate(angles, efforts, (0.0, 0.0, -1e-12))
+    gravity_free = model.estimate(angles, efforts, (0.0, 0.0, -1e-12)).forces
     np.testing.assert_allclose(gravity_free, force, atol=1e-5)
 
 

@@ -63,7 +63,7 @@ LEGS = len(LEG_NAMES)
 
 @dataclass(frozen=True)
 class ForceEstimate:
-    """Foot forces for N configurations.
+    """Foot forces for N configurations (one: without the leading N).
 
     ``forces`` (N, 4, 3) [N]: the force the ground exerts on each foot, base frame, NaN where
     the leg has none; ``missing`` (N, 4): the leg's angles or efforts are missing or not finite;
@@ -191,25 +191,28 @@ class FootForces:
 
     def estimate(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
-    ) -> np.ndarray:
-        """(4, 3) foot forces [N, base frame] for 12 angles [rad] and 12 efforts [N m] (slot
-        order); a leg with no force is NaN. ``gravity_base``: (3,) [m/s^2] in the base frame.
+    ) -> ForceEstimate:
+        """The foot forces of one configuration, in floats (the per-message path): 12 angles
+        [rad] and 12 efforts [N m] (slot order), ``gravity_base`` (3,) [m/s^2] in the base frame;
+        a :class:`ForceEstimate` of shapes (4, 3), (4,), (4,).
         """
         q = _row(angles, "joint angles")[0].tolist()
         tau = _row(efforts, "joint efforts")[0].tolist()
         gravity = _gravity(gravity_base, 1)[0].tolist()
         out = [[math.nan] * 3 for _ in range(LEGS)]
+        missing, singular = [True] * LEGS, [False] * LEGS
         if all(math.isfinite(value) for value in gravity):
             for slot, statics in enumerate(self._legs):
                 joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-                values = q[joints] + tau[joints]
-                if not all(math.isfinite(value) for value in values):
+                missing[slot] = not all(math.isfinite(v) for v in q[joints] + tau[joints])
+                if missing[slot]:
                     continue
                 trig = [f(angle) for angle in q[joints] for f in (math.cos, math.sin)]
                 scaled, det, size = statics.solve(trig, tau[joints], gravity)
-                if abs(det) >= self.min_condition * size:
+                singular[slot] = not abs(det) >= self.min_condition * size
+                if not singular[slot]:
                     out[slot] = [value / det for value in scaled]
-        return np.array(out)
+        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
 
     def estimate_batch(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None

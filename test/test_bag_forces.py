@@ -261,3 +261,37 @@ def test_effort_span_against_rosbags(layout: str) -> None:
             raw = bytes(store.serialize_cdr(message, kind, little_endian=layout == "cdr_le"))
         order, span = effort_span(memoryview(raw), ros1=layout == "ros1")
         np.testing.assert_array_equal(np.frombuffer(raw[span], dtype=f"{order}f8"), efforts)
+
+
+def test_imu_without_orientation_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """An IMU that says it has no orientation (orientation_covariance[0] == -1) cannot give
+    gravity's direction: one line, exit 2.
+    """
+    spec = BagSpec()
+    vector = T["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0)
+    no_orientation = np.zeros(9)
+    no_orientation[0] = -1.0
+    for row in range(3):
+        stamp = T0 + STEP_NS * row
+        spec.add_joint_state(
+            "/joint_states",
+            stamp,
+            JointStateMsg(stamp, NAMES, list(STAND_LEG) * 4, [], "", [1.0] * 12),
+        )
+        imu = T["sensor_msgs/msg/Imu"](
+            header(stamp, "imu"),
+            T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
+            no_orientation,
+            vector,
+            np.zeros(9),
+            vector,
+            np.zeros(9),
+        )
+        spec.add("/imu", "sensor_msgs/msg/Imu", stamp, imu)
+    bag = write_bag(tmp_path / "in", spec)
+    out = tmp_path / "feet.csv"
+    arguments = ["bag", str(bag), "--csv", str(out), "--forces", "--imu", "/imu"]
+    assert cli.main(arguments) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--imu /imu: no message with an orientation" in error
+    assert not out.exists()

@@ -334,3 +334,34 @@ def test_one_configuration_equals_the_batch() -> None:
     np.testing.assert_allclose(single, batch, rtol=1e-12, atol=1e-9)
     assert np.isnan(batch[3, 0]).all() and np.isnan(batch[4, 2]).all()
     assert np.isfinite(batch).all(axis=2).sum() == 30 * 4 - 2
+
+
+def test_urdf_masses_and_foot_spheres_are_read() -> None:
+    """<inertial> mass and centre (defaults: 0 kg without <mass>, the link origin without
+    <origin>), <collision> spheres; bad values name the link.
+    """
+    from a1_leg_fk.urdf import parse_urdf
+
+    def robot(inertial: str, collision: str = "") -> str:
+        return (
+            '<robot name="r"><link name="base"/><link name="tip">'
+            f"{inertial}{collision}</link>"
+            '<joint name="j" type="fixed"><parent link="base"/><child link="tip"/></joint>'
+            "</robot>"
+        )
+
+    model = parse_urdf(
+        robot(
+            '<inertial><origin xyz="0.1 0 -0.2"/><mass value="1.5"/></inertial>',
+            '<collision><origin xyz="-0.002 0 0"/><geometry><sphere radius="0.022"/></geometry>'
+            "</collision><collision><geometry><box size='1 1 1'/></geometry></collision>",
+        )
+    )
+    assert model.inertials["tip"].mass == 1.5 and model.inertials["tip"].center == (0.1, 0, -0.2)
+    assert "base" not in model.inertials
+    assert [(s.radius, s.center) for s in model.spheres["tip"]] == [(0.022, (-0.002, 0, 0))]
+    assert parse_urdf(robot("<inertial/>")).inertials["tip"].mass == 0.0
+    with raises_leg_fk_error("link 'tip'", "mass"):
+        parse_urdf(robot('<inertial><mass value="-1"/></inertial>'))
+    with raises_leg_fk_error("link 'tip'", "radius"):
+        parse_urdf(robot("", '<collision><geometry><sphere radius="x"/></geometry></collision>'))

@@ -72,12 +72,30 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         help="no world position between two poses further apart than S seconds (default "
         f"{DEFAULT_MAX_POSE_GAP_S:g})",
     )
+    parser.add_argument(
+        "--imu",
+        metavar="TOPIC",
+        help="sensor_msgs/msg/Imu aligned with the base: gravity's direction for the foot forces "
+        "(nearest sample in time; default: the base is level)",
+    )
+    parser.add_argument(
+        "--touchdown-force",
+        type=non_negative,
+        metavar="N",
+        help="a foot touches down at this normal force [N] (default: 8 %% of the robot's weight)",
+    )
+    parser.add_argument(
+        "--liftoff-force",
+        type=non_negative,
+        metavar="N",
+        help="a foot lifts off below this normal force [N] (default: 4 %% of the weight)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def recording_options(options: argparse.Namespace) -> RecordingChoices:
+def recording_options(options: argparse.Namespace, forces: bool = False) -> RecordingChoices:
     """The keyword arguments of :func:`~a1_leg_fk.recording.trajectories.open_recording` from
-    parsed options.
+    parsed options; ``forces``: foot forces and contacts from the efforts too.
     """
     return {
         "topic": options.topic,
@@ -86,6 +104,9 @@ def recording_options(options: argparse.Namespace) -> RecordingChoices:
         "joint_aliases": options.joint_aliases,
         "base_pose": options.base_pose,
         "max_pose_gap_s": options.max_pose_gap,
+        "forces": forces,
+        "imu": options.imu,
+        "contact_thresholds": (options.touchdown_force, options.liftoff_force),
     }
 
 
@@ -94,11 +115,30 @@ def show_progress(options: argparse.Namespace) -> bool:
     return not options.quiet and sys.stderr.isatty()
 
 
-def trajectories_from_options(options: argparse.Namespace) -> FootTrajectories:
-    """The feet of ``options.input`` as arrays; :class:`LegFkError` (one line) for bad input."""
+def trajectories_from_options(
+    options: argparse.Namespace, forces: bool = False
+) -> FootTrajectories:
+    """The feet (and with ``forces``, foot forces and contacts) of ``options.input`` as arrays;
+    :class:`LegFkError` (one line) for bad input.
+    """
     return read_foot_trajectories(
-        options.input, progress=show_progress(options), **recording_options(options)
+        options.input, progress=show_progress(options), **recording_options(options, forces)
     )
+
+
+def check_force_options(options: argparse.Namespace, forces: bool, needs: str) -> None:
+    """:class:`LegFkError` for force options given without force estimation (``needs``: the
+    option that turns it on).
+    """
+    if forces:
+        return
+    for option, value in (
+        ("--imu", options.imu),
+        ("--touchdown-force", options.touchdown_force),
+        ("--liftoff-force", options.liftoff_force),
+    ):
+        if value is not None:
+            raise LegFkError(f"{option} needs {needs}")
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -115,7 +155,15 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     bag.add_argument(
         "--csv",
         metavar="FILE",
-        help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m]",
+        help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m] "
+        "(and with --forces, foot forces [N] and contact probabilities)",
+    )
+    bag.add_argument(
+        "--forces",
+        action="store_true",
+        help="foot forces from the joint efforts (the ground's force on each foot [N], base "
+        "frame) and contacts: CSV columns FR_fx .. RL_fz, FR_contact .. RL_contact; "
+        "/foot_forces/<leg> and /foot_contacts in --output-bag",
     )
     bag.add_argument(
         "--output-bag",
@@ -153,6 +201,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             )
         if options.copy_input and not options.output_bag:
             raise LegFkError("--copy-input needs --output-bag")
+        check_force_options(options, options.forces, "--forces")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         outputs = Outputs.checked(
@@ -168,7 +217,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             Path(options.input),
             outputs,
             progress=show_progress(options),
-            **recording_options(options),
+            **recording_options(options, options.forces),
         )
     except (LegFkError, OSError) as error:  # OSError: an output folder not writable, a full disk
         print(f"a1-leg-fk bag: {error}", file=sys.stderr)

@@ -22,14 +22,26 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from a1_leg_fk.cli.bag import add_recording_arguments, trajectories_from_options
+from a1_leg_fk.cli.bag import (
+    add_recording_arguments,
+    check_force_options,
+    trajectories_from_options,
+)
 from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
-from a1_leg_fk.gait.analysis import Contacts, ContactThresholds, GaitReport, analyze_gait
+from a1_leg_fk.gait.analysis import (
+    Contacts,
+    ContactThresholds,
+    GaitReport,
+    detect_contacts,
+    gait_metrics,
+)
+from a1_leg_fk.gait.force_contacts import with_force_stance
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # imported when the command runs, as a1-leg-fk bag does
     from a1_leg_fk.recording.outputs import OutputTarget
+    from a1_leg_fk.recording.trajectories import FootTrajectories
 
 PROG = "a1-leg-fk gait"
 NEEDS_BASE_POSE = (
@@ -85,6 +97,13 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     gait.add_argument("--force", action="store_true", help="replace outputs that exist")
     gait.add_argument(
+        "--contacts",
+        choices=("auto", "force", "kinematic"),
+        default="auto",
+        help="stance from the joint efforts' foot forces (force), from the feet's height and "
+        "speed (kinematic), or force when every leg has efforts (auto, the default)",
+    )
+    gait.add_argument(
         "--unsorted",
         choices=("sort", "reject"),
         default="sort",
@@ -127,24 +146,32 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             },
             adaptive=not options.fixed_thresholds,
         )
+        check_force_options(options, options.contacts != "kinematic", "--contacts force|auto")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         targets = checked_outputs(options)
-        trajectories = trajectories_from_options(options)
+        trajectories, source = read_with_contacts(options)
         if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
             raise LegFkError(f"{options.input}: no JointState rows with feet")
         stamps_s = (trajectories.stamps_ns - trajectories.stamps_ns.min()) * 1e-9
-        contacts, report = analyze_gait(
+        contacts = detect_contacts(
             stamps_s, trajectories.world_positions, thresholds, options.unsorted
         )
+        if source == "force" and trajectories.contacts is not None:
+            contacts = with_force_stance(
+                contacts, stamps_s, trajectories.contacts, options.unsorted
+            )
+        report = gait_metrics(contacts)
     except LegFkError as error:
         print(f"{PROG}: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    print(f"contacts:  {source}")
     for line in report_lines(report, trajectories.world_frame):
         print(line)
+    options.contact_source = source  # for the JSON
     code = write_outputs(options, targets, contacts, report, trajectories.world_frame)
     if trajectories.summary.stopped:
         print(
@@ -153,6 +180,34 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         )
         return EXIT_BAD_INPUT if code == EXIT_BAD_INPUT else EXIT_FAILED
     return code
+
+
+def read_with_contacts(options: argparse.Namespace) -> tuple[FootTrajectories, str]:
+    """The recording's feet (with forces unless ``--contacts kinematic``) and where the stance
+    comes from: ``"force"`` or ``"kinematic"``. ``--contacts auto`` takes the forces when every
+    leg has some; ``--contacts force`` without them is a :class:`LegFkError`.
+    """
+    from a1_leg_fk.recording.forces import MissingEfforts
+
+    if options.contacts == "kinematic":
+        return trajectories_from_options(options), "kinematic"
+    try:
+        trajectories = trajectories_from_options(options, forces=True)
+    except MissingEfforts:
+        if options.contacts == "force":
+            raise
+        return trajectories_from_options(options), "kinematic"
+    estimated = (
+        np.isfinite(trajectories.contacts).any(axis=0)
+        if trajectories.contacts is not None and trajectories.contacts.size
+        else np.zeros(len(LEG_NAMES), dtype=bool)
+    )
+    if estimated.all():
+        return trajectories, "force"
+    if options.contacts == "force":
+        missing = [leg for leg, known in zip(LEG_NAMES, estimated) if not known]
+        raise LegFkError(f"--contacts force: no foot force for legs {missing} (no efforts)")
+    return trajectories, "kinematic"
 
 
 def checked_outputs(options: argparse.Namespace) -> dict[str, OutputTarget]:
@@ -272,7 +327,12 @@ def _write_output(
     from a1_leg_fk.plots import plot_gait_diagram
 
     if option == "--json":
-        document = {"input": str(options.input), "world_frame": world_frame, **report.to_json()}
+        document = {
+            "input": str(options.input),
+            "world_frame": world_frame,
+            "contacts": getattr(options, "contact_source", "kinematic"),
+            **report.to_json(),
+        }
         path.write_text(json.dumps(document, indent=2, allow_nan=False) + "\n")
     elif option == "--csv-contacts":
         write_contacts_csv(contacts, path)

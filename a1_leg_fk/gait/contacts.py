@@ -224,7 +224,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
     return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
-def _segment_slices(valid: np.ndarray) -> list[slice]:
+def segment_slices(valid: np.ndarray) -> list[slice]:
     """The gap-free runs of one leg's (N,) validity mask, in time order, as row slices."""
     return [slice(first, last + 1) for first, last, value in _runs(valid) if value]
 
@@ -286,7 +286,7 @@ def detect_contacts(
     times = stamps - stamps[0]
     valid = np.isfinite(feet).all(axis=2)
     legs = len(LEG_NAMES)
-    segments = [_segment_slices(valid[:, slot]) for slot in range(legs)]
+    segments = [segment_slices(valid[:, slot]) for slot in range(legs)]
     speeds = np.full(valid.shape, np.nan)
     for slot in range(legs):
         for rows in segments[slot]:
@@ -324,7 +324,7 @@ def detect_contacts(
     for slot in range(legs):
         for rows in segments[slot]:
             stance[rows, slot] = trim_edges(heights[rows, slot], stance[rows, slot], tolerance)
-    stances = tuple(_stances(times, stance[:, slot], segments[slot]) for slot in range(legs))
+    stances = tuple(stances_of(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:
         notes.append(
@@ -345,7 +345,7 @@ def detect_contacts(
     )
 
 
-def _stances(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tuple[Stance, ...]:
+def stances_of(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tuple[Stance, ...]:
     """One leg's stance phases from its (N,) stance mask, within each gap-free run ``segments``."""
     out = []
     for segment, rows in enumerate(segments):

@@ -23,6 +23,9 @@ from a1_leg_fk.model.legs import LegChain
 Angles = Sequence[float] | np.ndarray
 """Joint angles [rad] (or rates [rad/s]): a sequence of numbers or a 1-D numpy array."""
 
+BATCH_CHUNK_ROWS = 4096
+"""Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
+
 
 class CompiledLeg:
     """One leg's generated FK functions and the stages they were made from.

@@ -23,7 +23,8 @@ from typing import cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from a1_leg_fk.kinematics.compiled_leg import Angles, CompiledLeg
+from a1_leg_fk.kinematics.compiled_leg import BATCH_CHUNK_ROWS, Angles, CompiledLeg
+from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.ik import four_legs
 from a1_leg_fk.kinematics.leg_stages import knee_circle
 from a1_leg_fk.model.legs import (
@@ -35,9 +36,6 @@ from a1_leg_fk.model.legs import (
     leg_slot,
 )
 from a1_leg_fk.model.urdf import Joint, LegFkError, RobotModel, load_urdf
-
-BATCH_CHUNK_ROWS = 4096
-"""Rows per block in the batch functions: keeps the temporaries of one block in the CPU cache."""
 
 
 @dataclass(frozen=True)
@@ -189,6 +187,32 @@ class Quadruped:
             and joint.upper is not None
             and not joint.lower <= value <= joint.upper
         ]
+
+    @cached_property
+    def _forces(self) -> FootForces:
+        return FootForces(self)
+
+    def foot_forces(
+        self, angles: Angles, efforts: Angles, gravity_base: Sequence[float] | None = None
+    ) -> np.ndarray:
+        """(4, 3) the force [N] the ground exerts on each foot, base frame, from 12 joint angles
+        [rad] and efforts [N m] (the torque each motor applies to its child link, as
+        ``JointState.effort``), quasi-static; ``gravity_base`` [m/s^2] is gravity in the base
+        frame (default: base level, ``(0, 0, -9.80665)``). A leg whose angles or efforts are
+        not finite, or whose knee is near straight, is NaN. See
+        :mod:`a1_leg_fk.kinematics.foot_forces`.
+        """
+        forces: np.ndarray = self._forces.estimate(angles, efforts, gravity_base).forces
+        return forces
+
+    def foot_forces_batch(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> np.ndarray:
+        """:meth:`foot_forces` for (N, 12) angles [rad] and efforts [N m], gravity (3,) or (N, 3)
+        [m/s^2] in the base frame: (N, 4, 3) forces [N], NaN where a leg has none.
+        """
+        forces: np.ndarray = self._forces.estimate_batch(angles, efforts, gravity_base).forces
+        return forces
 
     @cached_property
     def _ik_solvers(self) -> tuple[four_legs.LegSolver, ...]:

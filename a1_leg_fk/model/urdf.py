@@ -1,8 +1,10 @@
 """URDF reading: XML (a file path or a string) -> :class:`RobotModel`.
 
-Only what forward kinematics needs is kept: the links, and for every joint its type, parent,
-child, ``<origin xyz rpy>`` (metres, radians), unit ``<axis>`` and ``<limit>``. Inertia, meshes,
-transmissions and everything else are ignored. No ROS and no PyBullet here.
+Only what kinematics and leg statics need is kept: the links, each link's mass and centre of mass
+(``<inertial>``: ``<mass value>`` [kg], ``<origin xyz>`` [m]) and collision spheres (a foot's
+radius), and for every joint its type,
+parent, child, ``<origin xyz rpy>`` (metres, radians), unit ``<axis>`` and ``<limit>``. Inertia
+tensors, meshes, transmissions and everything else are ignored. No ROS and no PyBullet here.
 
 The parser refuses DTD entity declarations outright, so an entity-expansion bomb ("billion
 laughs") fails at once instead of expanding; a URDF never needs them.
@@ -67,14 +69,35 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Inertial:
+    """A link's mass [kg] and centre of mass [m, in the link frame] (its ``<inertial>``)."""
+
+    mass: float
+    center: Vector3
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """A ``<collision>`` sphere: radius [m] and centre [m, in the link frame]."""
+
+    radius: float
+    center: Vector3
+
+
+@dataclass(frozen=True)
 class RobotModel:
-    """The kinematic tree of a URDF: links, joints by name, and the root link (base frame)."""
+    """The kinematic tree of a URDF: links, joints by name, and the root link (base frame);
+    ``inertials`` holds the links that have an ``<inertial>`` (a link without one has no mass),
+    ``spheres`` the ``<collision>`` spheres of the links that have any.
+    """
 
     name: str
     source: str
     links: tuple[str, ...]
     joints: Mapping[str, Joint]
     root: str
+    inertials: Mapping[str, Inertial] = field(default_factory=dict)
+    spheres: Mapping[str, tuple[Sphere, ...]] = field(default_factory=dict)
     _parent_joints: Mapping[str, Joint] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -167,7 +190,17 @@ def parse_urdf(xml_text: str, source: str = "<string>") -> RobotModel:
             raise LegFkError(f"{source}: duplicate joint name '{joint.name}'")
         joints[joint.name] = joint
     root = _check_tree(links, joints, source)
-    return RobotModel(robot.get("name", ""), source, links, joints, root)
+    inertials = {
+        link.get("name", ""): _parse_inertial(inertial, f"{source}: link '{link.get('name')}'")
+        for link in robot.findall("link")
+        if (inertial := link.find("inertial")) is not None
+    }
+    spheres = {
+        link.get("name", ""): found
+        for link in robot.findall("link")
+        if (found := _collision_spheres(link, f"{source}: link '{link.get('name')}'"))
+    }
+    return RobotModel(robot.get("name", ""), source, links, joints, root, inertials, spheres)
 
 
 def _parse_xml(xml_text: str, source: str) -> ElementTree.Element:
@@ -209,6 +242,37 @@ def _parse_joint(element: ElementTree.Element, source: str) -> Joint:
         axis = _unit_axis(_vector(element.find("axis"), "xyz", DEFAULT_AXIS, where), where)
     lower, upper = _limits(element, joint_type, where)
     return Joint(name, joint_type, parent, child, xyz, rpy, axis, lower, upper)
+
+
+def _parse_inertial(element: ElementTree.Element, where: str) -> Inertial:
+    """Mass [kg] (0 without ``<mass>``: FK never needed it) and centre of mass [m] of an
+    ``<inertial>``.
+    """
+    mass_element = element.find("mass")
+    text = "0" if mass_element is None else mass_element.get("value", "0")
+    try:
+        mass = float(text)
+    except ValueError as error:
+        raise LegFkError(f"{where}: <mass value='{text}'> is not a number") from error
+    if not (math.isfinite(mass) and mass >= 0.0):
+        raise LegFkError(f"{where}: <mass value='{text}'> is not a finite mass >= 0")
+    return Inertial(mass, _vector(element.find("origin"), "xyz", (0.0, 0.0, 0.0), where))
+
+
+def _collision_spheres(link: ElementTree.Element, where: str) -> tuple[Sphere, ...]:
+    spheres = []
+    for collision in link.findall("collision"):
+        sphere = collision.find("geometry/sphere")
+        if sphere is None:
+            continue
+        try:
+            radius = float(sphere.get("radius", ""))
+        except ValueError as error:
+            raise LegFkError(f"{where}: <sphere radius> is not a number") from error
+        if not (math.isfinite(radius) and radius >= 0.0):
+            raise LegFkError(f"{where}: <sphere radius='{radius}'> is not a finite radius >= 0")
+        spheres.append(Sphere(radius, _vector(collision.find("origin"), "xyz", (0.0,) * 3, where)))
+    return tuple(spheres)
 
 
 def _required_attribute(element: ElementTree.Element, attribute: str, where: str) -> str:

@@ -2,7 +2,10 @@
 
 ``/foot_positions/<leg>`` (``geometry_msgs/msg/PointStamped``, base frame),
 ``/foot_velocities/<leg>`` (``Vector3Stamped``, when velocities exist) and
-``/foot_positions_world/<leg>`` (``PointStamped``, world frame, with a base pose), in MCAP or
+``/foot_positions_world/<leg>`` (``PointStamped``, world frame, with a base pose), with forces
+``/foot_forces/<leg>`` (``WrenchStamped``, base frame, the ground's force on the foot [N]) and
+``/foot_contacts`` (``JointState``: name FR, FL, RR, RL, position the contact probability, effort
+the normal force [N] along minus gravity, velocity empty), in MCAP or
 sqlite3, metadata version and QoS profiles as rosbag2 Jazzy writes them. The messages are
 serialized here (little-endian CDR: a header, then three float64 [m or m/s]) with the JointState's
 header stamp and bag time; optionally every input message is copied too. ``rosbags`` is
@@ -86,6 +89,11 @@ class BagWriter:
                 )
             )
         stamps, bag_times = block.stamps_ns.tolist(), block.bag_times_ns.tolist()
+        if block.forces is not None:
+            groups.append(
+                ("/foot_forces", "geometry_msgs/msg/WrenchStamped", self.base_head, block.forces)
+            )
+            self._write_contacts(block, stamps, bag_times)
         for prefix, msgtype, head, values in groups:
             for leg_slot, leg in enumerate(LEG_NAMES):
                 leg_values = values[:, leg_slot]
@@ -93,13 +101,38 @@ class BagWriter:
                 if not len(rows):
                     continue
                 connection = self._connection(f"{prefix}/{leg}", msgtype)
+                tail = _NO_TORQUE if prefix == "/foot_forces" else b""
                 for row, (x, y, z) in zip(rows.tolist(), leg_values[rows].tolist()):
                     sec, nanosec = divmod(stamps[row], 1_000_000_000)
                     self.writer.write(
                         connection,
                         bag_times[row],
-                        _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z),
+                        _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z) + tail,
                     )
+
+    def _write_contacts(self, block: FootBlock, stamps: list[int], bag_times: list[int]) -> None:
+        """``/foot_contacts`` JointStates of the rows with a contact estimate for some leg."""
+        if block.contacts is None or block.normal_forces is None:
+            return
+        rows = np.flatnonzero(np.isfinite(block.contacts).any(axis=1))
+        if not len(rows):
+            return
+        connection = self._connection("/foot_contacts", "sensor_msgs/msg/JointState")
+        head, middle = _contacts_layout(self.recording.quadruped.base_frame)
+        for row, probabilities, normal in zip(
+            rows.tolist(), block.contacts[rows].tolist(), block.normal_forces[rows].tolist()
+        ):
+            sec, nanosec = divmod(stamps[row], 1_000_000_000)
+            self.writer.write(
+                connection,
+                bag_times[row],
+                _CDR_LE
+                + _STAMP.pack(sec, nanosec)
+                + head
+                + _LEG_VALUES.pack(*probabilities)
+                + middle
+                + _LEG_VALUES.pack(*normal),
+            )
 
     def copy(self, connection: Connection, bag_time: int, raw: bytes) -> None:
         """Copy one input message (ROS 1 messages converted to CDR)."""
@@ -148,6 +181,27 @@ class BagWriter:
 _CDR_LE = b"\x00\x01\x00\x00"  # encapsulation header: CDR, little endian
 _STAMP = struct.Struct("<iI")
 _XYZ = struct.Struct("<3d")
+_NO_TORQUE = _XYZ.pack(0.0, 0.0, 0.0)  # the torque of a WrenchStamped, after its force
+_LEG_VALUES = struct.Struct(f"<{len(LEG_NAMES)}d")
+
+
+def _contacts_layout(frame: str) -> tuple[bytes, bytes]:
+    """The constant CDR bytes of a ``/foot_contacts`` JointState: after the stamp, the frame,
+    the leg names and the position count (padded to 8); between the positions and the efforts,
+    the empty velocity and the effort count. Offsets relative to the encapsulation header.
+    """
+    body = bytearray(struct.pack("<I", len(frame) + 1) + frame.encode() + b"\0")
+    offset = 8  # the stamp
+    body += b"\0" * (-(offset + len(body)) % 4)
+    body += struct.pack("<I", len(LEG_NAMES))
+    for leg in LEG_NAMES:
+        body += b"\0" * (-(offset + len(body)) % 4)
+        body += struct.pack("<I", len(leg) + 1) + leg.encode() + b"\0"
+    body += b"\0" * (-(offset + len(body)) % 4)
+    body += struct.pack("<I", len(LEG_NAMES))
+    body += b"\0" * (-(offset + len(body)) % 8)
+    # the positions end 8-aligned: velocity count 0, effort count, and the efforts stay aligned
+    return bytes(body), struct.pack("<II", 0, len(LEG_NAMES))
 
 
 def _frame_bytes(frame: str) -> bytes:

@@ -1,7 +1,9 @@
 """The pass over a recording's JointState messages: their serialized bytes (no deserialization)
 in blocks of :data:`BLOCK_MESSAGES`, through :class:`~a1_leg_fk.tracking.FootTracker`'s rules,
 to :class:`FootBlock` rows of feet [m] and foot velocities [m/s] in the base frame (and in the
-world frame with a base pose). No ROS install: ``rosbags`` and ``tqdm`` come with the open bag.
+world frame with a base pose; with ``recording.forces``, foot forces [N] and contacts from the
+efforts, :mod:`a1_leg_fk.recording.forces`). No ROS install: ``rosbags`` and ``tqdm`` come
+with the open bag.
 """
 
 from __future__ import annotations
@@ -15,7 +17,12 @@ import numpy as np
 
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, cdr_layout
+from a1_leg_fk.recording.joint_state_wire import (
+    JointStateDecoder,
+    WireError,
+    cdr_layout,
+    effort_span,
+)
 from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording, one_line
 from a1_leg_fk.tracking import FootTracker
 
@@ -35,7 +42,9 @@ class FootBlock:
     """Rows of consecutive accepted messages: like
     :class:`~a1_leg_fk.recording.trajectories.FootTrajectories` (stamps [ns], feet [m] and foot
     velocities [m/s] in the base frame, world feet [m]), velocities always an array (NaN where the
-    message gives none).
+    message gives none); with ``recording.forces``, ``forces`` (N, 4, 3) [N, base frame],
+    ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts`` (N, 4) probabilities (NaN
+    where none).
     """
 
     stamps_ns: np.ndarray
@@ -43,6 +52,9 @@ class FootBlock:
     positions: np.ndarray
     velocities: np.ndarray
     world_positions: np.ndarray | None
+    forces: np.ndarray | None = None
+    normal_forces: np.ndarray | None = None
+    contacts: np.ndarray | None = None
 
 
 def iter_foot_blocks(
@@ -61,6 +73,8 @@ def iter_foot_blocks(
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
+    if recording.forces is not None:
+        recording.forces.restart()
     recording.has_velocities = False  # this pass's
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
@@ -189,7 +203,7 @@ class _Batch:
 
     def _vectorised(
         self, raws: list[bytes], bag_times: list[int]
-    ) -> tuple[np.ndarray, ...] | None:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None:
         layout = cdr_layout(bytes(raws[0]))
         if layout is None:
             return None
@@ -206,14 +220,19 @@ class _Batch:
         stamps = np.where(stamps == 0, bag_times_ns, stamps)
         positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
         velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
-        return stamps, bag_times_ns, positions, velocities
+        efforts = None
+        if self.recording.forces is not None:
+            efforts = np.ascontiguousarray(matrix[:, effort_span(raws[0])[1]]).view("<f8")
+        return stamps, bag_times_ns, positions, velocities, efforts
 
     def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
         fields = self.decoder.fields
         pending = _Pending()
+        forces = self.recording.forces is not None
         for raw, bag_time in zip(raws, bag_times):
             try:
                 stamp, changed, order, positions, velocities = fields(raw)
+                efforts = bytes(raw)[effort_span(raw, self.recording.ros1)[1]] if forces else b""
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
@@ -222,15 +241,19 @@ class _Batch:
                 or order != pending.order
                 or len(positions) != pending.position_bytes
                 or len(velocities) != pending.velocity_bytes
+                or len(efforts) != pending.effort_bytes
             ):
                 yield from pending.finish(self)
                 pending = _Pending()
             if not pending.stamps:
-                pending.start(self.decoder.names, order, len(positions), len(velocities))
+                pending.start(
+                    self.decoder.names, order, len(positions), len(velocities), len(efforts)
+                )
             pending.stamps.append(stamp or bag_time)
             pending.bag_times.append(bag_time)
             pending.positions.append(positions)
             pending.velocities.append(velocities)
+            pending.efforts.append(efforts)
         yield from pending.finish(self)
 
 
@@ -240,17 +263,24 @@ class _Pending:
     def __init__(self) -> None:
         self.names: list[str] = []
         self.order = "<"
-        self.position_bytes = self.velocity_bytes = 0
+        self.position_bytes = self.velocity_bytes = self.effort_bytes = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
         self.velocities: list[bytes] = []
+        self.efforts: list[bytes] = []
 
     def start(
-        self, names: list[str], order: str, position_bytes: int, velocity_bytes: int
+        self,
+        names: list[str],
+        order: str,
+        position_bytes: int,
+        velocity_bytes: int,
+        effort_bytes: int,
     ) -> None:
         self.names, self.order = names, order
         self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
+        self.effort_bytes = effort_bytes
 
     def finish(self, batch: _Batch) -> Iterator[FootBlock]:
         """The rows of these messages (none if there are none)."""
@@ -265,6 +295,9 @@ class _Pending:
             count, self.velocity_bytes // 8
         )
         batch.seen(self.names)
+        efforts = np.frombuffer(b"".join(self.efforts), dtype).reshape(
+            count, self.effort_bytes // 8
+        )
         yield from _finish(
             batch.recording,
             batch.tracker,
@@ -273,6 +306,7 @@ class _Pending:
             np.array(self.bag_times, dtype=np.int64),
             positions.astype(np.float64),
             velocities.astype(np.float64),
+            efforts.astype(np.float64) if batch.recording.forces is not None else None,
         )
 
 
@@ -284,9 +318,11 @@ def _finish(
     bag_times: np.ndarray,
     positions: np.ndarray,
     velocities: np.ndarray,
+    efforts: np.ndarray | None = None,
 ) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
-    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length).
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
+    another length; efforts only with ``recording.forces``).
     """
     result = tracker.update_block(names, positions, velocities)
     angles = result.angles[result.accepted]
@@ -305,7 +341,11 @@ def _finish(
     if recording.base_pose is not None:
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
-    yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
+    forces = None
+    if recording.forces is not None and efforts is not None:
+        slot_efforts = recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
+        forces = recording.forces.rows(stamps, angles[rows], slot_efforts)
+    yield FootBlock(stamps, bag_times, feet, foot_velocities, world, *(forces or (None,) * 3))
 
 
 def velocities_of(

@@ -179,3 +179,34 @@ def _packed_doubles(raw: bytes, offset: int) -> tuple[bytes, int]:
             f"float64 array of {count} elements runs past the message ({len(raw)} bytes)"
         )
     return raw[offset + 4 : end], end
+
+
+def effort_span(raw: bytes | memoryview, ros1: bool = False) -> tuple[str, slice]:
+    """``(byte order, slice)`` of the ``effort`` array's float64 bytes in one serialized
+    JointState (CDR, or ROS 1 with ``ros1``); :class:`WireError` if the message is malformed.
+
+    Messages of one layout (:func:`cdr_layout`) share the slice.
+    """
+    raw = bytes(raw)
+    try:
+        if ros1:
+            u32 = _UINT32["<"].unpack_from
+            offset = 16 + u32(raw, 12)[0]
+            count = u32(raw, offset)[0]
+            _check_count(count, len(raw), "names")
+            offset += 4
+            for _ in range(count):
+                offset += 4 + u32(raw, offset)[0]
+            for _ in range(3):  # position, velocity, effort
+                data, offset = _packed_doubles(raw, offset)
+            return "<", slice(offset - len(data), offset)
+        if len(raw) < 16 or raw[1] > 1:
+            raise WireError(f"not a CDR message (encapsulation {raw[:4].hex()})")
+        order = "<" if raw[1] == 1 else ">"
+        u32 = _UINT32[order].unpack_from
+        _, offset = _cdr_names(raw, (12 + u32(raw, 12)[0] + 3) & -4, u32)
+        for _ in range(3):  # position, velocity, effort
+            data, offset = _cdr_doubles(raw, offset, u32)
+    except (struct.error, UnicodeDecodeError) as error:
+        raise WireError(f"malformed JointState ({len(raw)} bytes): {error}") from None
+    return order, slice(4 + offset - len(data), 4 + offset)

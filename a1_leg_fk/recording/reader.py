@@ -26,6 +26,7 @@ if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.interfaces import Connection
 
     from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.recording.forces import ForcePass
     from a1_leg_fk.tracking import FootTracker
 
 ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
@@ -42,6 +43,9 @@ class RecordingChoices(TypedDict, total=False):
     joint_aliases: Sequence[str]
     base_pose: str | None
     max_pose_gap_s: float
+    forces: bool
+    imu: str | None
+    contact_thresholds: tuple[float | None, float | None]
 
 
 @dataclass
@@ -63,6 +67,7 @@ class Recording:
     stopped: str = ""
     salvage_note: str = ""  # what was read of a truncated MCAP file
     tracker: FootTracker | None = None  # the rules' state and counts of the current pass
+    forces: ForcePass | None = None  # foot forces and contacts from the efforts, when asked for
 
 
 def _rosbags() -> ModuleType:
@@ -83,9 +88,15 @@ def open_recording(
     joint_aliases: Sequence[str] = (),
     base_pose: str | None = None,
     max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
+    forces: bool = False,
+    imu: str | None = None,
+    contact_thresholds: tuple[float | None, float | None] = (None, None),
 ) -> Recording:
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
-    problem for bad input. Close with :func:`close_recording`.
+    problem for bad input. Close with :func:`close_recording`. ``forces``: foot forces and
+    contacts from the efforts (:mod:`a1_leg_fk.recording.forces`), gravity from the
+    ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``contact_thresholds`` the touchdown and
+    liftoff forces [N] (``None``: the defaults for the robot's weight).
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
@@ -136,6 +147,11 @@ def open_recording(
                 raise LegFkError(
                     f"--base-pose {base_pose}: cannot read it: {one_line(error)}"
                 ) from None
+        force_pass = (
+            _force_pass(reader, path, joint_states, robot.quadruped, imu, contact_thresholds)
+            if forces
+            else None
+        )
         return Recording(
             reader,
             path,
@@ -147,10 +163,37 @@ def open_recording(
             not reader.is2,
             types,
             salvage_note=salvage_note,
+            forces=force_pass,
         )
     except BaseException:
         _close_reader(reader)
         raise
+
+
+def _force_pass(
+    reader: AnyReader,
+    path: Path,
+    joint_states: Connection,
+    quadruped: Quadruped,
+    imu: str | None,
+    thresholds: tuple[float | None, float | None],
+) -> ForcePass:
+    """The force estimation of a pass; :class:`LegFkError` if the JointStates carry no efforts or
+    the IMU topic gives no orientation.
+    """
+    from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuGravity, check_has_efforts
+
+    check_has_efforts(reader, joint_states, not reader.is2)
+    gravity = None
+    if imu:
+        connection = _pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")
+        try:
+            gravity = ImuGravity.read(reader, connection)
+        except LegFkError:
+            raise
+        except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
+            raise LegFkError(f"--imu {imu}: cannot read it: {one_line(error)}") from None
+    return ForcePass(quadruped, gravity, thresholds)
 
 
 def close_recording(recording: Recording) -> None:

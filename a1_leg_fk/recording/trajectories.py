@@ -59,6 +59,7 @@ class RecordingSummary:
     wall_time_s: float
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
     types: str = ""  # which message types the bag was read with (recording.typestores)
+    forces: str = ""  # with forces: what the estimate gave (ForceCounts.line)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -104,6 +105,8 @@ class RecordingSummary:
                 f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a "
                 "pose (outside its time range or in a gap)"
             )
+        if self.forces:
+            lines.append(self.forces)
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -133,6 +136,9 @@ class FootTrajectories:
     base_frame: str
     world_frame: str | None
     summary: RecordingSummary
+    forces: np.ndarray | None = None  # (N, 4, 3) [N], base frame, NaN where none; with forces
+    normal_forces: np.ndarray | None = None  # (N, 4) [N] along minus gravity, NaN where none
+    contacts: np.ndarray | None = None  # (N, 4) contact probabilities, NaN where none
 
 
 class BlockStats:
@@ -174,6 +180,7 @@ class BlockStats:
             time.perf_counter() - self.started,
             "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
             recording.types,
+            recording.forces.counts.line() if recording.forces is not None else "",
         )
 
 
@@ -195,8 +202,11 @@ def read_foot_trajectories(
     ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
     gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
     stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s], default
-    :data:`DEFAULT_MAX_POSE_GAP_S`). Raises :class:`LegFkError` for bad input; a bag that cannot be
-    read to its end gives what was read, with ``summary.stopped`` saying why.
+    :data:`DEFAULT_MAX_POSE_GAP_S`). ``forces=True``: foot forces [N] and contact probabilities
+    from the joint efforts (``imu``: a sensor_msgs/msg/Imu topic for gravity's direction;
+    ``contact_thresholds``: touchdown and liftoff forces [N], ``None`` for the defaults).
+    Raises :class:`LegFkError` for bad input; a bag that cannot be read to its end gives what was
+    read, with ``summary.stopped`` saying why.
     """
     recording = open_recording(path, **choices)
     try:
@@ -230,6 +240,9 @@ def collected(
         base_frame=recording.quadruped.base_frame,
         world_frame=recording.base_pose.world_frame if recording.base_pose is not None else None,
         summary=summary,
+        forces=joined("forces", (LEGS, 3)) if recording.forces is not None else None,
+        normal_forces=joined("normal_forces", (LEGS,)) if recording.forces is not None else None,
+        contacts=joined("contacts", (LEGS,)) if recording.forces is not None else None,
     )
 
 

@@ -1,0 +1,1 @@
+"""Estimation from joint states, without ROS: foot forces and contacts."""

@@ -1,0 +1,393 @@
+"""Foot forces from joint efforts: the legs as a force sensor, quasi-static, without ROS.
+
+A leg at rest (or slow enough that its own inertia does not matter) balances three torques at
+each joint: the motor's effort ``tau``, gravity on the leg's own links, and the ground's force
+``F`` on the foot acting through the foot Jacobian ``J``::
+
+    g(q) = tau + J(q)^T F      =>      F = J(q)^-T (g(q) - tau)
+
+Conventions (those of ``sensor_msgs/JointState`` and ros2_control, and of PyBullet's applied motor
+torque): ``tau`` [N m] is the torque the joint's motor applies to its child link about the joint
+axis (positive by the right-hand rule about the URDF ``<axis>``); ``g(q)`` [N m] is the generalised
+gravity force, the effort that holds the leg still against gravity with the foot in the air
+(minus the torque gravity exerts on the links below the joint); ``F`` [N] is the force the ground
+exerts on the foot, in the base frame (the URDF root link); gravity is an acceleration vector
+[m/s^2] in the base frame (default: ``-z`` at standard gravity, the base level).
+
+The ground pushes where it touches the foot: a foot with a collision sphere (radius ``r``, its
+centre in the foot link's frame) in the URDF touches flat ground ``r`` along gravity from the
+sphere's centre, and the Jacobian is that of this point (on the A1, ignoring the 2 cm radius
+costs up to ~2.6 N per foot in static poses tilted by 0.15 rad).
+
+``g(q)`` comes from the URDF's ``<inertial>`` masses and centres of mass: every link below a leg's
+first movable joint belongs to the *segment* of the nearest movable joint above it (links under a
+movable joint outside the leg's chain are taken at that joint's zero angle).
+
+Near a singular Jacobian (the knee straight) the solve amplifies any effort error without bound:
+there, and where the efforts or angles of a leg are missing or not finite, a leg gets no force
+(NaN), and the result says which and why.
+
+The math is built from the compiled legs (:mod:`a1_leg_fk.kinematics.compiled_leg`, the same
+generated straight-line code: the Jacobians of each segment's centre of mass and of the contact
+point). It is the statics of the kinematic chain, so it sits in the kinematics beside the
+Jacobians, below :class:`~a1_leg_fk.kinematics.quadruped.Quadruped`, whose ``foot_forces`` is a
+thin method over it; the contact rule built on these forces is :mod:`a1_leg_fk.estimation`'s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from a1_leg_fk.kinematics.compiled_leg import BATCH_CHUNK_ROWS, CompiledLeg
+from a1_leg_fk.kinematics.fk_codegen import compile_source, leg_source
+from a1_leg_fk.kinematics.leg_stages import rpy_matrix
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError, RobotModel, Sphere
+
+STANDARD_GRAVITY = 9.80665
+"""[m/s^2]"""
+LEVEL_GRAVITY = (0.0, 0.0, -STANDARD_GRAVITY)
+"""Gravity in the base frame [m/s^2] when nothing tells its direction: the base level."""
+MIN_JACOBIAN_CONDITION = 0.05
+"""A leg whose Jacobian columns ``j0, j1, j2`` give ``|det J| / (|j0| |j1| |j2|)`` below this gets
+no force. On the A1 the measure is 0.65 standing (knee -1.5 rad), 0.43 at the knee's straightest
+limit (-0.916 rad), 0.048 at -0.1 rad and 0 straight; at 0.05 the smallest singular value of J is
+~9 mm, so an effort error of 1 N m already moves the force by ~110 N."""
+LEGS = len(LEG_NAMES)
+
+
+@dataclass(frozen=True)
+class ForceEstimate:
+    """Foot forces for N configurations (one: without the leading N).
+
+    ``forces`` (N, 4, 3) [N]: the force the ground exerts on each foot, base frame, NaN where
+    the leg has none; ``missing`` (N, 4): the leg's angles or efforts are missing or not finite;
+    ``singular`` (N, 4): its Jacobian is too near singular (:data:`MIN_JACOBIAN_CONDITION`).
+    """
+
+    forces: np.ndarray
+    missing: np.ndarray
+    singular: np.ndarray
+
+
+Columns = tuple[Any, Any, Any]
+"""Components x, y, z: floats, or (K,) arrays for K vectors."""
+Values = Sequence[Any] | np.ndarray
+"""Per joint or per axis: floats, or (K,) arrays (the rows of an array)."""
+
+
+class _LegStatics:
+    """One leg's generated functions (see :mod:`a1_leg_fk.kinematics.fk_codegen`): per segment with
+    mass, the Jacobian of its centre of mass; per joint, its axis in the base frame; the Jacobian
+    of the foot sphere's centre, and the sphere's radius [m].
+    """
+
+    def __init__(self, model: RobotModel, leg: CompiledLeg, radius_m: float | None) -> None:
+        sphere = foot_sphere(model, leg.chain.foot_link) if radius_m is None else None
+        self.radius_m = sphere.radius if sphere is not None else radius_m or 0.0
+        center = _foot_point(leg, np.array(sphere.center) if sphere is not None else np.zeros(3))
+        self.contact_jacobian: Callable[..., tuple[Any, ...]] = compile_source(
+            leg_source(leg.stages, center), f"foot sphere of {leg.chain.leg}", self
+        )["jacobian_from_trig"]
+        movable = leg.chain.movable
+        self.masses: list[float] = []
+        self.com_jacobians: list[tuple[float, Callable[..., tuple[Any, ...]]]] = []
+        for k, joint in enumerate(movable):
+            stop = movable[k + 1].name if k + 1 < len(movable) else None
+            mass, moment = _segment(model, joint.child, stop)
+            self.masses.append(mass)
+            if mass > 0.0:  # the centre of mass, a point in stage k's child frame
+                source = leg_source(leg.stages[: k + 1], moment / mass)
+                code = compile_source(source, f"CoM of {leg.chain.leg} segment {k}", self)
+                self.com_jacobians.append((mass, code["jacobian_from_trig"]))
+        # a stage without its offset turns a vector as the leg turns it
+        turns = tuple(replace(stage, offset=np.zeros(3)) for stage in leg.stages)
+        self.axes: list[Callable[..., tuple[Any, Any, Any]]] = [
+            compile_source(
+                leg_source(turns[: k + 1], stage.axis), f"axis {stage.joint.name}", self
+            )["position_from_trig"]
+            for k, stage in enumerate(leg.stages)
+        ]
+
+    def gravity_torques(self, trig: Values, gravity: Values) -> list[Any]:
+        """g(q) [N m], per joint, for the leg's (c0, s0, c1, s1, c2, s2) and gravity [m/s^2]
+        (floats, or (K,) arrays): minus the torque gravity exerts on the links below each joint.
+        """
+        gx, gy, gz = gravity
+        torques: list[Any] = [0.0] * JOINTS_PER_LEG
+        for mass, jacobian in self.com_jacobians:
+            columns = jacobian(*trig)
+            for k in range(len(columns) // 3):
+                x, y, z = columns[3 * k : 3 * k + 3]
+                torques[k] = torques[k] - mass * (x * gx + y * gy + z * gz)
+        return torques
+
+    def solve(
+        self, trig: Values, efforts: Values, gravity: Values
+    ) -> tuple[tuple[Any, Any, Any], Any, Any]:
+        """``J^T F = g - tau`` by Cramer's rule, J that of the contact point, on floats or (K,)
+        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``.
+        """
+        gx, gy, gz = gravity
+        torques = self.gravity_torques(trig, gravity)
+        rhs = [torques[k] - efforts[k] for k in range(JOINTS_PER_LEG)]
+        flat = self.contact_jacobian(*trig)
+        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
+        if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
+            scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
+            down = (gx * scale, gy * scale, gz * scale)
+            for k, axis in enumerate(self.axes):
+                turn = _cross(down, axis(*trig))
+                columns[k] = tuple(columns[k][i] - turn[i] for i in range(3))
+        j0, j1, j2 = columns
+        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
+        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
+        size = 1.0
+        for c in columns:
+            size = size * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) ** 0.5
+        scaled = tuple(rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i] for i in range(3))
+        return (scaled[0], scaled[1], scaled[2]), det, size
+
+
+class LeggedRobot(Protocol):
+    """What the statics need of a robot (a :class:`~a1_leg_fk.kinematics.quadruped.Quadruped`):
+    its URDF model and its four compiled legs.
+    """
+
+    @property
+    def model(self) -> RobotModel:
+        """The robot's URDF model (masses, centres of mass, collision spheres)."""
+
+    @property
+    def legs(self) -> tuple[CompiledLeg, ...]:
+        """The four compiled legs, FR, FL, RR, RL."""
+
+
+class FootForces:
+    """Quasi-static foot forces of a :class:`~a1_leg_fk.kinematics.quadruped.Quadruped` from its
+    joint efforts (see the module text for the conventions).
+    """
+
+    def __init__(
+        self,
+        quadruped: LeggedRobot,
+        min_condition: float = MIN_JACOBIAN_CONDITION,
+        foot_radius_m: float | None = None,
+    ) -> None:
+        """Collect each leg's segment masses from the quadruped's URDF; ``min_condition`` gates
+        near-singular Jacobians. The contact point: by default on each foot link's collision
+        sphere (:func:`foot_sphere`); with ``foot_radius_m`` [m], on a sphere of that radius
+        centred on the foot link's origin (0: the origin itself).
+        """
+        self.min_condition = min_condition
+        self._legs = tuple(
+            _LegStatics(quadruped.model, leg, foot_radius_m) for leg in quadruped.legs
+        )
+        self.foot_radii_m = tuple(leg.radius_m for leg in self._legs)
+        """Each foot's contact sphere radius [m]."""
+        self.total_mass_kg = sum(i.mass for i in quadruped.model.inertials.values())
+        """The robot's mass [kg]: every ``<inertial>`` of the URDF."""
+        if not self.total_mass_kg > 0.0:
+            raise LegFkError(
+                f"{quadruped.model.source}: no link has a mass (<inertial><mass>); foot forces "
+                "need the masses of the legs"
+            )
+
+    def leg_masses_kg(self, leg: int) -> tuple[float, ...]:
+        """The masses [kg] of leg slot ``leg``'s three segments, root side first."""
+        return tuple(self._legs[leg].masses)
+
+    def estimate(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> ForceEstimate:
+        """The foot forces of one configuration, in floats (the per-message path): 12 angles
+        [rad] and 12 efforts [N m] (slot order), ``gravity_base`` (3,) [m/s^2] in the base frame;
+        a :class:`ForceEstimate` of shapes (4, 3), (4,), (4,).
+        """
+        q = _row(angles, "joint angles")[0].tolist()
+        tau = _row(efforts, "joint efforts")[0].tolist()
+        gravity = _gravity(gravity_base, 1)[0].tolist()
+        out = [[math.nan] * 3 for _ in range(LEGS)]
+        missing, singular = [True] * LEGS, [False] * LEGS
+        if all(math.isfinite(value) for value in gravity):
+            for slot, statics in enumerate(self._legs):
+                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+                missing[slot] = not all(math.isfinite(v) for v in q[joints] + tau[joints])
+                if missing[slot]:
+                    continue
+                trig = [f(angle) for angle in q[joints] for f in (math.cos, math.sin)]
+                scaled, det, size = statics.solve(trig, tau[joints], gravity)
+                singular[slot] = not abs(det) >= self.min_condition * size
+                if not singular[slot]:
+                    out[slot] = [value / det for value in scaled]
+        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+
+    def estimate_batch(
+        self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> ForceEstimate:
+        """Foot forces for (N, 12) angles [rad] and efforts [N m]; ``gravity_base`` (3,) or
+        (N, 3) [m/s^2] in the base frame (default :data:`LEVEL_GRAVITY`). Non-finite values
+        make their leg :attr:`ForceEstimate.missing`, never an error.
+        """
+        q = _batch(angles, "angles")
+        tau = _batch(efforts, "efforts")
+        if tau.shape != q.shape:
+            raise LegFkError(f"efforts have shape {tau.shape}, angles {q.shape}")
+        gravity = _gravity(gravity_base, q.shape[0])
+        rows = q.shape[0]
+        forces = np.full((rows, LEGS, 3), math.nan)
+        singular = np.zeros((rows, LEGS), dtype=bool)
+        finite = np.isfinite(q) & np.isfinite(tau)
+        missing = ~finite.reshape(rows, LEGS, JOINTS_PER_LEG).all(axis=2)
+        missing |= ~np.isfinite(gravity).all(axis=1)[:, None]
+        q, tau = np.where(finite, q, 0.0), np.where(finite, tau, 0.0)
+        gravity = np.nan_to_num(gravity)
+        for start in range(0, rows, BATCH_CHUNK_ROWS):
+            block = slice(start, min(start + BATCH_CHUNK_ROWS, rows))
+            cos, sin = np.cos(q[block]), np.sin(q[block])
+            for slot in range(LEGS):
+                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+                forces[block, slot], singular[block, slot] = self._leg_forces(
+                    slot, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
+                )
+        singular &= ~missing
+        forces[missing | singular] = math.nan
+        return ForceEstimate(forces, missing, singular)
+
+    def gravity_torques_batch(
+        self, angles: ArrayLike, gravity_base: ArrayLike | None = None
+    ) -> np.ndarray:
+        """(N, 12) g(q) [N m]: the efforts that hold the legs still in the air, for (N, 12)
+        angles [rad] and gravity (3,) or (N, 3) [m/s^2] in the base frame.
+        """
+        q = _batch(angles, "angles")
+        if not np.isfinite(q).all():
+            raise LegFkError("angles: NaN or infinite values")
+        gravity = _gravity(gravity_base, q.shape[0])
+        cos, sin = np.cos(q), np.sin(q)
+        out = np.empty_like(q)
+        for slot, statics in enumerate(self._legs):
+            joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+            g = gravity.T
+            torques = statics.gravity_torques(_trig(cos[:, joints], sin[:, joints]), g)
+            out[:, joints] = np.stack(np.broadcast_arrays(*torques), axis=1)
+        return out
+
+    def _leg_forces(
+        self,
+        slot: int,
+        cos: np.ndarray,
+        sin: np.ndarray,
+        efforts: np.ndarray,
+        gravity: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(K, 3) forces [N] and (K,) singular flags of one leg (:meth:`_LegStatics.solve`)."""
+        scaled, det, size = self._legs[slot].solve(_trig(cos, sin), efforts.T, gravity.T)
+        singular = ~(np.abs(det) >= self.min_condition * size)
+        inverse = 1.0 / np.where(singular, 1.0, det)
+        forces = np.empty((cos.shape[0], 3))
+        for i in range(3):
+            forces[:, i] = scaled[i] * inverse
+        return forces, singular
+
+
+def _trig(cos: np.ndarray, sin: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(c0, s0, c1, s1, c2, s2) of a leg's (K, 3) cosines and sines."""
+    return cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
+
+
+def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
+    """``a x b`` component by component (numpy's cross is slow on (K, 3) arrays)."""
+    return (
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    )
+
+
+def gravity_in_base(quaternions: np.ndarray) -> np.ndarray:
+    """(M, 3) world gravity ``(0, 0, -g)`` [m/s^2] in the frame of a base at (M, 4) unit
+    quaternions (x, y, z, w): ``-g`` times the third row of the base's rotation matrix.
+    """
+    x, y, z, w = quaternions.T
+    row = np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1)
+    result: np.ndarray = -STANDARD_GRAVITY * row
+    return result
+
+
+def foot_sphere(model: RobotModel, foot_link: str) -> Sphere | None:
+    """The largest collision sphere of ``foot_link``, or ``None`` (a point foot at its origin)."""
+    spheres = model.spheres.get(foot_link, ())
+    return max(spheres, key=lambda sphere: sphere.radius) if spheres else None
+
+
+def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:
+    """``point`` [m] of the foot link's frame in the last movable joint's child frame."""
+    joints = leg.chain.joints
+    last_movable = max(i for i, joint in enumerate(joints) if joint.movable)
+    rotation, offset = np.eye(3), np.zeros(3)
+    for joint in joints[last_movable + 1 :]:
+        offset = offset + rotation @ np.array(joint.origin_xyz)
+        rotation = rotation @ rpy_matrix(joint.origin_rpy)
+    result: np.ndarray = offset + rotation @ point
+    return result
+
+
+def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:
+    """Mass [kg] and first moment [kg m] (in ``link``'s frame) of ``link`` and everything below
+    it, except below the joint named ``stop_joint``; other joints at their zero angle.
+    """
+    mass, moment = 0.0, np.zeros(3)
+    pending = [(link, np.eye(3), np.zeros(3))]
+    while pending:
+        name, rotation, origin = pending.pop()
+        inertial = model.inertials.get(name)
+        if inertial is not None:
+            mass += inertial.mass
+            moment += inertial.mass * (origin + rotation @ np.array(inertial.center))
+        pending.extend(
+            (
+                joint.child,
+                rotation @ rpy_matrix(joint.origin_rpy),
+                origin + rotation @ np.array(joint.origin_xyz),
+            )
+            for joint in model.joints.values()
+            if joint.parent == name and joint.name != stop_joint
+        )
+    return mass, moment
+
+
+def _row(values: ArrayLike, what: str) -> np.ndarray:
+    try:
+        row = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers: {error}") from error
+    if row.shape != (JOINT_COUNT,):
+        raise LegFkError(f"{what} must be {JOINT_COUNT} numbers (3 per leg), got {row.shape}")
+    return row[np.newaxis]
+
+
+def _batch(values: ArrayLike, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise LegFkError(f"{what} must be an (N, {JOINT_COUNT}) array: {error}") from error
+    if array.ndim != 2 or array.shape[1] != JOINT_COUNT:
+        raise LegFkError(f"{what} must have shape (N, {JOINT_COUNT}), got {array.shape}")
+    return array
+
+
+def _gravity(gravity_base: ArrayLike | None, rows: int) -> np.ndarray:
+    """(rows, 3) gravity [m/s^2] from None (level), a (3,) vector or a (rows, 3) array."""
+    gravity = np.asarray(LEVEL_GRAVITY if gravity_base is None else gravity_base, dtype=float)
+    if gravity.shape == (3,):
+        return np.broadcast_to(gravity, (rows, 3))
+    if gravity.shape != (rows, 3):
+        raise LegFkError(f"gravity_base must have shape (3,) or ({rows}, 3), got {gravity.shape}")
+    return gravity

@@ -170,6 +170,12 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     durations = np.array([b - a for a, b in strides])
     regular = np.abs(durations / np.median(durations) - 1.0) <= IRREGULAR_STRIDE
     kept = [stride for stride, keep in zip(strides, regular) if keep]
+    if not kept:  # an even count of strides can leave none near its median (0.5 s and 1.5 s)
+        return without_strides(
+            "irregular strides",
+            f"no stride within {IRREGULAR_STRIDE:.0%} of the median stride period",
+            clearance_m=clearance,
+        ), []
     stride_time = float(durations[regular].sum())
     period = stride_time / len(kept)
     metrics = LegMetrics(

@@ -104,6 +104,19 @@ def test_a_pause_is_an_irregular_stride() -> None:
         assert abs(known(metrics.duty_factor) - DUTY["pronk"]) <= 0.02
 
 
+def test_two_strides_far_from_their_median_are_no_gait() -> None:
+    # Two strides, 0.47 s and 1.47 s (a 1 s pause mid-stance): their median, 0.97 s, is more
+    # than 50 % from both, so no stride is regular; the legs say so instead of dividing by zero.
+    pause_at = PERIOD_S + 0.5 * DUTY["pronk"] * PERIOD_S
+    stamps, feet, _ = synthetic(
+        "pronk", 0.0, 200, seconds=3 * PERIOD_S + 1.2, pause=(pause_at, 1.0)
+    )
+    _, report = analyze_gait(stamps, feet)
+    assert {metrics.status for metrics in report.legs.values()} == {"irregular strides"}
+    assert report.gait == "unknown"
+    json.dumps(report.to_json(), allow_nan=False)
+
+
 def test_json_is_strict_and_complete() -> None:
     stamps, feet, _ = synthetic("trot", 0.5, 200)
     _, report = analyze_gait(stamps, feet)

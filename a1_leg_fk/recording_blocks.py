@@ -41,6 +41,8 @@ class FootBlock:
     positions: np.ndarray
     velocities: np.ndarray
     world_positions: np.ndarray | None
+    angles: np.ndarray  # (N, 12) [rad]: the merged state after each message, NaN where unknown
+    rates: np.ndarray  # (N, 12) [rad/s]: the message's rates where a foot velocity came of them
 
 
 def iter_foot_blocks(
@@ -266,7 +268,8 @@ def _finish(
     if recording.base_pose is not None:
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
-    yield FootBlock(stamps, bag_times, feet, foot_velocities, world)
+    rates[~np.repeat(np.isfinite(foot_velocities).all(axis=2), JOINTS_PER_LEG, axis=1)] = math.nan
+    yield FootBlock(stamps, bag_times, feet, foot_velocities, world, angles[rows], rates)
 
 
 def velocities_of(

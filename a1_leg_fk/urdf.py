@@ -1,8 +1,9 @@
 """URDF reading: XML (a file path or a string) -> :class:`RobotModel`.
 
 Only what forward kinematics needs is kept: the links, and for every joint its type, parent,
-child, ``<origin xyz rpy>`` (metres, radians), unit ``<axis>`` and ``<limit>``. Inertia, meshes,
-transmissions and everything else are ignored. No ROS and no PyBullet here.
+child, ``<origin xyz rpy>`` (metres, radians), unit ``<axis>`` and ``<limit>``; of the collision
+geometry, the spheres (a foot's rolling radius). Inertia, meshes, transmissions and everything
+else are ignored. No ROS and no PyBullet here.
 
 The parser refuses DTD entity declarations outright, so an entity-expansion bomb ("billion
 laughs") fails at once instead of expanding; a URDF never needs them.
@@ -67,6 +68,14 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Sphere:
+    """A ``<collision>`` sphere: ``radius`` [m], centre ``origin_xyz`` [m] in its link's frame."""
+
+    radius: float
+    origin_xyz: Vector3
+
+
+@dataclass(frozen=True)
 class RobotModel:
     """The kinematic tree of a URDF: links, joints by name, and the root link (base frame)."""
 
@@ -75,6 +84,8 @@ class RobotModel:
     links: tuple[str, ...]
     joints: Mapping[str, Joint]
     root: str
+    spheres: Mapping[str, Sphere] = field(default_factory=dict)
+    """Link name -> its first ``<collision>`` sphere, for the links that have one."""
     _parent_joints: Mapping[str, Joint] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -167,7 +178,30 @@ def parse_urdf(xml_text: str, source: str = "<string>") -> RobotModel:
             raise LegFkError(f"{source}: duplicate joint name '{joint.name}'")
         joints[joint.name] = joint
     root = _check_tree(links, joints, source)
-    return RobotModel(robot.get("name", ""), source, links, joints, root)
+    spheres: dict[str, Sphere] = {}
+    for element in robot.findall("link"):
+        name = element.get("name", "")
+        sphere = _collision_sphere(element, f"{source}: link '{name}'")
+        if sphere is not None:
+            spheres[name] = sphere
+    return RobotModel(robot.get("name", ""), source, links, joints, root, spheres)
+
+
+def _collision_sphere(link: ElementTree.Element, where: str) -> Sphere | None:
+    """The link's first ``<collision>`` whose geometry is a ``<sphere>``, or None."""
+    for collision in link.findall("collision"):
+        sphere = collision.find("geometry/sphere")
+        if sphere is None:
+            continue
+        text = sphere.get("radius", "")
+        try:
+            radius = float(text)
+        except ValueError:
+            raise LegFkError(f"{where}: collision sphere radius='{text}' is not a number") from None
+        if not (math.isfinite(radius) and radius >= 0.0):
+            raise LegFkError(f"{where}: collision sphere radius={text} is not a finite number >= 0")
+        return Sphere(radius, _vector(collision.find("origin"), "xyz", (0.0, 0.0, 0.0), where))
+    return None
 
 
 def _parse_xml(xml_text: str, source: str) -> ElementTree.Element:

@@ -78,23 +78,29 @@ def rotation_matrices(quaternions: np.ndarray) -> np.ndarray:
 
 def walking_targets(
     start_s: float = 0.5,
-    trot_hz: float = 2.5,
+    trot_hz: float = 2.0,
+    duty: float = 0.6,
     knee_lift: float = 0.3,
-    stride: float = 0.12,
-    turn: float = 0.5,
+    stride: float = 0.18,
+    turn: float = 0.025,
+    differential: float = 0.09,
     ramp_s: float = 0.5,
 ) -> Callable[[float], list[float]]:
     """Joint targets [rad] of an A1 trot: stand until ``start_s`` [s], then trot at ``trot_hz``.
 
-    Diagonal pairs (FR+RL, FL+RR) alternate. A swing leg bends its knee by ``knee_lift`` *
-    sin(phase) and turns its hip pitch by half that; the hip pitch also strokes by ``stride`` *
-    cos(phase) [rad], forward in swing and backward in stance, which walks the robot forward.
-    The right legs stroke ``1 + turn`` times, the left ``1 - turn`` times as far: it turns left.
-    The stroke fades in over ``ramp_s`` [s]. With the defaults and ``simulate(...,
-    position_gain=0.5)`` the A1 walks ~1.7 m and turns ~135 degrees in 8 s (roll within 10 deg).
+    Diagonal pairs (FR+RL, FL+RR) are half a cycle apart; each leg stands for the fraction
+    ``duty`` of the cycle and swings for the rest. A swing leg bends its knee by up to
+    ``knee_lift`` [rad] and turns its hip pitch by half that, lifting the foot. The hip pitch also
+    strokes by ``stride`` [rad]: back to front in swing, front to back at constant speed in
+    stance, which walks the robot forward. The hip roll strokes likewise by ``turn`` [rad] on the
+    front legs and the opposite on the rear ones: the stance feet sweep sideways in opposite
+    directions, which turns the robot without making its feet slide. The strokes fade in over
+    ``ramp_s`` [s].
     """
-    pair = (0.0, math.pi, math.pi, 0.0)  # FR, FL, RR, RL
-    side = (1.0, -1.0, 1.0, -1.0)  # right +1
+    offset = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL: the cycle's fraction
+    end = (1.0, 1.0, -1.0, -1.0)  # front +1
+    side = (-1.0, 1.0, -1.0, 1.0)  # left +1
+    swing = 1.0 - duty
 
     def targets(t: float) -> list[float]:
         out: list[float] = []
@@ -102,10 +108,18 @@ def walking_targets(
         fade = min(1.0, (t - start_s) / ramp_s) if running else 0.0
         fade = fade * fade * (3.0 - 2.0 * fade)
         for leg in range(4):
-            phase = 2.0 * math.pi * trot_hz * (t - start_s) + pair[leg]
-            bend = knee_lift * max(0.0, math.sin(phase)) if running else 0.0
-            stroke = fade * stride * (1.0 + turn * side[leg]) * math.cos(phase)
-            out += [STAND[0], STAND[1] + bend / 2 + stroke, STAND[2] - bend]
+            u = (trot_hz * (t - start_s) + offset[leg]) % 1.0
+            if u < swing:  # swing: lift, and stroke from back (+1) to front (-1)
+                bend = knee_lift * math.sin(math.pi * u / swing) if running else 0.0
+                stroke = math.cos(math.pi * u / swing)
+            else:  # stance: from front to back at constant speed
+                bend, stroke = 0.0, -1.0 + 2.0 * (u - swing) / duty
+            stroke *= fade
+            out += [
+                STAND[0] + turn * end[leg] * stroke,
+                STAND[1] + bend / 2 + stride * (1.0 + differential * side[leg]) * stroke,
+                STAND[2] - bend,
+            ]
         return out
 
     return targets
@@ -218,7 +232,10 @@ def _run(
         rows["contacts"].append(touching)
         rows["contact_forces"].append(forces)
         rows["foot_positions"].append(
-            [pybullet.getLinkState(body, link, **pb)[4] for link in foot_links]
+            [
+                pybullet.getLinkState(body, link, computeForwardKinematics=True, **pb)[4]
+                for link in foot_links
+            ]
         )
     arrays = {key: np.array(value) for key, value in rows.items() if key != "joint_names"}
     return SimRun(joint_names=tuple(joint_names), **arrays)

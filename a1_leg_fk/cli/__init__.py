@@ -1,8 +1,8 @@
-"""``a1-leg-fk``: echo | verify | plot | demo | bag | gait | ik, for installs without the ROS 2
+"""``a1-leg-fk``: echo | verify | plot | demo | bag | odom | gait | ik, for installs without the ROS 2
 command line tools.
 
 One module per command (:mod:`.echo`, :mod:`.verify`, :mod:`.plot`, :mod:`.demo`, :mod:`.bag`,
-:mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options, argv)``; the
+:mod:`.odom`, :mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options, argv)``; the
 shared plumbing (exit codes, signals, this tool's ROS node, child processes) is :mod:`.common`.
 
 The ROS arguments (after ``--ros-args``, up to a lone ``--``) are found by rclpy's own
@@ -22,7 +22,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from a1_leg_fk.cli import bag, demo, echo, gait, ik, plot, verify
+from a1_leg_fk.cli import bag, demo, echo, gait, ik, odom, plot, verify
 from a1_leg_fk.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -32,7 +32,7 @@ from a1_leg_fk.cli.common import (
     our_arguments,
 )
 
-COMMANDS = (echo, verify, plot, demo, bag, gait, ik)
+COMMANDS = (echo, verify, plot, demo, bag, odom, gait, ik)
 """The sub-command modules, in the order ``--help`` lists them."""
 
 

@@ -31,6 +31,26 @@ from a1_leg_fk.urdf import LegFkError
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     """INPUT and the options that choose what is read from it (shared with ``a1-leg-fk gait``)."""
+    add_input_arguments(parser)
+    parser.add_argument(
+        "--base-pose",
+        metavar="TOPIC",
+        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, "
+        "PoseWithCovarianceStamped, or /tf): adds world-frame feet",
+    )
+    parser.add_argument(
+        "--max-pose-gap",
+        type=non_negative,
+        default=DEFAULT_MAX_POSE_GAP_S,
+        metavar="S",
+        help="no world position between two poses further apart than S seconds (default "
+        f"{DEFAULT_MAX_POSE_GAP_S:g})",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_input_arguments(parser: argparse.ArgumentParser) -> None:
+    """INPUT, its JointState topic and the robot model (shared with ``a1-leg-fk odom``)."""
     parser.add_argument(
         "input",
         metavar="INPUT",
@@ -58,21 +78,6 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME=joint",
         help="as the node's joint_aliases parameter",
     )
-    parser.add_argument(
-        "--base-pose",
-        metavar="TOPIC",
-        help="the base's pose (nav_msgs/Odometry, geometry_msgs/PoseStamped, "
-        "PoseWithCovarianceStamped, or /tf): adds world-frame feet",
-    )
-    parser.add_argument(
-        "--max-pose-gap",
-        type=non_negative,
-        default=DEFAULT_MAX_POSE_GAP_S,
-        metavar="S",
-        help="no world position between two poses further apart than S seconds (default "
-        f"{DEFAULT_MAX_POSE_GAP_S:g})",
-    )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def recording_options(options: argparse.Namespace) -> RecordingChoices:

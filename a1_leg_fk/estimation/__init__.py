@@ -1,0 +1,1 @@
+"""State estimation from the legs, without ROS: contacts and leg odometry."""

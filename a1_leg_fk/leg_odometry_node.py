@@ -1,0 +1,303 @@
+"""``leg_odometry_node``: sensor_msgs/JointState (+ sensor_msgs/Imu) in, nav_msgs/Odometry out.
+
+Thin ROS glue over :mod:`a1_leg_fk.estimation.odometry_feed`, the pipeline ``a1-leg-fk odom``
+runs on bags. The robot comes from :class:`~a1_leg_fk.robot_source.RobotSource` and joint states
+follow :class:`~a1_leg_fk.joint_state.FootTracker`'s rules, as in ``foot_fk_node``. Each accepted
+joint state with velocities gives one ``leg_odometry`` message, stamped with the joint state's
+stamp: pose in ``odom_frame``, twist in the base frame (``child_frame_id``). An IMU sample is
+paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`).
+
+Contacts: kinematic. :meth:`LegOdometryNode._contact_probabilities` is where a contact estimate
+from the joint efforts plugs in (probabilities per leg, or None).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from typing import Unpack
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from sensor_msgs.msg import Imu, JointState
+
+from a1_leg_fk import ros_glue
+from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
+from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
+from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.fk_diagnostics import PeriodCounter
+from a1_leg_fk.joint_state import REJECTIONS, FootTracker
+from a1_leg_fk.legs import LEG_NAMES
+from a1_leg_fk.odometry_diagnostics import OdometryReport, odometry_status
+from a1_leg_fk.robot_config import RobotConfig
+from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
+from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
+
+NODE_NAME = "leg_odometry"
+DIAGNOSTICS_PERIOD_S = 1.0
+DEFAULTS = OdometrySettings()
+SMALL_RANGE_M = (-1.0, 1.0)
+RANGE_S = (0.001, 10.0)
+RANGE_MPS = (0.001, 100.0)
+
+PARAMETERS = (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec(
+        "odom_frame", "odom", ParameterType.PARAMETER_STRING, "header.frame_id of leg_odometry"
+    ),
+    ParameterSpec(
+        "use_imu",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Use the imu topic (orientation unless its orientation_covariance[0] is -1, angular "
+        "velocity always); false = legs alone (planar pose)",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "imu_timeout_s",
+        DEFAULT_IMU_TIMEOUT_S,
+        ParameterType.PARAMETER_DOUBLE,
+        f"A joint state takes the latest IMU sample stamped at most this long [s] before it, in "
+        f"{RANGE_S}",
+        read_only=True,
+        value_range=RANGE_S,
+    ),
+    ParameterSpec(
+        "foot_radius_m",
+        -1.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "Rolling radius of the feet [m], in [0, 1]; negative = the foot links' collision spheres "
+        "in the URDF",
+        read_only=True,
+        value_range=SMALL_RANGE_M,
+    ),
+    ParameterSpec(
+        "slip_threshold_mps",
+        DEFAULTS.slip_threshold_mps,
+        ParameterType.PARAMETER_DOUBLE,
+        f"A stance foot whose velocity estimate is further than this [m/s] from the others' is "
+        f"dropped for that sample, in {RANGE_MPS}",
+        read_only=True,
+        value_range=RANGE_MPS,
+    ),
+    ParameterSpec(
+        "stance_band_m",
+        DEFAULTS.stance_band_m,
+        ParameterType.PARAMETER_DOUBLE,
+        "Kinematic stance: the feet whose contact points lie within this [m] of the lowest along "
+        "gravity, in [0, 1]",
+        read_only=True,
+        value_range=SMALL_RANGE_M,
+    ),
+)
+"""The node's own parameters; the model parameters are :class:`RobotSource`'s."""
+
+
+class LegOdometryNode(Node):
+    """Publishes the base's leg odometry for every joint state with velocities."""
+
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
+        super().__init__(NODE_NAME, **node_options)
+        for spec in PARAMETERS:
+            spec.declare(self)
+        self._robot = RobotSource(self, self._on_robot)
+        self._warnings = ros_glue.WarnThrottle(self)
+        self._period = PeriodCounter()
+        self._no_stance_before = 0
+        self._without_velocities = 0
+        self._msg = Odometry()
+        self._start(self._robot.config)
+        self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        self.create_subscription(
+            JointState,
+            "joint_states",
+            self._on_joint_state,
+            JOINT_STATES_QOS,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+        )
+        self._imu_topic = self.resolve_topic_name("imu")
+        if self._bool("use_imu"):
+            self.create_subscription(
+                Imu,
+                "imu",
+                self._on_imu,
+                JOINT_STATES_QOS,
+                qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            )
+        self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self.get_logger().info(
+            f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
+            + (f" and {self._imu_topic}" if self._bool("use_imu") else " (legs alone)")
+            + f" to {self.resolve_topic_name('leg_odometry')} in frame '{self._msg.header.frame_id}'"
+        )
+
+    def _start(self, config: RobotConfig) -> None:
+        """(Re)start the estimate with a robot: fresh tracker and odometry, pose at the origin."""
+        self._config = config
+        self._tracker = FootTracker(config.quadruped)
+        radius = self._float("foot_radius_m")
+        self._feed = OdometryFeed(
+            config.quadruped,
+            OdometrySettings(
+                slip_threshold_mps=self._float("slip_threshold_mps"),
+                stance_band_m=self._float("stance_band_m"),
+            ),
+            radius if radius >= 0.0 else None,
+            self._float("imu_timeout_s"),
+            use_imu=self._bool("use_imu"),
+        )
+        self._no_stance_before = 0
+        self._apply_frames()
+
+    # --- per message ---------------------------------------------------------------------
+
+    def _on_imu(self, msg: Imu) -> None:
+        q, w = msg.orientation, msg.angular_velocity
+        reading = imu_reading(
+            (q.x, q.y, q.z, q.w),
+            msg.orientation_covariance,
+            (w.x, w.y, w.z),
+            msg.angular_velocity_covariance,
+        )
+        if reading is None:
+            self._warnings.warn("imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite")
+            return
+        self._feed.add_imu(self._stamp_ns(msg.header.stamp), reading)
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        tracker = self._tracker
+        feet = tracker.update(msg.name, msg.position, msg.velocity)
+        if tracker.new_unknown_names:
+            names = tracker.take_new_unknown_names()
+            self.get_logger().warn(f"ignoring joint names not in the model (warned once per name): {names[:20]}")
+        if tracker.last_problem:
+            self._report_problem()
+        if not feet:
+            return
+        positions = np.full((len(LEG_NAMES), 3), math.nan)
+        velocities = np.full((len(LEG_NAMES), 3), math.nan)
+        for foot in feet:
+            positions[foot.leg_slot] = foot.position
+            if foot.velocity is not None:
+                velocities[foot.leg_slot] = foot.velocity
+        if np.isnan(velocities).all():
+            self._without_velocities += 1
+            self._warnings.warn("no_velocities", "joint_states without joint velocities: no odometry from them")
+            return
+        stamp_ns = self._stamp_ns(msg.header.stamp)
+        sample = self._feed.step(
+            stamp_ns,
+            positions,
+            velocities,
+            np.array(tracker.angles),
+            np.array(tracker.rates),
+            self._contact_probabilities(msg),
+        )
+        self._publish(sample)
+
+    def _contact_probabilities(self, msg: JointState) -> np.ndarray | None:
+        """Contact probabilities (4,) of the legs from the message's efforts, or None for the
+        kinematic stance. The force-based contact estimate plugs in here.
+        """
+        del msg
+        return None
+
+    def _publish(self, sample: OdometrySample) -> None:
+        msg = self._msg
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(sample.stamp_ns, 1_000_000_000)
+        pose, twist = msg.pose.pose, msg.twist.twist
+        pose.position.x, pose.position.y, pose.position.z = sample.position
+        o = pose.orientation
+        o.x, o.y, o.z, o.w = sample.orientation
+        twist.linear.x, twist.linear.y, twist.linear.z = sample.linear
+        twist.angular.x, twist.angular.y, twist.angular.z = sample.angular
+        msg.pose.covariance = _diagonal_covariance(sample.pose_variance)
+        msg.twist.covariance = _diagonal_covariance(sample.twist_variance)
+        self._publisher.publish(msg)
+
+    def _stamp_ns(self, stamp: object) -> int:
+        """A header stamp [ns], or the node clock's now where it is zero."""
+        value = stamp.sec * 1_000_000_000 + stamp.nanosec  # type: ignore[attr-defined]
+        return value or self.get_clock().now().nanoseconds
+
+    def _report_problem(self) -> None:
+        tracker = self._tracker
+        outcome = tracker.last_outcome
+        kind = outcome if outcome in REJECTIONS else "non_finite_position"
+        self._warnings.warn(kind, f"joint_states: {outcome.replace('_', ' ')}: {tracker.last_problem}")
+
+    # --- diagnostics and parameters -----------------------------------------------------------
+
+    def _publish_diagnostics(self) -> None:
+        received, rejected = self._period.take(self._tracker.counts)
+        counts = self._feed.odometry.counts
+        no_stance, self._no_stance_before = counts.no_stance - self._no_stance_before, counts.no_stance
+        if self._diagnostics_pub.get_subscription_count() == 0:
+            return
+        robot = self._robot
+        level, summary, values = odometry_status(
+            OdometryReport(
+                tracker=self._tracker.counts,
+                odometry=counts,
+                received_in_period=received,
+                rejected_in_period=rejected,
+                no_stance_in_period=no_stance,
+                period_s=DIAGNOSTICS_PERIOD_S,
+                imu_topic=self._imu_topic if self._bool("use_imu") else "none (use_imu false)",
+                imu_received=self._feed.imu.received,
+                samples_with_imu=self._feed.samples_with_imu,
+                without_velocities=self._without_velocities,
+                model=self._config.source,
+                description_topic=robot.topic_name,
+                description_status=robot.topic_status,
+                description_rejected=robot.topic_rejected,
+            )
+        )
+        self._diagnostics_pub.publish(
+            ros_glue.diagnostics(
+                self, "leg odometry", level, summary, self._config.quadruped.model.name, values
+            )
+        )
+
+    def _float(self, name: str) -> float:
+        return float(self.get_parameter(name).get_parameter_value().double_value)
+
+    def _bool(self, name: str) -> bool:
+        return bool(self.get_parameter(name).get_parameter_value().bool_value)
+
+    def _apply_frames(self) -> None:
+        self._msg.header.frame_id = str(self.get_parameter("odom_frame").value)
+        self._msg.child_frame_id = self._robot.base_frame({})
+
+    def _on_robot(self, config: RobotConfig) -> None:
+        """Another robot was accepted: start over with it (the pose restarts at the origin)."""
+        self._period.new_tracker(self._tracker.counts)
+        self._start(config)
+
+    def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
+        self._apply_frames()
+
+
+def _diagonal_covariance(variances: Sequence[float]) -> list[float]:
+    """A row-major 6x6 covariance with ``variances`` on its diagonal."""
+    matrix = [0.0] * 36
+    for index, variance in enumerate(variances):
+        matrix[7 * index] = variance
+    return matrix
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
+    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

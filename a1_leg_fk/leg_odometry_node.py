@@ -13,28 +13,28 @@ from the joint efforts plugs in (probabilities per leg, or None).
 
 from __future__ import annotations
 
-import math
 import sys
 from collections.abc import Sequence
 from typing import Unpack
 
-import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu, JointState
 
 from a1_leg_fk import ros_glue
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
-from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
 from a1_leg_fk.fk_diagnostics import PeriodCounter
 from a1_leg_fk.joint_state import REJECTIONS, FootTracker
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.odometry_diagnostics import OdometryReport, odometry_status
+from a1_leg_fk.odometry_wire import SerializedOdometry, imu_fields
 from a1_leg_fk.robot_config import RobotConfig
 from a1_leg_fk.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
 from a1_leg_fk.ros_glue import JOINT_STATES_QOS, OUTPUT_QOS
@@ -130,6 +130,7 @@ class LegOdometryNode(Node):
                 self._on_imu,
                 JOINT_STATES_QOS,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+                raw=True,
             )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.add_post_set_parameters_callback(self._after_set_parameters)
@@ -159,18 +160,28 @@ class LegOdometryNode(Node):
 
     # --- per message ---------------------------------------------------------------------
 
-    def _on_imu(self, msg: Imu) -> None:
-        q, w = msg.orientation, msg.angular_velocity
-        reading = imu_reading(
-            (q.x, q.y, q.z, q.w),
-            msg.orientation_covariance,
-            (w.x, w.y, w.z),
-            msg.angular_velocity_covariance,
-        )
+    def _on_imu(self, raw: bytes) -> None:
+        """One serialized Imu: read from its bytes (:func:`imu_fields`), else deserialized."""
+        fields = imu_fields(raw)
+        if fields is None:
+            msg = deserialize_message(raw, Imu)
+            q, w = msg.orientation, msg.angular_velocity
+            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            fields = (
+                stamp,
+                (q.x, q.y, q.z, q.w),
+                tuple(msg.orientation_covariance),
+                (w.x, w.y, w.z),
+                tuple(msg.angular_velocity_covariance),
+            )
+        stamp, orientation, orientation_covariance, gyro, gyro_covariance = fields
+        reading = imu_reading(orientation, orientation_covariance, gyro, gyro_covariance)
         if reading is None:
-            self._warnings.warn("imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite")
+            self._warnings.warn(
+                "imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite"
+            )
             return
-        self._feed.add_imu(self._stamp_ns(msg.header.stamp), reading)
+        self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
 
     def _on_joint_state(self, msg: JointState) -> None:
         tracker = self._tracker
@@ -182,28 +193,26 @@ class LegOdometryNode(Node):
             self._report_problem()
         if not feet:
             return
-        positions = np.full((len(LEG_NAMES), 3), math.nan)
-        velocities = np.full((len(LEG_NAMES), 3), math.nan)
+        legs: list[Foot | None] = [None] * len(LEG_NAMES)
         for foot in feet:
-            positions[foot.leg_slot] = foot.position
             if foot.velocity is not None:
-                velocities[foot.leg_slot] = foot.velocity
-        if np.isnan(velocities).all():
+                legs[foot.leg_slot] = (foot.position, foot.velocity)
+        if not any(legs):
             self._without_velocities += 1
-            self._warnings.warn("no_velocities", "joint_states without joint velocities: no odometry from them")
+            self._warnings.warn(
+                "no_velocities", "joint_states without joint velocities: no odometry from them"
+            )
             return
-        stamp_ns = self._stamp_ns(msg.header.stamp)
         sample = self._feed.step(
-            stamp_ns,
-            positions,
-            velocities,
-            np.array(tracker.angles),
-            np.array(tracker.rates),
+            self._stamp_ns(msg.header.stamp),
+            legs,
+            tracker.angles,
+            tracker.rates,
             self._contact_probabilities(msg),
         )
         self._publish(sample)
 
-    def _contact_probabilities(self, msg: JointState) -> np.ndarray | None:
+    def _contact_probabilities(self, msg: JointState) -> Sequence[float] | None:
         """Contact probabilities (4,) of the legs from the message's efforts, or None for the
         kinematic stance. The force-based contact estimate plugs in here.
         """
@@ -211,6 +220,21 @@ class LegOdometryNode(Node):
         return None
 
     def _publish(self, sample: OdometrySample) -> None:
+        pose_covariance, twist_covariance = [0.0] * 36, [0.0] * 36
+        for index in range(6):
+            pose_covariance[7 * index] = sample.pose_variance[index]
+            twist_covariance[7 * index] = sample.twist_variance[index]
+        if self._serialized is not None:
+            values = [
+                *sample.position,
+                *sample.orientation,
+                *pose_covariance,
+                *sample.linear,
+                *sample.angular,
+                *twist_covariance,
+            ]
+            self._publisher.publish(self._serialized.serialized(sample.stamp_ns, values))
+            return
         msg = self._msg
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(sample.stamp_ns, 1_000_000_000)
         pose, twist = msg.pose.pose, msg.twist.twist
@@ -219,8 +243,8 @@ class LegOdometryNode(Node):
         o.x, o.y, o.z, o.w = sample.orientation
         twist.linear.x, twist.linear.y, twist.linear.z = sample.linear
         twist.angular.x, twist.angular.y, twist.angular.z = sample.angular
-        msg.pose.covariance = _diagonal_covariance(sample.pose_variance)
-        msg.twist.covariance = _diagonal_covariance(sample.twist_variance)
+        msg.pose.covariance = pose_covariance
+        msg.twist.covariance = twist_covariance
         self._publisher.publish(msg)
 
     def _stamp_ns(self, stamp: object) -> int:
@@ -274,8 +298,24 @@ class LegOdometryNode(Node):
         return bool(self.get_parameter(name).get_parameter_value().bool_value)
 
     def _apply_frames(self) -> None:
-        self._msg.header.frame_id = str(self.get_parameter("odom_frame").value)
-        self._msg.child_frame_id = self._robot.base_frame({})
+        """Set the frames, and serialize the probe message that output is patched into."""
+        msg = self._msg
+        msg.header.frame_id = str(self.get_parameter("odom_frame").value)
+        msg.child_frame_id = self._robot.base_frame({})
+        probe = Odometry(child_frame_id=msg.child_frame_id)
+        probe.header.frame_id = msg.header.frame_id
+        probe.header.stamp.sec, probe.header.stamp.nanosec = SerializedOdometry.PROBE_STAMP
+        values = SerializedOdometry.probe_values()
+        pose, twist = probe.pose.pose, probe.twist.twist
+        pose.position.x, pose.position.y, pose.position.z = values[0:3]
+        o = pose.orientation
+        o.x, o.y, o.z, o.w = values[3:7]
+        probe.pose.covariance = values[7:43]
+        twist.linear.x, twist.linear.y, twist.linear.z = values[43:46]
+        twist.angular.x, twist.angular.y, twist.angular.z = values[46:49]
+        probe.twist.covariance = values[49:85]
+        writer = SerializedOdometry(serialize_message(probe))
+        self._serialized = writer if writer.usable else None
 
     def _on_robot(self, config: RobotConfig) -> None:
         """Another robot was accepted: start over with it (the pose restarts at the origin)."""
@@ -284,14 +324,6 @@ class LegOdometryNode(Node):
 
     def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
         self._apply_frames()
-
-
-def _diagonal_covariance(variances: Sequence[float]) -> list[float]:
-    """A row-major 6x6 covariance with ``variances`` on its diagonal."""
-    matrix = [0.0] * 36
-    for index, variance in enumerate(variances):
-        matrix[7 * index] = variance
-    return matrix
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -92,19 +92,27 @@ def odometry_track(
         stats, samples, next_imu = BlockStats(), [], 0
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
-            for row in range(len(block.stamps_ns)):
-                while next_imu < len(imu) and imu[next_imu][0] <= block.bag_times_ns[row]:
+            usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
+                axis=2
+            )
+            rows = zip(
+                block.stamps_ns.tolist(),
+                block.bag_times_ns.tolist(),
+                block.positions.tolist(),
+                block.velocities.tolist(),
+                usable.tolist(),
+                block.angles.tolist(),
+                block.rates.tolist(),
+            )
+            for stamp, bag_time, positions, velocities, known, angles, rates in rows:
+                while next_imu < len(imu) and imu[next_imu][0] <= bag_time:
                     feed.add_imu(imu[next_imu][1], imu[next_imu][2])
                     next_imu += 1
-                samples.append(
-                    feed.step(
-                        int(block.stamps_ns[row]),
-                        block.positions[row],
-                        block.velocities[row],
-                        block.angles[row],
-                        block.rates[row],
-                    )
-                )
+                feet = [
+                    (position, velocity) if ok else None
+                    for position, velocity, ok in zip(positions, velocities, known)
+                ]
+                samples.append(feed.step(stamp, feet, angles, rates))
         summary = stats.summary(recording)
     finally:
         close_recording(recording)
@@ -133,8 +141,8 @@ def _track(
         angular=column("angular", 3),
         pose_variances=column("pose_variance", 6),
         twist_variances=column("twist_variance", 6),
-        stance=column("stance", 4, bool),
-        used=column("used", 4, bool),
+        stance=_mask([s.stance for s in samples]),
+        used=_mask([s.used for s in samples]),
         planar=bool(samples[-1].planar) if samples else True,
         base_frame=base_frame,
         imu_topic=imu_connection.topic if imu_connection else None,
@@ -146,6 +154,14 @@ def _track(
         truth_topic=truth_topic,
         summary=summary,
     )
+
+
+def _mask(legs: Sequence[Sequence[int]]) -> np.ndarray:
+    """(N, 4) bool: row n has True at the legs ``legs[n]``."""
+    mask = np.zeros((len(legs), 4), dtype=bool)
+    for row, chosen in enumerate(legs):
+        mask[row, list(chosen)] = True
+    return mask
 
 
 def _imu_connection(

@@ -1,4 +1,5 @@
-"""What each foot says about the base's velocity, rolling feet included (numpy, N samples at once).
+"""What each foot says about the base's velocity, rolling feet included (plain floats: this runs
+for every joint state, in the node at 1 kHz).
 
 A stance foot does not slip: the point of its sole that touches the ground is still. For a
 spherical foot of radius ``r`` (Unitree's feet; the A1's toe collision sphere has r = 0.02 m) that
@@ -10,10 +11,10 @@ coordinates, is zero::
 
 ``v`` [m/s] and ``w`` [rad/s] the base's linear and angular velocity, ``p`` [m] the foot frame,
 ``J q_dot`` its velocity relative to the base, ``w_leg`` [rad/s] the calf's angular velocity
-relative to the base (sum of joint axis x joint rate). So each stance foot gives
-``v = e - w x r`` with ``e = -(J q_dot + w_leg x c)`` and ``r = p + c``: :func:`foot_motion`
-returns ``e`` and ``r`` per foot, and the sinking ``depth = d . r`` [m] of each contact point that
-the kinematic stance test compares. Ignoring the rolling (r = 0) means taking the sphere's centre
+relative to the base (the sum of joint axis x joint rate). So each stance foot gives
+``v = e - w x r`` with ``e = -(J q_dot + w_leg x c)`` and ``r = p + c``: :class:`LegMotion`
+returns ``e``, ``r`` and how deep the contact point lies along gravity, ``depth = d . r`` [m],
+which the kinematic stance test compares. Ignoring the rolling (r = 0) takes the sphere's centre
 for still: it moves at ``|w_calf| r`` (~25 mm/s on a trotting A1).
 
 Frames: the base frame (the URDF root link), as in :mod:`a1_leg_fk.kinematics`.
@@ -21,17 +22,29 @@ Frames: the base frame (the URDF root link), as in :mod:`a1_leg_fk.kinematics`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from typing import NamedTuple
 
-import numpy as np
-
-from a1_leg_fk.kinematics import Quadruped
-from a1_leg_fk.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.kinematics import CompiledLeg, Quadruped
+from a1_leg_fk.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
 CENTRED_SPHERE_M = 1e-9
 """A collision sphere whose centre is this close [m] to its link's origin is the foot sphere."""
+
+Vector = tuple[float, float, float]
+
+
+class FootMotion(NamedTuple):
+    """One foot at one sample, base frame: ``e`` [m/s], the base velocity it gives when the base
+    does not turn; ``r`` [m], its contact point; ``depth`` [m], ``d . r``, how far below the base
+    the contact point lies along gravity.
+    """
+
+    e: Vector
+    r: Vector
+    depth: float
 
 
 def foot_radii(quadruped: Quadruped) -> tuple[float, ...]:
@@ -46,85 +59,96 @@ def foot_radii(quadruped: Quadruped) -> tuple[float, ...]:
     return tuple(radii)
 
 
-@dataclass(frozen=True)
-class FootMotion:
-    """Per sample and foot (N, 4, ...), base frame: ``e`` [m/s], the base velocity the foot gives
-    when the base does not turn; ``r`` [m], the contact point; ``depth`` [m], ``d . r``, how far
-    below the base the contact point is along gravity. NaN for feet without angles or rates.
+class _CalfRate:
+    """A leg's calf angular velocity relative to the base [rad/s, base frame].
+
+    With the stages of :mod:`a1_leg_fk.leg_stages` (``p -> o + M Rot(a, q) p``), joint i's axis
+    in the base frame is ``R_i M_i a_i``, with ``R_0 = I``, ``R_1 = M_0 Rot(a_0, q_0)`` and
+    ``R_2 = R_1 M_1 Rot(a_1, q_1)``; Rodrigues' ``M Rot(a, q) = C0 + cos q C1 + sin q C2`` leaves
+    products with constants: ``w = A0 dq0 + R_1 (B1 dq1 + (K0 + cos q1 K1 + sin q1 K2) dq2)``.
     """
 
-    e: np.ndarray
-    r: np.ndarray
-    depth: np.ndarray
+    def __init__(self, leg: CompiledLeg) -> None:
+        hip, pitch, knee = leg.stages
+        self.a0: Vector = _vector(hip.rotation @ hip.axis)
+        self.hip = tuple(tuple(float(x) for x in term.ravel()) for term in hip.rodrigues_terms)
+        self.b1: Vector = _vector(pitch.rotation @ pitch.axis)
+        knee_axis = knee.rotation @ knee.axis
+        self.k = tuple(_vector(term @ knee_axis) for term in pitch.rodrigues_terms)
 
 
-class CalfRates:
-    """The calf's angular velocity relative to the base [rad/s, base frame], every leg at once.
-
-    With the stages of :mod:`a1_leg_fk.leg_stages` (``p -> o + M Rot(a, q) p``), joint i's axis in
-    the base frame is ``R_i M_i a_i`` with ``R_0 = I``, ``R_1 = M_0 Rot(a_0, q_0)`` and ``R_2 =
-    R_1 M_1 Rot(a_1, q_1)``; Rodrigues' ``M Rot(a, q) = C0 + cos q C1 + sin q C2`` keeps it to
-    products with constants.
-    """
-
-    def __init__(self, quadruped: Quadruped) -> None:
-        stages = [leg.stages for leg in quadruped.legs]
-        self._axis0 = np.array([s[0].rotation @ s[0].axis for s in stages])  # (4, 3)
-        self._hip = np.array([s[0].rodrigues_terms for s in stages])  # (4, 3 terms, 3, 3)
-        self._axis1 = np.array([s[1].rotation @ s[1].axis for s in stages])  # M_1 a_1
-        knee_axis = [s[2].rotation @ s[2].axis for s in stages]  # M_2 a_2
-        self._knee = np.array(
-            [[term @ axis for term in s[1].rodrigues_terms] for s, axis in zip(stages, knee_axis)]
-        )  # (4, 3 terms, 3): M_1 Rot(a_1, q_1) M_2 a_2 = k0 + cos q_1 k1 + sin q_1 k2
-
-    def __call__(self, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-        """(N, 4, 3) for (N, 12) angles [rad] and rates [rad/s]."""
-        q = angles.reshape(-1, LEGS, JOINTS_PER_LEG)
-        dq = rates.reshape(-1, LEGS, JOINTS_PER_LEG)
-        cos, sin = np.cos(q), np.sin(q)
-        hip = self._hip
-        rotation = (
-            hip[:, 0] + cos[:, :, 0, None, None] * hip[:, 1] + sin[:, :, 0, None, None] * hip[:, 2]
-        )  # R_1 (N, 4, 3, 3)
-        knee = self._knee
-        knee_axis = knee[:, 0] + cos[:, :, 1, None] * knee[:, 1] + sin[:, :, 1, None] * knee[:, 2]
-        below_hip = self._axis1 * dq[:, :, 1, None] + knee_axis * dq[:, :, 2, None]
-        rate: np.ndarray = self._axis0 * dq[:, :, 0, None] + np.einsum(
-            "nlij,nlj->nli", rotation, below_hip
-        )
-        return rate
+def _vector(values: Sequence[float]) -> Vector:
+    return (float(values[0]), float(values[1]), float(values[2]))
 
 
 class LegMotion:
-    """:func:`foot_motion` for one robot: its calf rates and foot radii [m] (``radii`` overrides
-    the URDF's, one per leg or one for all).
+    """Per-foot motion for one robot (see the module docstring). ``radii`` [m] overrides the
+    URDF's foot radii: one per leg, or one for all.
     """
 
     def __init__(self, quadruped: Quadruped, radii: Sequence[float] | float | None = None) -> None:
-        self.calf_rates = CalfRates(quadruped)
+        self._calves = tuple(_CalfRate(leg) for leg in quadruped.legs)
         if radii is None:
             radii = foot_radii(quadruped)
         elif isinstance(radii, (int, float)):
             radii = (float(radii),) * LEGS
         self.radii = tuple(float(radius) for radius in radii)
-        self._radii = np.array(self.radii)[:, None]  # (4, 1)
 
-    def __call__(
+    def foot(
         self,
-        feet: np.ndarray,
-        foot_velocities: np.ndarray,
-        angles: np.ndarray,
-        rates: np.ndarray,
-        down: np.ndarray,
+        leg: int,
+        angles: Sequence[float],
+        rates: Sequence[float],
+        position: Sequence[float],
+        velocity: Sequence[float],
+        down: Vector,
     ) -> FootMotion:
-        """Per-foot motion for N samples: ``feet`` (N, 4, 3) [m] and ``foot_velocities`` (N, 4, 3)
-        [m/s] (``J q_dot``) in the base frame, ``angles`` (N, 12) [rad], ``rates`` (N, 12)
-        [rad/s], ``down`` (N, 3) unit gravity direction in the base frame.
+        """Leg ``leg``'s foot: its three ``angles`` [rad] and ``rates`` [rad/s], its ``position``
+        [m] and ``velocity`` [m/s] (``J q_dot``) in the base frame, gravity's unit direction
+        ``down`` in the base frame.
         """
-        offset = self._radii * down[:, None, :]  # c (N, 4, 3)
-        with np.errstate(invalid="ignore"):
-            calf = self.calf_rates(angles, rates)
-            e = -(foot_velocities + np.cross(calf, offset))
-            r = feet + offset
-            depth = np.einsum("nlj,nj->nl", r, down)
-        return FootMotion(e, r, depth)
+        ox, oy, oz = self.calf_rate(leg, angles, rates)
+        radius = self.radii[leg]
+        dx, dy, dz = down
+        cx, cy, cz = radius * dx, radius * dy, radius * dz
+        rx, ry, rz = position[0] + cx, position[1] + cy, position[2] + cz
+        return FootMotion(
+            (
+                -(velocity[0] + oy * cz - oz * cy),
+                -(velocity[1] + oz * cx - ox * cz),
+                -(velocity[2] + ox * cy - oy * cx),
+            ),
+            (rx, ry, rz),
+            rx * dx + ry * dy + rz * dz,
+        )
+
+    def calf_rate(self, leg: int, angles: Sequence[float], rates: Sequence[float]) -> Vector:
+        """The calf's angular velocity relative to the base [rad/s, base frame] for the leg's
+        three ``angles`` [rad] and ``rates`` [rad/s] (see :class:`_CalfRate`).
+        """
+        calf = self._calves[leg]
+        q0, q1 = angles[0], angles[1]
+        dq0, dq1, dq2 = rates[0], rates[1], rates[2]
+        c0, s0, c1, s1 = math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1)
+        k0, k1, k2 = calf.k
+        wx = k0[0] + c1 * k1[0] + s1 * k2[0]
+        wy = k0[1] + c1 * k1[1] + s1 * k2[1]
+        wz = k0[2] + c1 * k1[2] + s1 * k2[2]
+        b1 = calf.b1
+        ux, uy, uz = b1[0] * dq1 + wx * dq2, b1[1] * dq1 + wy * dq2, b1[2] * dq1 + wz * dq2
+        h0, h1, h2 = calf.hip
+        a0 = calf.a0
+        return (
+            a0[0] * dq0
+            + (h0[0] + c0 * h1[0] + s0 * h2[0]) * ux
+            + (h0[1] + c0 * h1[1] + s0 * h2[1]) * uy
+            + (h0[2] + c0 * h1[2] + s0 * h2[2]) * uz,
+            a0[1] * dq0
+            + (h0[3] + c0 * h1[3] + s0 * h2[3]) * ux
+            + (h0[4] + c0 * h1[4] + s0 * h2[4]) * uy
+            + (h0[5] + c0 * h1[5] + s0 * h2[5]) * uz,
+            a0[2] * dq0
+            + (h0[6] + c0 * h1[6] + s0 * h2[6]) * ux
+            + (h0[7] + c0 * h1[7] + s0 * h2[7]) * uy
+            + (h0[8] + c0 * h1[8] + s0 * h2[8]) * uz,
+        )

@@ -1,7 +1,7 @@
 """Leg odometry: the base's velocity from its stance feet, and its pose integrated from it.
 
 One sample at a time (:meth:`LegOdometry.step`), the same code for the live node and the bag
-tool. Per sample: the per-foot motion of :mod:`a1_leg_fk.estimation.leg_motion` (``v = e - w x
+tool, in plain floats (a joint state at 1 kHz leaves no time for numpy's per-call overhead). Per sample: the per-foot motion of :mod:`a1_leg_fk.estimation.leg_motion` (``v = e - w x
 r`` for each stance foot), an IMU reading (:class:`ImuReading`, optional), and optionally contact
 probabilities from elsewhere (the hook for a force-based contact estimate; without them, stance is
 kinematic, see :mod:`a1_leg_fk.estimation.stance`).
@@ -26,9 +26,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.stance import consistent_feet, kinematic_stance, stance_from_contacts
 from a1_leg_fk.legs import LEG_NAMES
 
@@ -74,8 +76,7 @@ class OdometrySettings:
                 raise ValueError(f"odometry setting {name} must be a finite number >= 0: {value}")
 
 
-@dataclass(frozen=True)
-class ImuReading:
+class ImuReading(NamedTuple):
     """One IMU sample: ``orientation`` (x, y, z, w) of the base in the world (None: the IMU has
     none, ``orientation_covariance[0] == -1``), ``gyro`` [rad/s] in the base frame, and the
     diagonals of their covariances (None where the message leaves them unknown, all zero).
@@ -87,12 +88,11 @@ class ImuReading:
     gyro_variance: tuple[float, float, float] | None = None
 
 
-@dataclass(frozen=True)
-class OdometrySample:
+class OdometrySample(NamedTuple):
     """The estimate at one stamp [ns]. Pose in odom: ``position`` [m], ``orientation`` (x, y, z,
     w); twist in the base frame: ``linear`` [m/s], ``angular`` [rad/s]; ``pose_variance`` (x, y,
     z, roll, pitch, yaw) and ``twist_variance`` (vx, vy, vz, wx, wy, wz), the covariances'
-    diagonals; ``stance``: the feet taken for standing, ``used``: those averaged.
+    diagonals; ``stance``: the legs taken for standing, ``used``: those averaged (slots 0..3).
     """
 
     stamp_ns: int
@@ -102,8 +102,8 @@ class OdometrySample:
     angular: tuple[float, float, float]
     pose_variance: tuple[float, ...]
     twist_variance: tuple[float, ...]
-    stance: tuple[bool, ...]
-    used: tuple[bool, ...]
+    stance: tuple[int, ...]
+    used: tuple[int, ...]
     planar: bool
 
 
@@ -120,34 +120,45 @@ class OdometryCounts:
     distance_m: float = 0.0
 
 
-def down_direction(orientation: Sequence[float] | None) -> np.ndarray:
+Vector = tuple[float, float, float]
+Quaternion = tuple[float, float, float, float]
+DOWN: Vector = (0.0, 0.0, -1.0)
+
+
+def down_direction(orientation: Quaternion | None) -> Vector:
     """Gravity's unit direction in the base frame for a base orientation (x, y, z, w) in a z-up
     world; ``(0, 0, -1)`` (a level base) without one.
     """
     if orientation is None:
-        return np.array([0.0, 0.0, -1.0])
+        return DOWN
     x, y, z, w = orientation
-    return -np.array([2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)])
+    return (2.0 * (w * y - x * z), -2.0 * (y * z + w * x), 2.0 * (x * x + y * y) - 1.0)
 
 
-def _rotate(q: Sequence[float], v: np.ndarray) -> np.ndarray:
+def rotate(q: Quaternion, v: Vector) -> Vector:
     """``v`` rotated by the unit quaternion ``q`` (x, y, z, w)."""
-    u = np.array(q[:3])
-    t = 2.0 * np.cross(u, v)
-    rotated: np.ndarray = v + q[3] * t + np.cross(u, t)
-    return rotated
+    x, y, z, w = q
+    tx, ty, tz = 2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])
+    return (
+        v[0] + w * tx + y * tz - z * ty,
+        v[1] + w * ty + z * tx - x * tz,
+        v[2] + w * tz + x * ty - y * tx,
+    )
 
 
-def _floored(values: Sequence[float]) -> tuple[float, float, float]:
-    a, b, c = (max(float(value), MIN_VARIANCE) for value in values)
-    return (a, b, c)
+def _cross(a: Vector, b: Vector) -> Vector:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def _unit(q: Sequence[float]) -> tuple[float, float, float, float] | None:
-    norm = math.sqrt(sum(value * value for value in q))
+def _unit(q: Sequence[float]) -> Quaternion | None:
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     if not (math.isfinite(norm) and norm > 0.5):  # not a rotation: a zero or broken quaternion
         return None
     return (q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm)
+
+
+def _floored(values: Sequence[float]) -> tuple[float, float, float]:
+    return (max(values[0], MIN_VARIANCE), max(values[1], MIN_VARIANCE), max(values[2], MIN_VARIANCE))
 
 
 class LegOdometry:
@@ -157,65 +168,62 @@ class LegOdometry:
         self.settings = settings or OdometrySettings()
         self.counts = OdometryCounts()
         self._stamp_ns: int | None = None
-        self._velocity: np.ndarray | None = None  # the last estimate [m/s], base frame
-        self._velocity_variance = np.full(3, UNKNOWN_RATE_VARIANCE)
-        self._world_velocity = np.zeros(3)  # the last step's, for the trapezoid rule
-        self._position = np.zeros(3)
+        self._velocity: Vector | None = None  # the last estimate [m/s], base frame
+        self._velocity_variance: Vector = (UNKNOWN_RATE_VARIANCE,) * 3
+        self._world_velocity: Vector = (0.0, 0.0, 0.0)  # the last step's, for the trapezoid rule
+        self._position = [0.0, 0.0, 0.0]
         self._yaw = 0.0  # planar mode
         self._turned_rad = 0.0  # planar mode: the heading change integrated, in absolute value
 
     def step(
         self,
         stamp_ns: int,
-        e: np.ndarray,
-        r: np.ndarray,
-        depth: np.ndarray,
+        feet: Sequence[FootMotion | None],
         imu: ImuReading | None = None,
-        contacts: np.ndarray | None = None,
+        contacts: Sequence[float] | None = None,
     ) -> OdometrySample:
-        """The estimate after one sample: per foot ``e`` (4, 3) [m/s], ``r`` (4, 3) [m] and
-        ``depth`` (4,) [m] (:class:`~a1_leg_fk.estimation.leg_motion.FootMotion` rows, NaN for
-        feet without them), ``imu`` (None: none), ``contacts`` (4,) probabilities in [0, 1] or
-        None (kinematic stance).
+        """The estimate after one sample: each leg's :class:`FootMotion` (None for a leg without
+        one), ``imu`` (None: none), ``contacts`` (4) probabilities in [0, 1] or None (kinematic
+        stance).
         """
         settings = self.settings
-        usable = np.isfinite(e).all(axis=1) & np.isfinite(r).all(axis=1)
         if contacts is None:
-            stance = kinematic_stance(depth, usable, settings.stance_band_m)
-            weights = stance.astype(float)
+            weights = kinematic_stance(
+                [None if foot is None else foot.depth for foot in feet], settings.stance_band_m
+            )
         else:
-            stance, weights = stance_from_contacts(contacts, usable)
-        gyro = None if imu is None else np.array(imu.gyro, dtype=float)
-        if gyro is not None and not np.isfinite(gyro).all():
-            gyro = None
-        omega, estimates = self._per_foot(e, r, stance, gyro)
+            weights = stance_from_contacts(contacts, [foot is not None for foot in feet])
+        gyro = None if imu is None else imu.gyro
+        stance = tuple(weights)
+        omega, estimates = self._per_foot(feet, stance, gyro)
         used = consistent_feet(
             estimates,
-            stance,
             self._velocity,
-            math.sqrt(float(self._velocity_variance.max())),
+            math.sqrt(max(self._velocity_variance)),
             settings.slip_threshold_mps,
         )
-        if gyro is None and used.sum() != stance.sum():  # w again, from the consistent feet
-            omega, estimates = self._per_foot(e, r, used, None)
-        for leg in np.flatnonzero(stance & ~used):
-            self.counts.slips[leg] += 1
+        if gyro is None and len(used) != len(stance):  # w again, from the consistent feet
+            omega, estimates = self._per_foot(feet, used, None)
+        for leg in stance:
+            if leg not in used:
+                self.counts.slips[leg] += 1
         dt = self._advance(stamp_ns)
         linear, linear_variance = self._linear(estimates, used, weights, dt)
-        angular_variance = self._angular_variance(imu, gyro, e, r, used, omega)
+        angular_variance = self._angular_variance(imu, feet, used, omega)
         orientation, orientation_variance, planar = self._orientation(imu, omega, dt)
         self._integrate(orientation, linear, dt, planar)
         self.counts.samples += 1
+        position = self._position
         return OdometrySample(
             stamp_ns,
-            (float(self._position[0]), float(self._position[1]), float(self._position[2])),
+            (position[0], position[1], position[2]),
             orientation,
-            (float(linear[0]), float(linear[1]), float(linear[2])),
-            (float(omega[0]), float(omega[1]), float(omega[2])),
+            linear,
+            omega,
             self._position_variance(planar) + orientation_variance,
-            tuple(float(v) for v in np.concatenate([linear_variance, angular_variance])),
-            tuple(bool(s) for s in stance),
-            tuple(bool(u) for u in used),
+            linear_variance + angular_variance,
+            stance,
+            tuple(used),
             planar,
         )
 
@@ -223,60 +231,75 @@ class LegOdometry:
 
     @staticmethod
     def _per_foot(
-        e: np.ndarray, r: np.ndarray, feet: np.ndarray, gyro: np.ndarray | None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(w [rad/s], per-foot estimates (4, 3) [m/s]) with the gyro's w, or without one the
-        least-squares w of :data:`MIN_RATE_FEET` or more ``feet``, else zero.
+        feet: Sequence[FootMotion | None], legs: Sequence[int], gyro: Vector | None
+    ) -> tuple[Vector, dict[int, Vector]]:
+        """(w [rad/s], leg -> estimate [m/s] for ``legs``) with the gyro's w, or without one the
+        least-squares w of :data:`MIN_RATE_FEET` or more ``legs``, else zero.
         """
-        omega = gyro if gyro is not None else np.zeros(3)
-        if gyro is None and feet.sum() >= MIN_RATE_FEET:
-            omega = _rate_from_feet(e[feet], r[feet])
-        return omega, e - np.cross(omega, r)
+        standing = [foot for leg in legs if (foot := feet[leg]) is not None]
+        omega = gyro if gyro is not None else (0.0, 0.0, 0.0)
+        if gyro is None and len(standing) >= MIN_RATE_FEET:
+            omega = _rate_from_feet(standing)
+        estimates = {}
+        for leg, foot in zip(legs, standing):
+            e, turn = foot.e, _cross(omega, foot.r)
+            estimates[leg] = (e[0] - turn[0], e[1] - turn[1], e[2] - turn[2])
+        return omega, estimates
 
     def _linear(
-        self, estimates: np.ndarray, used: np.ndarray, weights: np.ndarray, dt: float
-    ) -> tuple[np.ndarray, np.ndarray]:
+        self, estimates: dict[int, Vector], used: list[int], weights: dict[int, float], dt: float
+    ) -> tuple[Vector, Vector]:
         settings = self.settings
-        count = int(used.sum())
+        count = len(used)
         if count == 0:
             self.counts.no_stance += 1
-            previous = self._velocity if self._velocity is not None else np.zeros(3)
+            previous = self._velocity or (0.0, 0.0, 0.0)
             decay = math.exp(-dt / settings.decay_time_s) if settings.decay_time_s > 0 else 0.0
-            self._velocity = previous * decay
-            self._velocity_variance = self._velocity_variance + settings.flight_growth_mps**2 * dt
-            return self._velocity, np.maximum(self._velocity_variance, MIN_VARIANCE)
-        feet = estimates[used]
-        weight = weights[used]
-        velocity = (weight[:, None] * feet).sum(axis=0) / weight.sum()
-        spread = (
-            feet.var(axis=0, ddof=1)
-            if count > 1
-            else np.full(3, (settings.slip_threshold_mps / 2.0) ** 2)
+            self._velocity = (previous[0] * decay, previous[1] * decay, previous[2] * decay)
+            growth = settings.flight_growth_mps**2 * dt
+            v = self._velocity_variance
+            self._velocity_variance = (v[0] + growth, v[1] + growth, v[2] + growth)
+            return self._velocity, _floored(self._velocity_variance)
+        total = sum(weights[leg] for leg in used)
+        velocity = tuple(
+            sum(weights[leg] * estimates[leg][axis] for leg in used) / total for axis in range(3)
         )
-        variance = np.maximum((spread + settings.foot_noise_mps**2) / count, MIN_VARIANCE)
-        self._velocity, self._velocity_variance = velocity, variance
-        return velocity, variance
+        noise = settings.foot_noise_mps**2
+        if count > 1:
+            spread = [
+                sum((estimates[leg][axis] - velocity[axis]) ** 2 for leg in used) / (count - 1)
+                for axis in range(3)
+            ]
+        else:  # one foot: nothing to check it against
+            spread = [(settings.slip_threshold_mps / 2.0) ** 2] * 3
+        variance = _floored([(spread[axis] + noise) / count for axis in range(3)])
+        self._velocity = (velocity[0], velocity[1], velocity[2])
+        self._velocity_variance = variance
+        return self._velocity, variance
 
     def _angular_variance(
         self,
         imu: ImuReading | None,
-        gyro: np.ndarray | None,
-        e: np.ndarray,
-        r: np.ndarray,
-        used: np.ndarray,
-        omega: np.ndarray,
-    ) -> np.ndarray:
-        if gyro is not None and imu is not None:
+        feet: Sequence[FootMotion | None],
+        used: list[int],
+        omega: Vector,
+    ) -> Vector:
+        if imu is not None:
             given = imu.gyro_variance
             default = self.settings.gyro_noise_radps**2
-            return np.maximum(np.array(given if given is not None else (default,) * 3), MIN_VARIANCE)
-        if used.sum() < MIN_RATE_FEET:
-            return np.full(3, UNKNOWN_RATE_VARIANCE)
-        points = r[used]
-        lever = float(((points - points.mean(axis=0)) ** 2).sum())  # [m^2]
-        residual = e[used] - np.cross(omega, points)
-        noise = float(residual.var(axis=0).sum()) + self.settings.foot_noise_mps**2
-        return np.full(3, max(noise / max(lever, 1e-6), MIN_VARIANCE))
+            return _floored(given if given is not None else (default, default, default))
+        standing = [foot for leg in used if (foot := feet[leg]) is not None]
+        if len(standing) < MIN_RATE_FEET:
+            return (UNKNOWN_RATE_VARIANCE,) * 3
+        mean = [sum(foot.r[axis] for foot in standing) / len(standing) for axis in range(3)]
+        lever = sum((foot.r[axis] - mean[axis]) ** 2 for foot in standing for axis in range(3))
+        residual = 0.0
+        for foot in standing:
+            turn = _cross(omega, foot.r)
+            residual += sum((foot.e[axis] - turn[axis]) ** 2 for axis in range(3))
+        noise = residual / len(standing) + self.settings.foot_noise_mps**2
+        variance = max(noise / max(lever, 1e-6), MIN_VARIANCE)
+        return (variance, variance, variance)
 
     # --- pose ------------------------------------------------------------------------------
 
@@ -292,8 +315,8 @@ class LegOdometry:
         return dt
 
     def _orientation(
-        self, imu: ImuReading | None, omega: np.ndarray, dt: float
-    ) -> tuple[tuple[float, float, float, float], tuple[float, float, float], bool]:
+        self, imu: ImuReading | None, omega: Vector, dt: float
+    ) -> tuple[Quaternion, Vector, bool]:
         """The base's orientation in odom, the variances of its roll, pitch, yaw [rad^2], and
         whether it is planar (no usable IMU orientation: the yaw integrated from ``w_z``).
         """
@@ -301,10 +324,9 @@ class LegOdometry:
         orientation = None if imu is None or imu.orientation is None else _unit(imu.orientation)
         if orientation is not None and imu is not None:
             given = imu.orientation_variance
-            default = (settings.orientation_noise_rad**2,) * 3
-            variance = given if given is not None else default
-            return orientation, _floored(variance), False
-        turn = float(omega[2]) * dt
+            default = settings.orientation_noise_rad**2
+            return orientation, _floored(given or (default, default, default)), False
+        turn = omega[2] * dt
         self._yaw = math.remainder(self._yaw + turn, math.tau)
         self._turned_rad += abs(turn)
         heading = settings.drift_fraction * (self._turned_rad + self.counts.distance_m)
@@ -315,41 +337,38 @@ class LegOdometry:
             True,
         )
 
-    def _integrate(
-        self,
-        orientation: tuple[float, float, float, float],
-        linear: np.ndarray,
-        dt: float,
-        planar: bool,
-    ) -> None:
+    def _integrate(self, orientation: Quaternion, linear: Vector, dt: float, planar: bool) -> None:
         """Move the position by the trapezoid rule over the world-frame velocity [m/s] (planar:
         in the horizontal plane only).
         """
-        world = _rotate(orientation, linear)
+        world = rotate(orientation, linear)
         if planar:
-            world[2] = 0.0
+            world = (world[0], world[1], 0.0)
         if dt > 0.0:
-            moved = 0.5 * (self._world_velocity + world) * dt
-            self._position = self._position + moved
-            self.counts.distance_m += float(np.linalg.norm(moved))
+            last = self._world_velocity
+            moved = [0.5 * (last[axis] + world[axis]) * dt for axis in range(3)]
+            position = self._position
+            for axis in range(3):
+                position[axis] += moved[axis]
+            self.counts.distance_m += math.sqrt(moved[0] ** 2 + moved[1] ** 2 + moved[2] ** 2)
         self._world_velocity = world
 
-    def _position_variance(self, planar: bool) -> tuple[float, float, float]:
+    def _position_variance(self, planar: bool) -> Vector:
         drift = (self.settings.drift_fraction * self.counts.distance_m) ** 2
         horizontal = max(drift, MIN_VARIANCE)
         return (horizontal, horizontal, UNKNOWN_VARIANCE if planar else horizontal)
 
 
-def _rate_from_feet(e: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """The minimum-norm least-squares w [rad/s] of ``v - [r_i]x w = e_i`` over n >= 2 feet
-    (``e``, ``r`` (n, 3)); ``v`` is eliminated by centring on the feet's means.
+def _rate_from_feet(feet: Sequence[FootMotion]) -> Vector:
+    """The minimum-norm least-squares w [rad/s] of ``v + w x r_i = e_i`` over n >= 2 feet; ``v``
+    is eliminated by centring on the feet's means (numpy: only without a gyro).
     """
-    de = e - e.mean(axis=0)
-    dr = r - r.mean(axis=0)
-    # -[r]x w = w x r: stack the skew matrices of the centred points.
-    rows = np.zeros((len(dr), 3, 3))
+    e = np.array([foot.e for foot in feet])
+    r = np.array([foot.r for foot in feet])
+    de, dr = e - e.mean(axis=0), r - r.mean(axis=0)
+    rows = np.zeros((len(dr), 3, 3))  # w x dr = -[dr]x w
     rows[:, 0, 1], rows[:, 0, 2] = dr[:, 2], -dr[:, 1]
     rows[:, 1, 0], rows[:, 1, 2] = -dr[:, 2], dr[:, 0]
     rows[:, 2, 0], rows[:, 2, 1] = dr[:, 1], -dr[:, 0]
-    solution, *_ = np.linalg.lstsq(rows.reshape(-1, 3), de.reshape(-1), rcond=None)
-    return np.asarray(solution)
+    solution = np.linalg.lstsq(rows.reshape(-1, 3), de.reshape(-1), rcond=None)[0]
+    return (float(solution[0]), float(solution[1]), float(solution[2]))

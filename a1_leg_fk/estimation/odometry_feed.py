@@ -2,25 +2,29 @@
 tool (:class:`OdometryFeed`). Per joint state: the IMU sample that goes with it
 (:class:`~a1_leg_fk.estimation.imu.ImuBuffer`), gravity's direction from its orientation, each
 foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`), then one
-:meth:`~a1_leg_fk.estimation.odometry.LegOdometry.step`.
+:meth:`~a1_leg_fk.estimation.odometry.LegOdometry.step`. Plain floats throughout.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
-import numpy as np
-
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
-from a1_leg_fk.estimation.leg_motion import LegMotion
+from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
     ImuReading,
     LegOdometry,
     OdometrySample,
     OdometrySettings,
+    Vector,
     down_direction,
 )
 from a1_leg_fk.kinematics import Quadruped
+from a1_leg_fk.legs import JOINTS_PER_LEG
+
+Foot = tuple[Sequence[float], Sequence[float]]
+"""A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
 
 
 class OdometryFeed:
@@ -50,21 +54,29 @@ class OdometryFeed:
     def step(
         self,
         stamp_ns: int,
-        feet: np.ndarray,
-        foot_velocities: np.ndarray,
-        angles: np.ndarray,
-        rates: np.ndarray,
-        contacts: np.ndarray | None = None,
+        feet: Sequence[Foot | None],
+        angles: Sequence[float],
+        rates: Sequence[float],
+        contacts: Sequence[float] | None = None,
     ) -> OdometrySample:
-        """The estimate after one joint state: ``feet`` (4, 3) [m] and ``foot_velocities`` (4, 3)
-        [m/s] (``J q_dot``; NaN where unknown) in the base frame, ``angles`` (12) [rad], ``rates``
-        (12) [rad/s], ``contacts`` (4) probabilities or None (kinematic stance).
+        """The estimate after one joint state: per leg its foot (None: not in this joint state, or
+        without velocity), the 12 ``angles`` [rad] and ``rates`` [rad/s], ``contacts`` (4)
+        probabilities or None (kinematic stance).
         """
         imu = self.imu.at(stamp_ns)
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
-        motion = self.motion(
-            feet[np.newaxis], foot_velocities[np.newaxis], angles[np.newaxis], rates[np.newaxis],
-            down[np.newaxis],
-        )
-        return self.odometry.step(stamp_ns, motion.e[0], motion.r[0], motion.depth[0], imu, contacts)
+        motions = [
+            None if foot is None else self._motion(leg, foot, angles, rates, down)
+            for leg, foot in enumerate(feet)
+        ]
+        return self.odometry.step(stamp_ns, motions, imu, contacts)
+
+    def _motion(
+        self, leg: int, foot: Foot, angles: Sequence[float], rates: Sequence[float], down: Vector
+    ) -> FootMotion | None:
+        first = leg * JOINTS_PER_LEG
+        last = first + JOINTS_PER_LEG
+        motion = self.motion.foot(leg, angles[first:last], rates[first:last], foot[0], foot[1], down)
+        e, depth = motion.e, motion.depth
+        return motion if math.isfinite(e[0] + e[1] + e[2] + depth) else None

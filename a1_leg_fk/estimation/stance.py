@@ -1,63 +1,85 @@
-"""Which feet stand, and which of those to believe: kinematic stance and slip rejection.
+"""Which feet stand, and which of those to believe: kinematic stance and slip rejection (plain
+floats, per sample).
 
-Stance comes from elsewhere when it can (a contact mask or probabilities, e.g. the force estimate
-from joint efforts): :func:`stance_from_contacts`. Otherwise :func:`kinematic_stance`: the feet
-whose contact points are the lowest along gravity, within a band [m] of the lowest one. Either
-way, :func:`consistent_feet` then drops a foot whose base-velocity estimate [m/s] is far from the
-others' (a slipping foot, a foot taken for standing that is not).
+Stance comes from elsewhere when it can (contact probabilities, e.g. the force estimate from joint
+efforts): :func:`stance_from_contacts`. Otherwise :func:`kinematic_stance`: the feet whose contact
+points are the lowest along gravity, within a band [m] of the lowest one. Either way,
+:func:`consistent_feet` then drops a foot whose base-velocity estimate [m/s] is far from the
+others' (a slipping foot, or a foot taken for standing that is not).
 """
 
 from __future__ import annotations
 
-import numpy as np
+import math
+from collections.abc import Mapping, Sequence
 
 CONTACT_PROBABILITY = 0.5
 """A foot with a contact probability at or above this stands."""
 
+Vector = tuple[float, float, float]
 
-def stance_from_contacts(contacts: np.ndarray, usable: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(stance (4,) bool, weights (4,)) from contact probabilities (4,) in [0, 1] (a bool mask
-    works too); only ``usable`` feet (finite estimates) stand. A foot's weight is its probability.
+
+def stance_from_contacts(
+    contacts: Sequence[float], usable: Sequence[bool]
+) -> dict[int, float]:
+    """Leg -> weight of the standing feet: the ``usable`` ones whose contact probability (in [0, 1];
+    a bool works too) is at least :data:`CONTACT_PROBABILITY`; the weight is the probability.
     """
-    probability = np.clip(np.nan_to_num(np.asarray(contacts, dtype=float)), 0.0, 1.0)
-    stance = usable & (probability >= CONTACT_PROBABILITY)
-    return stance, np.where(stance, probability, 0.0)
+    weights = {}
+    for leg, (probability, ok) in enumerate(zip(contacts, usable)):
+        p = min(float(probability), 1.0)
+        if ok and p >= CONTACT_PROBABILITY:  # NaN is not
+            weights[leg] = p
+    return weights
 
 
-def kinematic_stance(depth: np.ndarray, usable: np.ndarray, band_m: float) -> np.ndarray:
-    """(4,) bool: the usable feet whose contact point is within ``band_m`` [m] of the deepest
-    one's along gravity (``depth`` (4,) [m], larger = lower).
+def kinematic_stance(depths: Sequence[float | None], band_m: float) -> dict[int, float]:
+    """Leg -> weight 1 of the feet whose contact point lies within ``band_m`` [m] of the deepest
+    one's along gravity (``depths`` [m], larger = lower; None for a foot without one).
     """
-    if not usable.any():
-        return usable.copy()
-    deepest = depth[usable].max()
-    with np.errstate(invalid="ignore"):
-        return usable & (depth >= deepest - band_m)
+    known = [depth for depth in depths if depth is not None]
+    if not known:
+        return {}
+    floor = max(known) - band_m
+    return {leg: 1.0 for leg, depth in enumerate(depths) if depth is not None and depth >= floor}
+
+
+def _distance(a: Vector, b: Vector) -> float:
+    return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
+
+
+def _median(values: list[float]) -> float:
+    values.sort()
+    middle = len(values) // 2
+    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
 
 
 def consistent_feet(
-    estimates: np.ndarray,
-    stance: np.ndarray,
-    previous: np.ndarray | None,
+    estimates: Mapping[int, Vector],
+    previous: Vector | None,
     previous_sigma: float,
     threshold: float,
-) -> np.ndarray:
-    """(4,) bool: the stance feet whose estimate (``estimates`` (4, 3) [m/s]) lies within the gate
-    of the reference. With three or more stance feet the reference is their per-axis median and
-    the gate ``threshold`` [m/s]; two feet within ``threshold`` of each other vouch for each other.
+) -> list[int]:
+    """The stance feet (``estimates``: leg -> its base-velocity estimate [m/s]) within the gate of
+    the reference. With three or more feet the reference is their per-axis median and the gate
+    ``threshold`` [m/s]; two feet within ``threshold`` of each other vouch for each other.
     Otherwise the reference is ``previous`` (the last estimate) and the gate ``threshold + 3
-    previous_sigma`` (its standard deviation [m/s], which grows while no foot stands, so that feet
-    are believed again); with no previous estimate, every stance foot is kept.
+    previous_sigma`` (its standard deviation [m/s], which grows while no foot stands, so that
+    feet are believed again); with no previous estimate, every stance foot is kept.
     """
-    feet = np.flatnonzero(stance)
-    if feet.size >= 3:
-        reference, gate = np.median(estimates[feet], axis=0), threshold
-    elif feet.size == 2 and np.linalg.norm(estimates[feet[0]] - estimates[feet[1]]) <= threshold:
-        return stance.copy()
-    elif previous is not None and feet.size:
+    legs = list(estimates)
+    if len(legs) >= 3:
+        values = list(estimates.values())
+        reference: Vector = (
+            _median([v[0] for v in values]),
+            _median([v[1] for v in values]),
+            _median([v[2] for v in values]),
+        )
+        gate = threshold
+    elif len(legs) == 2 and _distance(estimates[legs[0]], estimates[legs[1]]) <= threshold:
+        return legs
+    elif previous is not None and legs:
         reference, gate = previous, threshold + 3.0 * previous_sigma
     else:
-        return stance.copy()
-    kept = np.zeros_like(stance)
-    kept[feet[np.linalg.norm(estimates[feet] - reference, axis=1) <= gate]] = True
-    return kept
+        return legs
+    return [leg for leg in legs if _distance(estimates[leg], reference) <= gate]

@@ -51,7 +51,7 @@ MIN_VARIANCE = 1e-9
 class OdometrySettings:
     """The estimate's tuning; units in the names."""
 
-    slip_threshold_mps: float = 0.15
+    slip_threshold_mps: float = 0.08
     """A stance foot whose estimate is further than this from the others' is dropped."""
     stance_band_m: float = 0.02
     """Kinematic stance: contact points within this of the lowest one's along gravity."""

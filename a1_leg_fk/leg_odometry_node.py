@@ -197,12 +197,6 @@ class LegOdometryNode(Node):
         for foot in feet:
             if foot.velocity is not None:
                 legs[foot.leg_slot] = (foot.position, foot.velocity)
-        if not any(legs):
-            self._without_velocities += 1
-            self._warnings.warn(
-                "no_velocities", "joint_states without joint velocities: no odometry from them"
-            )
-            return
         sample = self._feed.step(
             self._stamp_ns(msg.header.stamp),
             legs,
@@ -210,6 +204,12 @@ class LegOdometryNode(Node):
             tracker.rates,
             self._contact_probabilities(msg),
         )
+        if sample is None:
+            self._without_velocities += 1
+            self._warnings.warn(
+                "no_velocities", "joint_states without joint velocities: no odometry from them"
+            )
+            return
         self._publish(sample)
 
     def _contact_probabilities(self, msg: JointState) -> Sequence[float] | None:

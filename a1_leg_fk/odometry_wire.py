@@ -56,6 +56,10 @@ class SerializedOdometry:
             and self._offset + self.VALUES.size == len(probe)
         )
         self._buffer = bytearray(probe)
+        if self.usable:  # zero the padding before the values (a serializer may leave junk)
+            child = (12 + _LENGTH.unpack_from(probe, 12)[0] + 3) & -4  # relative to the data
+            text_end = 4 + child + 4 + _LENGTH.unpack_from(probe, 4 + child)[0]
+            self._buffer[text_end : self._offset] = bytes(self._offset - text_end)
 
     PROBE_STAMP = (7, 9)
 

@@ -40,7 +40,8 @@ IMU_TYPE = "sensor_msgs/msg/Imu"
 
 @dataclass(frozen=True)
 class OdometryTrack:
-    """The odometry over a recording, one row per accepted JointState (N): ``stamps_ns`` (N,);
+    """The odometry over a recording, one row per accepted JointState with joint velocities (N):
+    ``stamps_ns`` (N,);
     pose in odom: ``positions`` (N, 3) [m], ``orientations`` (N, 4) x, y, z, w; twist in the base
     frame: ``linear`` (N, 3) [m/s], ``angular`` (N, 3) [rad/s]; covariance diagonals
     ``pose_variances`` and ``twist_variances`` (N, 6); ``stance`` and ``used`` (N, 4) bool.
@@ -112,7 +113,9 @@ def odometry_track(
                     (position, velocity) if ok else None
                     for position, velocity, ok in zip(positions, velocities, known)
                 ]
-                samples.append(feed.step(stamp, feet, angles, rates))
+                sample = feed.step(stamp, feet, angles, rates)
+                if sample is not None:
+                    samples.append(sample)
         summary = stats.summary(recording)
     finally:
         close_recording(recording)

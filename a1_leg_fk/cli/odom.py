@@ -56,7 +56,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the feet's rolling radius [m] (default: the foot links' collision spheres)",
     )
     odom.add_argument(
-        "--csv", metavar="FILE", help=f"one row per joint state: {CSV_HEADER.strip()}"
+        "--csv", metavar="FILE", help=f"one row per joint state with velocities: {CSV_HEADER.strip()}"
     )
     odom.add_argument(
         "--plot", metavar="FILE.png", help="the path from above and the velocities over time"

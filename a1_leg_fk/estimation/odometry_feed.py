@@ -58,11 +58,14 @@ class OdometryFeed:
         angles: Sequence[float],
         rates: Sequence[float],
         contacts: Sequence[float] | None = None,
-    ) -> OdometrySample:
+    ) -> OdometrySample | None:
         """The estimate after one joint state: per leg its foot (None: not in this joint state, or
         without velocity), the 12 ``angles`` [rad] and ``rates`` [rad/s], ``contacts`` (4)
-        probabilities or None (kinematic stance).
+        probabilities or None (kinematic stance). None, and nothing changes, when no leg has a
+        foot (a joint state without velocities says nothing about motion).
         """
+        if all(foot is None for foot in feet):
+            return None
         imu = self.imu.at(stamp_ns)
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)

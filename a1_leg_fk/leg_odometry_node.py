@@ -137,7 +137,8 @@ class LegOdometryNode(Node):
         self.get_logger().info(
             f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
             + (f" and {self._imu_topic}" if self._bool("use_imu") else " (legs alone)")
-            + f" to {self.resolve_topic_name('leg_odometry')} in frame '{self._msg.header.frame_id}'"
+            + f" to {self.resolve_topic_name('leg_odometry')}"
+            + f" in frame '{self._msg.header.frame_id}'"
         )
 
     def _start(self, config: RobotConfig) -> None:
@@ -188,7 +189,9 @@ class LegOdometryNode(Node):
         feet = tracker.update(msg.name, msg.position, msg.velocity)
         if tracker.new_unknown_names:
             names = tracker.take_new_unknown_names()
-            self.get_logger().warn(f"ignoring joint names not in the model (warned once per name): {names[:20]}")
+            self.get_logger().warn(
+                f"ignoring joint names not in the model (warned once per name): {names[:20]}"
+            )
         if tracker.last_problem:
             self._report_problem()
         if not feet:
@@ -256,14 +259,19 @@ class LegOdometryNode(Node):
         tracker = self._tracker
         outcome = tracker.last_outcome
         kind = outcome if outcome in REJECTIONS else "non_finite_position"
-        self._warnings.warn(kind, f"joint_states: {outcome.replace('_', ' ')}: {tracker.last_problem}")
+        self._warnings.warn(
+            kind, f"joint_states: {outcome.replace('_', ' ')}: {tracker.last_problem}"
+        )
 
     # --- diagnostics and parameters -----------------------------------------------------------
 
     def _publish_diagnostics(self) -> None:
         received, rejected = self._period.take(self._tracker.counts)
         counts = self._feed.odometry.counts
-        no_stance, self._no_stance_before = counts.no_stance - self._no_stance_before, counts.no_stance
+        no_stance, self._no_stance_before = (
+            counts.no_stance - self._no_stance_before,
+            counts.no_stance,
+        )
         if self._diagnostics_pub.get_subscription_count() == 0:
             return
         robot = self._robot

@@ -30,7 +30,9 @@ def plot_odometry(track: OdometryTrack, path: str | Path) -> Path:
         above.legend(loc="best")
         above.grid(alpha=0.3)
         truth_velocity = (
-            truth_body_velocities(track.truth, track.stamps_ns) if track.truth is not None else None
+            truth_body_velocities(track.truth, track.stamps_ns)
+            if track.truth is not None
+            else None
         )
         for axis, name in enumerate(("vx", "vy", "vz")):
             speeds.plot(seconds, track.linear[:, axis], color=f"C{axis}", lw=0.8, label=name)
@@ -40,7 +42,8 @@ def plot_odometry(track: OdometryTrack, path: str | Path) -> Path:
         speeds.set(
             xlabel="time [s]",
             ylabel="[m/s]",
-            title="base velocity, base frame" + (" (dashed: truth)" if truth_velocity is not None else ""),
+            title="base velocity, base frame"
+            + (" (dashed: truth)" if truth_velocity is not None else ""),
         )
         speeds.legend(loc="best")
         speeds.grid(alpha=0.3)
@@ -68,5 +71,6 @@ def _aligned_truth(track: OdometryTrack) -> np.ndarray | None:
     )
     c, s = math.cos(turn), math.sin(turn)
     moved = positions[rows] - positions[first]
-    aligned = np.stack([c * moved[:, 0] - s * moved[:, 1], s * moved[:, 0] + c * moved[:, 1]], 1)
-    return aligned + track.positions[first, :2]
+    turned = np.stack([c * moved[:, 0] - s * moved[:, 1], s * moved[:, 0] + c * moved[:, 1]], 1)
+    aligned: np.ndarray = turned + track.positions[first, :2]
+    return aligned

@@ -74,18 +74,17 @@ def odometry_track(
     *,
     imu_topic: str | None = None,
     use_imu: bool = True,
-    truth: str | None = None,
     radius_m: float | None = None,
     settings: OdometrySettings | None = None,
     progress: bool = False,
     **choices: Unpack[RecordingChoices],
 ) -> OdometryTrack:
     """The leg odometry of a bag. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
-    one, if any; ``use_imu`` false: none); ``truth``: a base-pose topic (as ``--base-pose``) to
-    compare with; ``radius_m`` overrides the feet's URDF radius; ``choices`` as
-    :func:`~a1_leg_fk.recording.open_recording`'s. :class:`LegFkError` for bad input.
+    one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
+    ``choices`` as :func:`~a1_leg_fk.recording.open_recording`'s, whose ``base_pose`` is the truth
+    to compare with. :class:`LegFkError` for bad input.
     """
-    recording = open_recording(path, base_pose=truth, **choices)
+    recording = open_recording(path, **choices)
     try:
         imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
         imu = _imu_samples(recording.reader, imu_connection) if imu_connection else []
@@ -119,8 +118,16 @@ def odometry_track(
         summary = stats.summary(recording)
     finally:
         close_recording(recording)
-    return _track(samples, recording.quadruped.base_frame, imu_connection, len(imu), feed, truth,
-                  recording.base_pose, summary)
+    return _track(
+        samples,
+        recording.quadruped.base_frame,
+        imu_connection,
+        len(imu),
+        feed,
+        recording.base_pose_topic,
+        recording.base_pose,
+        summary,
+    )
 
 
 def _track(

@@ -197,9 +197,13 @@ def _collision_sphere(link: ElementTree.Element, where: str) -> Sphere | None:
         try:
             radius = float(text)
         except ValueError:
-            raise LegFkError(f"{where}: collision sphere radius='{text}' is not a number") from None
+            raise LegFkError(
+                f"{where}: collision sphere radius='{text}' is not a number"
+            ) from None
         if not (math.isfinite(radius) and radius >= 0.0):
-            raise LegFkError(f"{where}: collision sphere radius={text} is not a finite number >= 0")
+            raise LegFkError(
+                f"{where}: collision sphere radius={text} is not a finite number >= 0"
+            )
         return Sphere(radius, _vector(collision.find("origin"), "xyz", (0.0, 0.0, 0.0), where))
     return None
 

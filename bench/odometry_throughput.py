@@ -52,11 +52,16 @@ def generator(rate: float, duration: float, answer_topic: str, answer_type: str)
     joint_pub = node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
     imu_pub = node.create_publisher(Imu, "imu", QoSProfile(depth=100))
     answers = [0]
-    kind = Odometry if answer_type == "odometry" else __import__(
-        "geometry_msgs.msg", fromlist=["PointStamped"]
-    ).PointStamped
+    kind = (
+        Odometry
+        if answer_type == "odometry"
+        else __import__("geometry_msgs.msg", fromlist=["PointStamped"]).PointStamped
+    )
     node.create_subscription(
-        kind, answer_topic, lambda _msg: answers.__setitem__(0, answers[0] + 1), QoSProfile(depth=1000)
+        kind,
+        answer_topic,
+        lambda _msg: answers.__setitem__(0, answers[0] + 1),
+        QoSProfile(depth=1000),
     )
     deadline = time.monotonic() + 30.0
     while joint_pub.get_subscription_count() == 0 and time.monotonic() < deadline:
@@ -94,11 +99,27 @@ def generator(rate: float, duration: float, answer_topic: str, answer_type: str)
 
 def measure(name: str, script: str, module: str, args: argparse.Namespace, logs: Path) -> dict:
     """One node under the generator's load: its CPU [% of a core] and answers over the window."""
-    env = {**os.environ, "ROS_DOMAIN_ID": str(args.domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env = {
+        **os.environ,
+        "ROS_DOMAIN_ID": str(args.domain),
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+    }
     node = common.Child(name, common.child_command(script, module), logs / f"{name}.log", env=env)
     answer = ("leg_odometry", "odometry") if "odometry" in name else ("foot_positions/FR", "point")
-    command = [sys.executable, __file__, "--role", "generator", "--rate", str(args.rate),
-               "--duration", str(args.duration), "--answer-topic", answer[0], "--answer-type", answer[1]]
+    command = [
+        sys.executable,
+        __file__,
+        "--role",
+        "generator",
+        "--rate",
+        str(args.rate),
+        "--duration",
+        str(args.duration),
+        "--answer-topic",
+        answer[0],
+        "--answer-type",
+        answer[1],
+    ]
     load = common.Child("generator", command, logs / "generator.log", env=env, pipes=True)
     result: dict = {"node": name}
     try:
@@ -107,7 +128,11 @@ def measure(name: str, script: str, module: str, args: argparse.Namespace, logs:
             if event["event"] == "start":
                 cpu, started = shared.cpu_seconds(node.process.pid), time.monotonic()
             elif event["event"] == "end":
-                result["cpu_pct"] = 100 * (shared.cpu_seconds(node.process.pid) - cpu) / (time.monotonic() - started)
+                result["cpu_pct"] = (
+                    100
+                    * (shared.cpu_seconds(node.process.pid) - cpu)
+                    / (time.monotonic() - started)
+                )
                 result["sent"] = event["sent"]
             elif event["event"] == "answers":
                 result["answers"] = event["answers"]
@@ -121,8 +146,12 @@ def measure(name: str, script: str, module: str, args: argparse.Namespace, logs:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--role", choices=("generator",))
-    parser.add_argument("--rate", type=float, default=1000.0, help="Hz of each stream (default 1000)")
-    parser.add_argument("--duration", type=float, default=8.0, help="measured seconds per run (default 8)")
+    parser.add_argument(
+        "--rate", type=float, default=1000.0, help="Hz of each stream (default 1000)"
+    )
+    parser.add_argument(
+        "--duration", type=float, default=8.0, help="measured seconds per run (default 8)"
+    )
     parser.add_argument("--domain", type=int, default=1 + os.getpid() % 100)
     parser.add_argument("--answer-topic", default="")
     parser.add_argument("--answer-type", default="")
@@ -143,12 +172,20 @@ def main() -> int:
     print(f"{args.rate:g} Hz joint_states + {args.rate:g} Hz imu, {args.duration:g} s per run:")
     for name, runs in results.items():
         for r in runs:
-            print(f"  {name:<18} CPU {r.get('cpu_pct', float('nan')):6.1f} %  answered "
-                  f"{r.get('answers', 0)} of {r.get('sent', 0)}")
-    mean = {name: sum(r.get("cpu_pct", float("nan")) for r in runs) / len(runs) for name, runs in results.items()}
+            print(
+                f"  {name:<18} CPU {r.get('cpu_pct', float('nan')):6.1f} %  answered "
+                f"{r.get('answers', 0)} of {r.get('sent', 0)}"
+            )
+    mean = {
+        name: sum(r.get("cpu_pct", float("nan")) for r in runs) / len(runs)
+        for name, runs in results.items()
+    }
     ratio = mean["leg_odometry_node"] / mean["foot_fk_node"]
     verdict = "met" if ratio <= GOAL_RATIO else "NOT met"
-    print(f"ratio leg_odometry_node / foot_fk_node CPU: {ratio:.2f}x (goal <= {GOAL_RATIO}x: {verdict})")
+    print(
+        f"ratio leg_odometry_node / foot_fk_node CPU: {ratio:.2f}x "
+        f"(goal <= {GOAL_RATIO}x: {verdict})"
+    )
     return 0
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from bag_factory import T, T0, BagSpec, JointStateMsg, header, pose, write_bag
+from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
 from pybullet_sim import SimRun
 
 IMU_TOPIC, TRUTH_TOPIC, JOINT_TOPIC = "/imu", "/truth", "/joint_states"

@@ -1,4 +1,4 @@
-"""A free-base quadruped in PyBullet, for tests: what a robot's sensors would record, and the truth.
+"""A free-base quadruped in PyBullet, for tests: what a robot's sensors record, and the truth.
 
 :func:`simulate` drops a URDF (default: pybullet_data's A1) onto a plane, drives its joints with
 PyBullet's position control towards ``targets(t)`` and records, every step: joint angles [rad],
@@ -179,7 +179,9 @@ def _run(
     pybullet.setTimeStep(step_s, **pb)
     plane = pybullet.loadURDF(f"{pybullet_data.getDataPath()}/plane.urdf", **pb)
     body = pybullet.loadURDF(urdf, [0, 0, spawn_height_m], **pb)
-    infos = [pybullet.getJointInfo(body, j, **pb) for j in range(pybullet.getNumJoints(body, **pb))]
+    infos = [
+        pybullet.getJointInfo(body, j, **pb) for j in range(pybullet.getNumJoints(body, **pb))
+    ]
     joint_index = {info[1].decode(): info[0] for info in infos}
     link_index = {info[12].decode(): info[0] for info in infos}
     joints = [joint_index[name] for name in joint_names]
@@ -190,7 +192,7 @@ def _run(
             pybullet.changeDynamics(body, link, lateralFriction=lateral_friction, **pb)
     for joint, angle in zip(joints, targets(0.0)):
         pybullet.resetJointState(body, joint, angle, **pb)
-    # PyBullet's base pose is the root link's inertial (CoM) frame: root = base * inverse(inertial).
+    # PyBullet's base pose is the root link's inertial (CoM) frame: root = base * inertial^-1.
     inertial_position, inertial_orientation = pybullet.getDynamicsInfo(body, -1, **pb)[3:5]
     to_root = pybullet.invertTransform(inertial_position, inertial_orientation)
     gain, damping, torque = control

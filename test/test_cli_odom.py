@@ -36,7 +36,9 @@ def bag(run, tmp_path_factory):
 
 def test_csv_plot_and_truth(run, bag, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     out, png = tmp_path / "odom.csv", tmp_path / "odom.png"
-    code = cli.main(["odom", str(bag), "--truth", TRUTH_TOPIC, "--csv", str(out), "--plot", str(png)])
+    code = cli.main(
+        ["odom", str(bag), "--truth", TRUTH_TOPIC, "--csv", str(out), "--plot", str(png)]
+    )
     printed = capsys.readouterr().out
     print(printed)
     assert code == 0
@@ -55,7 +57,10 @@ def test_csv_plot_and_truth(run, bag, tmp_path: Path, capsys: pytest.CaptureFixt
     error = np.linalg.norm(values[-1, 1:4] - moved)
     distance = np.linalg.norm(np.diff(run.base_positions, axis=0), axis=1).sum()
     line = next(line for line in printed.splitlines() if line.startswith("truth:"))
-    assert f"final position error {error:.3f} m ({100 * error / distance:.2f} % of {distance:.3f} m)" in line
+    assert (
+        f"final position error {error:.3f} m ({100 * error / distance:.2f} % of {distance:.3f} m)"
+        in line
+    )
     assert png.stat().st_size > 10_000
     assert "imu:       /imu (2000 samples; 2000 of 2000 rows had one)" in printed
 
@@ -81,6 +86,7 @@ def test_without_the_imu_the_pose_is_planar(bag, tmp_path: Path, capsys) -> None
 )
 def test_bad_input_is_one_line_and_exit_2(bag, tmp_path, capsys, arguments, culprit) -> None:
     out = tmp_path / "bad.csv"
+    code: object
     try:
         code = cli.main(["odom", str(bag), "--csv", str(out), *arguments])
     except SystemExit as exit_:  # argparse's own refusal
@@ -100,13 +106,19 @@ def test_an_existing_output_is_kept_without_force(bag, tmp_path, capsys) -> None
     assert out.read_text() == "mine"
 
 
-def test_a_bag_without_velocities_gives_no_rows(tmp_path, capsys) -> None:
+def test_a_bag_without_velocities_gives_no_rows(tmp_path) -> None:
     from bag_factory import JointStateMsg, write_bag
 
     spec = BagSpec()
-    names = [f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper", "lower")]
+    names = [
+        f"{leg}_{part}_joint"
+        for leg in ("FR", "FL", "RR", "RL")
+        for part in ("hip", "upper", "lower")
+    ]
     for index in range(5):
-        spec.add_joint_state("/joint_states", T0 + index, JointStateMsg(T0 + index, names, [0.0, 0.8, -1.5] * 4))
+        spec.add_joint_state(
+            "/joint_states", T0 + index, JointStateMsg(T0 + index, names, [0.0, 0.8, -1.5] * 4)
+        )
     out = tmp_path / "none.csv"
     assert cli.main(["odom", str(write_bag(tmp_path / "b", spec)), "--csv", str(out)]) == 0
     assert out.read_text() == CSV_HEADER
@@ -125,7 +137,9 @@ def test_imu_fields_read_rclpys_bytes() -> None:
         msg.orientation_covariance = [float(i) for i in range(9)]
         msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 1.5, -2.5, 3.5
         msg.angular_velocity_covariance = [0.1 * i for i in range(9)]
-        stamp, orientation, orientation_cov, gyro, gyro_cov = imu_fields(serialize_message(msg))
+        fields = imu_fields(serialize_message(msg))
+        assert fields is not None
+        stamp, orientation, orientation_cov, gyro, gyro_cov = fields
         assert stamp == 1_700_000_000_123_456_789
         assert orientation == (0.1, -0.2, 0.3, 0.9) and gyro == (1.5, -2.5, 3.5)
         assert list(orientation_cov) == list(msg.orientation_covariance)
@@ -134,7 +148,7 @@ def test_imu_fields_read_rclpys_bytes() -> None:
     assert imu_fields(serialize_message(msg)[:-8]) is None  # truncated
 
 
-def test_serialized_odometry_is_rclpys(tmp_path) -> None:
+def test_serialized_odometry_is_rclpys() -> None:
     def message(stamp_ns: int, values) -> Odometry:
         msg = Odometry(child_frame_id="trunk")
         msg.header.frame_id = "odom"
@@ -148,7 +162,9 @@ def test_serialized_odometry_is_rclpys(tmp_path) -> None:
         msg.twist.covariance = values[49:85]
         return msg
 
-    writer = SerializedOdometry(serialize_message(message(7_000_000_009, SerializedOdometry.probe_values())))
+    writer = SerializedOdometry(
+        serialize_message(message(7_000_000_009, SerializedOdometry.probe_values()))
+    )
     assert writer.usable
     values = np.random.default_rng(2).normal(size=85).tolist()
     stamp = T0 + 987_654_321

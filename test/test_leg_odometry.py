@@ -5,7 +5,9 @@ in the air, hops)."""
 
 from __future__ import annotations
 
+import itertools
 import math
+from typing import Any
 
 import numpy as np
 import pybullet
@@ -51,15 +53,15 @@ def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None):
     for row, seconds in enumerate(run.stamps_s):
         stamp = round(seconds * 1e9)
         feed.add_imu(stamp, ImuReading(tuple(run.base_quaternions[row]), tuple(run.gyro[row])))
-        samples.append(
-            feed.step(
-                stamp,
-                list(zip(feet[row], velocities[row])),
-                angles[row],
-                rates[row],
-                standing[row] if contacts else None,
-            )
+        sample = feed.step(
+            stamp,
+            list(zip(feet[row], velocities[row])),
+            angles[row],
+            rates[row],
+            standing[row] if contacts else None,
         )
+        assert sample is not None
+        samples.append(sample)
     linear = np.array([s.linear for s in samples])
     position = np.array([s.position for s in samples])
     return linear, position, feed.odometry.counts, samples
@@ -77,7 +79,11 @@ def errors(run, linear, position, planar):
 
 def test_the_walk_is_what_the_issue_asks_for(walk) -> None:
     q = walk.base_quaternions
-    yaw = np.unwrap(np.arctan2(2 * (q[:, 3] * q[:, 2] + q[:, 0] * q[:, 1]), 1 - 2 * (q[:, 1] ** 2 + q[:, 2] ** 2)))
+    yaw = np.unwrap(
+        np.arctan2(
+            2 * (q[:, 3] * q[:, 2] + q[:, 0] * q[:, 1]), 1 - 2 * (q[:, 1] ** 2 + q[:, 2] ** 2)
+        )
+    )
     distance = np.linalg.norm(np.diff(walk.base_positions[:, :2], axis=0), axis=1).sum()
     print(f"walk: {distance:.2f} m, turned {math.degrees(yaw[-1] - yaw[0]):.0f} deg")
     assert distance >= 1.5
@@ -88,13 +94,14 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
     """The issue's goals with contacts from the feet's forces (the contact hook, fed PyBullet's
     normal forces); kinematic contacts, no IMU and no rolling reported and bounded."""
     results = {}
-    for name, options in {
+    cases: dict[str, dict[str, Any]] = {
         "force contacts + IMU": {"contacts": True},
         "force contacts + IMU, feet as points": {"contacts": True, "radius": 0.0},
         "kinematic contacts + IMU": {},
         "force contacts, no IMU": {"contacts": True, "imu": False},
         "kinematic contacts, no IMU": {"imu": False},
-    }.items():
+    }
+    for name, options in cases.items():
         linear, position, counts, _ = odometry_of(walk, quadruped, **options)
         results[name] = errors(walk, linear, position, planar=not options.get("imu", True))
         print(
@@ -128,16 +135,19 @@ def test_rolling_foot_centre_moves_contact_point_does_not(quadruped) -> None:
         down = tuple(-gait_run.rotations[row][2])  # gravity in the base frame
         foot = motion.foot(
             int(leg),
-            gait_run.angles[row, joints],
-            gait_run.rates[row, joints],
-            feet[row, leg],
-            foot_velocities[row, leg],
+            gait_run.angles[row, joints].tolist(),
+            gait_run.rates[row, joints].tolist(),
+            feet[row, leg].tolist(),
+            foot_velocities[row, leg].tolist(),
             down,
         )
         estimate = np.array(foot.e) - np.cross(gait_run.gyro[row], foot.r)
         slip.append(np.linalg.norm(estimate - gait_run.body_velocities[row]))
     centre_speed = np.median(np.linalg.norm(centre[standing], axis=1))
-    print(f"stance: sphere centre {centre_speed * 1e3:.1f} mm/s, contact point {np.median(slip) * 1e3:.2f} mm/s (medians)")
+    print(
+        f"stance: sphere centre {centre_speed * 1e3:.1f} mm/s, contact point "
+        f"{np.median(slip) * 1e3:.2f} mm/s (medians)"
+    )
     assert 0.015 < centre_speed < 0.04
     assert np.median(slip) < 0.002
 
@@ -145,8 +155,13 @@ def test_rolling_foot_centre_moves_contact_point_does_not(quadruped) -> None:
 def test_calf_rates_are_pybullets(quadruped) -> None:
     client = pybullet.connect(pybullet.DIRECT)
     try:
-        body = pybullet.loadURDF(f"{pybullet_data.getDataPath()}/a1/a1.urdf", useFixedBase=True, physicsClientId=client)
-        infos = [pybullet.getJointInfo(body, j, physicsClientId=client) for j in range(pybullet.getNumJoints(body, physicsClientId=client))]
+        body = pybullet.loadURDF(
+            f"{pybullet_data.getDataPath()}/a1/a1.urdf", useFixedBase=True, physicsClientId=client
+        )
+        infos = [
+            pybullet.getJointInfo(body, j, physicsClientId=client)
+            for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+        ]
         joints = {info[1].decode(): info[0] for info in infos}
         links = {info[12].decode(): info[0] for info in infos}
         motion = LegMotion(quadruped)
@@ -157,8 +172,18 @@ def test_calf_rates_are_pybullets(quadruped) -> None:
             for name, angle, rate in zip(quadruped.joint_names, angles, rates):
                 pybullet.resetJointState(body, joints[name], angle, rate, physicsClientId=client)
             for leg, link in enumerate(("FR_toe", "FL_toe", "RR_toe", "RL_toe")):
-                state = pybullet.getLinkState(body, links[link], computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=client)
-                ours = motion.calf_rate(leg, angles[3 * leg : 3 * leg + 3], rates[3 * leg : 3 * leg + 3])
+                state = pybullet.getLinkState(
+                    body,
+                    links[link],
+                    computeLinkVelocity=1,
+                    computeForwardKinematics=1,
+                    physicsClientId=client,
+                )
+                ours = motion.calf_rate(
+                    leg,
+                    angles[3 * leg : 3 * leg + 3].tolist(),
+                    rates[3 * leg : 3 * leg + 3].tolist(),
+                )
                 assert np.allclose(ours, state[7], atol=1e-9)
     finally:
         pybullet.disconnect(client)
@@ -194,7 +219,10 @@ def test_foot_radius_comes_from_the_collision_sphere(quadruped) -> None:
     assert foot_radii(quadruped) == (0.02,) * 4  # pybullet_data's A1
     sphere = '<collision><geometry><sphere radius="0.0225"/></geometry></collision>'
     assert foot_radii(robot(sphere)) == (0.0225,) * 4
-    offset = '<collision><origin xyz="0 0 0.01"/><geometry><sphere radius="0.02"/></geometry></collision>'
+    offset = (
+        '<collision><origin xyz="0 0 0.01"/><geometry><sphere radius="0.02"/></geometry>'
+        "</collision>"
+    )
     assert foot_radii(robot(offset)) == (0.0,) * 4  # not centred on the foot frame: a point foot
     assert foot_radii(robot("")) == (0.0,) * 4
     with pytest.raises(LegFkError, match="radius"):
@@ -262,8 +290,8 @@ def test_hops_decay_the_velocity_and_grow_its_variance() -> None:
     speeds = [np.linalg.norm(s.linear) for s in flight]
     variances = [s.twist_variance[0] for s in flight]
     assert all(np.isfinite(s.linear).all() and np.isfinite(s.position).all() for s in flight)
-    assert all(b < a for a, b in zip(speeds, speeds[1:]))
-    assert all(b > a for a, b in zip(variances, variances[1:]))
+    assert all(b < a for a, b in itertools.pairwise(speeds))
+    assert all(b > a for a, b in itertools.pairwise(variances))
     assert speeds[-1] == pytest.approx(np.linalg.norm(V) * math.exp(-0.2 / 0.2), rel=1e-9)
     assert flight[-1].twist_variance[0] > 100 * standing.twist_variance[0]
     assert odometry.counts.no_stance == 100
@@ -298,14 +326,21 @@ def test_bad_feet_leave_the_estimate_finite() -> None:
 def test_imu_message_rules() -> None:
     unknown, given = [0.0] * 9, [0.01, 0, 0, 0, 0.02, 0, 0, 0, 0.03]
     reading = imu_reading((0, 0, 0.6, 0.8), given, (0.1, 0.2, 0.3), unknown)
-    assert reading.orientation == (0, 0, 0.6, 0.8) and reading.orientation_variance == (0.01, 0.02, 0.03)
+    assert reading is not None
+    assert reading.orientation == (0, 0, 0.6, 0.8) and reading.orientation_variance == (
+        0.01,
+        0.02,
+        0.03,
+    )
     assert reading.gyro_variance is None  # all zero: unknown
-    assert imu_reading((0, 0, 0, 1), [-1.0] + [0.0] * 8, (0, 0, 0), unknown).orientation is None
-    assert imu_reading((0, 0, 0, 0), unknown, (0, 0, 0), unknown).orientation is None
+    for orientation, covariance in (((0, 0, 0, 1), [-1.0] + [0.0] * 8), ((0, 0, 0, 0), unknown)):
+        without = imu_reading(orientation, covariance, (0, 0, 0), unknown)
+        assert without is not None and without.orientation is None
     assert imu_reading((0, 0, 0, 1), unknown, (math.nan, 0, 0), unknown) is None
     buffer = ImuBuffer(timeout_s=0.01)
     for stamp in (3_000_000, 1_000_000, 2_000_000):  # out of order
         buffer.add(stamp, ImuReading(None, (stamp, 0, 0)))
-    assert buffer.at(2_500_000).gyro[0] == 2_000_000
+    found = buffer.at(2_500_000)
+    assert found is not None and found.gyro[0] == 2_000_000
     assert buffer.at(999_999) is None
     assert buffer.at(3_000_000 + 10_000_001) is None  # too old

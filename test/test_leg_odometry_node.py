@@ -52,13 +52,17 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     track = odometry_track(bag, topic=JOINT_TOPIC)
     node = processes.start(odometry_node_command())
     received: list[Odometry] = []
-    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=10000))
+    ros.node.create_subscription(
+        Odometry, "leg_odometry", received.append, QoSProfile(depth=10000)
+    )
     imu_pub = ros.node.create_publisher(Imu, "imu", QoSProfile(depth=1000))
     joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=1000))
     assert ros.spin_until(
-        lambda: imu_pub.get_subscription_count() > 0
-        and joint_pub.get_subscription_count() > 0
-        and ros.node.count_publishers("leg_odometry") > 0,
+        lambda: (
+            imu_pub.get_subscription_count() > 0
+            and joint_pub.get_subscription_count() > 0
+            and ros.node.count_publishers("leg_odometry") > 0
+        ),
         30.0,
     ), processes.output(node)
     ros.spin_for(0.5)  # the node's subscriptions match ours too
@@ -73,15 +77,28 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
         if delay > 0:
             ros.spin_for(delay)
         # 500 Hz, unless the node (on a loaded machine) falls more than AHEAD samples behind
-        ros.spin_until(lambda: len(received) >= row - AHEAD, 10.0)
+        behind = row - AHEAD
+        ros.spin_until(lambda: len(received) >= behind, 10.0)  # noqa: B023 (used at once)
     assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
         f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"
     )
     assert processes.interrupt(node) == 0
-    stamps = np.array([m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received])
+    stamps = np.array(
+        [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received]
+    )
     assert (stamps == track.stamps_ns).all()
-    linear = np.array([[m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.linear.z] for m in received])
-    position = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z] for m in received])
+    linear = np.array(
+        [
+            [m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.linear.z]
+            for m in received
+        ]
+    )
+    position = np.array(
+        [
+            [m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]
+            for m in received
+        ]
+    )
     print(
         f"node vs bag over {samples} samples: linear velocity max difference "
         f"{np.abs(linear - track.linear).max():.2e} m/s, final position "

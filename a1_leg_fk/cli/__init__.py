@@ -1,9 +1,10 @@
-"""``a1-leg-fk``: echo | verify | plot | demo | bag | odom | gait | ik, for installs without the ROS 2
-command line tools.
+"""``a1-leg-fk``: echo | verify | plot | demo | bag | odom | gait | ik, for installs without the
+ROS 2 command line tools.
 
 One module per command (:mod:`.echo`, :mod:`.verify`, :mod:`.plot`, :mod:`.demo`, :mod:`.bag`,
-:mod:`.odom`, :mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options, argv)``; the
-shared plumbing (exit codes, signals, this tool's ROS node, child processes) is :mod:`.common`.
+:mod:`.odom`, :mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options,
+argv)``; the shared plumbing (exit codes, signals, this tool's ROS node, child processes) is
+:mod:`.common`.
 
 The ROS arguments (after ``--ros-args``, up to a lone ``--``) are found by rclpy's own
 ``remove_ros_args``; ``rclpy.init`` gets the whole command line, so ``--ros-args -r

@@ -18,7 +18,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from a1_leg_fk.cli.bag import add_input_arguments, show_progress
-from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, non_negative
+from a1_leg_fk.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    non_negative,
+)
 from a1_leg_fk.urdf import LegFkError
 
 if TYPE_CHECKING:  # the bag side is imported when the command runs
@@ -56,7 +62,9 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the feet's rolling radius [m] (default: the foot links' collision spheres)",
     )
     odom.add_argument(
-        "--csv", metavar="FILE", help=f"one row per joint state with velocities: {CSV_HEADER.strip()}"
+        "--csv",
+        metavar="FILE",
+        help=f"one row per joint state with velocities: {CSV_HEADER.strip()}",
     )
     odom.add_argument(
         "--plot", metavar="FILE.png", help="the path from above and the velocities over time"
@@ -85,7 +93,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             options.input,
             imu_topic=options.imu,
             use_imu=not options.no_imu,
-            truth=options.truth,
+            base_pose=options.truth,
             radius_m=options.foot_radius,
             progress=show_progress(options),
             topic=options.topic,
@@ -152,16 +160,26 @@ def summary_lines(track: OdometryTrack) -> list[str]:
     )
     slips = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.slips))
     radii = sorted(set(track.radii))
+    final = (
+        f"; final position {np.round(track.positions[-1], 3).tolist()} m in odom"
+        if len(track.stamps_ns)
+        else ""
+    )
     lines += [
         f"imu:       {imu}",
-        f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m; samples without a "
-        f"stance foot {counts.no_stance}; feet dropped as slipping: {slips}",
-        f"distance:  {counts.distance_m:.3f} m travelled"
-        + (f"; final position {np.round(track.positions[-1], 3).tolist()} m in odom" if len(track.stamps_ns) else ""),
+        (
+            f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m; samples without"
+            f" a stance foot {counts.no_stance}; feet dropped as slipping: {slips}"
+        ),
+        f"distance:  {counts.distance_m:.3f} m travelled{final}",
     ]
     if track.truth is not None:
         comparison = compare_with_truth(
-            track.stamps_ns, track.positions, track.orientations, track.linear, track.planar,
+            track.stamps_ns,
+            track.positions,
+            track.orientations,
+            track.linear,
+            track.planar,
             track.truth,
         )
         lines.append(

@@ -1,8 +1,9 @@
 """Leg odometry: the base's velocity from its stance feet, and its pose integrated from it.
 
 One sample at a time (:meth:`LegOdometry.step`), the same code for the live node and the bag
-tool, in plain floats (a joint state at 1 kHz leaves no time for numpy's per-call overhead). Per sample: the per-foot motion of :mod:`a1_leg_fk.estimation.leg_motion` (``v = e - w x
-r`` for each stance foot), an IMU reading (:class:`ImuReading`, optional), and optionally contact
+tool, in plain floats (a joint state at 1 kHz leaves no time for numpy's per-call overhead). Per
+sample: the per-foot motion of :mod:`a1_leg_fk.estimation.leg_motion` (``v = e - w x r`` for
+each stance foot), an IMU reading (:class:`ImuReading`, optional), and optionally contact
 probabilities from elsewhere (the hook for a force-based contact estimate; without them, stance is
 kinematic, see :mod:`a1_leg_fk.estimation.stance`).
 
@@ -138,7 +139,11 @@ def down_direction(orientation: Quaternion | None) -> Vector:
 def rotate(q: Quaternion, v: Vector) -> Vector:
     """``v`` rotated by the unit quaternion ``q`` (x, y, z, w)."""
     x, y, z, w = q
-    tx, ty, tz = 2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])
+    tx, ty, tz = (
+        2.0 * (y * v[2] - z * v[1]),
+        2.0 * (z * v[0] - x * v[2]),
+        2.0 * (x * v[1] - y * v[0]),
+    )
     return (
         v[0] + w * tx + y * tz - z * ty,
         v[1] + w * ty + z * tx - x * tz,
@@ -158,7 +163,11 @@ def _unit(q: Sequence[float]) -> Quaternion | None:
 
 
 def _floored(values: Sequence[float]) -> tuple[float, float, float]:
-    return (max(values[0], MIN_VARIANCE), max(values[1], MIN_VARIANCE), max(values[2], MIN_VARIANCE))
+    return (
+        max(values[0], MIN_VARIANCE),
+        max(values[1], MIN_VARIANCE),
+        max(values[2], MIN_VARIANCE),
+    )
 
 
 class LegOdometry:

@@ -80,6 +80,8 @@ class OdometryFeed:
     ) -> FootMotion | None:
         first = leg * JOINTS_PER_LEG
         last = first + JOINTS_PER_LEG
-        motion = self.motion.foot(leg, angles[first:last], rates[first:last], foot[0], foot[1], down)
+        motion = self.motion.foot(
+            leg, angles[first:last], rates[first:last], foot[0], foot[1], down
+        )
         e, depth = motion.e, motion.depth
         return motion if math.isfinite(e[0] + e[1] + e[2] + depth) else None

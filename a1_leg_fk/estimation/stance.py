@@ -19,11 +19,10 @@ CONTACT_PROBABILITY = 0.5
 Vector = tuple[float, float, float]
 
 
-def stance_from_contacts(
-    contacts: Sequence[float], usable: Sequence[bool]
-) -> dict[int, float]:
-    """Leg -> weight of the standing feet: the ``usable`` ones whose contact probability (in [0, 1];
-    a bool works too) is at least :data:`CONTACT_PROBABILITY`; the weight is the probability.
+def stance_from_contacts(contacts: Sequence[float], usable: Sequence[bool]) -> dict[int, float]:
+    """Leg -> weight of the standing feet: the ``usable`` ones whose contact probability (in
+    [0, 1]; a bool works too) is at least :data:`CONTACT_PROBABILITY`; the weight is the
+    probability.
     """
     weights = {}
     for leg, (probability, ok) in enumerate(zip(contacts, usable)):

@@ -68,13 +68,16 @@ def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None):
 
 
 def errors(run, linear, position, planar):
-    """(velocity RMSE [m/s] after settling, final position error as % of the distance)."""
+    """(velocity RMSE [m/s] after settling, final position error as % of the distance: in 3D
+    (planar: x, y), and horizontal)."""
     settled = run.stamps_s >= SETTLED_S
     rmse = float(np.sqrt(np.mean(np.sum((linear - run.body_velocities)[settled] ** 2, axis=1))))
-    axes = slice(0, 2) if planar else slice(0, 3)
     moved = run.base_positions[-1] - run.base_positions[0]
-    distance = np.linalg.norm(np.diff(run.base_positions[:, axes], axis=0), axis=1).sum()
-    return rmse, 100 * float(np.linalg.norm(position[-1, axes] - moved[axes])) / distance
+    drifts = []
+    for axes in (slice(0, 2) if planar else slice(0, 3), slice(0, 2)):
+        distance = np.linalg.norm(np.diff(run.base_positions[:, axes], axis=0), axis=1).sum()
+        drifts.append(100 * float(np.linalg.norm(position[-1, axes] - moved[axes])) / distance)
+    return rmse, drifts[0], drifts[1]
 
 
 def test_the_walk_is_what_the_issue_asks_for(walk) -> None:
@@ -104,18 +107,21 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
     for name, options in cases.items():
         linear, position, counts, _ = odometry_of(walk, quadruped, **options)
         results[name] = errors(walk, linear, position, planar=not options.get("imu", True))
+        rmse, drift, horizontal = results[name]
         print(
-            f"{name:<40} velocity RMSE {results[name][0]:.4f} m/s, final position error "
-            f"{results[name][1]:.2f} % of the distance; no-stance samples {counts.no_stance}"
+            f"{name:<38} velocity RMSE {rmse:.4f} m/s, final position error {drift:.2f} % of "
+            f"the distance ({horizontal:.2f} % horizontally); no-stance samples "
+            f"{counts.no_stance}"
         )
-    rmse, drift = results["force contacts + IMU"]
+    rmse, drift, horizontal = results["force contacts + IMU"]
     assert rmse <= 0.05
-    assert drift <= 2.0
-    assert results["force contacts + IMU, feet as points"][1] > 2 * drift  # rolling matters
-    assert results["kinematic contacts + IMU"][0] <= 0.1
-    assert results["kinematic contacts + IMU"][1] <= 8.0
+    assert horizontal <= 2.0  # the issue's goal; z drifts more (below)
+    assert drift <= 2.5
+    assert results["force contacts + IMU, feet as points"][2] > 2 * horizontal  # rolling matters
+    assert results["kinematic contacts + IMU"][0] <= 0.06
+    assert results["kinematic contacts + IMU"][1] <= 5.0
     assert results["force contacts, no IMU"][1] <= 10.0
-    assert results["kinematic contacts, no IMU"][1] <= 20.0
+    assert results["kinematic contacts, no IMU"][1] <= 15.0
 
 
 def test_rolling_foot_centre_moves_contact_point_does_not(quadruped) -> None:

@@ -47,10 +47,13 @@ def _distance(a: Vector, b: Vector) -> float:
     return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
 
-def _median(values: list[float]) -> float:
-    values.sort()
-    middle = len(values) // 2
-    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
+def _mean(vectors: list[Vector]) -> Vector:
+    count = len(vectors)
+    return (
+        sum(v[0] for v in vectors) / count,
+        sum(v[1] for v in vectors) / count,
+        sum(v[2] for v in vectors) / count,
+    )
 
 
 def consistent_feet(
@@ -59,26 +62,27 @@ def consistent_feet(
     previous_sigma: float,
     threshold: float,
 ) -> list[int]:
-    """The stance feet (``estimates``: leg -> its base-velocity estimate [m/s]) within the gate of
-    the reference. With three or more feet the reference is their per-axis median and the gate
-    ``threshold`` [m/s]; two feet within ``threshold`` of each other vouch for each other.
-    Otherwise the reference is ``previous`` (the last estimate) and the gate ``threshold + 3
-    previous_sigma`` (its standard deviation [m/s], which grows while no foot stands, so that
-    feet are believed again); with no previous estimate, every stance foot is kept.
+    """The stance feet (``estimates``: leg -> its base-velocity estimate [m/s]) to believe: the
+    largest group that agree, by consensus. Each foot gathers the feet within ``threshold`` [m/s]
+    of its own estimate (itself included); the foot with the most wins, ties going to the group
+    whose mean is closest to ``previous`` (the last estimate), and its group is kept. When no two
+    feet agree, the foot closest to ``previous`` is kept if it lies within ``threshold + 3
+    previous_sigma`` (the last estimate's standard deviation [m/s], which grows while no foot
+    stands, so that feet are believed again); with no previous estimate, all of them are.
     """
     legs = list(estimates)
-    if len(legs) >= 3:
-        values = list(estimates.values())
-        reference: Vector = (
-            _median([v[0] for v in values]),
-            _median([v[1] for v in values]),
-            _median([v[2] for v in values]),
-        )
-        gate = threshold
-    elif len(legs) == 2 and _distance(estimates[legs[0]], estimates[legs[1]]) <= threshold:
+    groups = [
+        [other for other in legs if _distance(estimates[leg], estimates[other]) <= threshold]
+        for leg in legs
+    ]
+    largest = max((len(group) for group in groups), default=0)
+    if largest >= 2:
+        best = [group for group in groups if len(group) == largest]
+        if previous is not None and len(best) > 1:
+            best.sort(key=lambda group: _distance(_mean([estimates[g] for g in group]), previous))
+        return sorted(best[0])
+    if previous is None or not legs:
         return legs
-    elif previous is not None and legs:
-        reference, gate = previous, threshold + 3.0 * previous_sigma
-    else:
-        return legs
-    return [leg for leg in legs if _distance(estimates[leg], reference) <= gate]
+    closest = min(legs, key=lambda leg: _distance(estimates[leg], previous))
+    gate = threshold + 3.0 * previous_sigma
+    return [closest] if _distance(estimates[closest], previous) <= gate else []

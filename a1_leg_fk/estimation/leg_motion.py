@@ -107,19 +107,38 @@ class LegMotion:
         [m] and ``velocity`` [m/s] (``J q_dot``) in the base frame, gravity's unit direction
         ``down`` in the base frame.
         """
-        ox, oy, oz = self.calf_rate(leg, angles, rates)
+        r, depth = self.contact(leg, position, down)
+        return FootMotion(self.still_base_velocity(leg, angles, rates, velocity, down), r, depth)
+
+    def contact(self, leg: int, position: Sequence[float], down: Vector) -> tuple[Vector, float]:
+        """(``r``, ``depth``) of leg ``leg``'s contact point (see :class:`FootMotion`): cheap,
+        for every foot; :meth:`still_base_velocity` only for the feet that stand.
+        """
         radius = self.radii[leg]
         dx, dy, dz = down
-        cx, cy, cz = radius * dx, radius * dy, radius * dz
-        rx, ry, rz = position[0] + cx, position[1] + cy, position[2] + cz
-        return FootMotion(
-            (
-                -(velocity[0] + oy * cz - oz * cy),
-                -(velocity[1] + oz * cx - ox * cz),
-                -(velocity[2] + ox * cy - oy * cx),
-            ),
-            (rx, ry, rz),
-            rx * dx + ry * dy + rz * dz,
+        rx, ry, rz = (
+            position[0] + radius * dx,
+            position[1] + radius * dy,
+            position[2] + radius * dz,
+        )
+        return (rx, ry, rz), rx * dx + ry * dy + rz * dz
+
+    def still_base_velocity(
+        self,
+        leg: int,
+        angles: Sequence[float],
+        rates: Sequence[float],
+        velocity: Sequence[float],
+        down: Vector,
+    ) -> Vector:
+        """``e`` of :class:`FootMotion`: ``-(J q_dot + w_calf x c)`` [m/s], base frame."""
+        ox, oy, oz = self.calf_rate(leg, angles, rates)
+        radius = self.radii[leg]
+        cx, cy, cz = radius * down[0], radius * down[1], radius * down[2]
+        return (
+            -(velocity[0] + oy * cz - oz * cy),
+            -(velocity[1] + oz * cx - ox * cz),
+            -(velocity[2] + ox * cy - oy * cx),
         )
 
     def calf_rate(self, leg: int, angles: Sequence[float], rates: Sequence[float]) -> Vector:

@@ -193,15 +193,33 @@ class LegOdometry:
     ) -> OdometrySample:
         """The estimate after one sample: each leg's :class:`FootMotion` (None for a leg without
         one), ``imu`` (None: none), ``contacts`` (4) probabilities in [0, 1] or None (kinematic
-        stance).
+        stance): :meth:`stance`, then :meth:`estimate`.
+        """
+        weights = self.stance([None if foot is None else foot.depth for foot in feet], contacts)
+        return self.estimate(stamp_ns, feet, weights, imu)
+
+    def stance(
+        self, depths: Sequence[float | None], contacts: Sequence[float] | None
+    ) -> dict[int, float]:
+        """Leg -> weight of the feet that stand: from ``contacts`` (probabilities in [0, 1]) when
+        given, else kinematic; ``depths`` [m] of the contact points along gravity (None for a
+        foot without one).
+        """
+        if contacts is None:
+            return kinematic_stance(depths, self.settings.stance_band_m)
+        return stance_from_contacts(contacts, [depth is not None for depth in depths])
+
+    def estimate(
+        self,
+        stamp_ns: int,
+        feet: Sequence[FootMotion | None],
+        weights: dict[int, float],
+        imu: ImuReading | None = None,
+    ) -> OdometrySample:
+        """The estimate after one sample, the stance decided (:meth:`stance`): ``feet`` must hold
+        a :class:`FootMotion` for every leg in ``weights``; the others are not read.
         """
         settings = self.settings
-        if contacts is None:
-            weights = kinematic_stance(
-                [None if foot is None else foot.depth for foot in feet], settings.stance_band_m
-            )
-        else:
-            weights = stance_from_contacts(contacts, [foot is not None for foot in feet])
         gyro = None if imu is None else imu.gyro
         stance = tuple(weights)
         omega, estimates = self._per_foot(feet, stance, gyro)
@@ -269,19 +287,29 @@ class LegOdometry:
             v = self._velocity_variance
             self._velocity_variance = (v[0] + growth, v[1] + growth, v[2] + growth)
             return self._velocity, _floored(self._velocity_variance)
-        total = sum(weights[leg] for leg in used)
-        velocity = tuple(
-            sum(weights[leg] * estimates[leg][axis] for leg in used) / total for axis in range(3)
-        )
+        total = vx = vy = vz = 0.0
+        for leg in used:
+            weight, estimate = weights[leg], estimates[leg]
+            total += weight
+            vx += weight * estimate[0]
+            vy += weight * estimate[1]
+            vz += weight * estimate[2]
+        velocity = (vx / total, vy / total, vz / total)
         noise = settings.foot_noise_mps**2
         if count > 1:
-            spread = [
-                sum((estimates[leg][axis] - velocity[axis]) ** 2 for leg in used) / (count - 1)
-                for axis in range(3)
-            ]
+            sx = sy = sz = 0.0
+            for leg in used:
+                estimate = estimates[leg]
+                sx += (estimate[0] - velocity[0]) ** 2
+                sy += (estimate[1] - velocity[1]) ** 2
+                sz += (estimate[2] - velocity[2]) ** 2
+            spread = (sx / (count - 1), sy / (count - 1), sz / (count - 1))
         else:  # one foot: nothing to check it against
-            spread = [(settings.slip_threshold_mps / 2.0) ** 2] * 3
-        variance = _floored([(spread[axis] + noise) / count for axis in range(3)])
+            lone = (settings.slip_threshold_mps / 2.0) ** 2
+            spread = (lone, lone, lone)
+        variance = _floored(
+            ((spread[0] + noise) / count, (spread[1] + noise) / count, (spread[2] + noise) / count)
+        )
         self._velocity = (velocity[0], velocity[1], velocity[2])
         self._velocity_variance = variance
         return self._velocity, variance

@@ -69,19 +69,39 @@ class OdometryFeed:
         imu = self.imu.at(stamp_ns)
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
-        motions = [
-            None if foot is None else self._motion(leg, foot, angles, rates, down)
-            for leg, foot in enumerate(feet)
-        ]
-        return self.odometry.step(stamp_ns, motions, imu, contacts)
+        depths: list[float | None] = [None] * len(feet)
+        points: list[Vector | None] = [None] * len(feet)
+        motion = self.motion
+        for leg, foot in enumerate(feet):
+            if foot is not None:
+                r, depth = motion.contact(leg, foot[0], down)
+                if math.isfinite(depth):
+                    points[leg], depths[leg] = r, depth
+        odometry = self.odometry
+        weights = odometry.stance(depths, contacts)
+        motions: list[FootMotion | None] = [None] * len(feet)
+        for leg in list(weights):
+            motions[leg] = self._motion(leg, feet, points, depths, angles, rates, down)
+            if motions[leg] is None:
+                del weights[leg]
+        return odometry.estimate(stamp_ns, motions, weights, imu)
 
     def _motion(
-        self, leg: int, foot: Foot, angles: Sequence[float], rates: Sequence[float], down: Vector
+        self,
+        leg: int,
+        feet: Sequence[Foot | None],
+        points: Sequence[Vector | None],
+        depths: Sequence[float | None],
+        angles: Sequence[float],
+        rates: Sequence[float],
+        down: Vector,
     ) -> FootMotion | None:
+        """A standing leg's motion, or None when its numbers overflow."""
         first = leg * JOINTS_PER_LEG
         last = first + JOINTS_PER_LEG
-        motion = self.motion.foot(
-            leg, angles[first:last], rates[first:last], foot[0], foot[1], down
+        foot, r, depth = feet[leg], points[leg], depths[leg]
+        assert foot is not None and r is not None and depth is not None  # it stands
+        e = self.motion.still_base_velocity(
+            leg, angles[first:last], rates[first:last], foot[1], down
         )
-        e, depth = motion.e, motion.depth
-        return motion if math.isfinite(e[0] + e[1] + e[2] + depth) else None
+        return FootMotion(e, r, depth) if math.isfinite(e[0] + e[1] + e[2]) else None

@@ -71,10 +71,20 @@ def consistent_feet(
     stands, so that feet are believed again); with no previous estimate, all of them are.
     """
     legs = list(estimates)
-    groups = [
-        [other for other in legs if _distance(estimates[leg], estimates[other]) <= threshold]
-        for leg in legs
-    ]
+    limit = threshold * threshold
+    groups = []
+    for leg in legs:
+        x, y, z = estimates[leg]
+        groups.append(
+            [
+                other
+                for other in legs
+                if (x - estimates[other][0]) ** 2
+                + (y - estimates[other][1]) ** 2
+                + (z - estimates[other][2]) ** 2
+                <= limit
+            ]
+        )
     largest = max((len(group) for group in groups), default=0)
     if largest >= 2:
         best = [group for group in groups if len(group) == largest]

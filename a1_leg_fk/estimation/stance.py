@@ -87,10 +87,10 @@ def consistent_feet(
         )
     largest = max((len(group) for group in groups), default=0)
     if largest >= 2:
-        best = [group for group in groups if len(group) == largest]
+        best = sorted({tuple(group) for group in groups if len(group) == largest})
         if previous is not None and len(best) > 1:
             best.sort(key=lambda group: _distance(_mean([estimates[g] for g in group]), previous))
-        return sorted(best[0])
+        return list(best[0])
     if previous is None or not legs:
         return legs
     closest = min(legs, key=lambda leg: _distance(estimates[leg], previous))

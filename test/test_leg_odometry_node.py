@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from bag_factory import joint_state
 from nav_msgs.msg import Odometry
+from node_harness import LEGS, Diagnostics
 from odometry_bags import JOINT_TOPIC, imu_message, stamp_of, write_sim_bag
 from pybullet_sim import simulate, walking_targets
 from rclpy.qos import QoSProfile
@@ -51,6 +52,7 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     bag = write_sim_bag(tmp_path / "sim", run, truth=False)
     track = odometry_track(bag, topic=JOINT_TOPIC)
     node = processes.start(odometry_node_command())
+    diagnostics = Diagnostics(ros, "leg odometry")
     received: list[Odometry] = []
     ros.node.create_subscription(
         Odometry, "leg_odometry", received.append, QoSProfile(depth=10000)
@@ -82,6 +84,10 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
         f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"
     )
+    status = diagnostics.fresh()
+    assert status["samples"] == str(samples) and status["imu_received"] == str(samples)
+    assert status["samples_without_stance"] == str(track.counts.no_stance)
+    assert [status[f"slips_{leg}"] for leg in LEGS] == [str(n) for n in track.counts.slips]
     assert processes.interrupt(node) == 0
     stamps = np.array(
         [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received]

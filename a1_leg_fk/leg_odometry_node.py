@@ -112,6 +112,7 @@ class LegOdometryNode(Node):
         self._no_stance_before = 0
         self._without_velocities = 0
         self._msg = Odometry()
+        self._values = [0.0] * SerializedOdometry.DOUBLES
         self._start(self._robot.config)
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
@@ -223,21 +224,19 @@ class LegOdometryNode(Node):
         return None
 
     def _publish(self, sample: OdometrySample) -> None:
-        pose_covariance, twist_covariance = [0.0] * 36, [0.0] * 36
-        for index in range(6):
-            pose_covariance[7 * index] = sample.pose_variance[index]
-            twist_covariance[7 * index] = sample.twist_variance[index]
+        values = self._values  # pose 7, its covariance 36, twist 6, its covariance 36
+        values[0:3] = sample.position
+        values[3:7] = sample.orientation
+        values[43:46] = sample.linear
+        values[46:49] = sample.angular
+        pose_variance, twist_variance = sample.pose_variance, sample.twist_variance
+        for index in range(6):  # the diagonals; the rest stays zero
+            values[7 + 7 * index] = pose_variance[index]
+            values[49 + 7 * index] = twist_variance[index]
         if self._serialized is not None:
-            values = [
-                *sample.position,
-                *sample.orientation,
-                *pose_covariance,
-                *sample.linear,
-                *sample.angular,
-                *twist_covariance,
-            ]
             self._publisher.publish(self._serialized.serialized(sample.stamp_ns, values))
             return
+        pose_covariance, twist_covariance = values[7:43], values[49:85]
         msg = self._msg
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(sample.stamp_ns, 1_000_000_000)
         pose, twist = msg.pose.pose, msg.twist.twist

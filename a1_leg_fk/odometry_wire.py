@@ -45,7 +45,8 @@ class SerializedOdometry:
     ``usable`` is False unless the probe is little-endian CDR laid out so.
     """
 
-    VALUES = struct.Struct("<85d")
+    DOUBLES = 85
+    VALUES = struct.Struct(f"<{DOUBLES}d")
 
     def __init__(self, probe: bytes) -> None:
         self._offset = probe.find(self.VALUES.pack(*self.probe_values()))
@@ -66,7 +67,7 @@ class SerializedOdometry:
     @staticmethod
     def probe_values() -> list[float]:
         """The 85 distinct values the probe message carries, in CDR order."""
-        return [1.0 + index / 128.0 for index in range(85)]
+        return [1.0 + index / 128.0 for index in range(SerializedOdometry.DOUBLES)]
 
     def serialized(self, stamp_ns: int, values: Sequence[float]) -> bytes:
         """The message's bytes with this stamp [ns] and these 85 values."""

@@ -35,16 +35,18 @@ def imu_reading(
     is not finite.
     """
     gyro = (float(angular_velocity[0]), float(angular_velocity[1]), float(angular_velocity[2]))
-    if not all(math.isfinite(value) for value in gyro):
+    if not math.isfinite(gyro[0] + gyro[1] + gyro[2]):  # a NaN or infinity anywhere
         return None
-    quaternion = tuple(float(value) for value in orientation)
+    x, y, z, w = (float(orientation[0]), float(orientation[1]), float(orientation[2]),
+                  float(orientation[3]))  # fmt: skip
+    norm2 = x * x + y * y + z * z + w * w
     usable = (
         float(orientation_covariance[0]) != NO_ORIENTATION
-        and all(math.isfinite(value) for value in quaternion)
-        and sum(value * value for value in quaternion) > 0.25
+        and math.isfinite(norm2)
+        and norm2 > 0.25  # a rotation, not a zero quaternion
     )
     return ImuReading(
-        (quaternion[0], quaternion[1], quaternion[2], quaternion[3]) if usable else None,
+        (x, y, z, w) if usable else None,
         gyro,
         _diagonal(orientation_covariance) if usable else None,
         _diagonal(angular_velocity_covariance),
@@ -53,10 +55,10 @@ def imu_reading(
 
 def _diagonal(covariance: Sequence[float]) -> tuple[float, float, float] | None:
     """The diagonal of a 3x3 row-major covariance; None when unknown (all zero) or unusable."""
-    diagonal = (float(covariance[0]), float(covariance[4]), float(covariance[8]))
-    if not any(covariance) or not all(math.isfinite(v) and v >= 0.0 for v in diagonal):
+    a, b, c = float(covariance[0]), float(covariance[4]), float(covariance[8])
+    if not any(covariance) or not (math.isfinite(a + b + c) and min(a, b, c) >= 0.0):
         return None
-    return diagonal
+    return (a, b, c)
 
 
 class ImuBuffer:

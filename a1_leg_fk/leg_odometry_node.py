@@ -13,6 +13,8 @@ from the joint efforts plugs in (probabilities per leg, or None).
 
 from __future__ import annotations
 
+import functools
+import struct
 import sys
 from collections.abc import Sequence
 from typing import Unpack
@@ -32,6 +34,7 @@ from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
 from a1_leg_fk.fk_diagnostics import PeriodCounter
 from a1_leg_fk.joint_state import REJECTIONS, FootTracker
+from a1_leg_fk.joint_state_wire import JointStateDecoder, WireError
 from a1_leg_fk.legs import LEG_NAMES
 from a1_leg_fk.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.odometry_wire import SerializedOdometry, imu_fields
@@ -111,6 +114,7 @@ class LegOdometryNode(Node):
         self._period = PeriodCounter()
         self._no_stance_before = 0
         self._without_velocities = 0
+        self._decoder = JointStateDecoder()
         self._msg = Odometry()
         self._values = [0.0] * SerializedOdometry.DOUBLES
         self._start(self._robot.config)
@@ -122,6 +126,7 @@ class LegOdometryNode(Node):
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            raw=True,
         )
         self._imu_topic = self.resolve_topic_name("imu")
         if self._bool("use_imu"):
@@ -185,9 +190,21 @@ class LegOdometryNode(Node):
             return
         self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
 
-    def _on_joint_state(self, msg: JointState) -> None:
+    def _on_joint_state(self, raw: bytes) -> None:
+        """One serialized JointState: read from its bytes (:class:`JointStateDecoder`, as the bag
+        tools read them), else deserialized; then :class:`FootTracker`'s rules and the odometry.
+        """
+        try:
+            stamp_ns, _, order, position_bytes, velocity_bytes = self._decoder.fields(raw)
+            names: Sequence[str] = self._decoder.names
+            positions = _doubles(order, position_bytes)
+            velocities = _doubles(order, velocity_bytes)
+        except WireError:
+            msg = deserialize_message(raw, JointState)
+            stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            names, positions, velocities = msg.name, msg.position, msg.velocity
         tracker = self._tracker
-        feet = tracker.update(msg.name, msg.position, msg.velocity)
+        feet = tracker.update(names, positions, velocities)
         if tracker.new_unknown_names:
             names = tracker.take_new_unknown_names()
             self.get_logger().warn(
@@ -202,11 +219,11 @@ class LegOdometryNode(Node):
             if foot.velocity is not None:
                 legs[foot.leg_slot] = (foot.position, foot.velocity)
         sample = self._feed.step(
-            self._stamp_ns(msg.header.stamp),
+            stamp_ns or self.get_clock().now().nanoseconds,
             legs,
             tracker.angles,
             tracker.rates,
-            self._contact_probabilities(msg),
+            self._contact_probabilities(),
         )
         if sample is None:
             self._without_velocities += 1
@@ -216,11 +233,11 @@ class LegOdometryNode(Node):
             return
         self._publish(sample)
 
-    def _contact_probabilities(self, msg: JointState) -> Sequence[float] | None:
-        """Contact probabilities (4,) of the legs from the message's efforts, or None for the
-        kinematic stance. The force-based contact estimate plugs in here.
+    def _contact_probabilities(self) -> Sequence[float] | None:
+        """Contact probabilities (4,) of the legs, or None for the kinematic stance. The
+        force-based contact estimate from the joint efforts plugs in here (the efforts are the
+        JointState's third array: :class:`JointStateDecoder` reads positions and velocities).
         """
-        del msg
         return None
 
     def _publish(self, sample: OdometrySample) -> None:
@@ -248,11 +265,6 @@ class LegOdometryNode(Node):
         msg.pose.covariance = pose_covariance
         msg.twist.covariance = twist_covariance
         self._publisher.publish(msg)
-
-    def _stamp_ns(self, stamp: object) -> int:
-        """A header stamp [ns], or the node clock's now where it is zero."""
-        value = stamp.sec * 1_000_000_000 + stamp.nanosec  # type: ignore[attr-defined]
-        return value or self.get_clock().now().nanoseconds
 
     def _report_problem(self) -> None:
         tracker = self._tracker
@@ -331,6 +343,16 @@ class LegOdometryNode(Node):
 
     def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
         self._apply_frames()
+
+
+@functools.cache
+def _unpacker(order: str, count: int) -> struct.Struct:
+    return struct.Struct(f"{order}{count}d")
+
+
+def _doubles(order: str, data: bytes) -> tuple[float, ...]:
+    """The float64 values of a CDR array's bytes in byte order ``order``."""
+    return _unpacker(order, len(data) // 8).unpack(data)
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -125,3 +125,34 @@ def joint_state_for(run, row):
     return joint_state(
         JointStateMsg(stamp_of(run, row), run.joint_names, run.angles[row], run.rates[row])
     )
+
+
+def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
+    node = processes.start(odometry_node_command("-p", "use_imu:=false"))
+    diagnostics = Diagnostics(ros, "leg odometry")
+    received: list[Odometry] = []
+    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
+    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
+    ros.spin_for(0.5)
+    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    stand = [0.0, 0.8, -1.5] * 4
+    bad = [
+        JointState(name=names, position=stand[:11], velocity=[0.0] * 12),  # lengths differ
+        JointState(name=names, position=stand),  # no velocities: no odometry
+        JointState(name=names, position=stand, velocity=[float("nan")] * 12),
+    ]
+    good = JointState(name=names, position=stand, velocity=[0.0] * 12)
+    for index, message in enumerate([*bad, good]):
+        message.header.stamp.sec, message.header.stamp.nanosec = 100, index * 1000
+        joint_pub.publish(message)
+        ros.spin_for(0.05)
+    assert ros.spin_until(lambda: len(received) >= 1, 10.0), processes.output(node)
+    ros.spin_for(0.3)
+    assert len(received) == 1 and received[0].header.stamp.nanosec == 3000
+    assert received[0].twist.twist.linear.x == 0.0 and received[0].pose.pose.orientation.w == 1.0
+    status = diagnostics.fresh()
+    assert status["joint_states_received"] == "4" and status["joint_states_rejected"] == "1"
+    assert status["joint_states_without_velocities"] == "2"
+    assert status["imu_topic"] == "none (use_imu false)"
+    assert processes.interrupt(node) == 0

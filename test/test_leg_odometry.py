@@ -68,15 +68,18 @@ def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None):
 
 
 def errors(run, linear, position, planar):
-    """(velocity RMSE [m/s] after settling, final position error as % of the distance: in 3D
-    (planar: x, y), and horizontal)."""
+    """After settling on the plane (the drop from the spawn height is no walk): (velocity RMSE
+    [m/s], final position error as % of the distance, in 3D (planar: x, y) and horizontally)."""
     settled = run.stamps_s >= SETTLED_S
+    first = int(np.argmax(settled))
     rmse = float(np.sqrt(np.mean(np.sum((linear - run.body_velocities)[settled] ** 2, axis=1))))
-    moved = run.base_positions[-1] - run.base_positions[0]
+    true_moved = run.base_positions[-1] - run.base_positions[first]
+    moved = position[-1] - position[first]  # odom's axes are the IMU's: the world's here
     drifts = []
     for axes in (slice(0, 2) if planar else slice(0, 3), slice(0, 2)):
-        distance = np.linalg.norm(np.diff(run.base_positions[:, axes], axis=0), axis=1).sum()
-        drifts.append(100 * float(np.linalg.norm(position[-1, axes] - moved[axes])) / distance)
+        steps = np.diff(run.base_positions[first:, axes], axis=0)
+        distance = np.linalg.norm(steps, axis=1).sum()
+        drifts.append(100 * float(np.linalg.norm(moved[axes] - true_moved[axes])) / distance)
     return rmse, drifts[0], drifts[1]
 
 
@@ -115,11 +118,11 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
         )
     rmse, drift, horizontal = results["force contacts + IMU"]
     assert rmse <= 0.05
-    assert horizontal <= 2.0  # the issue's goal; z drifts more (below)
-    assert drift <= 2.5
+    assert drift <= 2.0
+    assert horizontal <= 2.0
     assert results["force contacts + IMU, feet as points"][2] > 2 * horizontal  # rolling matters
     assert results["kinematic contacts + IMU"][0] <= 0.06
-    assert results["kinematic contacts + IMU"][1] <= 5.0
+    assert results["kinematic contacts + IMU"][1] <= 4.0
     assert results["force contacts, no IMU"][1] <= 10.0
     assert results["kinematic contacts, no IMU"][1] <= 15.0
 

@@ -353,3 +353,19 @@ def test_imu_message_rules() -> None:
     assert found is not None and found.gyro[0] == 2_000_000
     assert buffer.at(999_999) is None
     assert buffer.at(3_000_000 + 10_000_001) is None  # too old
+
+
+def test_the_tracker_keeps_the_latest_messages_rates(quadruped) -> None:
+    from a1_leg_fk.joint_state import FootTracker
+
+    tracker = FootTracker(quadruped)
+    names = list(quadruped.joint_names)
+    stand = [0.0, 0.8, -1.5] * 4
+    tracker.update(names, stand, [float(i) for i in range(12)])
+    assert tracker.rates == [float(i) for i in range(12)]
+    with_nan = [float(i) for i in range(12)]
+    with_nan[4] = math.nan  # FL's velocity unusable: its rates are not kept
+    tracker.update(names, stand, with_nan)
+    assert tracker.rates[:3] == [0.0, 1.0, 2.0] and all(math.isnan(r) for r in tracker.rates[3:6])
+    tracker.update(names[:3], stand[:3], [])  # FR only, without velocities
+    assert all(math.isnan(r) for r in tracker.rates)

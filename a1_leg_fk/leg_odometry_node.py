@@ -129,7 +129,7 @@ class LegOdometryNode(Node):
             raw=True,
         )
         self._imu_topic = self.resolve_topic_name("imu")
-        if self._bool("use_imu"):
+        if bool(self._setting("use_imu")):
             self.create_subscription(
                 Imu,
                 "imu",
@@ -142,7 +142,7 @@ class LegOdometryNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
             f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
-            + (f" and {self._imu_topic}" if self._bool("use_imu") else " (legs alone)")
+            + (f" and {self._imu_topic}" if bool(self._setting("use_imu")) else " (legs alone)")
             + f" to {self.resolve_topic_name('leg_odometry')}"
             + f" in frame '{self._msg.header.frame_id}'"
         )
@@ -151,16 +151,16 @@ class LegOdometryNode(Node):
         """(Re)start the estimate with a robot: fresh tracker and odometry, pose at the origin."""
         self._config = config
         self._tracker = FootTracker(config.quadruped)
-        radius = self._float("foot_radius_m")
+        radius = self._setting("foot_radius_m")
         self._feed = OdometryFeed(
             config.quadruped,
             OdometrySettings(
-                slip_threshold_mps=self._float("slip_threshold_mps"),
-                stance_band_m=self._float("stance_band_m"),
+                slip_threshold_mps=self._setting("slip_threshold_mps"),
+                stance_band_m=self._setting("stance_band_m"),
             ),
             radius if radius >= 0.0 else None,
-            self._float("imu_timeout_s"),
-            use_imu=self._bool("use_imu"),
+            self._setting("imu_timeout_s"),
+            use_imu=bool(self._setting("use_imu")),
         )
         self._no_stance_before = 0
         self._apply_frames()
@@ -294,7 +294,9 @@ class LegOdometryNode(Node):
                 rejected_in_period=rejected,
                 no_stance_in_period=no_stance,
                 period_s=DIAGNOSTICS_PERIOD_S,
-                imu_topic=self._imu_topic if self._bool("use_imu") else "none (use_imu false)",
+                imu_topic=self._imu_topic
+                if bool(self._setting("use_imu"))
+                else "none (use_imu false)",
                 imu_received=self._feed.imu.received,
                 samples_with_imu=self._feed.samples_with_imu,
                 without_velocities=self._without_velocities,
@@ -310,11 +312,9 @@ class LegOdometryNode(Node):
             )
         )
 
-    def _float(self, name: str) -> float:
-        return float(self.get_parameter(name).get_parameter_value().double_value)
-
-    def _bool(self, name: str) -> bool:
-        return bool(self.get_parameter(name).get_parameter_value().bool_value)
+    def _setting(self, name: str) -> float:
+        """A declared double or bool parameter's value (rclpy has checked its type and range)."""
+        return float(self.get_parameter(name).value)
 
     def _apply_frames(self) -> None:
         """Set the frames, and serialize the probe message that output is patched into."""

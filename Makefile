@@ -65,7 +65,7 @@ $(REQUIREMENTS_STAMP): | $(BIN)/python
 # builds with the pinned setuptools in the venv instead of whatever the index has that day.
 $(PACKAGE_STAMP): setup.py setup.cfg package.xml $(REQUIREMENTS_STAMP)
 	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation --editable .
-	@for script in foot_fk_node foot_ik_node joint_state_demo a1-leg-fk; do \
+	@for script in foot_fk_node foot_ik_node joint_state_demo leg_odometry_node a1-leg-fk; do \
 	  [ -x $(BIN)/$$script ] || { echo "make: $(BIN)/$$script was not installed" >&2; exit 1; }; \
 	done
 	touch $@

@@ -41,6 +41,7 @@ setup(
             "foot_fk_node = a1_leg_fk.ros.executables:foot_fk_node",
             "foot_ik_node = a1_leg_fk.ros.executables:foot_ik_node",
             "joint_state_demo = a1_leg_fk.ros.executables:joint_state_demo",
+            "leg_odometry_node = a1_leg_fk.ros.executables:leg_odometry_node",
             "a1-leg-fk = a1_leg_fk.cli:main",
         ],
     },

@@ -88,6 +88,9 @@ class FootTracker:
     def __init__(self, quadruped: Quadruped) -> None:
         self.quadruped = quadruped
         self.angles: list[float] = [math.nan] * JOINT_COUNT  # rad; NaN until first known
+        self.rates: list[float] = [math.nan] * JOINT_COUNT
+        """[rad/s]: the latest :meth:`update`'s joint velocities of the legs it returned a foot
+        velocity for, NaN elsewhere (as :attr:`BlockResult.rates`)."""
         self.counts = TrackerCounts()
         self._legs = quadruped.legs
         self._lower = [j.lower if j.lower is not None else -math.inf for j in quadruped.joints]
@@ -122,6 +125,7 @@ class FootTracker:
         counts = self.counts
         counts.messages += 1
         self.last_problem = ""
+        self.rates = [math.nan] * JOINT_COUNT
         layout = self._layout
         if names != layout.names:
             layout = self._layout = self._describe(list(names))
@@ -280,6 +284,8 @@ class FootTracker:
         finite = (
             math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)
         )  # huge rates can overflow
+        if finite:
+            self.rates[first : first + JOINTS_PER_LEG] = rates
         return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
 
     @staticmethod

@@ -95,6 +95,11 @@ ik_node_command = partial(installed_command, "foot_ik_node", "a1_leg_fk.ros.foot
 demo_command = partial(installed_command, "joint_state_demo", "a1_leg_fk.ros.joint_state_demo")
 """``demo_command(*ros_args)``: the installed joint_state_demo, else ``python -m``."""
 
+odometry_node_command = partial(
+    installed_command, "leg_odometry_node", "a1_leg_fk.ros.leg_odometry_node"
+)
+"""``odometry_node_command(*ros_args)``: the installed leg_odometry_node, else ``python -m``."""
+
 cli_command = partial(installed_command, "a1-leg-fk", "a1_leg_fk.cli")
 """``cli_command(*ros_args)``: the installed ``a1-leg-fk``, else ``python -m a1_leg_fk.cli``."""
 

@@ -19,7 +19,13 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("a1_leg_fk.stop_signals", "a1_leg_fk.model"),
     ("a1_leg_fk.kinematics",),
     ("a1_leg_fk.estimation", "a1_leg_fk.tracking"),
-    ("a1_leg_fk.recording", "a1_leg_fk.gait", "a1_leg_fk.verify", "a1_leg_fk.plots"),
+    (
+        "a1_leg_fk.recording",
+        "a1_leg_fk.gait",
+        "a1_leg_fk.verify",
+        "a1_leg_fk.plots",
+        "a1_leg_fk.odometry_plot",
+    ),
     ("a1_leg_fk.ros", "a1_leg_fk.cli"),
     ("a1_leg_fk",),  # the package's own __init__: the public API, re-exported lazily
 )

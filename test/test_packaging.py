@@ -33,6 +33,7 @@ EXEC_DEPENDS = {
     "rclpy",
     "std_msgs",
     "sensor_msgs",
+    "nav_msgs",
     "geometry_msgs",
     "std_srvs",
     "diagnostic_msgs",
@@ -46,6 +47,7 @@ CONSOLE_SCRIPTS = {
     "foot_fk_node": "a1_leg_fk.ros.executables:foot_fk_node",
     "foot_ik_node": "a1_leg_fk.ros.executables:foot_ik_node",
     "joint_state_demo": "a1_leg_fk.ros.executables:joint_state_demo",
+    "leg_odometry_node": "a1_leg_fk.ros.executables:leg_odometry_node",
     "a1-leg-fk": "a1_leg_fk.cli:main",
 }
 # Every node parameter with its default. String arrays have no value a params file can state

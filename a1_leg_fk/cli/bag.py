@@ -31,33 +31,7 @@ from a1_leg_fk.recording.trajectories import (
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     """INPUT and the options that choose what is read from it (shared with ``a1-leg-fk gait``)."""
-    parser.add_argument(
-        "input",
-        metavar="INPUT",
-        help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag",
-    )
-    parser.add_argument(
-        "--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)"
-    )
-    parser.add_argument(
-        "--urdf",
-        metavar="FILE",
-        help="robot model (default: the bag's robot_description topic, else the embedded A1)",
-    )
-    parser.add_argument(
-        "--foot-links",
-        nargs="*",
-        default=[],
-        metavar="LEG=link",
-        help="as the node's foot_links parameter",
-    )
-    parser.add_argument(
-        "--joint-aliases",
-        nargs="*",
-        default=[],
-        metavar="NAME=joint",
-        help="as the node's joint_aliases parameter",
-    )
+    add_input_arguments(parser)
     parser.add_argument(
         "--base-pose",
         metavar="TOPIC",
@@ -91,6 +65,37 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         help="a foot lifts off below this normal force [N] (default: 4 %% of the weight)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_input_arguments(parser: argparse.ArgumentParser) -> None:
+    """INPUT, its JointState topic and the robot model (shared with ``a1-leg-fk odom``)."""
+    parser.add_argument(
+        "input",
+        metavar="INPUT",
+        help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag",
+    )
+    parser.add_argument(
+        "--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)"
+    )
+    parser.add_argument(
+        "--urdf",
+        metavar="FILE",
+        help="robot model (default: the bag's robot_description topic, else the embedded A1)",
+    )
+    parser.add_argument(
+        "--foot-links",
+        nargs="*",
+        default=[],
+        metavar="LEG=link",
+        help="as the node's foot_links parameter",
+    )
+    parser.add_argument(
+        "--joint-aliases",
+        nargs="*",
+        default=[],
+        metavar="NAME=joint",
+        help="as the node's joint_aliases parameter",
+    )
 
 
 def recording_options(options: argparse.Namespace, forces: bool = False) -> RecordingChoices:

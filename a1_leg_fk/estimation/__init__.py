@@ -1,1 +1,3 @@
-"""Estimation from joint states, without ROS: foot forces and contacts."""
+"""State estimation from the legs, without ROS: the force contact rule (:mod:`.contacts`) and leg
+odometry (stance, rolling feet, slip rejection, the estimator and its feed, IMU readings).
+"""

@@ -46,11 +46,11 @@ from numpy.typing import ArrayLike
 
 from a1_leg_fk.kinematics.compiled_leg import BATCH_CHUNK_ROWS, CompiledLeg
 from a1_leg_fk.kinematics.fk_codegen import compile_source, leg_source
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.kinematics.leg_stages import rpy_matrix
-from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
-from a1_leg_fk.model.urdf import LegFkError, RobotModel, Sphere
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, foot_sphere
+from a1_leg_fk.model.urdf import LegFkError, RobotModel
 
-STANDARD_GRAVITY = 9.80665
 """[m/s^2]"""
 LEVEL_GRAVITY = (0.0, 0.0, -STANDARD_GRAVITY)
 """Gravity in the base frame [m/s^2] when nothing tells its direction: the base level."""
@@ -182,8 +182,8 @@ class FootForces:
     ) -> None:
         """Collect each leg's segment masses from the quadruped's URDF; ``min_condition`` gates
         near-singular Jacobians. The contact point: by default on each foot link's collision
-        sphere (:func:`foot_sphere`); with ``foot_radius_m`` [m], on a sphere of that radius
-        centred on the foot link's origin (0: the origin itself).
+        sphere (:func:`~a1_leg_fk.model.legs.foot_sphere`); with ``foot_radius_m`` [m], on a sphere
+        of that radius centred on the foot link's origin (0: the origin itself).
         """
         self.min_condition = min_condition
         self._legs = tuple(
@@ -309,22 +309,6 @@ def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     )
-
-
-def gravity_in_base(quaternions: np.ndarray) -> np.ndarray:
-    """(M, 3) world gravity ``(0, 0, -g)`` [m/s^2] in the frame of a base at (M, 4) unit
-    quaternions (x, y, z, w): ``-g`` times the third row of the base's rotation matrix.
-    """
-    x, y, z, w = quaternions.T
-    row = np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1)
-    result: np.ndarray = -STANDARD_GRAVITY * row
-    return result
-
-
-def foot_sphere(model: RobotModel, foot_link: str) -> Sphere | None:
-    """The largest collision sphere of ``foot_link``, or ``None`` (a point foot at its origin)."""
-    spheres = model.spheres.get(foot_link, ())
-    return max(spheres, key=lambda sphere: sphere.radius) if spheres else None
 
 
 def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:

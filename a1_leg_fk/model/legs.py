@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from a1_leg_fk.model.urdf import Joint, LegFkError, RobotModel
+from a1_leg_fk.model.urdf import Joint, LegFkError, RobotModel, Sphere
 
 LEG_NAMES: tuple[str, ...] = ("FR", "FL", "RR", "RL")
 """Leg order everywhere in the package: front-right, front-left, rear-right, rear-left."""
@@ -185,3 +185,9 @@ def _conventional_equivalents(joint_name: str) -> list[str]:
             if joint_name.endswith(suffix):
                 equivalents.append(joint_name[: -len(suffix)] + f"_{theirs}_joint")
     return equivalents
+
+
+def foot_sphere(model: RobotModel, foot_link: str) -> Sphere | None:
+    """The largest collision sphere of ``foot_link``, or ``None`` (a point foot at its origin)."""
+    spheres = model.spheres.get(foot_link, ())
+    return max(spheres, key=lambda sphere: sphere.radius) if spheres else None

@@ -52,6 +52,8 @@ class FootBlock:
     positions: np.ndarray
     velocities: np.ndarray
     world_positions: np.ndarray | None
+    angles: np.ndarray  # (N, 12) [rad]: the merged state after each message, NaN where unknown
+    rates: np.ndarray  # (N, 12) [rad/s]: the message's rates where a foot velocity came of them
     forces: np.ndarray | None = None
     normal_forces: np.ndarray | None = None
     contacts: np.ndarray | None = None
@@ -341,11 +343,21 @@ def _finish(
     if recording.base_pose is not None:
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
+    rates[~np.repeat(np.isfinite(foot_velocities).all(axis=2), JOINTS_PER_LEG, axis=1)] = math.nan
     forces = None
     if recording.forces is not None and efforts is not None:
         slot_efforts = recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
         forces = recording.forces.rows(stamps, angles[rows], slot_efforts)
-    yield FootBlock(stamps, bag_times, feet, foot_velocities, world, *(forces or (None,) * 3))
+    yield FootBlock(
+        stamps,
+        bag_times,
+        feet,
+        foot_velocities,
+        world,
+        angles[rows],
+        rates,
+        *(forces or (None,) * 3),
+    )
 
 
 def velocities_of(

@@ -15,12 +15,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.kinematics.foot_forces import (
-    LEVEL_GRAVITY,
-    STANDARD_GRAVITY,
-    FootForces,
-    gravity_in_base,
-)
+from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, gravity_in_base
 from a1_leg_fk.model.legs import JOINT_COUNT
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import WireError, effort_span

@@ -33,3 +33,11 @@ def joint_state_demo() -> int:
         from a1_leg_fk.ros import joint_state_demo as demo
 
         return demo.main()
+
+
+def leg_odometry_node() -> int:
+    """``ros2 run a1_leg_fk leg_odometry_node``: :func:`a1_leg_fk.ros.leg_odometry_node.main`."""
+    with StopSignals():
+        from a1_leg_fk.ros import leg_odometry_node as node
+
+        return node.main()

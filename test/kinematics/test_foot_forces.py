@@ -32,7 +32,8 @@ from pybullet_sim import (
 from shared import STAND_LEG
 
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.kinematics.foot_forces import FootForces, gravity_in_base
+from a1_leg_fk.kinematics.foot_forces import FootForces
+from a1_leg_fk.kinematics.frames import down_direction, gravity_in_base
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import LEG_NAMES
 
@@ -316,6 +317,9 @@ def test_gravity_in_base_from_orientation() -> None:
     )
     expected = [rotation(q).T @ [0.0, 0.0, -9.80665] for q in quaternions]
     np.testing.assert_allclose(gravity_in_base(quaternions), expected, atol=1e-12)
+    # The scalar form (the leg odometry's, one sample at a time) is the same rule.
+    scalar = [np.array(down_direction(tuple(q))) * 9.80665 for q in quaternions]
+    np.testing.assert_allclose(scalar, expected, atol=1e-12)
 
 
 def test_one_configuration_equals_the_batch() -> None:

@@ -1,0 +1,189 @@
+"""``a1-leg-fk odom``: a recorded run (ROS bag) -> the base's leg odometry: CSV, a PNG, a summary,
+and with ``--truth`` its error against a recorded base pose.
+
+The same pipeline as ``leg_odometry_node`` (:mod:`a1_leg_fk.estimation.odometry_feed`), fed the
+bag's JointState and Imu messages in bag order. Exit codes as ``a1-leg-fk bag``: 0 done; 1 the
+bag could not be read to its end (what was read is written); 2 bad usage or input (one line on
+stderr, nothing written); 130 interrupted (nothing left under the final output names).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from a1_leg_fk.cli.bag import add_input_arguments, show_progress
+from a1_leg_fk.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    non_negative,
+)
+from a1_leg_fk.model.urdf import LegFkError
+
+if TYPE_CHECKING:  # the bag side is imported when the command runs
+    from a1_leg_fk.recording.odometry import OdometryTrack
+    from a1_leg_fk.recording.outputs import OutputTarget
+
+CSV_HEADER = "stamp_ns,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz\n"
+
+
+def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Register ``odom`` with the ``a1-leg-fk`` sub-commands."""
+    odom = commands.add_parser(
+        "odom",
+        help="a recorded run (ROS bag) -> the base's leg odometry: CSV, a PNG, errors vs a truth",
+        description="Estimate the base's velocity and path from the legs (and an IMU) of a "
+        "recorded run, as leg_odometry_node does live; print a summary, write CSV (--csv) and/or "
+        "a plot (--plot), and compare with a recorded base pose (--truth). Exit 0 done, 1 the "
+        "bag could not be read to its end (what was read is written), 2 bad input.",
+    )
+    add_input_arguments(odom)
+    odom.add_argument(
+        "--imu", metavar="TOPIC", help="the sensor_msgs/msg/Imu topic (default: the only one)"
+    )
+    odom.add_argument("--no-imu", action="store_true", help="ignore the IMU: legs alone")
+    odom.add_argument(
+        "--truth",
+        metavar="TOPIC",
+        help="the base's true pose to compare with (nav_msgs/Odometry, geometry_msgs/PoseStamped, "
+        "PoseWithCovarianceStamped, or /tf by the base frame's child transforms)",
+    )
+    odom.add_argument(
+        "--foot-radius",
+        type=non_negative,
+        metavar="M",
+        help="the feet's rolling radius [m] (default: the foot links' collision spheres)",
+    )
+    odom.add_argument(
+        "--csv",
+        metavar="FILE",
+        help=f"one row per joint state with velocities: {CSV_HEADER.strip()}",
+    )
+    odom.add_argument(
+        "--plot", metavar="FILE.png", help="the path from above and the velocities over time"
+    )
+    odom.add_argument("--force", action="store_true", help="replace outputs that exist")
+    odom.add_argument("--quiet", action="store_true", help="no progress bar")
+    odom.set_defaults(handler=run)
+
+
+def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
+    """``a1-leg-fk odom``: see the module docstring for exit codes."""
+    from a1_leg_fk.plots import pyplot
+    from a1_leg_fk.recording.odometry import odometry_track
+    from a1_leg_fk.recording.outputs import checked_targets
+
+    del argv  # no ROS here
+    try:
+        if options.no_imu and options.imu:
+            raise LegFkError("--imu and --no-imu contradict each other")
+        if options.plot:
+            pyplot()  # before the work: MissingMatplotlib says how to install it
+        targets = checked_targets(
+            Path(options.input), {"--csv": options.csv, "--plot": options.plot}, options.force
+        )
+        track = odometry_track(
+            options.input,
+            imu_topic=options.imu,
+            use_imu=not options.no_imu,
+            base_pose=options.truth,
+            radius_m=options.foot_radius,
+            progress=show_progress(options),
+            topic=options.topic,
+            urdf=options.urdf,
+            foot_links=options.foot_links,
+            joint_aliases=options.joint_aliases,
+        )
+        written = _write(track, targets)
+    except (LegFkError, OSError) as error:
+        print(f"a1-leg-fk odom: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("a1-leg-fk odom: interrupted; no output written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    for line in summary_lines(track):
+        print(line)
+    for path in written:
+        print(f"wrote:     {path}")
+    if track.summary.stopped:
+        print(
+            f"a1-leg-fk odom: {options.input}: stopped early: {track.summary.stopped}",
+            file=sys.stderr,
+        )
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]:
+    """Write the requested outputs under temporary names, then move them into place."""
+    from a1_leg_fk.odometry_plot import plot_odometry
+    from a1_leg_fk.recording.csv_text import format_rows
+
+    try:
+        for target in targets.values():
+            target.prepare()
+        if "--csv" in targets:
+            floats = np.hstack([track.positions, track.orientations, track.linear, track.angular])
+            with open(targets["--csv"].temporary, "wb") as file:
+                file.write(CSV_HEADER.encode())
+                file.write(format_rows(track.stamps_ns[:, None], floats))
+        if "--plot" in targets:
+            plot_odometry(track, targets["--plot"].temporary)
+        for target in targets.values():
+            target.commit()
+    except BaseException:
+        for target in targets.values():
+            target.discard()
+        raise
+    return [target.final for target in targets.values()]
+
+
+def summary_lines(track: OdometryTrack) -> list[str]:
+    """The human summary of an odometry track, one fact per line."""
+    from a1_leg_fk.model.legs import LEG_NAMES
+    from a1_leg_fk.recording.odometry_truth import compare_with_truth
+
+    summary, counts = track.summary, track.counts
+    lines = summary.lines()
+    imu = (
+        f"{track.imu_topic} ({track.imu_samples} samples; {track.rows_with_imu} of "
+        f"{len(track.stamps_ns)} rows had one)"
+        if track.imu_topic
+        else "none (legs alone: planar pose, yaw from the feet)"
+    )
+    slips = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.slips))
+    radii = sorted(set(track.radii))
+    final = (
+        f"; final position {np.round(track.positions[-1], 3).tolist()} m in odom"
+        if len(track.stamps_ns)
+        else ""
+    )
+    lines += [
+        f"imu:       {imu}",
+        (
+            f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m; samples without"
+            f" a stance foot {counts.no_stance}; feet dropped as slipping: {slips}"
+        ),
+        f"distance:  {counts.distance_m:.3f} m travelled{final}",
+    ]
+    if track.truth is not None:
+        comparison = compare_with_truth(
+            track.stamps_ns,
+            track.positions,
+            track.orientations,
+            track.linear,
+            track.planar,
+            track.truth,
+        )
+        lines.append(
+            f"truth:     {track.truth_topic}: "
+            + (comparison.line() if comparison else "fewer than two rows with a pose")
+        )
+    return lines

@@ -1,0 +1,87 @@
+"""IMU samples for the odometry: what a ``sensor_msgs/msg/Imu`` says, and which sample goes with a
+joint state. One rule each, shared by the node and the bag tool (no ROS types here).
+
+- :func:`imu_reading`: the orientation counts unless ``orientation_covariance[0] == -1`` (the
+  message's convention for "no orientation") or it is not a rotation (a zero quaternion); the
+  angular velocity always (unless not finite). An all-zero covariance means "unknown" (REP 145,
+  sensor_msgs): its variances are then left to the odometry's defaults.
+- :class:`ImuBuffer`: a joint state stamped ``t`` takes the latest IMU sample stamped at or before
+  ``t``, if it is at most ``timeout_s`` older; else none.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Sequence
+
+from a1_leg_fk.estimation.odometry import ImuReading
+
+NO_ORIENTATION = -1.0
+"""``orientation_covariance[0]`` of an IMU without orientation (sensor_msgs/msg/Imu)."""
+DEFAULT_IMU_TIMEOUT_S = 0.1
+BUFFER_SAMPLES = 256
+"""IMU samples kept for matching: ~0.25 s at 1 kHz, far more than a joint state's lag."""
+
+
+def imu_reading(
+    orientation: Sequence[float],
+    orientation_covariance: Sequence[float],
+    angular_velocity: Sequence[float],
+    angular_velocity_covariance: Sequence[float],
+) -> ImuReading | None:
+    """The :class:`ImuReading` of an Imu message's fields (quaternion x, y, z, w; 3x3 row-major
+    covariances [rad^2], [(rad/s)^2]; angular velocity [rad/s]), or None when its angular velocity
+    is not finite.
+    """
+    gyro = (float(angular_velocity[0]), float(angular_velocity[1]), float(angular_velocity[2]))
+    if not math.isfinite(gyro[0] + gyro[1] + gyro[2]):  # a NaN or infinity anywhere
+        return None
+    x, y, z, w = (float(orientation[0]), float(orientation[1]), float(orientation[2]),
+                  float(orientation[3]))  # fmt: skip
+    norm2 = x * x + y * y + z * z + w * w
+    usable = (
+        float(orientation_covariance[0]) != NO_ORIENTATION
+        and math.isfinite(norm2)
+        and norm2 > 0.25  # a rotation, not a zero quaternion
+    )
+    return ImuReading(
+        (x, y, z, w) if usable else None,
+        gyro,
+        _diagonal(orientation_covariance) if usable else None,
+        _diagonal(angular_velocity_covariance),
+    )
+
+
+def _diagonal(covariance: Sequence[float]) -> tuple[float, float, float] | None:
+    """The diagonal of a 3x3 row-major covariance; None when unknown (all zero) or unusable."""
+    a, b, c = float(covariance[0]), float(covariance[4]), float(covariance[8])
+    if not any(covariance) or not (math.isfinite(a + b + c) and min(a, b, c) >= 0.0):
+        return None
+    return (a, b, c)
+
+
+class ImuBuffer:
+    """The latest IMU samples by stamp [ns], to pair with joint states (see the module's rule)."""
+
+    def __init__(self, timeout_s: float = DEFAULT_IMU_TIMEOUT_S) -> None:
+        self.timeout_ns = round(timeout_s * 1e9)
+        self._stamps: list[int] = []
+        self._readings: list[ImuReading] = []
+        self.received = 0
+
+    def add(self, stamp_ns: int, reading: ImuReading) -> None:
+        """Keep a sample (they may come out of order; the oldest beyond the buffer are dropped)."""
+        self.received += 1
+        index = bisect.bisect_right(self._stamps, stamp_ns)
+        self._stamps.insert(index, stamp_ns)
+        self._readings.insert(index, reading)
+        if len(self._stamps) > BUFFER_SAMPLES:
+            del self._stamps[0], self._readings[0]
+
+    def at(self, stamp_ns: int) -> ImuReading | None:
+        """The sample for a joint state stamped ``stamp_ns``, or None."""
+        index = bisect.bisect_right(self._stamps, stamp_ns) - 1
+        if index < 0 or stamp_ns - self._stamps[index] > self.timeout_ns:
+            return None
+        return self._readings[index]

@@ -1,0 +1,364 @@
+"""``leg_odometry_node``: sensor_msgs/JointState (+ sensor_msgs/Imu) in, nav_msgs/Odometry out.
+
+Thin ROS glue over :mod:`a1_leg_fk.estimation.odometry_feed`, the pipeline ``a1-leg-fk odom``
+runs on bags. The robot comes from :class:`~a1_leg_fk.ros.robot_source.RobotSource` and joint
+states follow :class:`~a1_leg_fk.tracking.FootTracker`'s rules, as in ``foot_fk_node``. Each
+accepted joint state with velocities gives one ``leg_odometry`` message, stamped with the joint
+state's stamp: pose in ``odom_frame``, twist in the base frame (``child_frame_id``). An IMU sample
+is paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`).
+
+Contacts: kinematic. :meth:`LegOdometryNode._contact_probabilities` is where a contact estimate
+from the joint efforts plugs in (probabilities per leg, or None).
+"""
+
+from __future__ import annotations
+
+import functools
+import struct
+import sys
+from collections.abc import Sequence
+from typing import Unpack
+
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import Imu, JointState
+
+from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
+from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
+from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
+from a1_leg_fk.kinematics.robot_config import RobotConfig
+from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
+from a1_leg_fk.ros import glue as ros_glue
+from a1_leg_fk.ros.diagnostics import PeriodCounter
+from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields
+from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
+from a1_leg_fk.tracking import REJECTIONS, FootTracker
+
+NODE_NAME = "leg_odometry"
+DIAGNOSTICS_PERIOD_S = 1.0
+DEFAULTS = OdometrySettings()
+SMALL_RANGE_M = (-1.0, 1.0)
+RANGE_S = (0.001, 10.0)
+RANGE_MPS = (0.001, 100.0)
+
+PARAMETERS = (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec(
+        "odom_frame", "odom", ParameterType.PARAMETER_STRING, "header.frame_id of leg_odometry"
+    ),
+    ParameterSpec(
+        "use_imu",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Use the imu topic (orientation unless its orientation_covariance[0] is -1, angular "
+        "velocity always); false = legs alone (planar pose)",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "imu_timeout_s",
+        DEFAULT_IMU_TIMEOUT_S,
+        ParameterType.PARAMETER_DOUBLE,
+        f"A joint state takes the latest IMU sample stamped at most this long [s] before it, in "
+        f"{RANGE_S}",
+        read_only=True,
+        value_range=RANGE_S,
+    ),
+    ParameterSpec(
+        "foot_radius_m",
+        -1.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "Rolling radius of the feet [m], in [0, 1]; negative = the foot links' collision spheres "
+        "in the URDF",
+        read_only=True,
+        value_range=SMALL_RANGE_M,
+    ),
+    ParameterSpec(
+        "slip_threshold_mps",
+        DEFAULTS.slip_threshold_mps,
+        ParameterType.PARAMETER_DOUBLE,
+        f"A stance foot whose velocity estimate is further than this [m/s] from the others' is "
+        f"dropped for that sample, in {RANGE_MPS}",
+        read_only=True,
+        value_range=RANGE_MPS,
+    ),
+    ParameterSpec(
+        "stance_band_m",
+        DEFAULTS.stance_band_m,
+        ParameterType.PARAMETER_DOUBLE,
+        "Kinematic stance: the feet whose contact points lie within this [m] of the lowest along "
+        "gravity, in [0, 1]",
+        read_only=True,
+        value_range=SMALL_RANGE_M,
+    ),
+)
+"""The node's own parameters; the model parameters are :class:`RobotSource`'s."""
+
+
+class LegOdometryNode(Node):
+    """Publishes the base's leg odometry for every joint state with velocities."""
+
+    def __init__(self, **node_options: Unpack[ros_glue.NodeOptions]) -> None:
+        super().__init__(NODE_NAME, **node_options)
+        for spec in PARAMETERS:
+            spec.declare(self)
+        self._robot = RobotSource(self, self._on_robot)
+        self._warnings = ros_glue.WarnThrottle(self)
+        self._period = PeriodCounter()
+        self._no_stance_before = 0
+        self._without_velocities = 0
+        self._decoder = JointStateDecoder()
+        self._msg = Odometry()
+        self._values = [0.0] * SerializedOdometry.DOUBLES
+        self._start(self._robot.config)
+        self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        self.create_subscription(
+            JointState,
+            "joint_states",
+            self._on_joint_state,
+            JOINT_STATES_QOS,
+            qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            raw=True,
+        )
+        self._imu_topic = self.resolve_topic_name("imu")
+        if bool(self._setting("use_imu")):
+            self.create_subscription(
+                Imu,
+                "imu",
+                self._on_imu,
+                JOINT_STATES_QOS,
+                qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+                raw=True,
+            )
+        self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
+        self.get_logger().info(
+            f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
+            + (f" and {self._imu_topic}" if bool(self._setting("use_imu")) else " (legs alone)")
+            + f" to {self.resolve_topic_name('leg_odometry')}"
+            + f" in frame '{self._msg.header.frame_id}'"
+        )
+
+    def _start(self, config: RobotConfig) -> None:
+        """(Re)start the estimate with a robot: fresh tracker and odometry, pose at the origin."""
+        self._config = config
+        self._tracker = FootTracker(config.quadruped)
+        radius = self._setting("foot_radius_m")
+        self._feed = OdometryFeed(
+            config.quadruped,
+            OdometrySettings(
+                slip_threshold_mps=self._setting("slip_threshold_mps"),
+                stance_band_m=self._setting("stance_band_m"),
+            ),
+            radius if radius >= 0.0 else None,
+            self._setting("imu_timeout_s"),
+            use_imu=bool(self._setting("use_imu")),
+        )
+        self._no_stance_before = 0
+        self._apply_frames()
+
+    # --- per message ---------------------------------------------------------------------
+
+    def _on_imu(self, raw: bytes) -> None:
+        """One serialized Imu: read from its bytes (:func:`imu_fields`), else deserialized."""
+        fields = imu_fields(raw)
+        if fields is None:
+            msg = deserialize_message(raw, Imu)
+            q, w = msg.orientation, msg.angular_velocity
+            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            fields = (
+                stamp,
+                (q.x, q.y, q.z, q.w),
+                tuple(msg.orientation_covariance),
+                (w.x, w.y, w.z),
+                tuple(msg.angular_velocity_covariance),
+            )
+        stamp, orientation, orientation_covariance, gyro, gyro_covariance = fields
+        reading = imu_reading(orientation, orientation_covariance, gyro, gyro_covariance)
+        if reading is None:
+            self._warnings.warn(
+                "imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite"
+            )
+            return
+        self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
+
+    def _on_joint_state(self, raw: bytes) -> None:
+        """One serialized JointState: read from its bytes (:class:`JointStateDecoder`, as the bag
+        tools read them), else deserialized; then :class:`FootTracker`'s rules and the odometry.
+        """
+        try:
+            stamp_ns, _, order, position_bytes, velocity_bytes = self._decoder.fields(raw)
+            names: Sequence[str] = self._decoder.names
+            positions = _doubles(order, position_bytes)
+            velocities = _doubles(order, velocity_bytes)
+        except WireError:
+            msg = deserialize_message(raw, JointState)
+            stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            names, positions, velocities = msg.name, msg.position, msg.velocity
+        tracker = self._tracker
+        feet = tracker.update(names, positions, velocities)
+        if tracker.new_unknown_names:
+            names = tracker.take_new_unknown_names()
+            self.get_logger().warn(
+                f"ignoring joint names not in the model (warned once per name): {names[:20]}"
+            )
+        if tracker.last_problem:
+            self._report_problem()
+        if not feet:
+            return
+        legs: list[Foot | None] = [None] * len(LEG_NAMES)
+        for foot in feet:
+            if foot.velocity is not None:
+                legs[foot.leg_slot] = (foot.position, foot.velocity)
+        sample = self._feed.step(
+            stamp_ns or self.get_clock().now().nanoseconds,
+            legs,
+            tracker.angles,
+            tracker.rates,
+            self._contact_probabilities(),
+        )
+        if sample is None:
+            self._without_velocities += 1
+            self._warnings.warn(
+                "no_velocities", "joint_states without joint velocities: no odometry from them"
+            )
+            return
+        self._publish(sample)
+
+    def _contact_probabilities(self) -> Sequence[float] | None:
+        """Contact probabilities (4,) of the legs, or None for the kinematic stance. The
+        force-based contact estimate from the joint efforts plugs in here (the efforts are the
+        JointState's third array: :class:`JointStateDecoder` reads positions and velocities).
+        """
+        return None
+
+    def _publish(self, sample: OdometrySample) -> None:
+        values = self._values  # pose 7, its covariance 36, twist 6, its covariance 36
+        values[0:3] = sample.position
+        values[3:7] = sample.orientation
+        values[43:46] = sample.linear
+        values[46:49] = sample.angular
+        pose_variance, twist_variance = sample.pose_variance, sample.twist_variance
+        for index in range(6):  # the diagonals; the rest stays zero
+            values[7 + 7 * index] = pose_variance[index]
+            values[49 + 7 * index] = twist_variance[index]
+        if self._serialized is not None:
+            self._publisher.publish(self._serialized.serialized(sample.stamp_ns, values))
+            return
+        pose_covariance, twist_covariance = values[7:43], values[49:85]
+        msg = self._msg
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(sample.stamp_ns, 1_000_000_000)
+        pose, twist = msg.pose.pose, msg.twist.twist
+        pose.position.x, pose.position.y, pose.position.z = sample.position
+        o = pose.orientation
+        o.x, o.y, o.z, o.w = sample.orientation
+        twist.linear.x, twist.linear.y, twist.linear.z = sample.linear
+        twist.angular.x, twist.angular.y, twist.angular.z = sample.angular
+        msg.pose.covariance = pose_covariance
+        msg.twist.covariance = twist_covariance
+        self._publisher.publish(msg)
+
+    def _report_problem(self) -> None:
+        tracker = self._tracker
+        outcome = tracker.last_outcome
+        kind = outcome if outcome in REJECTIONS else "non_finite_position"
+        self._warnings.warn(
+            kind, f"joint_states: {outcome.replace('_', ' ')}: {tracker.last_problem}"
+        )
+
+    # --- diagnostics and parameters -----------------------------------------------------------
+
+    def _publish_diagnostics(self) -> None:
+        received, rejected = self._period.take(self._tracker.counts)
+        counts = self._feed.odometry.counts
+        no_stance, self._no_stance_before = (
+            counts.no_stance - self._no_stance_before,
+            counts.no_stance,
+        )
+        if self._diagnostics_pub.get_subscription_count() == 0:
+            return
+        robot = self._robot
+        level, summary, values = odometry_status(
+            OdometryReport(
+                tracker=self._tracker.counts,
+                odometry=counts,
+                received_in_period=received,
+                rejected_in_period=rejected,
+                no_stance_in_period=no_stance,
+                period_s=DIAGNOSTICS_PERIOD_S,
+                imu_topic=self._imu_topic
+                if bool(self._setting("use_imu"))
+                else "none (use_imu false)",
+                imu_received=self._feed.imu.received,
+                samples_with_imu=self._feed.samples_with_imu,
+                without_velocities=self._without_velocities,
+                model=self._config.source,
+                description_topic=robot.topic_name,
+                description_status=robot.topic_status,
+                description_rejected=robot.topic_rejected,
+            )
+        )
+        self._diagnostics_pub.publish(
+            ros_glue.diagnostics(
+                self, "leg odometry", level, summary, self._config.quadruped.model.name, values
+            )
+        )
+
+    def _setting(self, name: str) -> float:
+        """A declared double or bool parameter's value (rclpy has checked its type and range)."""
+        return float(self.get_parameter(name).value)
+
+    def _apply_frames(self) -> None:
+        """Set the frames, and serialize the probe message that output is patched into."""
+        msg = self._msg
+        msg.header.frame_id = str(self.get_parameter("odom_frame").value)
+        msg.child_frame_id = self._robot.base_frame({})
+        probe = Odometry(child_frame_id=msg.child_frame_id)
+        probe.header.frame_id = msg.header.frame_id
+        probe.header.stamp.sec, probe.header.stamp.nanosec = SerializedOdometry.PROBE_STAMP
+        values = SerializedOdometry.probe_values()
+        pose, twist = probe.pose.pose, probe.twist.twist
+        pose.position.x, pose.position.y, pose.position.z = values[0:3]
+        o = pose.orientation
+        o.x, o.y, o.z, o.w = values[3:7]
+        probe.pose.covariance = values[7:43]
+        twist.linear.x, twist.linear.y, twist.linear.z = values[43:46]
+        twist.angular.x, twist.angular.y, twist.angular.z = values[46:49]
+        probe.twist.covariance = values[49:85]
+        writer = SerializedOdometry(serialize_message(probe))
+        self._serialized = writer if writer.usable else None
+
+    def _on_robot(self, config: RobotConfig) -> None:
+        """Another robot was accepted: start over with it (the pose restarts at the origin)."""
+        self._period.new_tracker(self._tracker.counts)
+        self._start(config)
+
+    def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
+        self._apply_frames()
+
+
+@functools.cache
+def _unpacker(order: str, count: int) -> struct.Struct:
+    return struct.Struct(f"{order}{count}d")
+
+
+def _doubles(order: str, data: bytes) -> tuple[float, ...]:
+    """The float64 values of a CDR array's bytes in byte order ``order``."""
+    return _unpacker(order, len(data) // 8).unpack(data)
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
+    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

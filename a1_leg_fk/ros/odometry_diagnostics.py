@@ -1,0 +1,78 @@
+"""The ``/diagnostics`` status of ``leg_odometry_node``, as a pure function (no ROS imports).
+
+Joint states are judged as ``foot_fk_node`` judges them (:mod:`a1_leg_fk.ros.diagnostics`); the
+odometry adds its own counts: samples, samples without a stance foot, feet dropped as slipping,
+stamp gaps, the IMU's state and the distance travelled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from a1_leg_fk.estimation.odometry import OdometryCounts
+from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.ros.diagnostics import OK, WARN, rejected_messages, robot_description_status
+from a1_leg_fk.tracking import TrackerCounts
+
+
+@dataclass(frozen=True)
+class OdometryReport:
+    """What the node knows at one report; ``*_in_period`` since the previous report."""
+
+    tracker: TrackerCounts
+    odometry: OdometryCounts
+    received_in_period: int
+    rejected_in_period: int
+    no_stance_in_period: int
+    period_s: float
+    imu_topic: str
+    imu_received: int
+    samples_with_imu: int
+    without_velocities: int  # joint states accepted that gave no foot velocity
+    model: str
+    description_topic: str
+    description_status: str
+    description_rejected: bool
+
+
+def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, object]]:
+    """(level, summary, values). WARN for: no joint state yet, rejected joint states in the
+    period, joint states without velocities, no IMU sample, samples without a stance foot in the
+    period, a rejected robot description; else OK.
+    """
+    tracker, odometry = report.tracker, report.odometry
+    level, summary = OK, "odometry published"
+    if not tracker.messages:
+        level, summary = WARN, "no joint_states received yet"
+    elif report.without_velocities and not odometry.samples:
+        level, summary = WARN, "joint_states carry no velocities: no odometry"
+    elif report.rejected_in_period:
+        level, summary = WARN, "some joint_states rejected"
+    elif report.no_stance_in_period:
+        level, summary = WARN, "samples without a stance foot: velocity held and decaying"
+    elif not report.imu_received:
+        level, summary = WARN, f"no IMU on {report.imu_topic}: legs alone, planar pose"
+    level, summary, description = robot_description_status(
+        level,
+        summary,
+        report.model,
+        report.description_topic,
+        report.description_status,
+        report.description_rejected,
+    )
+    values: dict[str, object] = {
+        "joint_states_received": tracker.messages,
+        "joint_states_rejected": rejected_messages(tracker),
+        "joint_states_without_velocities": report.without_velocities,
+        "input_rate_hz": f"{report.received_in_period / report.period_s:.1f}",
+        "imu_topic": report.imu_topic,
+        "imu_received": report.imu_received,
+        "samples": odometry.samples,
+        "samples_with_imu": report.samples_with_imu,
+        "samples_without_stance": odometry.no_stance,
+        **{f"slips_{leg}": n for leg, n in zip(LEG_NAMES, odometry.slips)},
+        "stamp_gaps": odometry.gaps,
+        "distance_m": f"{odometry.distance_m:.3f}",
+        **description,
+    }
+    return level, summary, values

@@ -1,0 +1,77 @@
+"""``leg_odometry_node``'s messages as bytes: sensor_msgs/Imu read from its CDR without building a
+message object, nav_msgs/Odometry written by patching a pre-serialized probe. At 1 kHz each of
+the two would otherwise cost about as much as the odometry itself (rclpy's conversion between
+message objects and C, with numpy arrays for every covariance).
+
+No ROS imports: :class:`SerializedOdometry` takes the probe's bytes from the caller.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Sequence
+
+IMU_DOUBLES = struct.Struct("<37d")
+"""An Imu's fields after its header: orientation (4), its covariance (9), angular velocity (3),
+its covariance (9), linear acceleration (3), its covariance (9)."""
+_STAMP = struct.Struct("<iI")
+_LENGTH = struct.Struct("<I")
+LITTLE_ENDIAN_CDR = b"\x00\x01"
+
+ImuFields = tuple[int, tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]
+"""(stamp [ns], orientation x y z w, orientation covariance (9), angular velocity [rad/s] (3),
+its covariance (9))."""
+
+
+def imu_fields(raw: bytes) -> ImuFields | None:
+    """The fields of a serialized little-endian CDR sensor_msgs/msg/Imu, or None (another
+    encoding, or malformed: the caller then deserializes it the ordinary way).
+    """
+    if len(raw) < 16 or raw[:2] != LITTLE_ENDIAN_CDR:
+        return None
+    sec, nanosec = _STAMP.unpack_from(raw, 4)
+    text_end = 12 + _LENGTH.unpack_from(raw, 12)[0]  # relative to the data, after 4 bytes
+    start = 4 + ((text_end + 7) & -8)
+    if start + IMU_DOUBLES.size != len(raw):
+        return None
+    values = IMU_DOUBLES.unpack_from(raw, start)
+    return (sec * 1_000_000_000 + nanosec, values[0:4], values[4:13], values[13:16], values[16:25])
+
+
+class SerializedOdometry:
+    """A nav_msgs/msg/Odometry serialized once (``probe``: the bytes of one whose 85 doubles are
+    :meth:`probe_values`); :meth:`serialized` patches the stamp and the 85 doubles (pose 7, its
+    covariance 36, twist 6, its covariance 36), which CDR keeps contiguous after the frame names.
+    ``usable`` is False unless the probe is little-endian CDR laid out so.
+    """
+
+    DOUBLES = 85
+    VALUES = struct.Struct(f"<{DOUBLES}d")
+
+    def __init__(self, probe: bytes) -> None:
+        self._offset = probe.find(self.VALUES.pack(*self.probe_values()))
+        self.usable = (
+            probe[:4] == b"\x00\x01\x00\x00"
+            and _STAMP.unpack_from(probe, 4) == self.PROBE_STAMP
+            and self._offset > 12
+            and self._offset + self.VALUES.size == len(probe)
+        )
+        self._buffer = bytearray(probe)
+        if self.usable:  # zero the padding before the values (a serializer may leave junk)
+            child = (12 + _LENGTH.unpack_from(probe, 12)[0] + 3) & -4  # relative to the data
+            text_end = 4 + child + 4 + _LENGTH.unpack_from(probe, 4 + child)[0]
+            self._buffer[text_end : self._offset] = bytes(self._offset - text_end)
+
+    PROBE_STAMP = (7, 9)
+
+    @staticmethod
+    def probe_values() -> list[float]:
+        """The 85 distinct values the probe message carries, in CDR order."""
+        return [1.0 + index / 128.0 for index in range(SerializedOdometry.DOUBLES)]
+
+    def serialized(self, stamp_ns: int, values: Sequence[float]) -> bytes:
+        """The message's bytes with this stamp [ns] and these 85 values."""
+        buffer = self._buffer
+        _STAMP.pack_into(buffer, 4, *divmod(stamp_ns, 1_000_000_000))
+        self.VALUES.pack_into(buffer, self._offset, *values)
+        return bytes(buffer)

@@ -1,0 +1,173 @@
+"""``a1-leg-fk odom``: a PyBullet walk in a bag (joint_states, imu, the true base pose) -> CSV, PNG
+and the comparison with the truth, checked against the simulation itself; the bag tool's
+bad-input rules; and the node's wire formats (Imu read from bytes, Odometry patched into bytes)
+against rclpy's own serialization."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+from bag_factory import T0, BagSpec
+from nav_msgs.msg import Odometry
+from odometry_bags import IMU_TOPIC, TRUTH_TOPIC, write_sim_bag
+from pybullet_walk import simulate, walking_targets
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import Imu
+
+from a1_leg_fk import cli
+from a1_leg_fk.cli.odom import CSV_HEADER
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields
+
+SIM_S = 4.0
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(walking_targets(), SIM_S)
+
+
+@pytest.fixture(scope="module")
+def bag(run, tmp_path_factory):
+    return write_sim_bag(tmp_path_factory.mktemp("odom") / "walk", run)
+
+
+def test_csv_plot_and_truth(run, bag, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out, png = tmp_path / "odom.csv", tmp_path / "odom.png"
+    code = cli.main(
+        ["odom", str(bag), "--truth", TRUTH_TOPIC, "--csv", str(out), "--plot", str(png)]
+    )
+    printed = capsys.readouterr().out
+    print(printed)
+    assert code == 0
+    rows = list(csv.reader(out.open()))
+    assert rows[0] == CSV_HEADER.strip().split(",")
+    values = np.array(rows[1:], dtype=float)
+    assert len(values) == len(run.stamps_s)
+    stamps = np.array([int(row[0]) for row in rows[1:]])
+    assert (stamps - T0 == np.round(run.stamps_s * 1e9)).all()
+    assert np.allclose(np.linalg.norm(values[:, 4:8], axis=1), 1.0)
+    # the pose's orientation is the IMU's, the truth's here
+    assert np.allclose(values[:, 4:8], run.base_quaternions, atol=1e-12)
+    # the summary's numbers, recomputed from the CSV and the simulation
+    moved = run.base_positions[-1] - run.base_positions[0]
+    # odom and the truth share the IMU's yaw: no turn between them
+    error = np.linalg.norm(values[-1, 1:4] - moved)
+    distance = np.linalg.norm(np.diff(run.base_positions, axis=0), axis=1).sum()
+    line = next(line for line in printed.splitlines() if line.startswith("truth:"))
+    assert (
+        f"final position error {error:.3f} m ({100 * error / distance:.2f} % of {distance:.3f} m)"
+        in line
+    )
+    assert png.stat().st_size > 10_000
+    assert "imu:       /imu (2000 samples; 2000 of 2000 rows had one)" in printed
+
+
+def test_without_the_imu_the_pose_is_planar(bag, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "planar.csv"
+    assert cli.main(["odom", str(bag), "--no-imu", "--csv", str(out), "--truth", TRUTH_TOPIC]) == 0
+    values = np.array(list(csv.reader(out.open()))[1:], dtype=float)
+    assert (values[:, 3] == 0).all() and (values[:, 4:6] == 0).all()  # z, qx, qy
+    printed = capsys.readouterr().out
+    assert "imu:       none (legs alone" in printed
+
+
+@pytest.mark.parametrize(
+    ("arguments", "culprit"),
+    [
+        (["--imu", "/nope"], "--imu /nope: no such topic"),
+        (["--imu", TRUTH_TOPIC], "expected sensor_msgs/msg/Imu"),
+        (["--truth", IMU_TOPIC], "--base-pose /imu is sensor_msgs/msg/Imu"),
+        (["--imu", IMU_TOPIC, "--no-imu"], "contradict"),
+        (["--foot-radius", "-1"], None),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(bag, tmp_path, capsys, arguments, culprit) -> None:
+    out = tmp_path / "bad.csv"
+    code: object
+    try:
+        code = cli.main(["odom", str(bag), "--csv", str(out), *arguments])
+    except SystemExit as exit_:  # argparse's own refusal
+        code = exit_.code
+    assert code == 2
+    error = capsys.readouterr().err.strip()
+    if culprit:
+        assert culprit in error and len(error.splitlines()) == 1, error
+    assert not out.exists()
+
+
+def test_an_existing_output_is_kept_without_force(bag, tmp_path, capsys) -> None:
+    out = tmp_path / "kept.csv"
+    out.write_text("mine")
+    assert cli.main(["odom", str(bag), "--csv", str(out)]) == 2
+    assert "exists already" in capsys.readouterr().err
+    assert out.read_text() == "mine"
+
+
+def test_a_bag_without_velocities_gives_no_rows(tmp_path) -> None:
+    from bag_factory import JointStateMsg, write_bag
+
+    spec = BagSpec()
+    names = [
+        f"{leg}_{part}_joint"
+        for leg in ("FR", "FL", "RR", "RL")
+        for part in ("hip", "upper", "lower")
+    ]
+    for index in range(5):
+        spec.add_joint_state(
+            "/joint_states", T0 + index, JointStateMsg(T0 + index, names, [0.0, 0.8, -1.5] * 4)
+        )
+    out = tmp_path / "none.csv"
+    assert cli.main(["odom", str(write_bag(tmp_path / "b", spec)), "--csv", str(out)]) == 0
+    assert out.read_text() == CSV_HEADER
+
+
+# --- the node's wire formats -------------------------------------------------------------------
+
+
+def test_imu_fields_read_rclpys_bytes() -> None:
+    msg = Imu()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = 1_700_000_000, 123_456_789
+    for frame in ("", "i", "imu_link", "a_longer_frame_name"):  # every string padding
+        msg.header.frame_id = frame
+        o = msg.orientation
+        o.x, o.y, o.z, o.w = 0.1, -0.2, 0.3, 0.9
+        msg.orientation_covariance = [float(i) for i in range(9)]
+        msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 1.5, -2.5, 3.5
+        msg.angular_velocity_covariance = [0.1 * i for i in range(9)]
+        fields = imu_fields(serialize_message(msg))
+        assert fields is not None
+        stamp, orientation, orientation_cov, gyro, gyro_cov = fields
+        assert stamp == 1_700_000_000_123_456_789
+        assert orientation == (0.1, -0.2, 0.3, 0.9) and gyro == (1.5, -2.5, 3.5)
+        assert list(orientation_cov) == list(msg.orientation_covariance)
+        assert list(gyro_cov) == list(msg.angular_velocity_covariance)
+    assert imu_fields(b"\x01\x00" + serialize_message(msg)[2:]) is None  # big-endian: not ours
+    assert imu_fields(serialize_message(msg)[:-8]) is None  # truncated
+
+
+def test_serialized_odometry_is_rclpys() -> None:
+    def message(stamp_ns: int, values) -> Odometry:
+        msg = Odometry(child_frame_id="trunk")
+        msg.header.frame_id = "odom"
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        p.x, p.y, p.z, o.x, o.y, o.z, o.w = values[:7]
+        msg.pose.covariance = values[7:43]
+        t = msg.twist.twist
+        t.linear.x, t.linear.y, t.linear.z = values[43:46]
+        t.angular.x, t.angular.y, t.angular.z = values[46:49]
+        msg.twist.covariance = values[49:85]
+        return msg
+
+    writer = SerializedOdometry(
+        serialize_message(message(7_000_000_009, SerializedOdometry.probe_values()))
+    )
+    assert writer.usable
+    values = np.random.default_rng(2).normal(size=85).tolist()
+    stamp = T0 + 987_654_321
+    ours = writer.serialized(stamp, values)
+    assert deserialize_message(ours, Odometry) == message(stamp, values)
+    assert len(ours) == len(serialize_message(message(stamp, values)))

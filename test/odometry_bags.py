@@ -1,0 +1,59 @@
+"""A simulated run (:class:`pybullet_walk.SimRun`) as a bag: JointState and Imu at every sample,
+the true base pose as PoseStamped; and the messages the node tests publish."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
+from pybullet_walk import SimRun
+
+IMU_TOPIC, TRUTH_TOPIC, JOINT_TOPIC = "/imu", "/truth", "/joint_states"
+UNKNOWN = np.zeros(9)  # an all-zero covariance: "unknown"
+NO_ORIENTATION = np.array([-1.0] + [0.0] * 8)
+
+
+def stamp_of(run: SimRun, row: int) -> int:
+    """The sample's stamp [ns]: from T0, whole nanoseconds."""
+    return T0 + round(run.stamps_s[row] * 1e9)
+
+
+def imu_message(run: SimRun, row: int, orientation: bool = True):
+    """sensor_msgs/msg/Imu of a sample: the root's orientation (or none) and gyro."""
+    x, y, z, w = run.base_quaternions[row] if orientation else (0.0, 0.0, 0.0, 1.0)
+    return T["sensor_msgs/msg/Imu"](
+        header(stamp_of(run, row), "imu_link"),
+        T["geometry_msgs/msg/Quaternion"](x, y, z, w),
+        UNKNOWN if orientation else NO_ORIENTATION,
+        T["geometry_msgs/msg/Vector3"](*run.gyro[row]),
+        UNKNOWN,
+        T["geometry_msgs/msg/Vector3"](0.0, 0.0, 9.81),
+        UNKNOWN,
+    )
+
+
+def write_sim_bag(path: Path, run: SimRun, imu: bool = True, truth: bool = True) -> Path:
+    """The run as an MCAP bag: joint_states (positions, velocities), imu, truth (PoseStamped of
+    the URDF root in the world)."""
+    spec = BagSpec()
+    for row in range(len(run.stamps_s)):
+        stamp = stamp_of(run, row)
+        if imu:  # one ns before the joint state: a replay delivers it first
+            spec.add(IMU_TOPIC, "sensor_msgs/msg/Imu", stamp - 1, imu_message(run, row))
+        spec.add_joint_state(
+            JOINT_TOPIC,
+            stamp,
+            JointStateMsg(stamp, run.joint_names, run.angles[row], run.rates[row]),
+        )
+        if truth:
+            spec.add(
+                TRUTH_TOPIC,
+                "geometry_msgs/msg/PoseStamped",
+                stamp,
+                T["geometry_msgs/msg/PoseStamped"](
+                    header(stamp, "world"),
+                    pose(run.base_positions[row], run.base_quaternions[row]),
+                ),
+            )
+    return write_bag(path, spec)

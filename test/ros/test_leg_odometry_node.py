@@ -1,0 +1,158 @@
+"""``leg_odometry_node`` over real DDS: a PyBullet-made stream (joint_states + imu at 500 Hz) gives
+the same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from bag_factory import joint_state
+from nav_msgs.msg import Odometry
+from node_harness import LEGS, Diagnostics
+from odometry_bags import JOINT_TOPIC, imu_message, stamp_of, write_sim_bag
+from pybullet_walk import simulate, walking_targets
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import Imu, JointState
+from shared import odometry_node_command
+
+from a1_leg_fk.recording.odometry import odometry_track
+
+RATE_HZ = 500.0
+SIM_S = 2.5
+AHEAD = 40  # samples the stream may run ahead of the node's answers (its queues hold 100)
+
+
+@pytest.fixture(scope="module")
+def run():
+    return simulate(walking_targets(start_s=0.3), SIM_S)
+
+
+def to_ros(message, kind):
+    """A rosbags message (bag_factory's) as the rclpy message of the same type."""
+    out = kind()
+    out.header.stamp.sec = message.header.stamp.sec
+    out.header.stamp.nanosec = message.header.stamp.nanosec
+    out.header.frame_id = message.header.frame_id
+    if kind is JointState:
+        out.name = list(message.name)
+        out.position = message.position.tolist()
+        out.velocity = message.velocity.tolist()
+        return out
+    for field in ("orientation", "angular_velocity", "linear_acceleration"):
+        source, target = getattr(message, field), getattr(out, field)
+        for axis in ("x", "y", "z", "w")[: 4 if field == "orientation" else 3]:
+            setattr(target, axis, float(getattr(source, axis)))
+    for field in ("orientation", "angular_velocity", "linear_acceleration"):
+        setattr(out, f"{field}_covariance", getattr(message, f"{field}_covariance").tolist())
+    return out
+
+
+def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None:
+    bag = write_sim_bag(tmp_path / "sim", run, truth=False)
+    track = odometry_track(bag, topic=JOINT_TOPIC)
+    node = processes.start(odometry_node_command())
+    diagnostics = Diagnostics(ros, "leg odometry")
+    received: list[Odometry] = []
+    ros.node.create_subscription(
+        Odometry, "leg_odometry", received.append, QoSProfile(depth=10000)
+    )
+    imu_pub = ros.node.create_publisher(Imu, "imu", QoSProfile(depth=1000))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=1000))
+    assert ros.spin_until(
+        lambda: (
+            imu_pub.get_subscription_count() > 0
+            and joint_pub.get_subscription_count() > 0
+            and ros.node.count_publishers("leg_odometry") > 0
+        ),
+        30.0,
+    ), processes.output(node)
+    ros.spin_for(0.5)  # the node's subscriptions match ours too
+    samples = len(run.stamps_s)
+    start = time.monotonic()
+    for row in range(samples):
+        imu_pub.publish(to_ros(imu_message(run, row), Imu))
+        ros.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in the bag
+        message = joint_state_for(run, row)
+        joint_pub.publish(to_ros(message, JointState))
+        delay = start + (row + 1) / RATE_HZ - time.monotonic()
+        if delay > 0:
+            ros.spin_for(delay)
+        # 500 Hz, unless the node (on a loaded machine) falls more than AHEAD samples behind
+        behind = row - AHEAD
+        ros.spin_until(lambda: len(received) >= behind, 10.0)  # noqa: B023 (used at once)
+    assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
+        f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"
+    )
+    status = diagnostics.fresh()
+    assert status["samples"] == str(samples) and status["imu_received"] == str(samples)
+    assert status["samples_without_stance"] == str(track.counts.no_stance)
+    assert [status[f"slips_{leg}"] for leg in LEGS] == [str(n) for n in track.counts.slips]
+    assert processes.interrupt(node) == 0
+    stamps = np.array(
+        [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received]
+    )
+    assert (stamps == track.stamps_ns).all()
+    linear = np.array(
+        [
+            [m.twist.twist.linear.x, m.twist.twist.linear.y, m.twist.twist.linear.z]
+            for m in received
+        ]
+    )
+    position = np.array(
+        [
+            [m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]
+            for m in received
+        ]
+    )
+    print(
+        f"node vs bag over {samples} samples: linear velocity max difference "
+        f"{np.abs(linear - track.linear).max():.2e} m/s, final position "
+        f"{np.abs(position[-1] - track.positions[-1]).max():.2e} m"
+    )
+    assert np.abs(linear - track.linear).max() < 1e-9
+    assert np.abs(position - track.positions).max() < 1e-9
+    first = received[0]
+    assert first.header.frame_id == "odom" and first.child_frame_id == "trunk"
+    covariance = np.array(received[-1].pose.covariance).reshape(6, 6)
+    assert (np.diag(covariance) > 0).all()
+    assert (np.diag(np.array(received[-1].twist.covariance).reshape(6, 6)) > 0).all()
+
+
+def joint_state_for(run, row):
+    from bag_factory import JointStateMsg
+
+    return joint_state(
+        JointStateMsg(stamp_of(run, row), run.joint_names, run.angles[row], run.rates[row])
+    )
+
+
+def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
+    node = processes.start(odometry_node_command("-p", "use_imu:=false"))
+    diagnostics = Diagnostics(ros, "leg odometry")
+    received: list[Odometry] = []
+    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
+    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
+    ros.spin_for(0.5)
+    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    stand = [0.0, 0.8, -1.5] * 4
+    bad = [
+        JointState(name=names, position=stand[:11], velocity=[0.0] * 12),  # lengths differ
+        JointState(name=names, position=stand),  # no velocities: no odometry
+        JointState(name=names, position=stand, velocity=[float("nan")] * 12),
+    ]
+    good = JointState(name=names, position=stand, velocity=[0.0] * 12)
+    for index, message in enumerate([*bad, good]):
+        message.header.stamp.sec, message.header.stamp.nanosec = 100, index * 1000
+        joint_pub.publish(message)
+        ros.spin_for(0.05)
+    assert ros.spin_until(lambda: len(received) >= 1, 10.0), processes.output(node)
+    ros.spin_for(0.3)
+    assert len(received) == 1 and received[0].header.stamp.nanosec == 3000
+    assert received[0].twist.twist.linear.x == 0.0 and received[0].pose.pose.orientation.w == 1.0
+    status = diagnostics.fresh()
+    assert status["joint_states_received"] == "4" and status["joint_states_rejected"] == "1"
+    assert status["joint_states_without_velocities"] == "2"
+    assert status["imu_topic"] == "none (use_imu false)"
+    assert processes.interrupt(node) == 0

@@ -1,7 +1,8 @@
 """JointState handling without ROS types: merge partial messages, reject bad ones, compute feet.
 
 :class:`FootTracker` is what the node calls for every ``sensor_msgs/JointState``. It takes the
-message's ``name``, ``position`` and ``velocity`` sequences and returns the feet to publish:
+message's ``name``, ``position``, ``velocity`` and ``effort`` sequences and returns the feet to
+publish:
 one per leg that the message touched and whose three joints are all known. The name -> slot
 mapping is cached and rebuilt only when the message's name list changes, so a steady stream
 costs one list comparison plus the generated FK arithmetic.
@@ -51,12 +52,14 @@ class BlockResult:
     """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;
     ``angles`` (K, 12) [rad], the merged state after each message (NaN for joints not yet known);
     ``rates`` (K, 12) [rad/s], the message's joint velocities where the node publishes that leg's
-    velocity for it, NaN elsewhere.
+    velocity for it, NaN elsewhere; ``efforts`` (K, 12) [N m], the merged efforts after each
+    message (see :attr:`FootTracker.efforts`).
     """
 
     accepted: np.ndarray
     angles: np.ndarray
     rates: np.ndarray
+    efforts: np.ndarray
 
 
 @dataclass
@@ -88,6 +91,10 @@ class FootTracker:
     def __init__(self, quadruped: Quadruped) -> None:
         self.quadruped = quadruped
         self.angles: list[float] = [math.nan] * JOINT_COUNT  # rad; NaN until first known
+        self.efforts: list[float] = [math.nan] * JOINT_COUNT
+        """Joint efforts [N m, or N for a prismatic joint] in slot order, merged like the angles
+        from accepted messages whose effort list is as long as their names (other lengths are
+        ignored); NaN until known. Carried, not used by the feet."""
         self.counts = TrackerCounts()
         self._legs = quadruped.legs
         self._lower = [j.lower if j.lower is not None else -math.inf for j in quadruped.joints]
@@ -112,12 +119,17 @@ class FootTracker:
         ]
 
     def update(
-        self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float]
+        self,
+        names: Sequence[str],
+        positions: Sequence[float],
+        velocities: Sequence[float],
+        efforts: Sequence[float] = (),
     ) -> list[Foot]:
         """Merge one message; return the feet to publish (possibly none). Never raises on bad data.
 
-        ``names``, ``positions`` [rad] and ``velocities`` [rad/s] are the JointState fields;
-        ``velocities`` may be empty. Check :attr:`last_outcome` for what happened.
+        ``names``, ``positions`` [rad], ``velocities`` [rad/s] and ``efforts`` [N m] are the
+        JointState fields; ``velocities`` and ``efforts`` may be empty. Check
+        :attr:`last_outcome` for what happened.
         """
         counts = self.counts
         counts.messages += 1
@@ -144,6 +156,10 @@ class FootTracker:
                 self.last_problem = f"position {angle} of joint '{names[index]}' is not finite"
         if not merged:
             return self._finish(ALL_POSITIONS_NON_FINITE, [])
+        if efforts and len(efforts) == len(names):
+            merged_efforts = self.efforts
+            for index, slot in layout.pairs:
+                merged_efforts[slot] = efforts[index]
         counts.out_of_limit_messages += out_of_limit
         feet = [
             self._foot(leg_slot, layout, velocities)
@@ -153,16 +169,23 @@ class FootTracker:
         return self._finish(ACCEPTED, feet)
 
     def update_block(
-        self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray
+        self,
+        names: Sequence[str],
+        positions: np.ndarray,
+        velocities: np.ndarray,
+        efforts: np.ndarray | None = None,
     ) -> BlockResult:
         """:meth:`update` for K consecutive messages that share one name list, as arrays.
 
-        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] is (K, len(names)) or
-        (K, 0). Outcomes, counts and the merged state end up exactly as after K calls of
+        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] and ``efforts`` [N m] are
+        (K, len(names)) or (K, 0). Outcomes, counts and the merged state end up exactly as after K
+        calls of
         :meth:`update`; messages whose leg joints are all finite are merged with numpy, the others
         go through :meth:`update` one by one.
         """
         rows = positions.shape[0]
+        if efforts is None or efforts.shape[1] != len(names):
+            efforts = np.empty((rows, 0))
         layout = self._layout
         if names != layout.names:
             layout = self._layout = self._describe(list(names))
@@ -170,12 +193,14 @@ class FootTracker:
             np.zeros(rows, bool),
             np.empty((rows, JOINT_COUNT)),
             np.full((rows, JOINT_COUNT), math.nan),
+            np.empty((rows, JOINT_COUNT)),
         )
         outcome = self._check(layout, len(names), positions.shape[1], velocities.shape[1])
         if outcome is not None:
             self.counts.messages += rows
             self._finish_many(outcome, rows, 0)
             result.angles[:] = self.angles
+            result.efforts[:] = self.efforts
             return result
         index = np.array([i for i, _ in layout.pairs])
         slots = np.array([slot for _, slot in layout.pairs])
@@ -186,14 +211,19 @@ class FootTracker:
             if finite[row]:
                 end = row + int(np.argmin(finite[row:])) if not finite[row:].all() else rows
                 self._merge_finite(layout, values[row:end], slots, result, slice(row, end))
+                block_efforts = efforts[row:end, index] if efforts.shape[1] else efforts[row:end]
+                self._merge_efforts(block_efforts, slots, result.efforts[row:end])
                 if velocities.shape[1]:
                     result.rates[row:end, slots] = velocities[row:end, index]
                 row = end
             else:
                 message_rates = velocities[row].tolist()
-                feet = self.update(names, positions[row].tolist(), message_rates)
+                feet = self.update(
+                    names, positions[row].tolist(), message_rates, efforts[row].tolist()
+                )
                 result.accepted[row] = self._last_outcome == ACCEPTED
                 result.angles[row] = self.angles
+                result.efforts[row] = self.efforts
                 for foot in feet:
                     if foot.velocity is not None:  # then the leg's three rates are finite
                         first = foot.leg_slot * JOINTS_PER_LEG
@@ -229,6 +259,15 @@ class FootTracker:
         )
         self.last_problem = ""
         self._finish_many(ACCEPTED, count, feet)
+
+    def _merge_efforts(self, values: np.ndarray, slots: np.ndarray, merged: np.ndarray) -> None:
+        """Merge accepted messages' efforts (``values`` (n, pairs) [N m], or (n, 0): none) into
+        ``merged`` (n, 12), the state after each of them.
+        """
+        merged[:] = self.efforts
+        if values.shape[1]:
+            merged[:, slots] = values
+            self.efforts = merged[-1].tolist()
 
     def _finish_many(self, outcome: str, messages: int, feet: int) -> None:
         self._last_outcome = outcome

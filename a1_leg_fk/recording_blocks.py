@@ -168,14 +168,15 @@ class _Batch:
         stamps = np.where(stamps == 0, bag_times_ns, stamps)
         positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
         velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
-        return stamps, bag_times_ns, positions, velocities
+        efforts = np.ascontiguousarray(matrix[:, layout.efforts]).view("<f8")
+        return stamps, bag_times_ns, positions, velocities, efforts
 
     def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
         fields = self.decoder.fields
         pending = _Pending()
         for raw, bag_time in zip(raws, bag_times):
             try:
-                stamp, changed, order, positions, velocities = fields(raw)
+                stamp, changed, order, positions, velocities, efforts = fields(raw)
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
@@ -184,15 +185,19 @@ class _Batch:
                 or order != pending.order
                 or len(positions) != pending.position_bytes
                 or len(velocities) != pending.velocity_bytes
+                or len(efforts) != pending.effort_bytes
             ):
                 yield from pending.finish(self)
                 pending = _Pending()
             if not pending.stamps:
-                pending.start(self.decoder.names, order, len(positions), len(velocities))
+                pending.start(
+                    self.decoder.names, order, len(positions), len(velocities), len(efforts)
+                )
             pending.stamps.append(stamp or bag_time)
             pending.bag_times.append(bag_time)
             pending.positions.append(positions)
             pending.velocities.append(velocities)
+            pending.efforts.append(efforts)
         yield from pending.finish(self)
 
 
@@ -202,17 +207,24 @@ class _Pending:
     def __init__(self) -> None:
         self.names: list[str] = []
         self.order = "<"
-        self.position_bytes = self.velocity_bytes = 0
+        self.position_bytes = self.velocity_bytes = self.effort_bytes = 0
         self.stamps: list[int] = []
         self.bag_times: list[int] = []
         self.positions: list[bytes] = []
         self.velocities: list[bytes] = []
+        self.efforts: list[bytes] = []
 
     def start(
-        self, names: list[str], order: str, position_bytes: int, velocity_bytes: int
+        self,
+        names: list[str],
+        order: str,
+        position_bytes: int,
+        velocity_bytes: int,
+        effort_bytes: int,
     ) -> None:
         self.names, self.order = names, order
         self.position_bytes, self.velocity_bytes = position_bytes, velocity_bytes
+        self.effort_bytes = effort_bytes
 
     def finish(self, batch: _Batch) -> Iterator[FootBlock]:
         """The rows of these messages (none if there are none)."""
@@ -226,6 +238,9 @@ class _Pending:
         velocities = np.frombuffer(b"".join(self.velocities), dtype).reshape(
             count, self.velocity_bytes // 8
         )
+        efforts = np.frombuffer(b"".join(self.efforts), dtype).reshape(
+            count, self.effort_bytes // 8
+        )
         yield from _finish(
             batch.recording,
             batch.tracker,
@@ -234,6 +249,7 @@ class _Pending:
             np.array(self.bag_times, dtype=np.int64),
             positions.astype(np.float64),
             velocities.astype(np.float64),
+            efforts.astype(np.float64),
         )
 
 
@@ -245,11 +261,13 @@ def _finish(
     bag_times: np.ndarray,
     positions: np.ndarray,
     velocities: np.ndarray,
+    efforts: np.ndarray,
 ) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
-    ``positions`` [rad] (K, n), ``velocities`` [rad/s] (K, n or 0 or another length).
+    ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
+    another length); the efforts are carried in the tracker, not in the rows (yet).
     """
-    result = tracker.update_block(names, positions, velocities)
+    result = tracker.update_block(names, positions, velocities, efforts)
     angles = result.angles[result.accepted]
     known = np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)  # (N, 4)
     rows = known.any(axis=1)  # a leg known, as the node needs to publish its foot

@@ -22,13 +22,15 @@ T0 = 1_700_000_000_000_000_000
 
 @dataclass
 class JointStateMsg:
-    """One JointState: stamp [ns] (0 = unset), names, positions, velocities (may be empty)."""
+    """One JointState: stamp [ns] (0 = unset), names, positions, velocities and efforts (may be
+    empty)."""
 
     stamp_ns: int
     names: Sequence[str]
     positions: Sequence[float]
     velocities: Sequence[float] = ()
     frame_id: str = ""
+    efforts: Sequence[float] = ()
 
 
 def joint_state(message: JointStateMsg):
@@ -37,7 +39,7 @@ def joint_state(message: JointStateMsg):
         list(message.names),
         np.array(message.positions, dtype=float),
         np.array(message.velocities, dtype=float),
-        np.array([], dtype=float),
+        np.array(message.efforts, dtype=float),
     )
 
 

@@ -14,11 +14,12 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from a1_leg_fk.kinematics import Quadruped
-from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG
+from a1_leg_fk.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
 
 # Message outcomes; every message received ends in exactly one of them.
 ACCEPTED = "accepted"
@@ -33,11 +34,11 @@ REJECTIONS = (
     DUPLICATE_NAMES,
     ALL_POSITIONS_NON_FINITE,
 )
+LEG_COUNT = len(LEG_NAMES)
 MAX_REMEMBERED_UNKNOWN_NAMES = 1000  # a flood of new names must not grow memory
 
 
-@dataclass(frozen=True)
-class Foot:
+class Foot(NamedTuple):
     """One leg's foot from one message: position [m] and, if the message had the leg's three
     joint velocities, velocity [m/s]; base frame, relative to the base.
     """
@@ -76,13 +77,16 @@ class TrackerCounts:
 
 @dataclass(frozen=True)
 class _NameLayout:
-    """What a message's name list means: (message index, slot) pairs and the legs it touches."""
+    """What a message's name list means: (message index, slot) pairs, the legs it touches and,
+    per leg slot, the message indices of the leg's three joints (None unless it has all three).
+    """
 
     names: list[str]
     pairs: tuple[tuple[int, int], ...]
     legs: tuple[int, ...]
     unknown: tuple[str, ...]
     duplicates: tuple[str, ...]
+    leg_indices: tuple[tuple[int, ...] | None, ...] = (None,) * LEG_COUNT
 
 
 class FootTracker:
@@ -161,11 +165,14 @@ class FootTracker:
             for index, slot in layout.pairs:
                 merged_efforts[slot] = efforts[index]
         counts.out_of_limit_messages += out_of_limit
-        feet = [
-            self._foot(leg_slot, layout, velocities)
-            for leg_slot in layout.legs
-            if leg_slot not in bad_legs and not self._leg_unknown(leg_slot)
-        ]
+        feet = []
+        for leg_slot in layout.legs:
+            first = leg_slot * JOINTS_PER_LEG
+            q0, q1, q2 = angles[first : first + JOINTS_PER_LEG]
+            if leg_slot in bad_legs or q0 != q0 or q1 != q1 or q2 != q2:  # noqa: PLR0124 (NaN: not known yet)
+                continue
+            rates = self._leg_rates(layout.leg_indices[leg_slot], velocities)
+            feet.append(self._foot(leg_slot, q0, q1, q2, rates))
         return self._finish(ACCEPTED, feet)
 
     def update_block(
@@ -228,7 +235,7 @@ class FootTracker:
                     if foot.velocity is not None:  # then the leg's three rates are finite
                         first = foot.leg_slot * JOINTS_PER_LEG
                         result.rates[row, first : first + JOINTS_PER_LEG] = self._leg_rates(
-                            foot.leg_slot, layout, message_rates
+                            layout.leg_indices[foot.leg_slot], message_rates
                         )
                 row += 1
         return result
@@ -304,15 +311,11 @@ class FootTracker:
             return NO_LEG_JOINTS
         return None
 
-    def _leg_unknown(self, leg_slot: int) -> bool:
-        first = leg_slot * JOINTS_PER_LEG
-        return any(math.isnan(angle) for angle in self.angles[first : first + JOINTS_PER_LEG])
-
-    def _foot(self, leg_slot: int, layout: _NameLayout, velocities: Sequence[float]) -> Foot:
-        first = leg_slot * JOINTS_PER_LEG
-        q0, q1, q2 = self.angles[first : first + JOINTS_PER_LEG]
+    def _foot(
+        self, leg_slot: int, q0: float, q1: float, q2: float, rates: tuple[float, ...] | None
+    ) -> Foot:
+        """The leg's foot at angles q0..q2 [rad], with its velocity for ``rates`` [rad/s]."""
         leg = self._legs[leg_slot]
-        rates = self._leg_rates(leg_slot, layout, velocities) if velocities else None
         if rates is None:
             return Foot(leg_slot, leg.position(q0, q1, q2), None)
         x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
@@ -323,15 +326,16 @@ class FootTracker:
 
     @staticmethod
     def _leg_rates(
-        leg_slot: int, layout: _NameLayout, velocities: Sequence[float]
-    ) -> list[float] | None:
-        """The leg's three joint velocities from this message, or None unless all are finite."""
-        rates = [math.nan] * JOINTS_PER_LEG
-        first = leg_slot * JOINTS_PER_LEG
-        for index, slot in layout.pairs:
-            if first <= slot < first + JOINTS_PER_LEG:
-                rates[slot - first] = velocities[index]
-        return rates if all(math.isfinite(rate) for rate in rates) else None
+        indices: tuple[int, ...] | None, velocities: Sequence[float]
+    ) -> tuple[float, ...] | None:
+        """The leg's three joint velocities [rad/s] at message ``indices``, or None unless the
+        message has all three and they are finite.
+        """
+        if indices is None or not velocities:
+            return None
+        rates = (velocities[indices[0]], velocities[indices[1]], velocities[indices[2]])
+        isfinite = math.isfinite
+        return rates if isfinite(rates[0]) and isfinite(rates[1]) and isfinite(rates[2]) else None
 
     def _describe(self, names: list[str]) -> _NameLayout:
         slots = self.quadruped.name_to_slot
@@ -347,7 +351,16 @@ class FootTracker:
             pairs.append((index, slot))
         self._remember_unknown(unknown)
         legs = tuple(sorted({slot // JOINTS_PER_LEG for _, slot in pairs}))
-        return _NameLayout(names, tuple(pairs), legs, tuple(unknown), tuple(duplicates))
+        index_of = {slot: index for index, slot in pairs}
+        leg_indices = tuple(
+            tuple(index_of[slot] for slot in range(first, first + JOINTS_PER_LEG))
+            if all(slot in index_of for slot in range(first, first + JOINTS_PER_LEG))
+            else None
+            for first in range(0, JOINT_COUNT, JOINTS_PER_LEG)
+        )
+        return _NameLayout(
+            names, tuple(pairs), legs, tuple(unknown), tuple(duplicates), leg_indices
+        )
 
     def _remember_unknown(self, names: list[str]) -> None:
         known_unknown = self.counts.unknown_names

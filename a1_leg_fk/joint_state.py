@@ -146,14 +146,15 @@ class FootTracker:
             return self._finish(outcome, [])
         angles, lower, upper = self.angles, self._lower, self._upper
         bad_legs: set[int] = set()
-        merged = 0
-        out_of_limit = False
+        merged = out_of_limit = False
+        isfinite = math.isfinite
         for index, slot in layout.pairs:
             angle = positions[index]
-            if math.isfinite(angle):
+            if isfinite(angle):
                 angles[slot] = angle
-                merged += 1
-                out_of_limit = out_of_limit or not lower[slot] <= angle <= upper[slot]
+                merged = True
+                if not lower[slot] <= angle <= upper[slot]:
+                    out_of_limit = True
             else:
                 bad_legs.add(slot // JOINTS_PER_LEG)
                 counts.non_finite_joints += 1

@@ -26,6 +26,13 @@ def _run(module: str) -> int:
             signals.interrupting = False
         except StartupInterrupted:
             return 0
+        except BaseException:
+            # A C extension importing a module when the signal came turns the exception into
+            # its own ImportError (numpy: "PyCapsule_Import could not import module ..."). The
+            # stop was asked for: no traceback.
+            if signals.stop.is_set():
+                return 0
+            raise
         return int(main())
 
 

@@ -2,15 +2,15 @@
 rclpy.init, the node's construction, the first turns): every process stops within 2 s, with exit
 0 and no traceback.
 
-Three ways to start:
+Two ways to start:
 - with both signals blocked by the parent over the exec (as ``env --block-signal=INT,TERM`` or a
   launch ``prefix`` does): a signal at ANY moment from the spawn, 0 to 600 ms, ends in exit 0 (it
   stays pending through the interpreter's start-up and is delivered when the executable unblocks
   it);
 - plain, from when the process catches SIGTERM (read from /proc: its ``SigCgt`` mask), i.e. once
-  the executable's handler is in place;
-- plain, right after the spawn: the interpreter's own defaults still apply (the process ends by
-  the signal itself; README, Troubleshooting), and there is no traceback.
+  the executable's handler is in place. Before that, in a plain start, the interpreter's own
+  defaults apply (docs/node.md): not tested, as no code of the package runs there and a loaded
+  machine moves the moment a signal "right after the spawn" lands anywhere in it.
 """
 
 from __future__ import annotations
@@ -144,16 +144,3 @@ def test_a_signal_once_the_handler_is_in_place_stops_with_exit_0(
                 f"+{delay_s} s: exit {code} after {exit_s:.2f} s, traceback={traceback}"
             )
     assert not failures, f"{executable} {signal.Signals(number).name}: " + "; ".join(failures)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-@pytest.mark.parametrize("executable", sorted(EXECUTABLES))
-def test_a_signal_right_after_the_spawn_ends_the_process(
-    processes, executable: str, number: int
-) -> None:
-    with default_dispositions():
-        process = processes.start(EXECUTABLES[executable])
-    code, _, traceback = stop_outcome(processes, process, number)
-    assert code in (0, -number), f"exit {code}"
-    assert not traceback, processes.output(process)

@@ -166,15 +166,7 @@ class FootTracker:
             for index, slot in layout.pairs:
                 merged_efforts[slot] = efforts[index]
         counts.out_of_limit_messages += out_of_limit
-        feet = []
-        for leg_slot in layout.legs:
-            first = leg_slot * JOINTS_PER_LEG
-            q0, q1, q2 = angles[first : first + JOINTS_PER_LEG]
-            if leg_slot in bad_legs or q0 != q0 or q1 != q1 or q2 != q2:  # noqa: PLR0124 (NaN: not known yet)
-                continue
-            rates = self._leg_rates(layout.leg_indices[leg_slot], velocities)
-            feet.append(self._foot(leg_slot, q0, q1, q2, rates))
-        return self._finish(ACCEPTED, feet)
+        return self._finish(ACCEPTED, self._feet(layout, bad_legs, velocities))
 
     def update_block(
         self,
@@ -312,18 +304,31 @@ class FootTracker:
             return NO_LEG_JOINTS
         return None
 
-    def _foot(
-        self, leg_slot: int, q0: float, q1: float, q2: float, rates: tuple[float, ...] | None
-    ) -> Foot:
-        """The leg's foot at angles q0..q2 [rad], with its velocity for ``rates`` [rad/s]."""
-        leg = self._legs[leg_slot]
-        if rates is None:
-            return Foot(leg_slot, leg.position(q0, q1, q2), None)
-        x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
-        finite = (
-            math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)
-        )  # huge rates can overflow
-        return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
+    def _feet(
+        self, layout: _NameLayout, bad_legs: set[int], velocities: Sequence[float]
+    ) -> list[Foot]:
+        """The feet of the legs the message touched whose three angles are known and finite,
+        each with its velocity where the message has the leg's three rates and they are finite
+        (and the result too: huge rates can overflow). Inlined: the node's per-message path.
+        """
+        angles, legs, leg_indices = self.angles, self._legs, layout.leg_indices
+        isfinite = math.isfinite
+        feet = []
+        for leg_slot in layout.legs:
+            first = leg_slot * JOINTS_PER_LEG
+            q0, q1, q2 = angles[first : first + JOINTS_PER_LEG]
+            if leg_slot in bad_legs or q0 != q0 or q1 != q1 or q2 != q2:  # noqa: PLR0124 (NaN)
+                continue
+            indices = leg_indices[leg_slot] if velocities else None
+            if indices is not None:
+                r0, r1, r2 = velocities[indices[0]], velocities[indices[1]], velocities[indices[2]]
+                if isfinite(r0) and isfinite(r1) and isfinite(r2):
+                    x, y, z, vx, vy, vz = legs[leg_slot].position_velocity(q0, q1, q2, r0, r1, r2)
+                    finite = isfinite(vx) and isfinite(vy) and isfinite(vz)
+                    feet.append(Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None))
+                    continue
+            feet.append(Foot(leg_slot, legs[leg_slot].position(q0, q1, q2), None))
+        return feet
 
     @staticmethod
     def _leg_rates(

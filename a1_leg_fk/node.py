@@ -181,7 +181,7 @@ class FootFkNode(Node):
             self._decoder.names,
             doubles(fields.positions, order),
             doubles(fields.velocities, order),
-            doubles(fields.efforts, order),
+            doubles(fields.efforts, order) if fields.efforts else (),
         )
         if self._tracker.new_unknown_names:
             self._warn_unknown_names()

@@ -440,7 +440,6 @@ def print_report(
                 f"{main_1k['cpu_under_test']:.1f} %",
             ),
         ]
-    base_1k = next((p.result for p in base_phases if not p.ramp and p.result), None)
     if main_1k and base_1k:
         cpu_ratio = main_1k["cpu_under_test"] / base_1k["cpu_under_test"]
         goals.append(

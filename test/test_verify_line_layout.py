@@ -17,7 +17,7 @@ import pybullet
 import pytest
 from exported_urdf import FEET, exported_quadruped, unitree_style_a1
 from node_harness import LATCHED, NodeClient, node_command, parse_tokens
-from pybullet_reference import A1_URDF, PyBulletRobot
+from pybullet_reference import A1_URDF, PyBulletRobot, assert_twin_agrees
 from shared import A1_FEET, LEGS, PYBULLET_NAMES, UNITREE_NAMES
 from std_msgs.msg import String
 
@@ -79,15 +79,8 @@ def test_the_twin_of_a_one_line_description_matches_pybullet(tmp_path: Path, rob
     try:
         with reference(tmp_path, robot) as pybullet_itself:
             limits = pybullet_itself.limits(names)
-            for q in np.random.default_rng(19).uniform(*limits, size=(20, len(names))):
-                result = twin.verify(q, TOLERANCE_M)
-                assert result.success, result
-                np.testing.assert_allclose(
-                    twin.foot_positions(q),
-                    pybullet_itself.feet(names, feet, q),
-                    rtol=0.0,
-                    atol=TOLERANCE_M,
-                )
+            configurations = np.random.default_rng(19).uniform(*limits, size=(20, len(names)))
+            assert_twin_agrees(twin, pybullet_itself, names, feet, configurations, TOLERANCE_M)
     finally:
         twin.close()
 

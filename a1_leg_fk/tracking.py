@@ -1,7 +1,8 @@
 """JointState handling without ROS types: merge partial messages, reject bad ones, compute feet.
 
 :class:`FootTracker` is what the node calls for every ``sensor_msgs/JointState``. It takes the
-message's ``name``, ``position`` and ``velocity`` sequences and returns the feet to publish:
+message's ``name``, ``position``, ``velocity`` and ``effort`` sequences and returns the feet to
+publish:
 one per leg that the message touched and whose three joints are all known. The name -> slot
 mapping is cached and rebuilt only when the message's name list changes, so a steady stream
 costs one list comparison plus the generated FK arithmetic.
@@ -13,11 +14,12 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from a1_leg_fk.kinematics.quadruped import Quadruped
-from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
 
 # Message outcomes; every message received ends in exactly one of them.
 ACCEPTED = "accepted"
@@ -32,11 +34,11 @@ REJECTIONS = (
     DUPLICATE_NAMES,
     ALL_POSITIONS_NON_FINITE,
 )
+LEG_COUNT = len(LEG_NAMES)
 MAX_REMEMBERED_UNKNOWN_NAMES = 1000  # a flood of new names must not grow memory
 
 
-@dataclass(frozen=True)
-class Foot:
+class Foot(NamedTuple):
     """One leg's foot from one message: position [m] and, if the message had the leg's three
     joint velocities, velocity [m/s]; base frame, relative to the base.
     """
@@ -51,12 +53,14 @@ class BlockResult:
     """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;
     ``angles`` (K, 12) [rad], the merged state after each message (NaN for joints not yet known);
     ``rates`` (K, 12) [rad/s], the message's joint velocities where the node publishes that leg's
-    velocity for it, NaN elsewhere.
+    velocity for it, NaN elsewhere; ``efforts`` (K, 12) [N m], the merged efforts after each
+    message (see :attr:`FootTracker.efforts`).
     """
 
     accepted: np.ndarray
     angles: np.ndarray
     rates: np.ndarray
+    efforts: np.ndarray
 
 
 @dataclass
@@ -73,13 +77,16 @@ class TrackerCounts:
 
 @dataclass(frozen=True)
 class _NameLayout:
-    """What a message's name list means: (message index, slot) pairs and the legs it touches."""
+    """What a message's name list means: (message index, slot) pairs, the legs it touches and,
+    per leg slot, the message indices of the leg's three joints (None unless it has all three).
+    """
 
     names: list[str]
     pairs: tuple[tuple[int, int], ...]
     legs: tuple[int, ...]
     unknown: tuple[str, ...]
     duplicates: tuple[str, ...]
+    leg_indices: tuple[tuple[int, ...] | None, ...] = (None,) * LEG_COUNT
 
 
 class FootTracker:
@@ -91,6 +98,10 @@ class FootTracker:
         self.rates: list[float] = [math.nan] * JOINT_COUNT
         """[rad/s]: the latest :meth:`update`'s joint velocities of the legs it returned a foot
         velocity for, NaN elsewhere (as :attr:`BlockResult.rates`)."""
+        self.efforts: list[float] = [math.nan] * JOINT_COUNT
+        """Joint efforts [N m, or N for a prismatic joint] in slot order, merged like the angles
+        from accepted messages whose effort list is as long as their names (other lengths are
+        ignored); NaN until known. Carried, not used by the feet."""
         self.counts = TrackerCounts()
         self._legs = quadruped.legs
         self._lower = [j.lower if j.lower is not None else -math.inf for j in quadruped.joints]
@@ -115,12 +126,17 @@ class FootTracker:
         ]
 
     def update(
-        self, names: Sequence[str], positions: Sequence[float], velocities: Sequence[float]
+        self,
+        names: Sequence[str],
+        positions: Sequence[float],
+        velocities: Sequence[float],
+        efforts: Sequence[float] = (),
     ) -> list[Foot]:
         """Merge one message; return the feet to publish (possibly none). Never raises on bad data.
 
-        ``names``, ``positions`` [rad] and ``velocities`` [rad/s] are the JointState fields;
-        ``velocities`` may be empty. Check :attr:`last_outcome` for what happened.
+        ``names``, ``positions`` [rad], ``velocities`` [rad/s] and ``efforts`` [N m] are the
+        JointState fields; ``velocities`` and ``efforts`` may be empty. Check
+        :attr:`last_outcome` for what happened.
         """
         counts = self.counts
         counts.messages += 1
@@ -134,39 +150,46 @@ class FootTracker:
             return self._finish(outcome, [])
         angles, lower, upper = self.angles, self._lower, self._upper
         bad_legs: set[int] = set()
-        merged = 0
-        out_of_limit = False
+        merged = out_of_limit = False
+        isfinite = math.isfinite
         for index, slot in layout.pairs:
             angle = positions[index]
-            if math.isfinite(angle):
+            if isfinite(angle):
                 angles[slot] = angle
-                merged += 1
-                out_of_limit = out_of_limit or not lower[slot] <= angle <= upper[slot]
+                merged = True
+                if not lower[slot] <= angle <= upper[slot]:
+                    out_of_limit = True
             else:
                 bad_legs.add(slot // JOINTS_PER_LEG)
                 counts.non_finite_joints += 1
                 self.last_problem = f"position {angle} of joint '{names[index]}' is not finite"
         if not merged:
             return self._finish(ALL_POSITIONS_NON_FINITE, [])
+        if efforts and len(efforts) == len(names):
+            merged_efforts = self.efforts
+            for index, slot in layout.pairs:
+                merged_efforts[slot] = efforts[index]
         counts.out_of_limit_messages += out_of_limit
-        feet = [
-            self._foot(leg_slot, layout, velocities)
-            for leg_slot in layout.legs
-            if leg_slot not in bad_legs and not self._leg_unknown(leg_slot)
-        ]
-        return self._finish(ACCEPTED, feet)
+        return self._finish(ACCEPTED, self._feet(layout, bad_legs, velocities))
 
     def update_block(
-        self, names: Sequence[str], positions: np.ndarray, velocities: np.ndarray
+        self,
+        names: Sequence[str],
+        positions: np.ndarray,
+        velocities: np.ndarray,
+        efforts: np.ndarray | None = None,
     ) -> BlockResult:
         """:meth:`update` for K consecutive messages that share one name list, as arrays.
 
-        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] is (K, len(names)) or
-        (K, 0). Outcomes, counts and the merged state end up exactly as after K calls of
+        ``positions`` [rad] is (K, len(names)); ``velocities`` [rad/s] and ``efforts`` [N m] are
+        (K, len(names)) or (K, 0). Outcomes, counts and the merged state end up exactly as after K
+        calls of
         :meth:`update`; messages whose leg joints are all finite are merged with numpy, the others
         go through :meth:`update` one by one.
         """
         rows = positions.shape[0]
+        if efforts is None or efforts.shape[1] != len(names):
+            efforts = np.empty((rows, 0))
         layout = self._layout
         if names != layout.names:
             layout = self._layout = self._describe(list(names))
@@ -174,12 +197,14 @@ class FootTracker:
             np.zeros(rows, bool),
             np.empty((rows, JOINT_COUNT)),
             np.full((rows, JOINT_COUNT), math.nan),
+            np.empty((rows, JOINT_COUNT)),
         )
         outcome = self._check(layout, len(names), positions.shape[1], velocities.shape[1])
         if outcome is not None:
             self.counts.messages += rows
             self._finish_many(outcome, rows, 0)
             result.angles[:] = self.angles
+            result.efforts[:] = self.efforts
             return result
         index = np.array([i for i, _ in layout.pairs])
         slots = np.array([slot for _, slot in layout.pairs])
@@ -190,19 +215,24 @@ class FootTracker:
             if finite[row]:
                 end = row + int(np.argmin(finite[row:])) if not finite[row:].all() else rows
                 self._merge_finite(layout, values[row:end], slots, result, slice(row, end))
+                block_efforts = efforts[row:end, index] if efforts.shape[1] else efforts[row:end]
+                self._merge_efforts(block_efforts, slots, result.efforts[row:end])
                 if velocities.shape[1]:
                     result.rates[row:end, slots] = velocities[row:end, index]
                 row = end
             else:
                 message_rates = velocities[row].tolist()
-                feet = self.update(names, positions[row].tolist(), message_rates)
+                feet = self.update(
+                    names, positions[row].tolist(), message_rates, efforts[row].tolist()
+                )
                 result.accepted[row] = self._last_outcome == ACCEPTED
                 result.angles[row] = self.angles
+                result.efforts[row] = self.efforts
                 for foot in feet:
                     if foot.velocity is not None:  # then the leg's three rates are finite
                         first = foot.leg_slot * JOINTS_PER_LEG
                         result.rates[row, first : first + JOINTS_PER_LEG] = self._leg_rates(
-                            foot.leg_slot, layout, message_rates
+                            layout.leg_indices[foot.leg_slot], message_rates
                         )
                 row += 1
         return result
@@ -233,6 +263,15 @@ class FootTracker:
         )
         self.last_problem = ""
         self._finish_many(ACCEPTED, count, feet)
+
+    def _merge_efforts(self, values: np.ndarray, slots: np.ndarray, merged: np.ndarray) -> None:
+        """Merge accepted messages' efforts (``values`` (n, pairs) [N m], or (n, 0): none) into
+        ``merged`` (n, 12), the state after each of them.
+        """
+        merged[:] = self.efforts
+        if values.shape[1]:
+            merged[:, slots] = values
+            self.efforts = merged[-1].tolist()
 
     def _finish_many(self, outcome: str, messages: int, feet: int) -> None:
         self._last_outcome = outcome
@@ -269,36 +308,46 @@ class FootTracker:
             return NO_LEG_JOINTS
         return None
 
-    def _leg_unknown(self, leg_slot: int) -> bool:
-        first = leg_slot * JOINTS_PER_LEG
-        return any(math.isnan(angle) for angle in self.angles[first : first + JOINTS_PER_LEG])
-
-    def _foot(self, leg_slot: int, layout: _NameLayout, velocities: Sequence[float]) -> Foot:
-        first = leg_slot * JOINTS_PER_LEG
-        q0, q1, q2 = self.angles[first : first + JOINTS_PER_LEG]
-        leg = self._legs[leg_slot]
-        rates = self._leg_rates(leg_slot, layout, velocities) if velocities else None
-        if rates is None:
-            return Foot(leg_slot, leg.position(q0, q1, q2), None)
-        x, y, z, vx, vy, vz = leg.position_velocity(q0, q1, q2, *rates)
-        finite = (
-            math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)
-        )  # huge rates can overflow
-        if finite:
-            self.rates[first : first + JOINTS_PER_LEG] = rates
-        return Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None)
+    def _feet(
+        self, layout: _NameLayout, bad_legs: set[int], velocities: Sequence[float]
+    ) -> list[Foot]:
+        """The feet of the legs the message touched whose three angles are known and finite,
+        each with its velocity where the message has the leg's three rates and they are finite
+        (and the result too: huge rates can overflow). Inlined: the node's per-message path.
+        """
+        angles, legs, leg_indices = self.angles, self._legs, layout.leg_indices
+        isfinite = math.isfinite
+        feet = []
+        for leg_slot in layout.legs:
+            first = leg_slot * JOINTS_PER_LEG
+            q0, q1, q2 = angles[first : first + JOINTS_PER_LEG]
+            if leg_slot in bad_legs or q0 != q0 or q1 != q1 or q2 != q2:  # noqa: PLR0124 (NaN)
+                continue
+            indices = leg_indices[leg_slot] if velocities else None
+            if indices is not None:
+                r0, r1, r2 = velocities[indices[0]], velocities[indices[1]], velocities[indices[2]]
+                if isfinite(r0) and isfinite(r1) and isfinite(r2):
+                    x, y, z, vx, vy, vz = legs[leg_slot].position_velocity(q0, q1, q2, r0, r1, r2)
+                    finite = isfinite(vx) and isfinite(vy) and isfinite(vz)
+                    if finite:
+                        self.rates[first : first + JOINTS_PER_LEG] = (r0, r1, r2)
+                    feet.append(Foot(leg_slot, (x, y, z), (vx, vy, vz) if finite else None))
+                    continue
+            feet.append(Foot(leg_slot, legs[leg_slot].position(q0, q1, q2), None))
+        return feet
 
     @staticmethod
     def _leg_rates(
-        leg_slot: int, layout: _NameLayout, velocities: Sequence[float]
-    ) -> list[float] | None:
-        """The leg's three joint velocities from this message, or None unless all are finite."""
-        rates = [math.nan] * JOINTS_PER_LEG
-        first = leg_slot * JOINTS_PER_LEG
-        for index, slot in layout.pairs:
-            if first <= slot < first + JOINTS_PER_LEG:
-                rates[slot - first] = velocities[index]
-        return rates if all(math.isfinite(rate) for rate in rates) else None
+        indices: tuple[int, ...] | None, velocities: Sequence[float]
+    ) -> tuple[float, ...] | None:
+        """The leg's three joint velocities [rad/s] at message ``indices``, or None unless the
+        message has all three and they are finite.
+        """
+        if indices is None or not velocities:
+            return None
+        rates = (velocities[indices[0]], velocities[indices[1]], velocities[indices[2]])
+        isfinite = math.isfinite
+        return rates if isfinite(rates[0]) and isfinite(rates[1]) and isfinite(rates[2]) else None
 
     def _describe(self, names: list[str]) -> _NameLayout:
         slots = self.quadruped.name_to_slot
@@ -314,7 +363,16 @@ class FootTracker:
             pairs.append((index, slot))
         self._remember_unknown(unknown)
         legs = tuple(sorted({slot // JOINTS_PER_LEG for _, slot in pairs}))
-        return _NameLayout(names, tuple(pairs), legs, tuple(unknown), tuple(duplicates))
+        index_of = {slot: index for index, slot in pairs}
+        leg_indices = tuple(
+            tuple(index_of[slot] for slot in range(first, first + JOINTS_PER_LEG))
+            if all(slot in index_of for slot in range(first, first + JOINTS_PER_LEG))
+            else None
+            for first in range(0, JOINT_COUNT, JOINTS_PER_LEG)
+        )
+        return _NameLayout(
+            names, tuple(pairs), legs, tuple(unknown), tuple(duplicates), leg_indices
+        )
 
     def _remember_unknown(self, names: list[str]) -> None:
         known_unknown = self.counts.unknown_names

@@ -14,6 +14,7 @@ import importlib
 import math
 import os
 import tempfile
+import uuid
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import ModuleType
@@ -26,6 +27,13 @@ from a1_leg_fk.model.urdf import LegFkError
 INSTALL_HINT = (
     "pybullet is not installed: pip install pybullet (or apt/rosdep key python3-pybullet-pip)"
 )
+MAX_LINE_BYTES = 4096
+"""The longest line the twin file may have [bytes]. PyBullet's URDF reader reads a file in lines
+of at most 8,191 bytes and starts a new line after each such piece, so a longer line is cut at a
+fixed offset (the load fails, or a name is silently split)."""
+KEPT_ELEMENTS = ("link", "joint")
+"""The children of ``<robot>`` the twin keeps: the tree. Materials, ``<gazebo>`` and
+``<transmission>`` blocks play no part in link frames."""
 
 
 @dataclass(frozen=True)
@@ -108,10 +116,12 @@ class PyBulletFeet:
         self._client = None
 
     def _load(self, urdf_xml: str) -> int:
+        text = kinematic_urdf(urdf_xml)
         with tempfile.TemporaryDirectory(prefix="a1_leg_fk_") as folder:
-            path = os.path.join(folder, "robot.urdf")
+            # a name never used before: PyBullet caches file contents by path
+            path = os.path.join(folder, f"robot_{uuid.uuid4().hex}.urdf")
             with open(path, "w", encoding="utf-8") as file:
-                file.write(kinematic_urdf(urdf_xml))
+                file.write(text)
             try:
                 return int(  # pybullet has no types: its body id, an int
                     self._pybullet.loadURDF(path, useFixedBase=True, physicsClientId=self._client)
@@ -135,13 +145,29 @@ class PyBulletFeet:
 
 
 def kinematic_urdf(urdf_xml: str) -> str:
-    """The URDF without ``<visual>`` and ``<collision>``: PyBullet then needs no mesh files.
+    """The URDF's links and joints without ``<visual>`` and ``<collision>``, one element per
+    line: PyBullet then needs no mesh files, and reads every line whole, whatever the layout of
+    ``urdf_xml`` (a description given with ``-p robot_description:=...`` arrives on one line).
 
     Geometry plays no part in the link frames compared here; joints, origins, axes and
-    inertials are kept as they are.
+    inertials are kept as they are. A :class:`LegFkError` if a line is still longer than
+    :data:`MAX_LINE_BYTES` (an attribute of kilobytes).
     """
     robot = ElementTree.fromstring(urdf_xml)
+    for element in list(robot):
+        if element.tag not in KEPT_ELEMENTS:
+            robot.remove(element)
     for link in robot.findall("link"):
         for element in link.findall("visual") + link.findall("collision"):
             link.remove(element)
-    return ElementTree.tostring(robot, encoding="unicode")
+    robot.text = robot.tail = None
+    ElementTree.indent(robot)
+    text = ElementTree.tostring(robot, encoding="unicode") + "\n"
+    for number, line in enumerate(text.splitlines(), 1):
+        if len(line.encode("utf-8")) > MAX_LINE_BYTES:
+            raise LegFkError(
+                f"the URDF has an element of {len(line.encode('utf-8'))} bytes on one line "
+                f"(line {number} of its kinematic copy: {line[:80]}...); PyBullet reads lines of "
+                f"at most {MAX_LINE_BYTES} bytes here"
+            )
+    return text

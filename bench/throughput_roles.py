@@ -22,9 +22,9 @@ Roles
   wake-up delay enters the latency. ``{"op": "count", "first": ns, "last": ns}`` answers the
   number of inputs answered on ``foot_positions/FR`` in a stamp window (for the ramp's early stop);
   on stop it writes every record to the ``.npz`` given as argument.
-- ``baseline``: the bare rclpy echo: same QoS and executor as the node; per JointState it copies
-  three positions per leg into four PointStamped (and, when the message has velocities, three
-  velocities into four Vector3Stamped, the node's outputs) and publishes them; no FK, no checks.
+- ``baseline``: the raw floor: same QoS and executor as the node; per JointState (subscribed raw)
+  it reads the stamp from the bytes and publishes the node's eight outputs as pre-serialized
+  messages (the node's own writer, fixed values); no decoding, no rules, no FK.
 - ``verifier``: calls ``verify_fk`` 20 times a second between ``{"op": "go"}`` and
   ``{"op": "stop"}``.
 """
@@ -270,49 +270,33 @@ def receiver(output: str) -> None:
 
 
 def baseline(executor_name: str) -> None:
+    """The floor: raw JointState in, the stamp read from its bytes, eight pre-serialized messages
+    out (the node's own output writer), no decoding, no rules, no FK."""
     from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+    from a1_leg_fk.ros.serialized_output import SerializedStamped
 
     rclpy.init()
-    node = Node("bench_echo_baseline")
-    position_msgs = [PointStamped() for _ in shared.LEGS]
-    velocity_msgs = [Vector3Stamped() for _ in shared.LEGS]
-    for msg in (*position_msgs, *velocity_msgs):
-        msg.header.frame_id = "trunk"
-    position_pubs = [
+    node = Node("bench_raw_floor")
+    writer = SerializedStamped("trunk")
+    publishers = [
         node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS)
         for leg in shared.LEGS
-    ]
-    velocity_pubs = [
+    ] + [
         node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
         for leg in shared.LEGS
     ]
+    stamp = struct.Struct("<iI").unpack_from
+    values = (0.1, 0.2, 0.3)
 
-    def on_joint_state(msg: JointState) -> None:
-        stamp = msg.header.stamp
-        positions, velocities = msg.position, msg.velocity
-        for slot in range(4):
-            first = 3 * slot
-            position_msg = position_msgs[slot]
-            position_msg.header.stamp = stamp
-            point = position_msg.point
-            point.x, point.y, point.z = (
-                positions[first],
-                positions[first + 1],
-                positions[first + 2],
-            )
-            position_pubs[slot].publish(position_msg)
-            if len(velocities) == len(positions):
-                velocity_msg = velocity_msgs[slot]
-                velocity_msg.header.stamp = stamp
-                vector = velocity_msg.vector
-                vector.x, vector.y, vector.z = (
-                    velocities[first],
-                    velocities[first + 1],
-                    velocities[first + 2],
-                )
-                velocity_pubs[slot].publish(velocity_msg)
+    def on_joint_state(raw: bytes) -> None:
+        sec, nanosec = stamp(raw, 4)
+        serialized = writer.serialized
+        for publisher in publishers:
+            publisher.publish(serialized(sec, nanosec, values))
 
-    node.create_subscription(JointState, "joint_states", on_joint_state, JOINT_STATES_QOS)
+    node.create_subscription(
+        JointState, "joint_states", on_joint_state, JOINT_STATES_QOS, raw=True
+    )
     executor = make_executor(executor_name)
     executor.add_node(node)
     try:

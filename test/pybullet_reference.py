@@ -82,3 +82,24 @@ class PyBulletRobot:
 
     def close(self) -> None:
         pybullet.disconnect(self.client)
+
+
+def assert_twin_agrees(
+    twin,
+    reference: PyBulletRobot,
+    joint_names: list[str],
+    feet: list[str],
+    configurations,
+    tolerance_m: float,
+) -> None:
+    """The code under test's verify twin (``PyBulletFeet``) passes ``verify`` and its feet are
+    ``reference``'s own within ``tolerance_m`` [m], for every configuration [rad] (slot order)."""
+    for q in configurations:
+        result = twin.verify(q, tolerance_m)
+        assert result.success, result
+        np.testing.assert_allclose(
+            twin.foot_positions(q),
+            reference.feet(joint_names, feet, q),
+            rtol=0.0,
+            atol=tolerance_m,
+        )

@@ -2,7 +2,8 @@
 
 Prints the chosen angles (rad and degrees), the status, the residual, and every exact solution
 with whether it is inside the URDF limits. ``--seed`` takes the leg's 3 angles or all 12 [rad].
-Exit codes: 0 a status was computed (whatever it is), 2 bad input (one line on stderr).
+Exit codes, for scripts: 0 status ok; 1 the target is outside the limits or unreachable (the
+status and the nearest angles still printed); 2 bad input (one line on stderr).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_OK
+from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
 from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, leg_slot
 
 if TYPE_CHECKING:  # imported when solving: --help needs no kinematics
@@ -56,28 +57,32 @@ def add_parser(
 
 
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
-    """Solve and print; one line on stderr and exit 2 for bad input."""
+    """Solve and print; exit 0 for status ok, 1 for outside_limits or unreachable, 2 (one line
+    on stderr) for bad input.
+    """
     del argv  # no ROS here
+    from a1_leg_fk.kinematics.ik.four_legs import OK
     from a1_leg_fk.kinematics.quadruped import Quadruped
     from a1_leg_fk.model.urdf import LegFkError
 
     try:
         quadruped = Quadruped.from_urdf(options.urdf)
-        print(
-            "\n".join(
-                report(quadruped, options.leg, (options.x, options.y, options.z), options.seed)
-            )
+        lines, status = report(
+            quadruped, options.leg, (options.x, options.y, options.z), options.seed
         )
     except LegFkError as error:
         print(f"a1-leg-fk ik: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    return EXIT_OK
+    print("\n".join(lines))
+    return EXIT_OK if status == OK else EXIT_FAILED
 
 
 def report(
     quadruped: Quadruped, leg: str, point: tuple[float, float, float], seed: Sequence[float] | None
-) -> list[str]:
-    """The lines ``a1-leg-fk ik`` prints (see the module docstring)."""
+) -> tuple[list[str], int]:
+    """The lines ``a1-leg-fk ik`` prints (see the module docstring) and the status code
+    (:data:`a1_leg_fk.kinematics.ik.four_legs.OK`, ...).
+    """
     from a1_leg_fk.kinematics.ik.four_legs import STATUS_NAMES, checked_point
 
     target = checked_point(point, leg)
@@ -106,7 +111,7 @@ def report(
         degrees = " ".join(f"{math.degrees(a):+9.3f}" for a in solution.angles)
         where = "inside the limits" if solution.inside_limits else "outside the limits"
         lines.append(f"  {number}. [{values}] rad  [{degrees}] deg  {where}")
-    return lines
+    return lines, int(result.status)
 
 
 def leg_seed(leg: str, seed: Sequence[float] | None) -> list[float] | None:

@@ -21,7 +21,6 @@ from a1_leg_fk.recording.joint_state_wire import (
     JointStateDecoder,
     WireError,
     cdr_layout,
-    effort_span,
 )
 from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording, one_line
 from a1_leg_fk.tracking import FootTracker
@@ -222,19 +221,15 @@ class _Batch:
         stamps = np.where(stamps == 0, bag_times_ns, stamps)
         positions = np.ascontiguousarray(matrix[:, layout.positions]).view("<f8")
         velocities = np.ascontiguousarray(matrix[:, layout.velocities]).view("<f8")
-        efforts = None
-        if self.recording.forces is not None:
-            efforts = np.ascontiguousarray(matrix[:, effort_span(raws[0])[1]]).view("<f8")
+        efforts = np.ascontiguousarray(matrix[:, layout.efforts]).view("<f8")
         return stamps, bag_times_ns, positions, velocities, efforts
 
     def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
         fields = self.decoder.fields
         pending = _Pending()
-        forces = self.recording.forces is not None
         for raw, bag_time in zip(raws, bag_times):
             try:
-                stamp, changed, order, positions, velocities = fields(raw)
-                efforts = bytes(raw)[effort_span(raw, self.recording.ros1)[1]] if forces else b""
+                stamp, changed, order, positions, velocities, efforts = fields(raw)
             except WireError as error:
                 yield from pending.finish(self)
                 raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
@@ -326,7 +321,7 @@ def _finish(
     ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
     another length; efforts only with ``recording.forces``).
     """
-    result = tracker.update_block(names, positions, velocities)
+    result = tracker.update_block(names, positions, velocities, efforts)
     angles = result.angles[result.accepted]
     known = np.isfinite(angles).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)  # (N, 4)
     rows = known.any(axis=1)  # a leg known, as the node needs to publish its foot

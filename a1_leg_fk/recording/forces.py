@@ -19,7 +19,7 @@ from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, gravity_in_base
 from a1_leg_fk.model.legs import JOINT_COUNT
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import WireError, effort_span
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is read
     from rosbags.highlevel import AnyReader
@@ -159,10 +159,10 @@ def check_has_efforts(reader: AnyReader, connection: Connection, ros1: bool) -> 
     """:class:`LegFkError` if the first JointState of ``connection`` has no efforts."""
     for _, _, raw in reader.messages(connections=[connection]):
         try:
-            span = effort_span(raw, ros1)[1]
+            efforts = JointStateDecoder(ros1).fields(raw).efforts
         except WireError as error:
             raise LegFkError(f"{connection.topic}: {error}") from None
-        if span.stop == span.start:
+        if not efforts:
             raise MissingEfforts(
                 f"{connection.topic}: its JointState messages carry no efforts (the first one's "
                 "effort array is empty); --forces needs joint efforts"

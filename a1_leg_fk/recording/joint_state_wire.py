@@ -2,18 +2,20 @@
 
 Two layouts: ROS 2 CDR (a 4-byte encapsulation header, then fields aligned to their size relative
 to the end of that header; either byte order) and ROS 1 (little endian, packed, header
-``seq``/``stamp``/``frame_id``). Only the fields the FK needs are read: the header stamp, the name
-list and the position/velocity arrays. A steady stream repeats the same name list: its bytes are
-compared with the previous message's, and the names are decoded only when they change.
+``seq``/``stamp``/``frame_id``). The header stamp, the name list and the position, velocity and
+effort arrays are read (not ``frame_id``). A steady stream repeats the same name list: its bytes
+are compared with the previous message's, and the names are decoded only when they change.
 
-No ROS and no ``rosbags`` here; the tests check this decoder against ``rosbags``' deserializer.
+The one decoder of both ``foot_fk_node`` (a raw subscription) and the bag tools. No ROS and no
+``rosbags`` here; the tests check this decoder against ``rosbags``' deserializer.
 """
 
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -26,6 +28,31 @@ _STAMP_ROS1 = struct.Struct("<II")
 
 class WireError(ValueError):
     """The bytes are not a JointState of the expected layout (truncated or corrupt)."""
+
+
+class WireFields(NamedTuple):
+    """One message's fields as :meth:`JointStateDecoder.fields` reads them; the arrays are raw
+    float64 bytes in ``order``, for callers that batch them (:func:`doubles` makes floats).
+    """
+
+    stamp_ns: int  # header stamp [ns]; 0 when unset
+    names_changed: bool  # the name list differs from the previous message's
+    order: str  # byte order of the arrays: "<" or ">"
+    positions: bytes  # [rad]
+    velocities: bytes  # [rad/s]
+    efforts: bytes  # [N m]
+
+
+_NATIVE_ORDER = "<" if struct.pack("=H", 1) == struct.pack("<H", 1) else ">"
+
+
+def doubles(data: bytes, order: str) -> Sequence[float]:
+    """The float64 values of ``data`` (bytes in ``order``): a zero-copy view where ``order`` is
+    the machine's own, else unpacked.
+    """
+    if order == _NATIVE_ORDER:
+        return memoryview(data).cast("d")
+    return struct.unpack(f"{order}{len(data) // 8}d", data)
 
 
 class JointStateDecoder:
@@ -41,10 +68,8 @@ class JointStateDecoder:
         """The name list of the latest decoded message."""
         return self._names
 
-    def fields(self, raw: bytes | memoryview) -> tuple[int, bool, str, bytes, bytes]:
-        """``(stamp [ns] (header, 0 when unset), names changed, byte order "<" or ">", position
-        bytes, velocity bytes)`` of one serialized message: the arrays as raw float64 bytes in
-        that byte order, for callers that batch them; the names are :attr:`names`.
+    def fields(self, raw: bytes | memoryview) -> WireFields:
+        """The :class:`WireFields` of one serialized message; the names are :attr:`names`.
         :class:`WireError` if the message is cut short or corrupt.
         """
         raw = bytes(raw)
@@ -53,7 +78,7 @@ class JointStateDecoder:
         except (struct.error, UnicodeDecodeError) as error:
             raise WireError(f"malformed JointState ({len(raw)} bytes): {error}") from None
 
-    def _fields_cdr(self, raw: bytes) -> tuple[int, bool, str, bytes, bytes]:
+    def _fields_cdr(self, raw: bytes) -> WireFields:
         # offsets are relative to the end of the 4-byte encapsulation header (CDR alignment)
         if len(raw) < 16 or raw[1] > 1:
             raise WireError(f"not a CDR message (encapsulation {raw[:4].hex()})")
@@ -69,10 +94,13 @@ class JointStateDecoder:
         else:
             offset = names_start + len(known)
         positions, offset = _cdr_doubles(raw, offset, u32)
-        velocities, _ = _cdr_doubles(raw, offset, u32)
-        return sec * 1_000_000_000 + nanosec, changed, order, positions, velocities
+        velocities, offset = _cdr_doubles(raw, offset, u32)
+        efforts, _ = _cdr_doubles(raw, offset, u32)
+        return WireFields(
+            sec * 1_000_000_000 + nanosec, changed, order, positions, velocities, efforts
+        )
 
-    def _fields_ros1(self, raw: bytes) -> tuple[int, bool, str, bytes, bytes]:
+    def _fields_ros1(self, raw: bytes) -> WireFields:
         u32 = _UINT32["<"].unpack_from
         sec, nanosec = _STAMP_ROS1.unpack_from(raw, 4)
         names_start = 16 + u32(raw, 12)[0]
@@ -92,8 +120,11 @@ class JointStateDecoder:
         else:
             offset = names_start + len(known)
         positions, offset = _packed_doubles(raw, offset)
-        velocities, _ = _packed_doubles(raw, offset)
-        return sec * 1_000_000_000 + nanosec, changed, "<", positions, velocities
+        velocities, offset = _packed_doubles(raw, offset)
+        efforts, _ = _packed_doubles(raw, offset)
+        return WireFields(
+            sec * 1_000_000_000 + nanosec, changed, "<", positions, velocities, efforts
+        )
 
 
 @dataclass(frozen=True)
@@ -105,6 +136,7 @@ class CdrLayout:
 
     positions: slice
     velocities: slice
+    efforts: slice
     fixed: np.ndarray  # byte indices
 
 
@@ -129,7 +161,7 @@ def cdr_layout(raw: bytes) -> CdrLayout | None:
     if 4 + offset != len(raw):
         return None
     indices = np.fromiter((i for block in fixed for i in block), dtype=np.intp)
-    return CdrLayout(spans[0], spans[1], indices)
+    return CdrLayout(spans[0], spans[1], spans[2], indices)
 
 
 def _cdr_names(raw: bytes, offset: int, u32: Uint32Reader) -> tuple[list[str], int]:
@@ -179,34 +211,3 @@ def _packed_doubles(raw: bytes, offset: int) -> tuple[bytes, int]:
             f"float64 array of {count} elements runs past the message ({len(raw)} bytes)"
         )
     return raw[offset + 4 : end], end
-
-
-def effort_span(raw: bytes | memoryview, ros1: bool = False) -> tuple[str, slice]:
-    """``(byte order, slice)`` of the ``effort`` array's float64 bytes in one serialized
-    JointState (CDR, or ROS 1 with ``ros1``); :class:`WireError` if the message is malformed.
-
-    Messages of one layout (:func:`cdr_layout`) share the slice.
-    """
-    raw = bytes(raw)
-    try:
-        if ros1:
-            u32 = _UINT32["<"].unpack_from
-            offset = 16 + u32(raw, 12)[0]
-            count = u32(raw, offset)[0]
-            _check_count(count, len(raw), "names")
-            offset += 4
-            for _ in range(count):
-                offset += 4 + u32(raw, offset)[0]
-            for _ in range(3):  # position, velocity, effort
-                data, offset = _packed_doubles(raw, offset)
-            return "<", slice(offset - len(data), offset)
-        if len(raw) < 16 or raw[1] > 1:
-            raise WireError(f"not a CDR message (encapsulation {raw[:4].hex()})")
-        order = "<" if raw[1] == 1 else ">"
-        u32 = _UINT32[order].unpack_from
-        _, offset = _cdr_names(raw, (12 + u32(raw, 12)[0] + 3) & -4, u32)
-        for _ in range(3):  # position, velocity, effort
-            data, offset = _cdr_doubles(raw, offset, u32)
-    except (struct.error, UnicodeDecodeError) as error:
-        raise WireError(f"malformed JointState ({len(raw)} bytes): {error}") from None
-    return order, slice(4 + offset - len(data), 4 + offset)

@@ -1,43 +1,56 @@
 """The console scripts of the package's ROS executables (setup.py's entry points).
 
-Standard library only at import time. Each script enters :class:`StopSignals` first and only then
-imports its node's module (rclpy, numpy, PyBullet: about 0.3 s), so a Ctrl-C/SIGTERM during those
-imports sets the flag :func:`a1_leg_fk.ros.glue.run_node` shares (it then stops with exit 0)
-instead of raising a KeyboardInterrupt traceback or killing the process.
+Standard library only at import time (``signal`` and ``threading``). Each script enters
+:class:`StopSignals` first and only then imports its node's module (rclpy, numpy, PyBullet: about
+0.3 s). A Ctrl-C/SIGTERM during those imports ends them at once with exit 0 (nothing is started
+yet); one after them sets the flag :func:`a1_leg_fk.ros.glue.run_node` shares, which stops the
+node with exit 0. What comes before the script's first line is the interpreter's own start-up
+(see :class:`StopSignals` for a parent that blocks the signals over it).
 """
 
 from __future__ import annotations
 
-from a1_leg_fk.stop_signals import StopSignals
+from a1_leg_fk.stop_signals import StartupInterrupted, StopSignals
+
+
+def _run(module: str) -> int:
+    """Import ``module`` under a :class:`StopSignals` and run its ``main()``; 0 if stopped while
+    importing.
+    """
+    with StopSignals() as signals:  # a signal pending since the exec arrives here: the flag
+        try:
+            signals.interrupting = True
+            if signals.stop.is_set():
+                return 0
+            main = __import__(module, fromlist=["main"]).main
+            signals.interrupting = False
+        except StartupInterrupted:
+            return 0
+        except BaseException:
+            # A C extension importing a module when the signal came turns the exception into
+            # its own ImportError (numpy: "PyCapsule_Import could not import module ..."). The
+            # stop was asked for: no traceback.
+            if signals.stop.is_set():
+                return 0
+            raise
+        return int(main())
 
 
 def foot_fk_node() -> int:
     """``ros2 run a1_leg_fk foot_fk_node``: :func:`a1_leg_fk.ros.foot_fk_node.main`."""
-    with StopSignals():
-        from a1_leg_fk.ros import foot_fk_node as node
-
-        return node.main()
+    return _run("a1_leg_fk.ros.foot_fk_node")
 
 
 def foot_ik_node() -> int:
     """``ros2 run a1_leg_fk foot_ik_node``: :func:`a1_leg_fk.ros.foot_ik_node.main`."""
-    with StopSignals():
-        from a1_leg_fk.ros import foot_ik_node as ik_node
-
-        return ik_node.main()
+    return _run("a1_leg_fk.ros.foot_ik_node")
 
 
 def joint_state_demo() -> int:
     """``ros2 run a1_leg_fk joint_state_demo``: :func:`a1_leg_fk.ros.joint_state_demo.main`."""
-    with StopSignals():
-        from a1_leg_fk.ros import joint_state_demo as demo
-
-        return demo.main()
+    return _run("a1_leg_fk.ros.joint_state_demo")
 
 
 def leg_odometry_node() -> int:
     """``ros2 run a1_leg_fk leg_odometry_node``: :func:`a1_leg_fk.ros.leg_odometry_node.main`."""
-    with StopSignals():
-        from a1_leg_fk.ros import leg_odometry_node as node
-
-        return node.main()
+    return _run("a1_leg_fk.ros.leg_odometry_node")

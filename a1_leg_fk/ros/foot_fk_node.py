@@ -3,6 +3,9 @@
 Thin ROS glue over :mod:`a1_leg_fk.tracking` (merging, rejection, FK per message) and
 :mod:`a1_leg_fk.verify` (the ``verify_fk`` service). All topic and service names are
 relative, so ``__ns`` and remaps work; every parameter is declared with a description.
+
+The joint states are subscribed raw (serialized) and read by the bag tools' decoder
+(:mod:`a1_leg_fk.recording.joint_state_wire`): no message object is built per JointState.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from visualization_msgs.msg import MarkerArray
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
@@ -116,6 +120,7 @@ class FootFkNode(Node):
         self._robot = RobotSource(self, self._on_robot)
         self._model = self._robot.config
         self._tracker = FootTracker(self._model.quadruped)
+        self._decoder = JointStateDecoder()
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
         self._last_verify = "not called"
@@ -152,6 +157,7 @@ class FootFkNode(Node):
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            raw=True,
         )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.create_timer(SUBSCRIBER_CHECK_PERIOD_S, self._check_subscribers)
@@ -164,8 +170,19 @@ class FootFkNode(Node):
 
     # --- per message ---------------------------------------------------------------------
 
-    def _on_joint_state(self, msg: JointState) -> None:
-        feet = self._tracker.update(msg.name, msg.position, msg.velocity)
+    def _on_joint_state(self, raw: bytes) -> None:
+        try:
+            fields = self._decoder.fields(raw)
+        except WireError as error:
+            self._warnings.warn("malformed", f"ignoring a joint_states message: {error}")
+            return
+        order = fields.order
+        feet = self._tracker.update(
+            self._decoder.names,
+            doubles(fields.positions, order),
+            doubles(fields.velocities, order),
+            doubles(fields.efforts, order) if fields.efforts else (),
+        )
         if self._tracker.new_unknown_names:
             self._warn_unknown_names()
         if self._tracker.last_problem:
@@ -176,14 +193,14 @@ class FootFkNode(Node):
         if now - self._last_publish < self._min_publish_interval_s:
             return
         self._last_publish = now
-        stamp = self._stamp_of(msg)
+        sec, nanosec = self._stamp_of(fields.stamp_ns)
         if self._serialized is not None:
-            self._publish_serialized(self._serialized, feet, stamp.sec, stamp.nanosec)
+            self._publish_serialized(self._serialized, feet, sec, nanosec)
         else:
-            self._publish_objects(feet, stamp)
+            self._publish_objects(feet, Time(sec=sec, nanosec=nanosec))
         if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
             self._last_markers = now
-            self._publish_markers(stamp)
+            self._publish_markers(Time(sec=sec, nanosec=nanosec))
 
     def _publish_objects(self, feet: list[Foot], stamp: Time) -> None:
         """Publish the feet as message objects (one reused message per leg and kind)."""
@@ -213,12 +230,13 @@ class FootFkNode(Node):
             if foot.velocity is not None and velocities:
                 self._velocity_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.velocity))
 
-    def _stamp_of(self, msg: JointState) -> Time:
-        """The message's stamp, or the node clock's now where the stamp is zero."""
-        stamp = msg.header.stamp
-        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+    def _stamp_of(self, stamp_ns: int) -> tuple[int, int]:
+        """(sec, nanosec) of the message's stamp [ns], or of the node clock's now where the stamp
+        is zero.
+        """
         if stamp_ns == 0:
-            return self.get_clock().now().to_msg()
+            sec, nanosec = divmod(self.get_clock().now().nanoseconds, 1_000_000_000)
+            return sec, nanosec
         if stamp_ns < self._last_stamp_ns:
             self._stamp_jumps_back += 1
             self._warnings.warn(
@@ -229,7 +247,8 @@ class FootFkNode(Node):
                 f"({self._stamp_jumps_back} jumps back so far)",
             )
         self._last_stamp_ns = stamp_ns
-        return stamp
+        sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        return sec, nanosec
 
     def _report_problem(self) -> None:
         """Warn about a rejected message or joint, at most once a second per kind of problem."""

@@ -74,10 +74,13 @@ def run_node(
     thread of theirs, shut the context down in the middle of the node's construction (an
     RCLError traceback, exit 1) and, for SIGINT, also raise KeyboardInterrupt wherever the main
     thread is; before they are installed (the imports, ``rclpy.init``) Python's default handlers
-    raise a KeyboardInterrupt traceback or end the process by SIGTERM. The flag is checked once
-    the node is built and between turns of the executor (at most :data:`SPIN_SLICE_S` apart).
+    raise a KeyboardInterrupt traceback or end the process by SIGTERM. The flag is checked before
+    ``rclpy.init``, once the node is built and between turns of the executor (at most
+    :data:`SPIN_SLICE_S` apart).
     """
     with StopSignals() as signals:
+        if signals.stop.is_set():  # during the imports, where no handler of ours raised
+            return 0
         try:
             rclpy.init(
                 args=None if args is None else list(args),

@@ -13,8 +13,6 @@ from the joint efforts plugs in (probabilities per leg, or None).
 
 from __future__ import annotations
 
-import functools
-import struct
 import sys
 from collections.abc import Sequence
 from typing import Unpack
@@ -33,7 +31,7 @@ from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
@@ -195,10 +193,10 @@ class LegOdometryNode(Node):
         tools read them), else deserialized; then :class:`FootTracker`'s rules and the odometry.
         """
         try:
-            stamp_ns, _, order, position_bytes, velocity_bytes = self._decoder.fields(raw)
+            stamp_ns, _, order, position_bytes, velocity_bytes, _ = self._decoder.fields(raw)
             names: Sequence[str] = self._decoder.names
-            positions = _doubles(order, position_bytes)
-            velocities = _doubles(order, velocity_bytes)
+            positions = doubles(position_bytes, order)
+            velocities = doubles(velocity_bytes, order)
         except WireError:
             msg = deserialize_message(raw, JointState)
             stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
@@ -343,16 +341,6 @@ class LegOdometryNode(Node):
 
     def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
         self._apply_frames()
-
-
-@functools.cache
-def _unpacker(order: str, count: int) -> struct.Struct:
-    return struct.Struct(f"{order}{count}d")
-
-
-def _doubles(order: str, data: bytes) -> tuple[float, ...]:
-    """The float64 values of a CDR array's bytes in byte order ``order``."""
-    return _unpacker(order, len(data) // 8).unpack(data)
 
 
 def main(args: Sequence[str] | None = None) -> int:

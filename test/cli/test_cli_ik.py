@@ -1,5 +1,6 @@
 """``a1-leg-fk ik``: the printed angles put the foot on the target (checked with the A1 closed-form
-FK typed in test_kinematics), statuses, the seed, and bad input (one line on stderr, exit 2)."""
+FK typed in test_kinematics), statuses and their exit codes (0 ok, 1 outside the limits or
+unreachable), the seed, and bad input (one line on stderr, exit 2)."""
 
 from __future__ import annotations
 
@@ -42,9 +43,18 @@ def test_seed_of_three_or_twelve_angles(capsys) -> None:
     np.testing.assert_allclose(printed_angles(three), [0.0, 0.8, -1.5], atol=1e-9)
 
 
+def test_a_target_reached_only_outside_the_limits_exits_1_with_the_status(capsys) -> None:
+    """Knee at +0.5 rad: the A1's knee range (-2.697..-0.916 rad) excludes every knee >= 0."""
+    target = a1_foot_closed_form("FR", 0.0, 0.3, 0.5)
+    code, out, err = run(capsys, "FR", *(repr(float(v)) for v in target))
+    assert code == 1 and not err
+    assert "status: outside_limits" in out
+    assert "inside the limits" not in out and "outside the limits" in out
+
+
 def test_out_of_reach(capsys) -> None:
     code, out, _ = run(capsys, "FL", "0.3", "0.13", "-0.9")
-    assert code == 0
+    assert code == 1
     assert "status: unreachable" in out and "exact solutions: 0" in out
     found = re.search(r"residual: ([0-9.e+-]+) m", out)
     assert found is not None, out

@@ -15,6 +15,7 @@ import pybullet
 import pytest
 from exported_urdf import FEET, QUIRKS, exported_quadruped, reference_robot
 from node_harness import NodeClient, distance, node_command, parse_tokens
+from pybullet_reference import assert_twin_agrees
 from shared import LEGS, UNITREE_NAMES
 
 from a1_leg_fk.kinematics.robot_config import load_robot
@@ -86,15 +87,8 @@ def test_the_verify_twin_loads_descriptions_whose_meshes_cannot_be_found(
     twin = PyBulletFeet(config.quadruped, config.urdf_xml)
     try:
         with reference_robot(tmp_path, robot) as reference:
-            for q in in_limit_configurations(reference.limits(UNITREE_NAMES), 50, seed=3):
-                result = twin.verify(q, TOLERANCE_M)
-                assert result.success, result
-                np.testing.assert_allclose(
-                    twin.foot_positions(q),
-                    reference.feet(UNITREE_NAMES, FEET, q),
-                    rtol=0.0,
-                    atol=TOLERANCE_M,
-                )
+            configurations = in_limit_configurations(reference.limits(UNITREE_NAMES), 50, seed=3)
+            assert_twin_agrees(twin, reference, UNITREE_NAMES, FEET, configurations, TOLERANCE_M)
     finally:
         twin.close()
 

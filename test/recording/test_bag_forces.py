@@ -234,35 +234,6 @@ def test_efforts_by_name_partial_unknown_and_wrong_length() -> None:
     assert forces.counts.missing == 8 and forces.counts.estimated == 0
 
 
-@pytest.mark.parametrize("layout", ["cdr_le", "cdr_be", "ros1"])
-def test_effort_span_against_rosbags(layout: str) -> None:
-    """The effort bytes found in serialized JointStates equal rosbags' deserialized efforts."""
-    from rosbags.typesys import Stores, get_typestore
-
-    from a1_leg_fk.recording.joint_state_wire import effort_span
-
-    store = get_typestore(Stores.ROS1_NOETIC if layout == "ros1" else Stores.ROS2_JAZZY)
-    kind = "sensor_msgs/msg/JointState"
-    stamp = store.types["builtin_interfaces/msg/Time"](1, 2)
-    head = store.types["std_msgs/msg/Header"]
-    cases: list[tuple[str, list[float], list[float]]] = [
-        ("", [], []),
-        ("base", [1.5, -2.0], [0.1]),
-        ("ab", [7.0], []),
-    ]
-    for frame, efforts, velocities in cases:
-        header = head(0, stamp, frame) if layout == "ros1" else head(stamp, frame)
-        message = store.types[kind](
-            header, ["a", "bb"], np.array([1.0, 2.0]), np.array(velocities), np.array(efforts)
-        )
-        if layout == "ros1":
-            raw = bytes(store.serialize_ros1(message, kind))
-        else:
-            raw = bytes(store.serialize_cdr(message, kind, little_endian=layout == "cdr_le"))
-        order, span = effort_span(memoryview(raw), ros1=layout == "ros1")
-        np.testing.assert_array_equal(np.frombuffer(raw[span], dtype=f"{order}f8"), efforts)
-
-
 def test_imu_without_orientation_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """An IMU that says it has no orientation (orientation_covariance[0] == -1) cannot give
     gravity's direction: one line, exit 2.

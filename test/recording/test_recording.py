@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 from pybullet_reference import PyBulletRobot
 
 from a1_leg_fk.kinematics.quadruped import Quadruped
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder
+from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, doubles
 from a1_leg_fk.recording.trajectories import read_foot_trajectories
 from a1_leg_fk.tracking import FootTracker
 
@@ -60,8 +60,9 @@ finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp: int) -> None:
     positions = data.draw(st.lists(finite, min_size=0, max_size=6))
     velocities = data.draw(st.lists(finite, min_size=0, max_size=6))
+    efforts = data.draw(st.lists(finite, min_size=0, max_size=6))
     message = joint_state(
-        JointStateMsg(stamp * 1_000_000_000 + 7, names, positions, velocities, frame)
+        JointStateMsg(stamp * 1_000_000_000 + 7, names, positions, velocities, frame, efforts)
     )
     cdr = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState")
     big_endian = TYPESTORE.serialize_cdr(
@@ -83,7 +84,7 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
         ),
     ):
         for repeat in range(2):  # the second time the names come from the cache
-            stamp_ns, changed, order, positions, velocities = decoder.fields(raw)
+            stamp_ns, changed, order, positions, velocities, efforts = decoder.fields(raw)
             assert (
                 stamp_ns
                 == reference.header.stamp.sec * 1_000_000_000 + reference.header.stamp.nanosec
@@ -94,6 +95,8 @@ def test_wire_decoder_matches_rosbags(frame: str, names: list[str], data, stamp:
             dtype = np.dtype(f"{order}f8")
             assert np.frombuffer(positions, dtype).tolist() == list(reference.position)
             assert np.frombuffer(velocities, dtype).tolist() == list(reference.velocity)
+            assert np.frombuffer(efforts, dtype).tolist() == list(reference.effort)
+            assert list(doubles(efforts, order)) == list(reference.effort)
 
 
 # --- update_block is update, K times -------------------------------------------------------------
@@ -111,20 +114,38 @@ def test_update_block_equals_update(data) -> None:
         if data.draw(st.booleans())
         else np.empty((rows, 0))
     )
+    efforts = np.array(  # as many as the names, or one too many (ignored)
+        [[data.draw(value) for _ in range(len(names) + data.draw(st.integers(0, 1)))]] * rows
+    )
     one, block = FootTracker(A1), FootTracker(A1)
-    one.update(NAMES[:3], [0.1, 0.7, -1.4], [])
-    block.update(NAMES[:3], [0.1, 0.7, -1.4], [])
-    result = block.update_block(names, positions, velocities)
+    one.update(NAMES[:3], [0.1, 0.7, -1.4], [], [1.0, 2.0, 3.0])
+    block.update(NAMES[:3], [0.1, 0.7, -1.4], [], [1.0, 2.0, 3.0])
+    result = block.update_block(names, positions, velocities, efforts)
     for row in range(rows):
-        feet = one.update(names, positions[row].tolist(), velocities[row].tolist())
+        feet = one.update(
+            names, positions[row].tolist(), velocities[row].tolist(), efforts[row].tolist()
+        )
         assert result.accepted[row] == (one.last_outcome == "accepted")
         np.testing.assert_array_equal(result.angles[row], one.angles)
+        np.testing.assert_array_equal(result.efforts[row], one.efforts)
         with_velocity = {foot.leg_slot for foot in feet if foot.velocity is not None}
         for leg in range(4):
             rates = result.rates[row, 3 * leg : 3 * leg + 3]
             assert np.isfinite(rates).all() == (leg in with_velocity)
     assert block.counts == one.counts
     np.testing.assert_array_equal(block.angles, one.angles)
+    np.testing.assert_array_equal(block.efforts, one.efforts)
+
+
+def test_efforts_are_merged_per_joint_like_the_angles() -> None:
+    tracker = FootTracker(A1)
+    tracker.update(NAMES[:3], [0.1, 0.7, -1.4], [], [1.0, 2.0, 3.0])
+    tracker.update(NAMES[3:6], [0.1, 0.7, -1.4], [], [4.0, 5.0, 6.0])
+    tracker.update(NAMES[:3], [0.1, 0.7, -1.4], [], [7.0])  # not one per name: ignored
+    tracker.update(NAMES[:1], [math.nan], [], [8.0])  # rejected: ignored
+    tracker.update(["arm", NAMES[2]], [0.0, -1.5], [], [9.0, 10.0])  # the arm's is no joint's
+    assert tracker.efforts[:6] == [1.0, 2.0, 10.0, 4.0, 5.0, 6.0]
+    assert all(math.isnan(effort) for effort in tracker.efforts[6:])
 
 
 # --- a bag with everything in it -----------------------------------------------------------------

@@ -16,6 +16,8 @@ from a1_leg_fk.ros.joint_state_demo import joint_names
 
 ROBOT = Quadruped.from_urdf()
 WINDOW_S = 2.0
+PERIOD_NS = 2_000_000
+"""The default rate's sample period: 500 Hz."""
 
 
 DEMO = demo_command()
@@ -32,18 +34,55 @@ def test_joint_names_for_both_namings() -> None:
 
 
 class Recorder:
-    """Every JointState on a topic with its arrival time and publication sequence number."""
+    """Every JointState on a topic with its arrival time, publication sequence number and source
+    timestamp (the publisher's DDS write time, system clock [ns])."""
 
     def __init__(self, ros, topic: str) -> None:
         from rclpy.qos import QoSProfile
         from sensor_msgs.msg import JointState
 
         self.samples: list[tuple[float, int | None, Any]] = []  # (arrival, sequence, JointState)
+        self.source_ns: list[int] = []
         self._ros = ros
         ros.node.create_subscription(JointState, topic, self._on_message, QoSProfile(depth=1000))
 
+    def clear(self) -> None:
+        self.samples.clear()
+        self.source_ns.clear()
+
     def _on_message(self, message, info) -> None:
         self.samples.append((time.monotonic(), info.get("publication_sequence_number"), message))
+        self.source_ns.append(info["source_timestamp"])
+
+
+def assert_paced(recorder: Recorder, period_ns: int, log: str) -> Any:
+    """What holds however loaded the machine is, for the demo's stream paced on a clock grid: the
+    stamps increase by whole periods (exact to the nanosecond); every sample of the grid was sent
+    (the publication sequence numbers count them), but for a stall the demo logged as skipped; at
+    least 90 % arrived; and each was written to DDS after its stamp, most within 0.1 s (the demo
+    catches up 0.1 s at most, then skips): the stamps keep up with the clock. Returns the stamps
+    [ns]."""
+    samples = recorder.samples
+    stamps_ns = np.array(
+        [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for _, _, m in samples]
+    )
+    steps = np.diff(stamps_ns)
+    assert (steps > 0).all() and (steps % period_ns == 0).all(), sorted(set(steps.tolist()))[:5]
+    grid = int((stamps_ns[-1] - stamps_ns[0]) // period_ns) + 1
+    if samples[0][1] is not None:
+        sent = known(samples[-1][1]) - known(samples[0][1]) + 1
+        assert sent == grid or (sent < grid and "skipping ahead" in log), (sent, grid)
+        assert len(samples) >= 0.9 * sent, (len(samples), sent)
+    # The stamps are the node clock (system time here): never after the DDS write, and most
+    # written within the 0.1 s the demo catches up (a starved demo can be later; the test's own
+    # clock on arrival is not compared: a starved test process reads its queue late).
+    lag_ns = np.array(recorder.source_ns, dtype=np.int64) - stamps_ns
+    assert lag_ns.min() >= 0 and np.median(lag_ns) < 100_000_000 and lag_ns.max() < 2e9, (
+        lag_ns.min(),
+        np.median(lag_ns),
+        lag_ns.max(),
+    )
+    return stamps_ns
 
 
 @pytest.mark.slow
@@ -69,35 +108,12 @@ def test_stream_rate_stamps_names_and_clean_exit(
         f"no {topic}; demo said:\n{processes.output(process)}"
     )
     ros.spin_for(0.3)  # past discovery and the first burst
-    recorder.samples.clear()
+    recorder.clear()
     ros.spin_for(WINDOW_S)
     samples = recorder.samples
-    probe_now_ns = ros.node.get_clock().now().nanoseconds
-    assert len(samples) > 100, processes.output(process)
+    assert len(samples) > 10, processes.output(process)
 
-    # Rate: what arrived per second, and what was sent per second (publication sequence numbers).
-    # Over 2 s of arrival times on a loaded machine a late timer catches up in a burst (582 Hz was
-    # seen with four test runs at once): +-20 % here; the demo's own timing is the stamps', +-10 %.
-    arrival_span = samples[-1][0] - samples[0][0]
-    received_hz = (len(samples) - 1) / arrival_span
-    assert 400.0 <= received_hz <= 600.0, f"received {received_hz:.1f} Hz"
-    if samples[0][1] is not None:
-        sent = known(samples[-1][1]) - known(samples[0][1])
-        sent_hz = sent / arrival_span
-        assert 400.0 <= sent_hz <= 600.0, f"sent {sent_hz:.1f} Hz"
-        assert len(samples) >= 0.9 * (sent + 1)  # few losses
-
-    # Stamps: the node clock (system time here), increasing, 2 ms apart, fresh.
-    stamps_ns = np.array(
-        [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for _, _, m in samples]
-    )
-    assert (np.diff(stamps_ns) > 0).all()
-    stamp_hz = (len(stamps_ns) - 1) / ((stamps_ns[-1] - stamps_ns[0]) * 1e-9)
-    assert 450.0 <= stamp_hz <= 550.0, f"stamps say {stamp_hz:.1f} Hz"
-    assert abs(np.median(np.diff(stamps_ns)) - 2_000_000) < 200_000
-    assert (
-        abs(time.time_ns() - stamps_ns[-1]) < 0.5e9 and abs(probe_now_ns - stamps_ns[-1]) < 0.5e9
-    )
+    stamps_ns = assert_paced(recorder, PERIOD_NS, processes.output(process))
 
     # Content: the naming asked for, 12 positions inside the URDF limits and 12 velocities that
     # are the positions' time derivatives (trapezoid rule over consecutive messages).
@@ -146,9 +162,10 @@ def test_lower_rate_and_integer_parameter(processes, ros) -> None:
     recorder = Recorder(ros, "joint_states")
     process = processes.start([*DEMO, "--ros-args", "-p", "rate_hz:=100"])
     assert ros.spin_until(lambda: len(recorder.samples) > 0), processes.output(process)
-    recorder.samples.clear()
+    recorder.clear()
     ros.spin_for(1.0)
-    assert 85 <= len(recorder.samples) <= 115
+    assert len(recorder.samples) > 5, processes.output(process)
+    assert_paced(recorder, 10_000_000, processes.output(process))
     assert processes.interrupt(process) == 0
 
 

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 import pytest
+from bag_factory import TYPESTORE, JointStateMsg, joint_state
 from hostile_values import SPECIAL_VALUES, UNKNOWN_NAMES
 from node_harness import Diagnostics, NodeClient, joint_state_message, node_command, stamp_ns
 from pybullet_reference import A1_URDF, PyBulletRobot
@@ -464,3 +465,31 @@ def test_urdf_pybullet_cannot_load_but_our_parser_can_is_reported_by_verify(proc
     assert client.set_string_parameter("robot_description", A1_XML).successful
     assert_publishes_correct_feet(client)  # a new model starts from an empty joint state
     assert client.verify().success
+
+
+def test_big_endian_and_malformed_joint_state_bytes(processes, ros):
+    """The node reads JointState bytes itself: a big-endian CDR message (another machine's rmw
+    may write one) gives the same feet as PyBullet's; bytes cut short are ignored with a warning,
+    and the next good message is answered."""
+    process, client = start_node(processes, ros)
+    raw_publisher = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=10))
+    angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
+    stamp = 1_700_000_000_123_456_789
+    message = joint_state(JointStateMsg(stamp, PYBULLET_NAMES, angles, efforts=[1.5] * 12))
+    big_endian = TYPESTORE.serialize_cdr(
+        message, "sensor_msgs/msg/JointState", little_endian=False
+    )
+    assert big_endian[:2] == b"\x00\x00"  # CDR_BE
+    client.clear()
+    raw_publisher.publish(bytes(big_endian))
+    assert wait_for_stamp(client, stamp), processes.output(process)
+    expected = pybullet_feet(angles)
+    for slot, got in enumerate(feet_of_stamp(client, stamp).values()):
+        assert math.dist(got, expected[slot]) <= 1e-7
+    little_endian = TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState")
+    raw_publisher.publish(bytes(little_endian[: len(little_endian) // 2]))
+    assert client.probe.spin_until(
+        lambda: "ignoring a joint_states message: " in processes.output(process), 10.0
+    ), processes.output(process)
+    assert "Traceback" not in processes.output(process)
+    assert_publishes_correct_feet(client)

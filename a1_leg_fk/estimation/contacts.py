@@ -17,6 +17,7 @@ gives a NaN probability.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,6 +65,13 @@ class ContactThresholds:
         return cls(touchdown, min(liftoff, touchdown) if liftoff_n is None else liftoff)
 
 
+def normal_force(force: Sequence[float], down: Sequence[float]) -> float:
+    """One foot's normal force [N] (:func:`normal_forces`' rule, in floats): its force [N]
+    against gravity's unit direction ``down``, both in the base frame.
+    """
+    return -(force[0] * down[0] + force[1] * down[1] + force[2] * down[2])
+
+
 def normal_forces(forces: ArrayLike, gravity_base: ArrayLike) -> np.ndarray:
     """(N, 4) normal forces [N] along minus gravity for (N, 4, 3) foot forces [N] and gravity
     (3,) or (N, 3) [m/s^2], both in the base frame; NaN where a force is NaN.
@@ -85,9 +93,21 @@ class ContactRule:
         self.stance = np.zeros(LEGS, dtype=bool)
         """Each foot's state after the latest row: True in stance."""
 
-    def update(self, normal: ArrayLike) -> np.ndarray:
-        """(4,) contact probabilities for one row of 4 normal forces [N]."""
-        probabilities: np.ndarray = self.update_batch(np.asarray(normal, dtype=float)[None])[0]
+    def update(self, normal: Sequence[float]) -> list[float]:
+        """4 contact probabilities for one row of 4 normal forces [N]: :meth:`update_batch`'s
+        rule in plain floats (the per-sample path of the leg odometry).
+        """
+        touchdown, liftoff = self.thresholds.touchdown_n, self.thresholds.liftoff_n
+        span = max(touchdown - liftoff, 1e-12)
+        stance = self.stance
+        probabilities = []
+        for leg, force in enumerate(normal):
+            if force >= touchdown:
+                stance[leg] = True
+            elif force < liftoff:
+                stance[leg] = False  # NaN: neither, the state stays
+            share = 0.5 + 0.5 * (force - liftoff) / span if stance[leg] else 0.5 * force / touchdown
+            probabilities.append(share if math.isnan(share) else min(max(share, 0.0), 1.0))
         return probabilities
 
     def update_batch(self, normal: ArrayLike) -> np.ndarray:

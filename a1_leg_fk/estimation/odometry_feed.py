@@ -1,8 +1,10 @@
 """Joint states and IMU samples in, odometry samples out: the one pipeline of the node and the bag
 tool (:class:`OdometryFeed`). Per joint state: the IMU sample that goes with it
 (:class:`~a1_leg_fk.estimation.imu.ImuBuffer`), gravity's direction from its orientation, each
-foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`), then one
-:meth:`~a1_leg_fk.estimation.odometry.LegOdometry.step`. Plain floats throughout.
+foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`), the stance's source (foot
+forces from the joint efforts, or kinematic: :class:`~a1_leg_fk.estimation.effort_contacts.
+EffortContacts`), then one :meth:`~a1_leg_fk.estimation.odometry.LegOdometry.step`. Plain floats
+throughout.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from a1_leg_fk.estimation.effort_contacts import AUTO, EffortContacts
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
@@ -28,7 +31,9 @@ Foot = tuple[Sequence[float], Sequence[float]]
 
 class OdometryFeed:
     """Leg odometry for one robot. ``radii``: the feet's rolling radii [m] (default: the URDF's
-    collision spheres); ``use_imu`` false ignores IMU samples (legs alone).
+    collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``: the
+    stance's source, ``auto``, ``force`` or ``kinematic`` (:mod:`~a1_leg_fk.estimation.
+    effort_contacts`), with the contact rule's ``thresholds`` [N] (None: the defaults).
     """
 
     def __init__(
@@ -38,8 +43,11 @@ class OdometryFeed:
         radii: Sequence[float] | float | None = None,
         imu_timeout_s: float = DEFAULT_IMU_TIMEOUT_S,
         use_imu: bool = True,
+        contacts: str = AUTO,
+        thresholds: tuple[float | None, float | None] = (None, None),
     ) -> None:
         self.motion = LegMotion(quadruped, radii)
+        self.contacts = EffortContacts(quadruped, contacts, thresholds)
         self.odometry = LegOdometry(settings)
         self.imu = ImuBuffer(imu_timeout_s)
         self.use_imu = use_imu
@@ -57,17 +65,22 @@ class OdometryFeed:
         angles: Sequence[float],
         rates: Sequence[float],
         contacts: Sequence[float] | None = None,
+        efforts: Sequence[float] | None = None,
     ) -> OdometrySample | None:
         """The estimate after one joint state: per leg its foot (None: not in this joint state, or
-        without velocity), the 12 ``angles`` [rad] and ``rates`` [rad/s], ``contacts`` (4)
-        probabilities or None (kinematic stance). None, and nothing changes, when no leg has a
-        foot (a joint state without velocities says nothing about motion).
+        without velocity), the 12 merged ``angles`` [rad], ``rates`` [rad/s] and ``efforts``
+        [N m] (None: none) in slot order; ``contacts`` (4) probabilities from elsewhere, else the
+        stance comes from :attr:`contacts` (the efforts' foot forces, or kinematic). None, and
+        nothing changes, when no leg has a foot (a joint state without velocities says nothing
+        about motion).
         """
         if all(foot is None for foot in feet):
             return None
         imu = self.imu.at(stamp_ns)
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
+        if contacts is None:
+            contacts = self.contacts.probabilities(angles, efforts, down)
         depths: list[float | None] = [None] * len(feet)
         points: list[Vector | None] = [None] * len(feet)
         motion = self.motion

@@ -213,20 +213,33 @@ class FootForces:
         q = _row(angles, "joint angles")[0].tolist()
         tau = _row(efforts, "joint efforts")[0].tolist()
         gravity = _gravity(gravity_base, 1)[0].tolist()
+        out, missing, singular = self.estimate_floats(q, tau, gravity)
+        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+
+    def estimate_floats(
+        self, angles: Sequence[float], efforts: Sequence[float], gravity: Sequence[float]
+    ) -> tuple[list[list[float]], list[bool], list[bool]]:
+        """:meth:`estimate` in plain floats, unchecked (the per-sample path of the leg odometry):
+        12 angles [rad] and 12 efforts [N m] in slot order, gravity (3) [m/s^2] in the base frame;
+        per leg its force [N] (NaN where none), whether it is missing, whether it is singular.
+        """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
-        if all(math.isfinite(value) for value in gravity):
-            for slot, statics in enumerate(self._legs):
-                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-                missing[slot] = not all(math.isfinite(v) for v in q[joints] + tau[joints])
-                if missing[slot]:
-                    continue
-                trig = [f(angle) for angle in q[joints] for f in (math.cos, math.sin)]
-                scaled, det, size = statics.solve(trig, tau[joints], gravity)
-                singular[slot] = not abs(det) >= self.min_condition * size
-                if not singular[slot]:
-                    out[slot] = [value / det for value in scaled]
-        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+        if not all(math.isfinite(value) for value in gravity):
+            return out, missing, singular
+        isfinite, cos, sin = math.isfinite, math.cos, math.sin
+        for slot, statics in enumerate(self._legs):
+            first = slot * JOINTS_PER_LEG
+            q, tau = angles[first : first + JOINTS_PER_LEG], efforts[first : first + JOINTS_PER_LEG]
+            missing[slot] = not (all(isfinite(v) for v in q) and all(isfinite(v) for v in tau))
+            if missing[slot]:
+                continue
+            trig = [cos(q[0]), sin(q[0]), cos(q[1]), sin(q[1]), cos(q[2]), sin(q[2])]
+            scaled, det, size = statics.solve(trig, tau, gravity)
+            singular[slot] = not abs(det) >= self.min_condition * size
+            if not singular[slot]:
+                out[slot] = [value / det for value in scaled]
+        return out, missing, singular
 
     def estimate_batch(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None

@@ -33,19 +33,28 @@ def imu_message(run: SimRun, row: int, orientation: bool = True):
     )
 
 
-def write_sim_bag(path: Path, run: SimRun, imu: bool = True, truth: bool = True) -> Path:
-    """The run as an MCAP bag: joint_states (positions, velocities), imu, truth (PoseStamped of
-    the URDF root in the world)."""
+def joint_state_msg(run: SimRun, row: int, efforts: bool = False) -> JointStateMsg:
+    """The JointState of a sample: angles, rates and (``efforts``) the motor torques [N m]."""
+    return JointStateMsg(
+        stamp_of(run, row),
+        run.joint_names,
+        run.angles[row],
+        run.rates[row],
+        efforts=run.torques[row] if efforts else (),
+    )
+
+
+def write_sim_bag(
+    path: Path, run: SimRun, imu: bool = True, truth: bool = True, efforts: bool = False
+) -> Path:
+    """The run as an MCAP bag: joint_states (positions, velocities, and with ``efforts`` the
+    motor torques), imu, truth (PoseStamped of the URDF root in the world)."""
     spec = BagSpec()
     for row in range(len(run.stamps_s)):
         stamp = stamp_of(run, row)
         if imu:  # one ns before the joint state: a replay delivers it first
             spec.add(IMU_TOPIC, "sensor_msgs/msg/Imu", stamp - 1, imu_message(run, row))
-        spec.add_joint_state(
-            JOINT_TOPIC,
-            stamp,
-            JointStateMsg(stamp, run.joint_names, run.angles[row], run.rates[row]),
-        )
+        spec.add_joint_state(JOINT_TOPIC, stamp, joint_state_msg(run, row, efforts))
         if truth:
             spec.add(
                 TRUTH_TOPIC,

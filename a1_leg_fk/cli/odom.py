@@ -25,6 +25,7 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     non_negative,
 )
+from a1_leg_fk.estimation.effort_contacts import CONTACT_SOURCES
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # the bag side is imported when the command runs
@@ -49,6 +50,14 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--imu", metavar="TOPIC", help="the sensor_msgs/msg/Imu topic (default: the only one)"
     )
     odom.add_argument("--no-imu", action="store_true", help="ignore the IMU: legs alone")
+    odom.add_argument(
+        "--contacts",
+        choices=CONTACT_SOURCES,
+        default="auto",
+        help="stance from the joint efforts' foot forces (force), from the feet's contact points "
+        "along gravity (kinematic), or force for each joint state whose efforts are all finite "
+        "(auto, the default)",
+    )
     odom.add_argument(
         "--truth",
         metavar="TOPIC",
@@ -95,6 +104,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             use_imu=not options.no_imu,
             base_pose=options.truth,
             radius_m=options.foot_radius,
+            contacts=options.contacts,
             progress=show_progress(options),
             topic=options.topic,
             urdf=options.urdf,
@@ -165,8 +175,12 @@ def summary_lines(track: OdometryTrack) -> list[str]:
         if len(track.stamps_ns)
         else ""
     )
+    contacts = track.contact_counts.line(track.contacts) + (
+        f" (no foot forces for this robot: {track.contacts_note})" if track.contacts_note else ""
+    )
     lines += [
         f"imu:       {imu}",
+        f"contacts:  {contacts}",
         (
             f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m; samples without"
             f" a stance foot {counts.no_stance}; feet dropped as slipping: {slips}"

@@ -106,7 +106,9 @@ class ContactRule:
                 stance[leg] = True
             elif force < liftoff:
                 stance[leg] = False  # NaN: neither, the state stays
-            share = 0.5 + 0.5 * (force - liftoff) / span if stance[leg] else 0.5 * force / touchdown
+            share = (
+                0.5 + 0.5 * (force - liftoff) / span if stance[leg] else 0.5 * force / touchdown
+            )
             probabilities.append(share if math.isnan(share) else min(max(share, 0.0), 1.0))
         return probabilities
 

@@ -66,13 +66,11 @@ class EffortContacts:
         self.counts = ContactCounts()
         self.model: FootForces | None = None
         self.note = ""
-        """Why ``auto`` never uses force contacts for this robot ("" when it can)."""
+        """Why there are no foot forces for this robot ("" when there are)."""
         if source != KINEMATIC:
             try:
                 self.model = FootForces(quadruped)
-            except LegFkError as error:
-                if source == FORCE:
-                    raise
+            except LegFkError as error:  # a URDF without masses: no foot stands by force
                 self.note = str(error)
         weight = self.model.total_mass_kg * STANDARD_GRAVITY if self.model else 1.0
         self.rule = ContactRule(ContactThresholds.for_weight(weight, *thresholds))

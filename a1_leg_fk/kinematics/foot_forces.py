@@ -230,7 +230,10 @@ class FootForces:
         isfinite, cos, sin = math.isfinite, math.cos, math.sin
         for slot, statics in enumerate(self._legs):
             first = slot * JOINTS_PER_LEG
-            q, tau = angles[first : first + JOINTS_PER_LEG], efforts[first : first + JOINTS_PER_LEG]
+            q, tau = (
+                angles[first : first + JOINTS_PER_LEG],
+                efforts[first : first + JOINTS_PER_LEG],
+            )
             missing[slot] = not (all(isfinite(v) for v in q) and all(isfinite(v) for v in tau))
             if missing[slot]:
                 continue

@@ -43,7 +43,8 @@ class FootBlock:
     velocities [m/s] in the base frame, world feet [m]), velocities always an array (NaN where the
     message gives none); with ``recording.forces``, ``forces`` (N, 4, 3) [N, base frame],
     ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts`` (N, 4) probabilities (NaN
-    where none).
+    where none); with ``recording.efforts``, ``efforts`` (N, 12) [N m], the merged joint efforts
+    after each message in slot order (NaN where unknown).
     """
 
     stamps_ns: np.ndarray
@@ -56,6 +57,7 @@ class FootBlock:
     forces: np.ndarray | None = None
     normal_forces: np.ndarray | None = None
     contacts: np.ndarray | None = None
+    efforts: np.ndarray | None = None
 
 
 def iter_foot_blocks(
@@ -303,7 +305,9 @@ class _Pending:
             np.array(self.bag_times, dtype=np.int64),
             positions.astype(np.float64),
             velocities.astype(np.float64),
-            efforts.astype(np.float64) if batch.recording.forces is not None else None,
+            efforts.astype(np.float64)
+            if batch.recording.forces is not None or batch.recording.efforts
+            else None,
         )
 
 
@@ -319,7 +323,7 @@ def _finish(
 ) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
     ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
-    another length; efforts only with ``recording.forces``).
+    another length; efforts only with ``recording.forces`` or ``recording.efforts``).
     """
     result = tracker.update_block(names, positions, velocities, efforts)
     angles = result.angles[result.accepted]
@@ -339,7 +343,7 @@ def _finish(
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
     rates[~np.repeat(np.isfinite(foot_velocities).all(axis=2), JOINTS_PER_LEG, axis=1)] = math.nan
-    forces = None
+    forces: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = (None, None, None)
     if recording.forces is not None and efforts is not None:
         slot_efforts = recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
         forces = recording.forces.rows(stamps, angles[rows], slot_efforts)
@@ -351,7 +355,8 @@ def _finish(
         world,
         angles[rows],
         rates,
-        *(forces or (None,) * 3),
+        *forces,
+        result.efforts[result.accepted][rows] if recording.efforts else None,
     )
 
 

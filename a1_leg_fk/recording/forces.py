@@ -155,8 +155,12 @@ class ForcePass:
         return estimate.forces, normal, self.rule.update_batch(normal)
 
 
-def check_has_efforts(reader: AnyReader, connection: Connection, ros1: bool) -> None:
-    """:class:`LegFkError` if the first JointState of ``connection`` has no efforts."""
+def check_has_efforts(
+    reader: AnyReader, connection: Connection, ros1: bool, needs: str = "--forces"
+) -> None:
+    """:class:`LegFkError` if the first JointState of ``connection`` has no efforts (``needs``:
+    the option that needs them, for the message).
+    """
     for _, _, raw in reader.messages(connections=[connection]):
         try:
             efforts = JointStateDecoder(ros1).fields(raw).efforts
@@ -165,6 +169,6 @@ def check_has_efforts(reader: AnyReader, connection: Connection, ros1: bool) -> 
         if not efforts:
             raise MissingEfforts(
                 f"{connection.topic}: its JointState messages carry no efforts (the first one's "
-                "effort array is empty); --forces needs joint efforts"
+                f"effort array is empty); {needs} needs joint efforts"
             )
         return

@@ -2,22 +2,26 @@
 pipeline (:class:`~a1_leg_fk.estimation.odometry_feed.OdometryFeed`), in bag order, as a live node
 would have received them. No ROS install: the bag is read with ``rosbags``
 (:mod:`a1_leg_fk.recording.reader`), JointState messages by the same rules and blocks as
-``a1-leg-fk bag`` (:mod:`a1_leg_fk.recording.blocks`).
+``a1-leg-fk bag`` (:mod:`a1_leg_fk.recording.blocks`); the stance from the merged joint efforts'
+foot forces or kinematic, as the node decides it (:mod:`a1_leg_fk.estimation.effort_contacts`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import repeat
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
 
 import numpy as np
 
+from a1_leg_fk.estimation.effort_contacts import AUTO, FORCE, KINEMATIC, ContactCounts
 from a1_leg_fk.estimation.imu import imu_reading
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.forces import check_has_efforts
 from a1_leg_fk.recording.reader import _pick_topic, one_line
 from a1_leg_fk.recording.trajectories import (
     BasePoses,
@@ -45,7 +49,9 @@ class OdometryTrack:
     pose in odom: ``positions`` (N, 3) [m], ``orientations`` (N, 4) x, y, z, w; twist in the base
     frame: ``linear`` (N, 3) [m/s], ``angular`` (N, 3) [rad/s]; covariance diagonals
     ``pose_variances`` and ``twist_variances`` (N, 6); ``stance`` and ``used`` (N, 4) bool.
-    ``truth``: the base's recorded pose (``--truth``), else None.
+    ``truth``: the base's recorded pose (``--truth``), else None. ``contacts``: the stance's
+    source asked for (auto, force, kinematic), ``contact_counts`` the samples of each,
+    ``contacts_note`` why there are no foot forces for this robot ("" when there are).
     """
 
     stamps_ns: np.ndarray
@@ -64,6 +70,9 @@ class OdometryTrack:
     rows_with_imu: int
     radii: tuple[float, ...]
     counts: OdometryCounts
+    contacts: str
+    contact_counts: ContactCounts
+    contacts_note: str
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
@@ -76,25 +85,37 @@ def odometry_track(
     use_imu: bool = True,
     radius_m: float | None = None,
     settings: OdometrySettings | None = None,
+    contacts: str = AUTO,
     progress: bool = False,
     **choices: Unpack[RecordingChoices],
 ) -> OdometryTrack:
     """The leg odometry of a bag. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
     one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
-    ``choices`` as :func:`~a1_leg_fk.recording.trajectories.open_recording`'s, whose ``base_pose``
-    is the truth to compare with. :class:`LegFkError` for bad input.
+    ``contacts``: the stance's source (``auto``, ``force``: a bag without efforts is bad input,
+    ``kinematic``); ``choices`` as :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
+    whose ``base_pose`` is the truth to compare with. :class:`LegFkError` for bad input.
     """
     recording = open_recording(path, **choices)
     try:
+        recording.efforts = contacts != KINEMATIC
+        if contacts == FORCE:
+            check_has_efforts(
+                recording.reader, recording.joint_states, recording.ros1, "--contacts force"
+            )
         imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
         imu = _imu_samples(recording.reader, imu_connection) if imu_connection else []
-        feed = OdometryFeed(recording.quadruped, settings, radius_m, use_imu=use_imu)
+        feed = OdometryFeed(
+            recording.quadruped, settings, radius_m, use_imu=use_imu, contacts=contacts
+        )
+        if contacts == FORCE and feed.contacts.note:
+            raise LegFkError(f"--contacts force: {feed.contacts.note}")
         stats, samples, next_imu = BlockStats(), [], 0
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
             usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
                 axis=2
             )
+            efforts = block.efforts.tolist() if block.efforts is not None else repeat(None)
             rows = zip(
                 block.stamps_ns.tolist(),
                 block.bag_times_ns.tolist(),
@@ -103,8 +124,9 @@ def odometry_track(
                 usable.tolist(),
                 block.angles.tolist(),
                 block.rates.tolist(),
+                efforts,
             )
-            for stamp, bag_time, positions, velocities, known, angles, rates in rows:
+            for stamp, bag_time, positions, velocities, known, angles, rates, effort in rows:
                 while next_imu < len(imu) and imu[next_imu][0] <= bag_time:
                     feed.add_imu(imu[next_imu][1], imu[next_imu][2])
                     next_imu += 1
@@ -112,7 +134,7 @@ def odometry_track(
                     (position, velocity) if ok else None
                     for position, velocity, ok in zip(positions, velocities, known)
                 ]
-                sample = feed.step(stamp, feet, angles, rates)
+                sample = feed.step(stamp, feet, angles, rates, efforts=effort)
                 if sample is not None:
                     samples.append(sample)
         summary = stats.summary(recording)
@@ -160,6 +182,9 @@ def _track(
         rows_with_imu=feed.samples_with_imu,
         radii=feed.motion.radii,
         counts=feed.odometry.counts,
+        contacts=feed.contacts.source,
+        contact_counts=feed.contacts.counts,
+        contacts_note=feed.contacts.note,
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,

@@ -68,6 +68,7 @@ class Recording:
     salvage_note: str = ""  # what was read of a truncated MCAP file
     tracker: FootTracker | None = None  # the rules' state and counts of the current pass
     forces: ForcePass | None = None  # foot forces and contacts from the efforts, when asked for
+    efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
 
 
 def _rosbags() -> ModuleType:

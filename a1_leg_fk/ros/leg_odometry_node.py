@@ -7,8 +7,9 @@ accepted joint state with velocities gives one ``leg_odometry`` message, stamped
 state's stamp: pose in ``odom_frame``, twist in the base frame (``child_frame_id``). An IMU sample
 is paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`).
 
-Contacts: kinematic. :meth:`LegOdometryNode._contact_probabilities` is where a contact estimate
-from the joint efforts plugs in (probabilities per leg, or None).
+Contacts (parameter ``contacts``): from the foot forces of the JointState's efforts when they are
+all finite, else kinematic (``auto``); or always one of them (``force``, ``kinematic``). The rule
+is :mod:`a1_leg_fk.estimation.effort_contacts`'s, inside the feed, as in ``a1-leg-fk odom``.
 """
 
 from __future__ import annotations
@@ -26,11 +27,13 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu, JointState
 
+from a1_leg_fk.estimation.effort_contacts import AUTO, CONTACT_SOURCES, KINEMATIC
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
@@ -58,6 +61,15 @@ PARAMETERS = (
         ParameterType.PARAMETER_BOOL,
         "Use the imu topic (orientation unless its orientation_covariance[0] is -1, angular "
         "velocity always); false = legs alone (planar pose)",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "contacts",
+        AUTO,
+        ParameterType.PARAMETER_STRING,
+        "Where the stance comes from: auto (the foot forces of the joint efforts when a joint "
+        "state's are all finite, else kinematic), force (the foot forces always) or kinematic "
+        "(the lowest feet along gravity)",
         read_only=True,
     ),
     ParameterSpec(
@@ -115,6 +127,11 @@ class LegOdometryNode(Node):
         self._decoder = JointStateDecoder()
         self._msg = Odometry()
         self._values = [0.0] * SerializedOdometry.DOUBLES
+        self._contacts = str(self.get_parameter("contacts").value)
+        if self._contacts not in CONTACT_SOURCES:
+            raise LegFkError(
+                f"parameter contacts must be {', '.join(CONTACT_SOURCES)}: {self._contacts!r}"
+            )
         self._start(self._robot.config)
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
@@ -159,7 +176,10 @@ class LegOdometryNode(Node):
             radius if radius >= 0.0 else None,
             self._setting("imu_timeout_s"),
             use_imu=bool(self._setting("use_imu")),
+            contacts=self._contacts,
         )
+        if self._feed.contacts.note and self._contacts != KINEMATIC:
+            self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.contacts.note}")
         self._no_stance_before = 0
         self._apply_frames()
 
@@ -193,16 +213,24 @@ class LegOdometryNode(Node):
         tools read them), else deserialized; then :class:`FootTracker`'s rules and the odometry.
         """
         try:
-            stamp_ns, _, order, position_bytes, velocity_bytes, _ = self._decoder.fields(raw)
+            stamp_ns, _, order, position_bytes, velocity_bytes, effort_bytes = (
+                self._decoder.fields(raw)
+            )
             names: Sequence[str] = self._decoder.names
             positions = doubles(position_bytes, order)
             velocities = doubles(velocity_bytes, order)
+            efforts = doubles(effort_bytes, order)
         except WireError:
             msg = deserialize_message(raw, JointState)
             stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-            names, positions, velocities = msg.name, msg.position, msg.velocity
+            names, positions, velocities, efforts = (
+                msg.name,
+                msg.position,
+                msg.velocity,
+                msg.effort,
+            )
         tracker = self._tracker
-        feet = tracker.update(names, positions, velocities)
+        feet = tracker.update(names, positions, velocities, efforts)
         if tracker.new_unknown_names:
             names = tracker.take_new_unknown_names()
             self.get_logger().warn(
@@ -221,7 +249,7 @@ class LegOdometryNode(Node):
             legs,
             tracker.angles,
             tracker.rates,
-            self._contact_probabilities(),
+            efforts=tracker.efforts,
         )
         if sample is None:
             self._without_velocities += 1
@@ -230,13 +258,6 @@ class LegOdometryNode(Node):
             )
             return
         self._publish(sample)
-
-    def _contact_probabilities(self) -> Sequence[float] | None:
-        """Contact probabilities (4,) of the legs, or None for the kinematic stance. The
-        force-based contact estimate from the joint efforts plugs in here (the efforts are the
-        JointState's third array: :class:`JointStateDecoder` reads positions and velocities).
-        """
-        return None
 
     def _publish(self, sample: OdometrySample) -> None:
         values = self._values  # pose 7, its covariance 36, twist 6, its covariance 36
@@ -298,6 +319,9 @@ class LegOdometryNode(Node):
                 imu_received=self._feed.imu.received,
                 samples_with_imu=self._feed.samples_with_imu,
                 without_velocities=self._without_velocities,
+                contacts=self._contacts,
+                contact_counts=self._feed.contacts.counts,
+                contacts_note=self._feed.contacts.note,
                 model=self._config.source,
                 description_topic=robot.topic_name,
                 description_status=robot.topic_status,

@@ -2,13 +2,15 @@
 
 Joint states are judged as ``foot_fk_node`` judges them (:mod:`a1_leg_fk.ros.diagnostics`); the
 odometry adds its own counts: samples, samples without a stance foot, feet dropped as slipping,
-stamp gaps, the IMU's state and the distance travelled.
+stamp gaps, the IMU's state, where the stance came from (foot forces or kinematic) and the
+distance travelled.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from a1_leg_fk.estimation.effort_contacts import ContactCounts
 from a1_leg_fk.estimation.odometry import OdometryCounts
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.ros.diagnostics import OK, WARN, rejected_messages, robot_description_status
@@ -33,12 +35,16 @@ class OdometryReport:
     description_topic: str
     description_status: str
     description_rejected: bool
+    contacts: str  # the contacts parameter: auto, force or kinematic
+    contact_counts: ContactCounts
+    contacts_note: str  # why there are no foot forces ("" when there are)
 
 
 def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, object]]:
     """(level, summary, values). WARN for: no joint state yet, rejected joint states in the
     period, joint states without velocities, no IMU sample, samples without a stance foot in the
-    period, a rejected robot description; else OK.
+    period, force contacts asked for a robot without masses, a rejected robot description; else
+    OK.
     """
     tracker, odometry = report.tracker, report.odometry
     level, summary = OK, "odometry published"
@@ -50,6 +56,8 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         level, summary = WARN, "some joint_states rejected"
     elif report.no_stance_in_period:
         level, summary = WARN, "samples without a stance foot: velocity held and decaying"
+    elif report.contacts == "force" and report.contacts_note:
+        level, summary = WARN, "contacts force, but no foot forces: no foot stands"
     elif not report.imu_received:
         level, summary = WARN, f"no IMU on {report.imu_topic}: legs alone, planar pose"
     level, summary, description = robot_description_status(
@@ -70,9 +78,14 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "samples": odometry.samples,
         "samples_with_imu": report.samples_with_imu,
         "samples_without_stance": odometry.no_stance,
+        "contacts": report.contacts,
+        "samples_with_force_contacts": report.contact_counts.force,
+        "samples_with_kinematic_stance": report.contact_counts.kinematic,
         **{f"slips_{leg}": n for leg, n in zip(LEG_NAMES, odometry.slips)},
         "stamp_gaps": odometry.gaps,
         "distance_m": f"{odometry.distance_m:.3f}",
         **description,
     }
+    if report.contacts_note:
+        values["contacts_note"] = f"no foot forces: {report.contacts_note}"
     return level, summary, values

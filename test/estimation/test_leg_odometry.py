@@ -42,12 +42,15 @@ def walk():
     return simulate(walking_targets(), SIM_S)
 
 
-def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None):
-    """Run the feed over a simulated run; (velocities (N, 3), positions (N, 3), counts)."""
+def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None, efforts=False):
+    """Run the feed over a simulated run; (velocities (N, 3), positions (N, 3), counts).
+    ``contacts``: PyBullet's normal forces through the contact hook; ``efforts``: the motor
+    torques as the joint states' efforts (the feed's own force contacts)."""
     feed = OdometryFeed(quadruped, radii=radius, use_imu=imu)
     feet = quadruped.fk_batch(run.angles).tolist()
     velocities = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
     angles, rates = run.angles.tolist(), run.rates.tolist()
+    torques = run.torques.tolist() if efforts else [None] * len(angles)
     standing = (run.contact_forces[:, :, 2] > CONTACT_FORCE_N).astype(float).tolist()
     samples = []
     for row, seconds in enumerate(run.stamps_s):
@@ -59,11 +62,13 @@ def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None):
             angles[row],
             rates[row],
             standing[row] if contacts else None,
+            torques[row],
         )
         assert sample is not None
         samples.append(sample)
     linear = np.array([s.linear for s in samples])
     position = np.array([s.position for s in samples])
+    assert feed.contacts.counts.force == (len(samples) if efforts and not contacts else 0)
     return linear, position, feed.odometry.counts, samples
 
 
@@ -97,10 +102,13 @@ def test_the_walk_is_what_the_issue_asks_for(walk) -> None:
 
 
 def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
-    """The issue's goals with contacts from the feet's forces (the contact hook, fed PyBullet's
-    normal forces); kinematic contacts, no IMU and no rolling reported and bounded."""
+    """The issue's goals with contacts from the joint efforts' foot forces (the motor torques in
+    the joint states: the feed's default, contacts auto); PyBullet's own normal forces through the
+    contact hook, kinematic contacts, no IMU and no rolling reported and bounded."""
     results = {}
     cases: dict[str, dict[str, Any]] = {
+        "efforts' force contacts + IMU": {"efforts": True},
+        "efforts' force contacts, no IMU": {"efforts": True, "imu": False},
         "force contacts + IMU": {"contacts": True},
         "force contacts + IMU, feet as points": {"contacts": True, "radius": 0.0},
         "kinematic contacts + IMU": {},
@@ -112,14 +120,17 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
         results[name] = errors(walk, linear, position, planar=not options.get("imu", True))
         rmse, drift, horizontal = results[name]
         print(
-            f"{name:<38} velocity RMSE {rmse:.4f} m/s, final position error {drift:.2f} % of "
+            f"{name:<40} velocity RMSE {rmse:.4f} m/s, final position error {drift:.2f} % of "
             f"the distance ({horizontal:.2f} % horizontally); no-stance samples "
             f"{counts.no_stance}"
         )
-    rmse, drift, horizontal = results["force contacts + IMU"]
+    rmse, drift, horizontal = results["efforts' force contacts + IMU"]
     assert rmse <= 0.05
     assert drift <= 2.0
     assert horizontal <= 2.0
+    assert results["efforts' force contacts, no IMU"][1] <= 8.0
+    rmse, drift, horizontal = results["force contacts + IMU"]  # PyBullet's: the same goals
+    assert rmse <= 0.05 and drift <= 2.0 and horizontal <= 2.0
     assert results["force contacts + IMU, feet as points"][2] > 2 * horizontal  # rolling matters
     assert results["kinematic contacts + IMU"][0] <= 0.06
     assert results["kinematic contacts + IMU"][1] <= 4.0

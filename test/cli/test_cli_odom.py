@@ -82,6 +82,8 @@ def test_without_the_imu_the_pose_is_planar(bag, tmp_path: Path, capsys) -> None
         (["--truth", IMU_TOPIC], "--base-pose /imu is sensor_msgs/msg/Imu"),
         (["--imu", IMU_TOPIC, "--no-imu"], "contradict"),
         (["--foot-radius", "-1"], None),
+        (["--contacts", "force"], "--contacts force needs joint efforts"),
+        (["--contacts", "forces"], None),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(bag, tmp_path, capsys, arguments, culprit) -> None:
@@ -96,6 +98,41 @@ def test_bad_input_is_one_line_and_exit_2(bag, tmp_path, capsys, arguments, culp
     if culprit:
         assert culprit in error and len(error.splitlines()) == 1, error
     assert not out.exists()
+
+
+def test_contacts_from_the_efforts(run, bag, tmp_path: Path, capsys) -> None:
+    """A bag whose joint states carry the motor torques: ``auto`` takes the foot forces for every
+    joint state and meets the odometry's goals against the simulation (from the first sample,
+    the drop included); ``kinematic`` ignores the efforts: the same rows as the bag without."""
+    efforts_bag = write_sim_bag(tmp_path / "walk_efforts", run, efforts=True)
+    auto, kinematic, without = (tmp_path / f"{name}.csv" for name in ("auto", "kin", "without"))
+    assert cli.main(["odom", str(efforts_bag), "--csv", str(auto)]) == 0
+    printed = capsys.readouterr().out
+    samples = len(run.stamps_s)
+    assert f"contacts:  auto: force contacts for {samples} samples, kinematic stance for 0" in (
+        printed
+    )
+    values = np.array(list(csv.reader(auto.open()))[1:], dtype=float)
+    rmse = np.sqrt(np.mean(np.sum((values[:, 8:11] - run.body_velocities) ** 2, axis=1)))
+    moved = run.base_positions[-1] - run.base_positions[0]
+    distance = np.linalg.norm(np.diff(run.base_positions, axis=0), axis=1).sum()
+    drift = 100 * np.linalg.norm(values[-1, 1:4] - moved) / distance
+    print(f"force contacts: velocity RMSE {rmse:.4f} m/s, final position error {drift:.2f} %")
+    assert rmse <= 0.05 and drift <= 3.0
+    assert (
+        cli.main(["odom", str(efforts_bag), "--contacts", "kinematic", "--csv", str(kinematic)])
+        == 0
+    )
+    assert cli.main(["odom", str(bag), "--csv", str(without)]) == 0
+    printed = capsys.readouterr().out
+    assert (
+        f"contacts:  kinematic: force contacts for 0 samples, kinematic stance for {samples}"
+        in (printed)
+    )
+    assert f"contacts:  auto: force contacts for 0 samples, kinematic stance for {samples}" in (
+        printed
+    )
+    assert kinematic.read_text() == without.read_text() != auto.read_text()
 
 
 def test_an_existing_output_is_kept_without_force(bag, tmp_path, capsys) -> None:

@@ -36,9 +36,10 @@ def test_force_contacts_are_pybullets_over_a_walk(quadruped) -> None:
     walk = simulate(walking_targets(), 3.0)
     contacts = EffortContacts(quadruped, "force")
     rows = zip(walk.angles.tolist(), walk.torques.tolist(), walk.base_quaternions.tolist())
-    stance = np.array(
-        [contacts.probabilities(a, e, down_direction(tuple(q))) for a, e, q in rows]
-    ) >= 0.5
+    stance = (
+        np.array([contacts.probabilities(a, e, down_direction(tuple(q))) for a, e, q in rows])
+        >= 0.5
+    )
     touching = walk.contact_forces[:, :, 2] > TOUCHING_N
     settled = walk.stamps_s >= SETTLED_S
     agreement = (stance == touching)[settled].mean(axis=0)

@@ -1,5 +1,6 @@
-"""``leg_odometry_node`` over real DDS: a PyBullet-made stream (joint_states + imu at 500 Hz) gives
-the same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message."""
+"""``leg_odometry_node`` over real DDS: a PyBullet-made stream (joint_states + imu at 500 Hz; with
+and without the motor torques as efforts, so with force contacts and kinematic stance) gives the
+same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pytest
 from bag_factory import joint_state
 from nav_msgs.msg import Odometry
 from node_harness import LEGS, Diagnostics
-from odometry_bags import JOINT_TOPIC, imu_message, stamp_of, write_sim_bag
+from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
 from pybullet_walk import simulate, walking_targets
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, JointState
@@ -38,6 +39,7 @@ def to_ros(message, kind):
         out.name = list(message.name)
         out.position = message.position.tolist()
         out.velocity = message.velocity.tolist()
+        out.effort = message.effort.tolist()
         return out
     for field in ("orientation", "angular_velocity", "linear_acceleration"):
         source, target = getattr(message, field), getattr(out, field)
@@ -48,9 +50,12 @@ def to_ros(message, kind):
     return out
 
 
-def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None:
-    bag = write_sim_bag(tmp_path / "sim", run, truth=False)
+@pytest.mark.parametrize("efforts", [False, True], ids=["kinematic", "force_contacts"])
+def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts) -> None:
+    bag = write_sim_bag(tmp_path / "sim", run, truth=False, efforts=efforts)
     track = odometry_track(bag, topic=JOINT_TOPIC)
+    force_samples = len(run.stamps_s) if efforts else 0
+    assert track.contact_counts.force == force_samples
     node = processes.start(odometry_node_command())
     diagnostics = Diagnostics(ros, "leg odometry")
     received: list[Odometry] = []
@@ -73,7 +78,7 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     for row in range(samples):
         imu_pub.publish(to_ros(imu_message(run, row), Imu))
         ros.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in the bag
-        message = joint_state_for(run, row)
+        message = joint_state(joint_state_msg(run, row, efforts))
         joint_pub.publish(to_ros(message, JointState))
         delay = start + (row + 1) / RATE_HZ - time.monotonic()
         if delay > 0:
@@ -88,6 +93,9 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     assert status["samples"] == str(samples) and status["imu_received"] == str(samples)
     assert status["samples_without_stance"] == str(track.counts.no_stance)
     assert [status[f"slips_{leg}"] for leg in LEGS] == [str(n) for n in track.counts.slips]
+    assert status["contacts"] == "auto"
+    assert status["samples_with_force_contacts"] == str(force_samples)
+    assert status["samples_with_kinematic_stance"] == str(samples - force_samples)
     assert processes.interrupt(node) == 0
     stamps = np.array(
         [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received]
@@ -117,14 +125,6 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path) -> None
     covariance = np.array(received[-1].pose.covariance).reshape(6, 6)
     assert (np.diag(covariance) > 0).all()
     assert (np.diag(np.array(received[-1].twist.covariance).reshape(6, 6)) > 0).all()
-
-
-def joint_state_for(run, row):
-    from bag_factory import JointStateMsg
-
-    return joint_state(
-        JointStateMsg(stamp_of(run, row), run.joint_names, run.angles[row], run.rates[row])
-    )
 
 
 def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:

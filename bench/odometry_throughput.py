@@ -1,8 +1,10 @@
 """CPU of ``leg_odometry_node`` against ``foot_fk_node`` alone, at the same load, in one run.
 
 Run: ``.venv/bin/python bench/odometry_throughput.py`` (about 40 s; ``--duration S``, ``--rate
-HZ``). A load generator publishes JointState (12 joints, the demo gait's angles and velocities,
-stamp = send time) and sensor_msgs/Imu (level, turning at 0.1 rad/s, same stamps) at ``--rate``
+HZ``). A load generator publishes JointState (12 joints, the demo gait's angles and velocities, and
+the efforts of the A1 standing in PyBullet, docs/forces.md, unless ``--no-efforts``: so
+leg_odometry_node estimates the foot forces and takes its contacts from them; stamp = send time)
+and sensor_msgs/Imu (level, turning at 0.1 rad/s, same stamps) at ``--rate``
 each, paced on perf_counter, for ``--duration`` seconds after a 2 s warm-up; it counts what the
 node under test answers (``foot_positions/FR`` or ``leg_odometry``). The node's CPU is
 (utime + stime) from /proc over the measured window. Each node runs twice, alternately
@@ -29,9 +31,13 @@ from a1_leg_fk.cli import common
 
 GOAL_RATIO = 1.3
 WARMUP_S = 2.0
+STANDING_EFFORTS = [1.08, -2.88, 2.42, -1.0, -3.08, 2.26, -1.86, 2.71, 5.02, 1.71, 2.8, 5.22]
+"""[N m]: the A1 standing in PyBullet (docs/forces.md): ~30 N on each foot."""
 
 
-def generator(rate: float, duration: float, answer_topic: str, answer_type: str) -> None:
+def generator(
+    rate: float, duration: float, answer_topic: str, answer_type: str, efforts: bool
+) -> None:
     """Publish joint states and IMU samples; print JSON lines "start", then "end" with counts."""
     import rclpy
     from nav_msgs.msg import Odometry
@@ -48,6 +54,7 @@ def generator(rate: float, duration: float, answer_topic: str, answer_type: str)
     states = [gait.state(2.0 + k / rate) for k in range(int(rate))]  # one second, cycled
     joints, imu = JointState(), Imu()
     joints.name = list(quadruped.joint_names)
+    joints.effort = STANDING_EFFORTS if efforts else []
     imu.orientation.w, imu.angular_velocity.z = 1.0, 0.1
     joint_pub = node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
     imu_pub = node.create_publisher(Imu, "imu", QoSProfile(depth=100))
@@ -119,6 +126,7 @@ def measure(name: str, script: str, module: str, args: argparse.Namespace, logs:
         answer[0],
         "--answer-type",
         answer[1],
+        *(["--no-efforts"] if args.no_efforts else []),
     ]
     load = common.Child("generator", command, logs / "generator.log", env=env, pipes=True)
     result: dict = {"node": name}
@@ -155,9 +163,16 @@ def main() -> int:
     parser.add_argument("--domain", type=int, default=1 + os.getpid() % 100)
     parser.add_argument("--answer-topic", default="")
     parser.add_argument("--answer-type", default="")
+    parser.add_argument(
+        "--no-efforts",
+        action="store_true",
+        help="joint states without efforts (leg_odometry_node: kinematic stance)",
+    )
     args = parser.parse_args()
     if args.role == "generator":
-        generator(args.rate, args.duration, args.answer_topic, args.answer_type)
+        generator(
+            args.rate, args.duration, args.answer_topic, args.answer_type, not args.no_efforts
+        )
         return 0
     print(machine())
     nodes = [
@@ -169,7 +184,10 @@ def main() -> int:
         for _ in range(2):
             for name, script, module in nodes:
                 results[name].append(measure(name, script, module, args, Path(folder)))
-    print(f"{args.rate:g} Hz joint_states + {args.rate:g} Hz imu, {args.duration:g} s per run:")
+    print(
+        f"{args.rate:g} Hz joint_states ({'without' if args.no_efforts else 'with'} efforts) + "
+        f"{args.rate:g} Hz imu, {args.duration:g} s per run:"
+    )
     for name, runs in results.items():
         for r in runs:
             print(

@@ -156,3 +156,22 @@ def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
     assert status["joint_states_without_velocities"] == "2"
     assert status["imu_topic"] == "none (use_imu false)"
     assert processes.interrupt(node) == 0
+
+
+def test_a_bad_contacts_value_names_the_parameter(ros) -> None:
+    from rclpy.parameter import Parameter
+
+    from a1_leg_fk.model.urdf import LegFkError
+    from a1_leg_fk.ros.leg_odometry_node import LegOdometryNode
+
+    with pytest.raises(LegFkError, match="parameter contacts must be auto, force, kinematic"):
+        LegOdometryNode(
+            context=ros.context, parameter_overrides=[Parameter("contacts", value="x")]
+        )
+    node = LegOdometryNode(
+        context=ros.context, parameter_overrides=[Parameter("contacts", value="kinematic")]
+    )
+    try:
+        assert node._feed.contacts.source == "kinematic" and node._feed.contacts.model is None
+    finally:
+        node.destroy_node()

@@ -1,4 +1,4 @@
-"""A simulated run (:class:`pybullet_walk.SimRun`) as a bag: JointState and Imu at every sample,
+"""A simulated run (:class:`pybullet_sim.SimRun`) as a bag: JointState and Imu at every sample,
 the true base pose as PoseStamped; and the messages the node tests publish."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
-from pybullet_walk import SimRun
+from pybullet_sim import SimRun
 
 IMU_TOPIC, TRUTH_TOPIC, JOINT_TOPIC = "/imu", "/truth", "/joint_states"
 UNKNOWN = np.zeros(9)  # an all-zero covariance: "unknown"

@@ -1,7 +1,9 @@
 """A free-base quadruped on a plane in PyBullet, recording what a robot's sensors would give.
 
-Independent of the code under test (no a1_leg_fk import): joints and links are found by name in
-PyBullet's own model. Each :meth:`QuadrupedSim.step` records a :class:`Sample`:
+Independent of the code under test (no a1_leg_fk import): this is the judge. Joints and links
+are found by name in PyBullet's own model. :class:`QuadrupedSim` connects, loads the plane and the
+robot, sets gravity and the time step; each :meth:`QuadrupedSim.step` drives the joints with
+PyBullet's position control and records a :class:`Sample`:
 
 - joint angles [rad], velocities [rad/s] and applied motor torques [N m] (``getJointState()[3]``:
   the torque the motor applies to the child link about the joint axis, as a JointState effort);
@@ -9,13 +11,18 @@ PyBullet's own model. Each :meth:`QuadrupedSim.step` records a :class:`Sample`:
   converted here), world frame, and its linear [m/s] and angular [rad/s] velocity, world frame;
 - an IMU aligned with the root: orientation (x, y, z, w) and gyro [rad/s] in the root frame;
 - per foot, the force the ground exerts on it [N, world frame]: every contact point of the foot
-  link with the plane, normal force plus both friction components, summed.
+  link with the plane, normal force plus both friction components, summed; whether it touches;
+  and the foot link's frame [m, world].
+
+Two gaits drive it: :func:`record_trot` (a trot in place, for the foot forces) and
+:func:`simulate` with :func:`walking_targets` (a trot that walks and turns, for the odometry),
+which gives a :class:`SimRun`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Self
@@ -25,6 +32,12 @@ import pybullet
 import pybullet_data
 
 A1_URDF = Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"
+A1_JOINTS = tuple(
+    f"{leg}_{part}_joint" for leg in ("FR", "FL", "RR", "RL") for part in ("hip", "upper", "lower")
+)
+A1_FEET = ("FR_toe", "FL_toe", "RR_toe", "RL_toe")
+STAND = (0.0, 0.8, -1.5)
+"""Hip roll, hip pitch, knee [rad] of one standing A1 leg."""
 STEP_S = 1.0 / 500.0
 GRAVITY = 9.81
 DIAGONAL_PAIR = (0, 1, 1, 0)
@@ -46,6 +59,7 @@ class Sample:
     gyro: np.ndarray  # (3,) root frame
     foot_forces: np.ndarray  # (4, 3) world
     foot_contact: np.ndarray  # (4,) bool: any contact point of the foot with the plane
+    foot_positions: np.ndarray  # (4, 3) foot link frames, world
     other_contact: bool  # any other link touching the plane
 
 
@@ -62,8 +76,25 @@ def rotation(quaternion: Sequence[float]) -> np.ndarray:
     return np.array(pybullet.getMatrixFromQuaternion(list(quaternion))).reshape(3, 3)
 
 
+def quaternion_rpy(roll: float, pitch: float, yaw: float = 0.0) -> tuple[float, ...]:
+    """(x, y, z, w) of fixed-axis roll, pitch, yaw [rad]."""
+    return tuple(pybullet.getQuaternionFromEuler([roll, pitch, yaw]))
+
+
+def gravity_in_root(orientation: Sequence[float], magnitude: float = GRAVITY) -> np.ndarray:
+    """World gravity (0, 0, -magnitude) [m/s^2] in the frame of a root at ``orientation``."""
+    result: np.ndarray = rotation(orientation).T @ np.array([0.0, 0.0, -magnitude])
+    return result
+
+
 class QuadrupedSim:
-    """One robot and a plane in a DIRECT client of its own; use as a context manager."""
+    """One robot and a plane in a DIRECT client of its own; use as a context manager.
+
+    The robot is loaded with its root origin at ``spawn_height_m`` [m] above the plane.
+    ``damped=False`` sets every link's and joint's damping to zero (PyBullet's default link
+    damping, 0.04, stays on the base); ``lateral_friction``, when given, is set on the plane and
+    the feet.
+    """
 
     def __init__(
         self,
@@ -71,18 +102,23 @@ class QuadrupedSim:
         joint_names: Sequence[str],
         foot_links: Sequence[str],
         step_s: float = STEP_S,
+        *,
+        spawn_height_m: float = 1.0,
+        damped: bool = False,
+        lateral_friction: float | None = None,
     ) -> None:
         self.client = pybullet.connect(pybullet.DIRECT)
-        self.step_s, self.time_s = step_s, 0.0
+        self.step_s, self.steps = step_s, 0
+        pb = {"physicsClientId": self.client}
         try:
-            pybullet.setGravity(0, 0, -GRAVITY, physicsClientId=self.client)
-            pybullet.setTimeStep(step_s, physicsClientId=self.client)
+            pybullet.setGravity(0, 0, -GRAVITY, **pb)
+            pybullet.setTimeStep(step_s, **pb)
             data = pybullet_data.getDataPath()
-            self.plane = pybullet.loadURDF(f"{data}/plane.urdf", physicsClientId=self.client)
-            self.body = pybullet.loadURDF(str(urdf_path), [0, 0, 1], physicsClientId=self.client)
+            self.plane = pybullet.loadURDF(f"{data}/plane.urdf", **pb)
+            self.body = pybullet.loadURDF(str(urdf_path), [0, 0, spawn_height_m], **pb)
             infos = [
-                pybullet.getJointInfo(self.body, j, physicsClientId=self.client)
-                for j in range(pybullet.getNumJoints(self.body, physicsClientId=self.client))
+                pybullet.getJointInfo(self.body, j, **pb)
+                for j in range(pybullet.getNumJoints(self.body, **pb))
             ]
         except BaseException:
             pybullet.disconnect(self.client)
@@ -91,17 +127,26 @@ class QuadrupedSim:
         link_index = {info[12].decode(): info[0] for info in infos}
         self.joints = [joint_index[name] for name in joint_names]
         self.feet = [link_index[name] for name in foot_links]
-        for joint in range(len(infos)):  # no default velocity motors, no joint damping
+        for joint in range(len(infos)):  # no default velocity motors
             pybullet.setJointMotorControl2(
-                self.body, joint, pybullet.VELOCITY_CONTROL, force=0, physicsClientId=self.client
+                self.body, joint, pybullet.VELOCITY_CONTROL, force=0, **pb
             )
-            pybullet.changeDynamics(
-                self.body, joint, linearDamping=0, angularDamping=0, jointDamping=0,
-                physicsClientId=self.client,
-            )  # fmt: skip
-        inertial = pybullet.getDynamicsInfo(self.body, -1, physicsClientId=self.client)[3:5]
+            if not damped:
+                pybullet.changeDynamics(
+                    self.body, joint, linearDamping=0, angularDamping=0, jointDamping=0, **pb
+                )
+        if lateral_friction is not None:
+            pybullet.changeDynamics(self.plane, -1, lateralFriction=lateral_friction, **pb)
+            for foot in self.feet:
+                pybullet.changeDynamics(self.body, foot, lateralFriction=lateral_friction, **pb)
+        inertial = pybullet.getDynamicsInfo(self.body, -1, **pb)[3:5]
         self._to_root = pybullet.invertTransform(*inertial)
         self._inertial = inertial
+
+    @property
+    def time_s(self) -> float:
+        """Simulated time [s]: steps taken times the step."""
+        return self.steps * self.step_s
 
     def __enter__(self) -> Self:
         return self
@@ -123,6 +168,10 @@ class QuadrupedSim:
             self.body, position, orientation, physicsClientId=self.client
         )
         pybullet.resetBaseVelocity(self.body, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
+        self.set_angles(angles)
+
+    def set_angles(self, angles: Sequence[float]) -> None:
+        """Put the joints at ``angles`` [rad], at rest (limits are not enforced)."""
         for joint, angle in zip(self.joints, angles):
             pybullet.resetJointState(self.body, joint, angle, 0.0, physicsClientId=self.client)
 
@@ -148,7 +197,7 @@ class QuadrupedSim:
             physicsClientId=client,
         )
         pybullet.stepSimulation(physicsClientId=client)
-        self.time_s += self.step_s
+        self.steps += 1
         return self.sample()
 
     def sample(self) -> Sample:
@@ -162,7 +211,7 @@ class QuadrupedSim:
             position, orientation, *self._to_root
         )
         linear, angular = pybullet.getBaseVelocity(self.body, physicsClientId=client)
-        to_world = rotation(root_orientation)
+        to_world = rotation_matrices(np.array([root_orientation]))[0]
         # the root origin moves with the CoM velocity plus omega x (root - CoM)
         linear = np.array(linear) + np.cross(angular, np.subtract(root_position, position))
         forces, contact = self.foot_forces()
@@ -178,6 +227,7 @@ class QuadrupedSim:
             to_world.T @ np.array(angular),
             forces,
             contact,
+            self.foot_positions(),
             self._other_contact(),
         )
 
@@ -190,7 +240,7 @@ class QuadrupedSim:
                 self.body, self.plane, linkIndexA=foot, physicsClientId=self.client
             ):
                 touching[slot] = True
-                # on body A: normal force along contactNormalOnB (from B to A), friction along
+                # on body A: normal force along contactNormalOnB (from B to A), friction against
                 # the lateral directions
                 forces[slot] += (
                     point[9] * np.array(point[7])
@@ -198,6 +248,17 @@ class QuadrupedSim:
                     - point[12] * np.array(point[13])
                 )
         return forces, touching
+
+    def foot_positions(self) -> np.ndarray:
+        """(4, 3) the foot link frames' origins [m, world] (``getLinkState(...)[4]``)."""
+        return np.array(
+            [
+                pybullet.getLinkState(
+                    self.body, foot, computeForwardKinematics=True, physicsClientId=self.client
+                )[4]
+                for foot in self.feet
+            ]
+        )
 
     def _other_contact(self) -> bool:
         points = pybullet.getContactPoints(self.body, self.plane, physicsClientId=self.client)
@@ -210,6 +271,9 @@ class QuadrupedSim:
             self.body, -1, list(force_world), list(center), pybullet.WORLD_FRAME,
             physicsClientId=self.client,
         )  # fmt: skip
+
+
+# --- the trot in place (foot forces) ---------------------------------------------------------
 
 
 def trot_targets(
@@ -248,17 +312,155 @@ def record_trot(
     return stack(samples)
 
 
-def quaternion_rpy(roll: float, pitch: float, yaw: float = 0.0) -> tuple[float, ...]:
-    """(x, y, z, w) of fixed-axis roll, pitch, yaw [rad]."""
-    return tuple(pybullet.getQuaternionFromEuler([roll, pitch, yaw]))
+# --- the walking and turning trot (odometry) --------------------------------------------------
 
 
-def gravity_in_root(orientation: Sequence[float], magnitude: float = GRAVITY) -> np.ndarray:
-    """World gravity (0, 0, -magnitude) [m/s^2] in the frame of a root at ``orientation``."""
-    result: np.ndarray = rotation(orientation).T @ np.array([0.0, 0.0, -magnitude])
-    return result
+@dataclass(frozen=True)
+class SimRun:
+    """One simulated run, sampled after every physics step (N samples): the :class:`Sample`
+    fields under the odometry tests' names. World frame: the plane's (z up). The base is the URDF
+    root link's origin and orientation (not PyBullet's CoM frame).
+    """
+
+    stamps_s: np.ndarray  # (N,) time after the step [s]
+    joint_names: tuple[str, ...]
+    angles: np.ndarray  # (N, J) [rad]
+    rates: np.ndarray  # (N, J) [rad/s]
+    torques: np.ndarray  # (N, J) applied motor torques [N m]
+    base_positions: np.ndarray  # (N, 3) root origin [m], world
+    base_quaternions: np.ndarray  # (N, 4) root orientation x, y, z, w (the IMU's orientation)
+    base_velocities: np.ndarray  # (N, 3) root origin's velocity [m/s], world
+    base_angular_velocities: np.ndarray  # (N, 3) [rad/s], world
+    gyro: np.ndarray  # (N, 3) angular velocity [rad/s] in the root frame (the IMU's gyro)
+    contacts: np.ndarray  # (N, F) bool: the foot link touches the plane
+    contact_forces: np.ndarray  # (N, F, 3) force of the plane on the foot [N], world
+    foot_positions: np.ndarray  # (N, F, 3) foot link frames [m], world
+
+    @classmethod
+    def of(cls, joint_names: Sequence[str], samples: Sequence[Sample]) -> SimRun:
+        """The samples of one run, stacked."""
+        rows = stack(samples)
+        return cls(
+            stamps_s=rows["stamp_s"],
+            joint_names=tuple(joint_names),
+            angles=rows["angles"],
+            rates=rows["rates"],
+            torques=rows["torques"],
+            base_positions=rows["root_position"],
+            base_quaternions=rows["root_orientation"],
+            base_velocities=rows["linear_velocity"],
+            base_angular_velocities=rows["angular_velocity"],
+            gyro=rows["gyro"],
+            contacts=rows["foot_contact"],
+            contact_forces=rows["foot_forces"],
+            foot_positions=rows["foot_positions"],
+        )
+
+    @property
+    def rotations(self) -> np.ndarray:
+        """(N, 3, 3) root-to-world rotation matrices."""
+        return rotation_matrices(self.base_quaternions)
+
+    @property
+    def body_velocities(self) -> np.ndarray:
+        """(N, 3) the root origin's velocity [m/s] in the root frame."""
+        return np.einsum("nji,nj->ni", self.rotations, self.base_velocities)
 
 
-def level_angle(orientation: Sequence[float]) -> float:
-    """The tilt [rad] of the root's z axis from the vertical."""
-    return math.acos(max(-1.0, min(1.0, rotation(orientation)[2, 2])))
+def rotation_matrices(quaternions: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of (N, 4) unit quaternions (x, y, z, w)."""
+    x, y, z, w = np.asarray(quaternions, dtype=float).T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
+        ],
+        axis=1,
+    )
+
+
+def walking_targets(
+    start_s: float = 0.5,
+    trot_hz: float = 2.0,
+    duty: float = 0.6,
+    knee_lift: float = 0.3,
+    stride: float = 0.18,
+    turn: float = 0.025,
+    differential: float = 0.09,
+    ramp_s: float = 0.5,
+) -> Callable[[float], list[float]]:
+    """Joint targets [rad] of an A1 trot: stand until ``start_s`` [s], then trot at ``trot_hz``.
+
+    Diagonal pairs (FR+RL, FL+RR) are half a cycle apart; each leg stands for the fraction
+    ``duty`` of the cycle and swings for the rest. A swing leg bends its knee by up to
+    ``knee_lift`` [rad] and turns its hip pitch by half that, lifting the foot. The hip pitch also
+    strokes by ``stride`` [rad]: back to front in swing, front to back at constant speed in
+    stance, which walks the robot forward. The hip roll strokes likewise by ``turn`` [rad] on the
+    front legs and the opposite on the rear ones: the stance feet sweep sideways in opposite
+    directions, which turns the robot without making its feet slide. The strokes fade in over
+    ``ramp_s`` [s].
+    """
+    offset = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL: the cycle's fraction
+    end = (1.0, 1.0, -1.0, -1.0)  # front +1
+    side = (-1.0, 1.0, -1.0, 1.0)  # left +1
+    swing = 1.0 - duty
+
+    def targets(t: float) -> list[float]:
+        out: list[float] = []
+        running = t > start_s
+        fade = min(1.0, (t - start_s) / ramp_s) if running else 0.0
+        fade = fade * fade * (3.0 - 2.0 * fade)
+        for leg in range(4):
+            u = (trot_hz * (t - start_s) + offset[leg]) % 1.0
+            if u < swing:  # swing: lift, and stroke from back (+1) to front (-1)
+                bend = knee_lift * math.sin(math.pi * u / swing) if running else 0.0
+                stroke = math.cos(math.pi * u / swing)
+            else:  # stance: from front to back at constant speed
+                bend, stroke = 0.0, -1.0 + 2.0 * (u - swing) / duty
+            stroke *= fade
+            out += [
+                STAND[0] + turn * end[leg] * stroke,
+                STAND[1] + bend / 2 + stride * (1.0 + differential * side[leg]) * stroke,
+                STAND[2] - bend,
+            ]
+        return out
+
+    return targets
+
+
+def simulate(
+    targets: Callable[[float], Sequence[float]],
+    seconds: float,
+    *,
+    urdf: Path | str = A1_URDF,
+    joint_names: Sequence[str] = A1_JOINTS,
+    feet: Sequence[str] = A1_FEET,
+    step_s: float = STEP_S,
+    spawn_height_m: float = 0.30,
+    position_gain: float = 0.3,
+    velocity_gain: float = 1.0,
+    max_torque_nm: float = 33.5,
+    lateral_friction: float | None = None,
+) -> SimRun:
+    """Run ``targets`` (time [s] -> joint angles [rad], ``joint_names`` order) for ``seconds``,
+    with PyBullet's default link damping.
+
+    The robot starts at ``spawn_height_m`` above the plane with its joints at ``targets(0)`` and
+    falls onto it. ``lateral_friction``, when given, is set on the plane and the feet.
+    """
+    with QuadrupedSim(
+        urdf,
+        joint_names,
+        feet,
+        step_s,
+        spawn_height_m=spawn_height_m,
+        damped=True,
+        lateral_friction=lateral_friction,
+    ) as sim:
+        sim.set_angles(targets(0.0))
+        samples = [
+            sim.step(targets(sim.time_s), max_torque_nm, position_gain, velocity_gain)
+            for _ in range(round(seconds / step_s))
+        ]
+    return SimRun.of(joint_names, samples)

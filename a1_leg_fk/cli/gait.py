@@ -236,7 +236,7 @@ def threshold_summary(report: GaitReport) -> str:
         f"{t.speed_off_mps:.2f} m/s"
         for leg, t in zip(LEG_NAMES, report.leg_thresholds)
     )
-    return f"thresholds ({kind}, on/off): {used}"
+    return f"({kind}, on/off) {used}"
 
 
 def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
@@ -252,7 +252,7 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
             f"phases:    touchdown vs FR: {phases}; limb phase {_number(limb_phase, '.2f')}; "
             f"mean duty factor {_number(report.duty_factor, '.3f')}"
         ),
-        f"contacts:  {threshold_summary(report)}",
+        f"thresholds: {threshold_summary(report)}",
         (
             f"ground:    level {report.ground.level_m:.4f} m in "
             f"{world_frame or 'the world frame'} (foot frame in stance), slope "

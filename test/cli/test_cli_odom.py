@@ -13,7 +13,7 @@ import pytest
 from bag_factory import T0, BagSpec
 from nav_msgs.msg import Odometry
 from odometry_bags import IMU_TOPIC, TRUTH_TOPIC, write_sim_bag
-from pybullet_walk import simulate, walking_targets
+from pybullet_sim import simulate, walking_targets
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu
 

@@ -279,7 +279,7 @@ def test_limb_phase_region_and_thresholds_are_reported(
     assert run_gait(folder, "--fixed-thresholds", "--json", str(fixed)) == 0
     out = capsys.readouterr().out
     assert "; limb phase 0." in out and "walking trot" in out
-    assert "contacts:  thresholds (fixed, on/off): FR 0.020/0.035 m 0.15/0.30 m/s;" in out
+    assert "thresholds: (fixed, on/off) FR 0.020/0.035 m 0.15/0.30 m/s;" in out
     fixed_document = json.loads(fixed.read_text())
     assert fixed_document["thresholds"]["adaptive"] is False
     assert all(

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from pybullet_walk import simulate, walking_targets
+from pybullet_sim import simulate, walking_targets
 from synthetic_urdf import quadruped_urdf
 
 from a1_leg_fk.estimation.effort_contacts import EffortContacts

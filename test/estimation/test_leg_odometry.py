@@ -13,7 +13,7 @@ import numpy as np
 import pybullet
 import pybullet_data
 import pytest
-from pybullet_walk import simulate, walking_targets
+from pybullet_sim import simulate, walking_targets
 
 from a1_leg_fk.estimation.imu import ImuBuffer, imu_reading
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion, foot_radii

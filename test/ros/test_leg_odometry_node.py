@@ -12,7 +12,7 @@ from bag_factory import joint_state
 from nav_msgs.msg import Odometry
 from node_harness import LEGS, Diagnostics
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
-from pybullet_walk import simulate, walking_targets
+from pybullet_sim import simulate, walking_targets
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, JointState
 from shared import odometry_node_command

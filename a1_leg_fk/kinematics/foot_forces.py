@@ -123,9 +123,10 @@ class _LegStatics:
         torques: list[Any] = [0.0] * JOINTS_PER_LEG
         for mass, jacobian in self.com_jacobians:
             columns = jacobian(*trig)
-            for k in range(len(columns) // 3):
-                x, y, z = columns[3 * k : 3 * k + 3]
-                torques[k] = torques[k] - mass * (x * gx + y * gy + z * gz)
+            for k in range(0, len(columns), 3):
+                torques[k // 3] -= mass * (
+                    columns[k] * gx + columns[k + 1] * gy + columns[k + 2] * gz
+                )
         return torques
 
     def solve(
@@ -135,24 +136,35 @@ class _LegStatics:
         arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``.
         """
         gx, gy, gz = gravity
-        torques = self.gravity_torques(trig, gravity)
-        rhs = [torques[k] - efforts[k] for k in range(JOINTS_PER_LEG)]
+        t0, t1, t2 = self.gravity_torques(trig, gravity)
+        r0, r1, r2 = t0 - efforts[0], t1 - efforts[1], t2 - efforts[2]
         flat = self.contact_jacobian(*trig)
-        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
+        columns = [flat[0:3], flat[3:6], flat[6:9]]
         if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
             scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
-            down = (gx * scale, gy * scale, gz * scale)
+            dx, dy, dz = gx * scale, gy * scale, gz * scale
             for k, axis in enumerate(self.axes):
-                turn = _cross(down, axis(*trig))
-                columns[k] = tuple(columns[k][i] - turn[i] for i in range(3))
+                ax, ay, az = axis(*trig)
+                cx, cy, cz = columns[k]
+                columns[k] = (
+                    cx - dy * az + dz * ay,
+                    cy - dz * ax + dx * az,
+                    cz - dx * ay + dy * ax,
+                )
         j0, j1, j2 = columns
         c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
         det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
-        size = 1.0
-        for c in columns:
-            size = size * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) ** 0.5
-        scaled = tuple(rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i] for i in range(3))
-        return (scaled[0], scaled[1], scaled[2]), det, size
+        size = (
+            (j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2])
+            * (j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2])
+            * (j2[0] * j2[0] + j2[1] * j2[1] + j2[2] * j2[2])
+        ) ** 0.5
+        scaled = (
+            r0 * c12[0] + r1 * c20[0] + r2 * c01[0],
+            r0 * c12[1] + r1 * c20[1] + r2 * c01[1],
+            r0 * c12[2] + r1 * c20[2] + r2 * c01[2],
+        )
+        return scaled, det, size
 
 
 class LeggedRobot(Protocol):

@@ -153,12 +153,8 @@ class _LegStatics:
                 )
         j0, j1, j2 = columns
         c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
-        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
-        size = (
-            (j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2])
-            * (j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2])
-            * (j2[0] * j2[0] + j2[1] * j2[1] + j2[2] * j2[2])
-        ) ** 0.5
+        det = _dot(j0, c12)
+        size = (_dot(j0, j0) * _dot(j1, j1) * _dot(j2, j2)) ** 0.5
         scaled = (
             r0 * c12[0] + r1 * c20[0] + r2 * c01[0],
             r0 * c12[1] + r1 * c20[1] + r2 * c01[1],
@@ -222,18 +218,15 @@ class FootForces:
         [rad] and 12 efforts [N m] (slot order), ``gravity_base`` (3,) [m/s^2] in the base frame;
         a :class:`ForceEstimate` of shapes (4, 3), (4,), (4,).
         """
-        q = _row(angles, "joint angles")[0].tolist()
-        tau = _row(efforts, "joint efforts")[0].tolist()
-        gravity = _gravity(gravity_base, 1)[0].tolist()
-        out, missing, singular = self.estimate_floats(q, tau, gravity)
-        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+        q, tau = _row(angles, "joint angles")[0], _row(efforts, "joint efforts")[0]
+        floats = self.estimate_floats(q.tolist(), tau.tolist(), _gravity(gravity_base, 1)[0])
+        return ForceEstimate(*(np.array(values) for values in floats))
 
     def estimate_floats(
         self, angles: Sequence[float], efforts: Sequence[float], gravity: Sequence[float]
     ) -> tuple[list[list[float]], list[bool], list[bool]]:
-        """:meth:`estimate` in plain floats, unchecked (the per-sample path of the leg odometry):
-        12 angles [rad] and 12 efforts [N m] in slot order, gravity (3) [m/s^2] in the base frame;
-        per leg its force [N] (NaN where none), whether it is missing, whether it is singular.
+        """:meth:`estimate` in floats, unchecked (the odometry's per sample): 12 angles [rad], 12
+        efforts [N m], gravity (3) [m/s^2], base frame -> per leg force [N], missing, singular.
         """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
@@ -241,11 +234,8 @@ class FootForces:
             return out, missing, singular
         isfinite, cos, sin = math.isfinite, math.cos, math.sin
         for slot, statics in enumerate(self._legs):
-            first = slot * JOINTS_PER_LEG
-            q, tau = (
-                angles[first : first + JOINTS_PER_LEG],
-                efforts[first : first + JOINTS_PER_LEG],
-            )
+            joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
+            q, tau = angles[joints], efforts[joints]
             missing[slot] = not (all(isfinite(v) for v in q) and all(isfinite(v) for v in tau))
             if missing[slot]:
                 continue
@@ -328,6 +318,11 @@ class FootForces:
 def _trig(cos: np.ndarray, sin: np.ndarray) -> tuple[np.ndarray, ...]:
     """(c0, s0, c1, s1, c2, s2) of a leg's (K, 3) cosines and sines."""
     return cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
+
+
+def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
+    """``a . b`` of two 3-vectors (floats or (K,) arrays per component)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:

@@ -17,6 +17,7 @@ gives a NaN probability.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,10 +86,25 @@ class ContactRule:
         self.stance = np.zeros(LEGS, dtype=bool)
         """Each foot's state after the latest row: True in stance."""
 
-    def update(self, normal: ArrayLike) -> np.ndarray:
-        """(4,) contact probabilities for one row of 4 normal forces [N]."""
-        probabilities: np.ndarray = self.update_batch(np.asarray(normal, dtype=float)[None])[0]
-        return probabilities
+    def update(self, normal: Sequence[float]) -> list[float]:
+        """4 contact probabilities for one row of 4 normal forces [N]: :meth:`update_batch` on
+        floats, without numpy (the node's per-message path).
+        """
+        touchdown, liftoff = self.thresholds.touchdown_n, self.thresholds.liftoff_n
+        span = max(touchdown - liftoff, 1e-12)
+        stance = self.stance
+        out = []
+        for leg, force in enumerate(normal):
+            if force >= touchdown:
+                stance[leg] = True
+            elif force < liftoff:
+                stance[leg] = False
+            if stance[leg]:
+                share = 0.5 + 0.5 * (force - liftoff) / span
+            else:
+                share = 0.5 * force / touchdown
+            out.append(share if 0.0 <= share <= 1.0 else min(max(share, 0.0), 1.0))
+        return out
 
     def update_batch(self, normal: ArrayLike) -> np.ndarray:
         """(N, 4) contact probabilities for (N, 4) normal forces [N], in time order."""

@@ -213,20 +213,35 @@ class FootForces:
         q = _row(angles, "joint angles")[0].tolist()
         tau = _row(efforts, "joint efforts")[0].tolist()
         gravity = _gravity(gravity_base, 1)[0].tolist()
+        out, missing, singular = self.estimate_floats(q, tau, gravity)
+        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+
+    def estimate_floats(
+        self, q: Sequence[float], tau: Sequence[float], gravity: Sequence[float]
+    ) -> tuple[list[list[float]], list[bool], list[bool]]:
+        """:meth:`estimate` on Python floats, without numpy (the node's per-message path): 12
+        angles [rad], 12 efforts [N m] and gravity (3,) [m/s^2]; per leg its force [N] (NaN when
+        none), whether it is missing and whether it is near-singular.
+        """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
-        if all(math.isfinite(value) for value in gravity):
-            for slot, statics in enumerate(self._legs):
-                joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-                missing[slot] = not all(math.isfinite(v) for v in q[joints] + tau[joints])
-                if missing[slot]:
-                    continue
-                trig = [f(angle) for angle in q[joints] for f in (math.cos, math.sin)]
-                scaled, det, size = statics.solve(trig, tau[joints], gravity)
-                singular[slot] = not abs(det) >= self.min_condition * size
-                if not singular[slot]:
-                    out[slot] = [value / det for value in scaled]
-        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
+        isfinite = math.isfinite
+        if not (isfinite(gravity[0]) and isfinite(gravity[1]) and isfinite(gravity[2])):
+            return out, missing, singular
+        for slot, statics in enumerate(self._legs):
+            first = slot * JOINTS_PER_LEG
+            q0, q1, q2 = q[first : first + JOINTS_PER_LEG]
+            t0, t1, t2 = tau[first : first + JOINTS_PER_LEG]
+            missing[slot] = not all(isfinite(value) for value in (q0, q1, q2, t0, t1, t2))
+            if missing[slot]:
+                continue
+            trig = (math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1), math.cos(q2),
+                    math.sin(q2))  # fmt: skip
+            scaled, det, size = statics.solve(trig, (t0, t1, t2), gravity)
+            singular[slot] = not abs(det) >= self.min_condition * size
+            if not singular[slot]:
+                out[slot] = [scaled[0] / det, scaled[1] / det, scaled[2] / det]
+        return out, missing, singular
 
     def estimate_batch(
         self, angles: ArrayLike, efforts: ArrayLike, gravity_base: ArrayLike | None = None

@@ -70,8 +70,8 @@ def test_an_out_of_range_value_at_start_is_a_leg_fk_error_naming_the_parameter(r
 
 
 def test_preserialized_output_can_be_turned_off_and_on_at_run_time(node):
-    assert node._serialized is not None  # on by default (and usable with this rmw)
+    assert node._output.preserialized  # on by default (and usable with this rmw)
     assert node.set_parameters([Parameter("preserialized_output", value=False)])[0].successful
-    assert node._serialized is None
+    assert not node._output.preserialized
     assert node.set_parameters([Parameter("preserialized_output", value=True)])[0].successful
-    assert node._serialized is not None
+    assert node._output.preserialized

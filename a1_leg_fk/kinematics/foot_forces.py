@@ -76,8 +76,6 @@ class ForceEstimate:
     singular: np.ndarray
 
 
-Columns = tuple[Any, Any, Any]
-"""Components x, y, z: floats, or (K,) arrays for K vectors."""
 Values = Sequence[Any] | np.ndarray
 """Per joint or per axis: floats, or (K,) arrays (the rows of an array)."""
 
@@ -118,41 +116,69 @@ class _LegStatics:
     def gravity_torques(self, trig: Values, gravity: Values) -> list[Any]:
         """g(q) [N m], per joint, for the leg's (c0, s0, c1, s1, c2, s2) and gravity [m/s^2]
         (floats, or (K,) arrays): minus the torque gravity exerts on the links below each joint.
+        Straight-line arithmetic: the node's per-message path runs it on floats.
         """
         gx, gy, gz = gravity
         torques: list[Any] = [0.0] * JOINTS_PER_LEG
         for mass, jacobian in self.com_jacobians:
             columns = jacobian(*trig)
-            for k in range(len(columns) // 3):
-                x, y, z = columns[3 * k : 3 * k + 3]
-                torques[k] = torques[k] - mass * (x * gx + y * gy + z * gz)
+            mx, my, mz = mass * gx, mass * gy, mass * gz
+            torques[0] = torques[0] - (columns[0] * mx + columns[1] * my + columns[2] * mz)
+            if len(columns) > 3:
+                torques[1] = torques[1] - (columns[3] * mx + columns[4] * my + columns[5] * mz)
+            if len(columns) > 6:
+                torques[2] = torques[2] - (columns[6] * mx + columns[7] * my + columns[8] * mz)
         return torques
 
     def solve(
         self, trig: Values, efforts: Values, gravity: Values
     ) -> tuple[tuple[Any, Any, Any], Any, Any]:
         """``J^T F = g - tau`` by Cramer's rule, J that of the contact point, on floats or (K,)
-        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``.
+        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``. Written out
+        component by component: on floats (the node, once per leg and message) it is the cost.
         """
         gx, gy, gz = gravity
-        torques = self.gravity_torques(trig, gravity)
-        rhs = [torques[k] - efforts[k] for k in range(JOINTS_PER_LEG)]
-        flat = self.contact_jacobian(*trig)
-        columns = [flat[3 * k : 3 * k + 3] for k in range(JOINTS_PER_LEG)]
+        g0, g1, g2 = self.gravity_torques(trig, gravity)
+        r0, r1, r2 = g0 - efforts[0], g1 - efforts[1], g2 - efforts[2]
+        ax, ay, az, bx, by, bz, cx, cy, cz = self.contact_jacobian(*trig)[:9]
         if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
             scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
-            down = (gx * scale, gy * scale, gz * scale)
-            for k, axis in enumerate(self.axes):
-                turn = _cross(down, axis(*trig))
-                columns[k] = tuple(columns[k][i] - turn[i] for i in range(3))
-        j0, j1, j2 = columns
-        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
-        det = j0[0] * c12[0] + j0[1] * c12[1] + j0[2] * c12[2]
-        size = 1.0
-        for c in columns:
-            size = size * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) ** 0.5
-        scaled = tuple(rhs[0] * c12[i] + rhs[1] * c20[i] + rhs[2] * c01[i] for i in range(3))
-        return (scaled[0], scaled[1], scaled[2]), det, size
+            dx, dy, dz = gx * scale, gy * scale, gz * scale
+            first, second, third = self.axes
+            ex, ey, ez = first(*trig)
+            ax, ay, az = (
+                ax - (dy * ez - dz * ey),
+                ay - (dz * ex - dx * ez),
+                az - (dx * ey - dy * ex),
+            )
+            ex, ey, ez = second(*trig)
+            bx, by, bz = (
+                bx - (dy * ez - dz * ey),
+                by - (dz * ex - dx * ez),
+                bz - (dx * ey - dy * ex),
+            )
+            ex, ey, ez = third(*trig)
+            cx, cy, cz = (
+                cx - (dy * ez - dz * ey),
+                cy - (dz * ex - dx * ez),
+                cz - (dx * ey - dy * ex),
+            )
+        # the columns j0 = a, j1 = b, j2 = c; their cross products b x c, c x a, a x b
+        bcx, bcy, bcz = by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx
+        cax, cay, caz = cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax
+        abx, aby, abz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        det = ax * bcx + ay * bcy + az * bcz
+        size = (
+            (ax * ax + ay * ay + az * az)
+            * (bx * bx + by * by + bz * bz)
+            * (cx * cx + cy * cy + cz * cz)
+        ) ** 0.5
+        scaled = (
+            r0 * bcx + r1 * cax + r2 * abx,
+            r0 * bcy + r1 * cay + r2 * aby,
+            r0 * bcz + r1 * caz + r2 * abz,
+        )
+        return scaled, det, size
 
 
 class LeggedRobot(Protocol):
@@ -315,15 +341,6 @@ class FootForces:
 def _trig(cos: np.ndarray, sin: np.ndarray) -> tuple[np.ndarray, ...]:
     """(c0, s0, c1, s1, c2, s2) of a leg's (K, 3) cosines and sines."""
     return cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
-
-
-def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
-    """``a x b`` component by component (numpy's cross is slow on (K, 3) arrays)."""
-    return (
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    )
 
 
 def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:

@@ -204,7 +204,10 @@ class Scenario:
 
     def run(self, phases: list[Phase]) -> None:
         python = sys.executable
-        self.receiver = self._start("receiver", [python, str(ROLES), "receiver", str(self.npz)])
+        receiver = [python, str(ROLES), "receiver", str(self.npz)]
+        if self.args.no_force_reader:
+            receiver.append("--no-force-reader")
+        self.receiver = self._start("receiver", receiver)
         self.generator = self._start("generator", [python, str(ROLES), "generator"])
         self.receiver.wait_event("up", 30)
         self.generator.wait_event("up", 30)
@@ -534,6 +537,12 @@ def parse_args() -> argparse.Namespace:
     )
     parser.add_argument("--no-baseline", action="store_true", help="skip the baseline (no ratio)")
     parser.add_argument("--no-ramp", action="store_true", help="skip both ramps")
+    parser.add_argument(
+        "--no-force-reader",
+        action="store_true",
+        help="the receiver does not subscribe to foot_forces/<leg> and foot_contacts (what the "
+        "forces cost without their DDS delivery)",
+    )
     parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
     parser.add_argument(
         "--package-root",

@@ -204,7 +204,7 @@ def generator() -> None:
 # --- receiver ----------------------------------------------------------------------------------
 
 
-def receiver(output: str) -> None:
+def receiver(output: str, force_reader: bool = True) -> None:
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
     _init()
@@ -232,7 +232,7 @@ def receiver(output: str) -> None:
             qos,
             raw=True,
         ).handle
-        for topic in FORCE_TOPICS
+        for topic in (FORCE_TOPICS if force_reader else [])
     ]
     records: list[tuple[list[int], list[int], list[int], list[int]]] = [
         ([], [], [], []) for _ in subscriptions
@@ -248,7 +248,7 @@ def receiver(output: str) -> None:
         for handle in handles + drains:
             wait_set.add_subscription(handle)
         wait_set.wait(100_000_000)
-        for drain, kind in zip(drains, [WrenchStamped] * 4 + [JointState], strict=True):
+        for drain, kind in zip(drains, [WrenchStamped] * 4 + [JointState], strict=False):
             while drain.take_message(kind, True) is not None:
                 pass
         for index, handle in enumerate(handles):
@@ -423,7 +423,7 @@ if __name__ == "__main__":
     if role == "generator":
         generator()
     elif role == "receiver":
-        receiver(arguments[0])
+        receiver(arguments[0], "--no-force-reader" not in arguments)
     elif role == "baseline":
         baseline(arguments[0] if arguments else "node")
     elif role == "verifier":

@@ -153,7 +153,10 @@ class FootForces:
             first = slot * JOINTS_PER_LEG
             q0, q1, q2 = q[first : first + JOINTS_PER_LEG]
             t0, t1, t2 = tau[first : first + JOINTS_PER_LEG]
-            missing[slot] = not all(isfinite(value) for value in (q0, q1, q2, t0, t1, t2))
+            missing[slot] = not (
+                isfinite(q0) and isfinite(q1) and isfinite(q2)
+                and isfinite(t0) and isfinite(t1) and isfinite(t2)
+            )  # fmt: skip
             if missing[slot]:
                 continue
             trig = (math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1), math.cos(q2),

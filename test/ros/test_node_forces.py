@@ -7,7 +7,6 @@ their legs only and are counted; a message without efforts publishes no forces a
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +15,7 @@ import pytest
 from bag_factory import T0, BagSpec, JointStateMsg, T, header, write_bag
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
-from node_harness import LEGS, STANDING, Diagnostics, node_command
+from node_harness import LEGS, STANDING, Diagnostics, SensorStream, node_command
 from pybullet_sim import A1_URDF, QuadrupedSim, record_trot
 from rclpy.qos import QoSProfile
 from rosbags.highlevel import AnyReader
@@ -32,7 +31,6 @@ NAMES = list(A1.joint_names)
 STEP_NS = 2_000_000  # 500 Hz
 SIM_S = 1.6
 NAN_FL_ROW, SHORT_ROW, EMPTY_ROW = 100, 200, 300
-AHEAD = 40  # samples the stream may run ahead of the node's answers (its queues hold 100)
 
 
 @pytest.fixture(scope="module")
@@ -141,29 +139,14 @@ def test_node_gives_the_bag_tools_forces_and_contacts(trot, ros, processes, tmp_
     ros.node.create_subscription(
         JointState, "foot_contacts", lambda m: contacts.__setitem__(stamp_of(m), m), depth
     )
-    imu_pub = ros.node.create_publisher(Imu, "imu", QoSProfile(depth=1000))
-    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=1000))
-    assert ros.spin_until(
-        lambda: (
-            imu_pub.get_subscription_count() > 0
-            and joint_pub.get_subscription_count() > 0
-            and ros.node.count_publishers("foot_contacts") > 0
-        ),
-        30.0,
-    ), processes.output(node)
-    ros.spin_for(0.5)  # the node's subscriptions match ours too
+    stream = SensorStream(ros, "foot_contacts")
+    assert stream.ready, processes.output(node)
     efforts = recorded_efforts(trot["torques"])
-    samples = len(trot["angles"])
-    start = time.monotonic()
-    for row in range(samples):
-        imu_pub.publish(imu(trot, row))
-        ros.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in the bag
-        joint_pub.publish(joint_state(trot, row, efforts[row]))
-        delay = start + (row + 1) / 500.0 - time.monotonic()
-        if delay > 0:
-            ros.spin_for(delay)
-        behind = row - AHEAD
-        ros.spin_until(lambda: len(contacts) >= behind - 3, 10.0)  # noqa: B023 (used at once)
+    stream.send(
+        len(trot["angles"]),
+        lambda row: (imu(trot, row), joint_state(trot, row, efforts[row])),
+        lambda: len(contacts) + 3,  # three inputs give no contacts
+    )
     assert ros.spin_until(lambda: len(contacts) >= len(bag_contacts), 20.0), (
         f"{len(contacts)} of {len(bag_contacts)} contact messages\n{processes.output(node)}"
     )

@@ -14,41 +14,23 @@ import numpy as np
 import pytest
 from bag_factory import T0, BagSpec, JointStateMsg, T, header, write_bag
 from builtin_interfaces.msg import Time
+from force_trot import A1, EMPTY_ROW, NAMES, NAN_FL_ROW, SHORT_ROW, a1_trot, recorded_efforts
 from geometry_msgs.msg import WrenchStamped
 from node_harness import LEGS, STANDING, Diagnostics, SensorStream, node_command
-from pybullet_sim import A1_URDF, QuadrupedSim, record_trot
 from rclpy.qos import QoSProfile
 from rosbags.highlevel import AnyReader
 from sensor_msgs.msg import Imu, JointState
-from shared import STAND_LEG
 
 from a1_leg_fk import cli
-from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.ros.markers import COLOR_RGBA, STANCE_RGBA, foot_markers
 
-A1 = Quadruped.from_urdf()
-NAMES = list(A1.joint_names)
 STEP_NS = 2_000_000  # 500 Hz
-SIM_S = 1.6
-NAN_FL_ROW, SHORT_ROW, EMPTY_ROW = 100, 200, 300
 
 
 @pytest.fixture(scope="module")
 def trot() -> dict[str, np.ndarray]:
     """1.6 s of the A1 in PyBullet (trotting from 0.5 s), 800 samples."""
-    feet = [leg.chain.foot_link for leg in A1.legs]
-    stand_height = 0.03 - A1.fk(list(STAND_LEG) * 4)[:, 2].mean()
-    with QuadrupedSim(A1_URDF, NAMES, feet) as sim:
-        return record_trot(sim, STAND_LEG, stand_height, SIM_S)
-
-
-def recorded_efforts(torques: np.ndarray) -> list[list[float]]:
-    """FL's knee NaN in one message, 11 efforts in one, none in one."""
-    efforts = torques.tolist()
-    efforts[NAN_FL_ROW][5] = math.nan
-    efforts[SHORT_ROW] = efforts[SHORT_ROW][:11]
-    efforts[EMPTY_ROW] = []
-    return efforts
+    return a1_trot(1.6)
 
 
 def joint_state(record: dict[str, np.ndarray], row: int, efforts: list[float]) -> JointState:

@@ -13,8 +13,9 @@ MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
 PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
 VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
 CONTACT_FORCE_RANGE_N = (0.0, 1e6)
-FORCE_PARAMETERS = ("publish_forces", "touchdown_force_n", "liftoff_force_n")
 """Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
+FORCE_PARAMETERS = ("publish_forces", "touchdown_force_n", "liftoff_force_n")
+"""The parameters whose change rebuilds the force and contact rules."""
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,

@@ -347,6 +347,15 @@ def fmt(value: float, spec: str) -> str:
     return "-" if math.isnan(value) else format(value, spec)
 
 
+OUTPUTS_PER_INPUT = 8  # per input without efforts: foot_positions/<leg>, foot_velocities/<leg>
+OUTPUTS_WITH_FORCES = OUTPUTS_PER_INPUT + 5  # and foot_forces/<leg>, foot_contacts
+
+
+def per_message(result: dict, messages: int) -> float:
+    """The node's CPU [us] per output message of a phase."""
+    return 1e4 * result["cpu_under_test"] / result["rate_hz"] / messages
+
+
 def print_report(
     node: Scenario,
     base: Scenario | None,
@@ -474,7 +483,10 @@ def print_report(
                 forces_ratio <= GOALS["forces_cpu_ratio"],
                 (
                     f"{forces_ratio:.2f}x ({forces_1k['cpu_under_test']:.1f} % / "
-                    f"{main_1k['cpu_under_test']:.1f} %)"
+                    f"{main_1k['cpu_under_test']:.1f} %); per output message "
+                    f"{per_message(forces_1k, OUTPUTS_WITH_FORCES):.0f} vs "
+                    f"{per_message(main_1k, OUTPUTS_PER_INPUT):.0f} us ({OUTPUTS_WITH_FORCES} vs "
+                    f"{OUTPUTS_PER_INPUT} messages per input)"
                 ),
             )
         )

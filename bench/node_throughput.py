@@ -16,7 +16,10 @@ Python speed does not enter it) and, in one phase, a ``verify_fk`` caller at 20 
 Scenarios
 1. node, startup: the generator already publishes (100 Hz) when the node process is started;
    startup = the first received foot's source (publish) time - the node's process start.
-2. node at 1 kHz for ``--duration``; then at 1 kHz with verify_fk called 20 times a second.
+2. node at 1 kHz for ``--duration``; then the same with joint efforts in every JointState (the
+   node also publishes foot_forces/<leg> and foot_contacts, which the receiver takes too; the
+   CPU ratio to the run without efforts is printed); then at 1 kHz with verify_fk called 20
+   times a second.
 3. node ramp: 5 s steps of rising rate, until two steps in a row lose >= 0.1 % of the inputs.
 4. baseline (the raw floor, same executor and QoS) at 1 kHz and the same ramp.
 
@@ -64,6 +67,7 @@ GOALS = {
     "p99_ms": 5.0,
     "cpu_pct": 40.0,
     "cpu_ratio": 1.2,
+    "forces_cpu_ratio": 1.25,
     "ratio": 0.90,
     "max_rate_hz": 2000.0,
     "startup_s": 2.0,
@@ -77,6 +81,7 @@ class Phase:
     duration: float
     verify: bool = False
     ramp: bool = False
+    efforts: bool = False  # the JointStates carry efforts: the node publishes forces, contacts
     result: dict = field(default_factory=dict)
 
 
@@ -199,7 +204,10 @@ class Scenario:
 
     def run(self, phases: list[Phase]) -> None:
         python = sys.executable
-        self.receiver = self._start("receiver", [python, str(ROLES), "receiver", str(self.npz)])
+        receiver = [python, str(ROLES), "receiver", str(self.npz)]
+        if self.args.no_force_reader:
+            receiver.append("--no-force-reader")
+        self.receiver = self._start("receiver", receiver)
         self.generator = self._start("generator", [python, str(ROLES), "generator"])
         self.receiver.wait_event("up", 30)
         self.generator.wait_event("up", 30)
@@ -228,7 +236,11 @@ class Scenario:
             if phase.verify and verifier is not None:
                 verifier.send(op="go")
             self.generator.send(
-                op="phase", rate=phase.rate, duration=phase.duration, name=phase.name
+                op="phase",
+                rate=phase.rate,
+                duration=phase.duration,
+                name=phase.name,
+                efforts=phase.efforts,
             )
             self.generator.wait_event("phase_start", 10)
             ours = {
@@ -335,6 +347,15 @@ def fmt(value: float, spec: str) -> str:
     return "-" if math.isnan(value) else format(value, spec)
 
 
+OUTPUTS_PER_INPUT = 8  # per input without efforts: foot_positions/<leg>, foot_velocities/<leg>
+OUTPUTS_WITH_FORCES = OUTPUTS_PER_INPUT + 5  # and foot_forces/<leg>, foot_contacts
+
+
+def per_message(result: dict, messages: int) -> float:
+    """The node's CPU [us] per output message of a phase."""
+    return 1e4 * result["cpu_under_test"] / result["rate_hz"] / messages
+
+
 def print_report(
     node: Scenario,
     base: Scenario | None,
@@ -408,8 +429,10 @@ def print_report(
     print(f"node exit on SIGINT: code {code} after {seconds:.2f} s")
     print()
     main_1k = next(
-        (p.result for p in node_phases if not p.ramp and not p.verify and p.result), None
+        (p.result for p in node_phases if not (p.ramp or p.verify or p.efforts) and p.result),
+        None,
     )
+    forces_1k = next((p.result for p in node_phases if p.efforts and p.result), None)
     verify_1k = next((p.result for p in node_phases if p.verify and p.result), None)
     goals = []
     if main_1k:
@@ -449,6 +472,21 @@ def print_report(
                 (
                     f"{cpu_ratio:.2f}x ({main_1k['cpu_under_test']:.1f} % / "
                     f"{base_1k['cpu_under_test']:.1f} %)"
+                ),
+            )
+        )
+    if main_1k and forces_1k:
+        forces_ratio = forces_1k["cpu_under_test"] / main_1k["cpu_under_test"]
+        goals.append(
+            (
+                "1 kHz with efforts: node CPU <= 1.25x the node's without efforts",
+                forces_ratio <= GOALS["forces_cpu_ratio"],
+                (
+                    f"{forces_ratio:.2f}x ({forces_1k['cpu_under_test']:.1f} % / "
+                    f"{main_1k['cpu_under_test']:.1f} %); per output message "
+                    f"{per_message(forces_1k, OUTPUTS_WITH_FORCES):.0f} vs "
+                    f"{per_message(main_1k, OUTPUTS_PER_INPUT):.0f} us ({OUTPUTS_WITH_FORCES} vs "
+                    f"{OUTPUTS_PER_INPUT} messages per input)"
                 ),
             )
         )
@@ -511,6 +549,12 @@ def parse_args() -> argparse.Namespace:
     )
     parser.add_argument("--no-baseline", action="store_true", help="skip the baseline (no ratio)")
     parser.add_argument("--no-ramp", action="store_true", help="skip both ramps")
+    parser.add_argument(
+        "--no-force-reader",
+        action="store_true",
+        help="the receiver does not subscribe to foot_forces/<leg> and foot_contacts (what the "
+        "forces cost without their DDS delivery)",
+    )
     parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
     parser.add_argument(
         "--package-root",
@@ -544,6 +588,7 @@ def main() -> int:
     rates = [float(r) for r in args.ramp.split(",") if r] if not args.no_ramp else []
     node_phases = [
         Phase("1 kHz", 1000, args.duration),
+        Phase("1 kHz with efforts and forces", 1000, args.duration, efforts=True),
         Phase("1 kHz + verify_fk 20 Hz", 1000, args.verify_duration, verify=True),
     ]
     node_phases += [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates]

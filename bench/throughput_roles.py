@@ -7,7 +7,8 @@ the orchestrator itself needs no ROS. Every role exits cleanly on SIGINT/SIGTERM
 ``{"op": "stop"}``.
 
 Roles
-- ``generator``: JointState (12 joints, positions and velocities) on ``joint_states``. Until the
+- ``generator``: JointState (12 joints, positions and velocities; with ``"efforts": true`` in
+  a phase command, efforts too) on ``joint_states``. Until the
   first phase it publishes 100 Hz "warm-up" messages (so a node that starts later answers at
   once); ``{"op": "phase", "rate": Hz, "duration": s}`` then publishes exactly ``rate * duration``
   messages, paced by ``time.perf_counter`` (sleep until just before the next one is due, then
@@ -21,7 +22,8 @@ Roles
   ``publication_sequence_number`` of the message info), so neither its own speed nor its Python
   wake-up delay enters the latency. ``{"op": "count", "first": ns, "last": ns}`` answers the
   number of inputs answered on ``foot_positions/FR`` in a stamp window (for the ramp's early stop);
-  on stop it writes every record to the ``.npz`` given as argument.
+  on stop it writes every record to the ``.npz`` given as argument. It also takes (and drops)
+  ``foot_forces/<leg>`` and ``foot_contacts``, so that the node publishes them to a reader.
 - ``baseline``: the raw floor: same QoS and executor as the node; per JointState (subscribed raw)
   it reads the stamp from the bytes and publishes the node's eight outputs as pre-serialized
   messages (the node's own writer, fixed values); no decoding, no rules, no FK.
@@ -43,7 +45,7 @@ import time
 
 import rclpy
 from common import shared
-from geometry_msgs.msg import PointStamped, Vector3Stamped
+from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
@@ -54,6 +56,9 @@ OUTPUT_TOPICS = [f"foot_positions/{leg}" for leg in shared.LEGS] + [
 ]
 WARMUP_RATE_HZ = 100.0
 POSES = 250  # distinct pre-built messages the generator cycles through
+STANDING_EFFORTS = [1.08, -2.88, 2.42, -1.0, -3.08, 2.26, -1.86, 2.71, 5.02, 1.71, 2.8, 5.22]
+"""[N m]: the A1 standing in PyBullet (docs/forces.md)."""
+FORCE_TOPICS = [f"foot_forces/{leg}" for leg in shared.LEGS] + ["foot_contacts"]
 
 
 def emit(**event: object) -> None:
@@ -100,15 +105,22 @@ def _init() -> None:
 # --- generator ---------------------------------------------------------------------------------
 
 
-def _poses() -> list[JointState]:
-    """Pre-built messages: a small trot-like motion around the standing pose, with its rates."""
+def _poses(efforts: bool = False) -> list[JointState]:
+    """Pre-built messages: a small trot-like motion around the standing pose, with its rates and,
+    if ``efforts``, joint efforts around those of the A1 standing [N m]."""
     messages = []
     for i in range(POSES):
         phase = 2 * math.pi * i / POSES
         positions = [a + 0.2 * math.sin(phase + k) for k, a in enumerate(shared.STANDING)]
         velocities = [0.2 * 2 * math.pi * math.cos(phase + k) for k in range(len(shared.STANDING))]
+        torques = [t * (1.0 + 0.5 * math.sin(phase + k)) for k, t in enumerate(STANDING_EFFORTS)]
         messages.append(
-            JointState(name=list(shared.PYBULLET_NAMES), position=positions, velocity=velocities)
+            JointState(
+                name=list(shared.PYBULLET_NAMES),
+                position=positions,
+                velocity=velocities,
+                effort=torques if efforts else [],
+            )
         )
     return messages
 
@@ -118,7 +130,8 @@ def generator() -> None:
     control = Control()
     node = Node("bench_load_generator")
     publisher = node.create_publisher(JointState, "joint_states", QoSProfile(depth=10))
-    messages = _poses()
+    plain, with_efforts = _poses(), _poses(efforts=True)
+    messages = plain
     seq = 0
     last_stamp = 0
 
@@ -150,6 +163,7 @@ def generator() -> None:
         if command["op"] != "phase":
             continue
         warming = False
+        messages = with_efforts if command.get("efforts") else plain
         rate, duration = float(command["rate"]), float(command["duration"])
         total = max(1, round(rate * duration))
         emit(event="phase_start", name=command.get("name", ""))
@@ -190,7 +204,7 @@ def generator() -> None:
 # --- receiver ----------------------------------------------------------------------------------
 
 
-def receiver(output: str) -> None:
+def receiver(output: str, force_reader: bool = True) -> None:
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
     _init()
@@ -209,20 +223,34 @@ def receiver(output: str) -> None:
     ]
     handles = [s.handle for s in subscriptions]
     types = [s.msg_type for s in subscriptions]
+    # forces and contacts (with efforts): taken and dropped, so the node publishes to a reader
+    drains = [
+        node.create_subscription(
+            JointState if topic == "foot_contacts" else WrenchStamped,
+            topic,
+            lambda _: None,
+            qos,
+            raw=True,
+        ).handle
+        for topic in (FORCE_TOPICS if force_reader else [])
+    ]
     records: list[tuple[list[int], list[int], list[int], list[int]]] = [
         ([], [], [], []) for _ in subscriptions
     ]
     context = rclpy.get_default_context()
-    wait_set = _rclpy.WaitSet(len(handles), 0, 0, 0, 0, 0, context.handle)
+    wait_set = _rclpy.WaitSet(len(handles) + len(drains), 0, 0, 0, 0, 0, context.handle)
     unpack = struct.Struct("<iI").unpack_from
     first_seen = [False] * len(handles)
     emit(event="up", pid=os.getpid())
     ready = False
     while not control.stopping:
         wait_set.clear_entities()
-        for handle in handles:
+        for handle in handles + drains:
             wait_set.add_subscription(handle)
         wait_set.wait(100_000_000)
+        for drain, kind in zip(drains, [WrenchStamped] * 4 + [JointState], strict=False):
+            while drain.take_message(kind, True) is not None:
+                pass
         for index, handle in enumerate(handles):
             stamps, received, sources, sequence = records[index]
             msg_type = types[index]
@@ -395,7 +423,7 @@ if __name__ == "__main__":
     if role == "generator":
         generator()
     elif role == "receiver":
-        receiver(arguments[0])
+        receiver(arguments[0], "--no-force-reader" not in arguments)
     elif role == "baseline":
         baseline(arguments[0] if arguments else "node")
     elif role == "verifier":

@@ -8,6 +8,7 @@ Importing it claims no ROS domain (conftest's type is for the checker only), so 
 from __future__ import annotations
 
 import math
+import time
 from collections import defaultdict
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -18,7 +19,7 @@ from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from shared import (
     LEGS,
     PYBULLET_NAMES,
@@ -31,7 +32,7 @@ from shared import (
 from std_srvs.srv import Trigger
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from collections.abc import Callable, Iterable
 
     from conftest import RosProbe
 
@@ -42,6 +43,7 @@ __all__ = [
     "UNITREE_NAMES",
     "Diagnostics",
     "NodeClient",
+    "SensorStream",
     "distance",
     "ik_node_command",
     "joint_state_message",
@@ -211,3 +213,53 @@ def distance(point, xyz) -> float:
 
 def package_root() -> Path:
     return ROOT
+
+
+class SensorStream:
+    """``imu`` and ``joint_states`` into a node, row by row at a fixed rate, as a robot (or a bag
+    replay) would send them: each row's Imu first, then its JointState.
+    """
+
+    def __init__(self, probe: RosProbe, output_topic: str, timeout_s: float = 30.0) -> None:
+        """Publishers (reliable, depth 1000); :attr:`ready` once the node subscribes to both and
+        publishes ``output_topic``, and half a second more for its subscriptions to match ours.
+        """
+        self.probe = probe
+        self.imu = probe.node.create_publisher(Imu, "imu", QoSProfile(depth=1000))
+        self.joint_states = probe.node.create_publisher(
+            JointState, "joint_states", QoSProfile(depth=1000)
+        )
+        self.ready = probe.spin_until(
+            lambda: (
+                self.imu.get_subscription_count() > 0
+                and self.joint_states.get_subscription_count() > 0
+                and probe.node.count_publishers(output_topic) > 0
+            ),
+            timeout_s,
+        )
+        if self.ready:
+            probe.spin_for(0.5)
+
+    def send(
+        self,
+        rows: int,
+        messages: Callable[[int], tuple[Imu, JointState]],
+        answered: Callable[[], int],
+        rate_hz: float = 500.0,
+        ahead: int = 40,
+    ) -> None:
+        """Publish ``messages(row)`` for every row at ``rate_hz``, unless the node (on a loaded
+        machine) has answered (``answered()``) more than ``ahead`` rows fewer than were sent.
+        """
+        probe = self.probe
+        start = time.monotonic()
+        for row in range(rows):
+            imu, joint_state = messages(row)
+            self.imu.publish(imu)
+            probe.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in a bag
+            self.joint_states.publish(joint_state)
+            delay = start + (row + 1) / rate_hz - time.monotonic()
+            if delay > 0:
+                probe.spin_for(delay)
+            behind = row - ahead
+            probe.spin_until(lambda: answered() >= behind, 10.0)  # noqa: B023 (used at once)

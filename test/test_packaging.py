@@ -64,6 +64,9 @@ SCALAR_DEFAULTS = {
     "enable_verify": True,
     "verify_tolerance_m": 1e-6,
     "preserialized_output": True,
+    "publish_forces": True,
+    "touchdown_force_n": 0.0,
+    "liftoff_force_n": 0.0,
 }
 STRING_ARRAYS = ("foot_links", "joint_aliases")
 # Parameters rclpy declares on every node (and per-topic QoS overrides), not the package's own.

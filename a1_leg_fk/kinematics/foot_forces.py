@@ -29,26 +29,26 @@ there, and where the efforts or angles of a leg are missing or not finite, a leg
 
 The math is built from the compiled legs (:mod:`a1_leg_fk.kinematics.compiled_leg`, the same
 generated straight-line code: the Jacobians of each segment's centre of mass and of the contact
-point). It is the statics of the kinematic chain, so it sits in the kinematics beside the
-Jacobians, below :class:`~a1_leg_fk.kinematics.quadruped.Quadruped`, whose ``foot_forces`` is a
-thin method over it; the contact rule built on these forces is :mod:`a1_leg_fk.estimation`'s.
+point), one leg at a time in :mod:`a1_leg_fk.kinematics.leg_statics`. It is the statics of the
+kinematic chain, so it sits in the kinematics beside the Jacobians, below
+:class:`~a1_leg_fk.kinematics.quadruped.Quadruped`, whose ``foot_forces`` is a thin method over
+it; the contact rule built on these forces is :mod:`a1_leg_fk.estimation`'s.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
-from typing import Any, Protocol
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from a1_leg_fk.kinematics.compiled_leg import BATCH_CHUNK_ROWS, CompiledLeg
-from a1_leg_fk.kinematics.fk_codegen import compile_source, leg_source
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
-from a1_leg_fk.kinematics.leg_stages import rpy_matrix
-from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES, foot_sphere
+from a1_leg_fk.kinematics.leg_statics import LegStatics
+from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError, RobotModel
 
 """[m/s^2]"""
@@ -74,93 +74,6 @@ class ForceEstimate:
     forces: np.ndarray
     missing: np.ndarray
     singular: np.ndarray
-
-
-Columns = tuple[Any, Any, Any]
-"""Components x, y, z: floats, or (K,) arrays for K vectors."""
-Values = Sequence[Any] | np.ndarray
-"""Per joint or per axis: floats, or (K,) arrays (the rows of an array)."""
-
-
-class _LegStatics:
-    """One leg's generated functions (see :mod:`a1_leg_fk.kinematics.fk_codegen`): per segment with
-    mass, the Jacobian of its centre of mass; per joint, its axis in the base frame; the Jacobian
-    of the foot sphere's centre, and the sphere's radius [m].
-    """
-
-    def __init__(self, model: RobotModel, leg: CompiledLeg, radius_m: float | None) -> None:
-        sphere = foot_sphere(model, leg.chain.foot_link) if radius_m is None else None
-        self.radius_m = sphere.radius if sphere is not None else radius_m or 0.0
-        center = _foot_point(leg, np.array(sphere.center) if sphere is not None else np.zeros(3))
-        self.contact_jacobian: Callable[..., tuple[Any, ...]] = compile_source(
-            leg_source(leg.stages, center), f"foot sphere of {leg.chain.leg}", self
-        )["jacobian_from_trig"]
-        movable = leg.chain.movable
-        self.masses: list[float] = []
-        self.com_jacobians: list[tuple[float, Callable[..., tuple[Any, ...]]]] = []
-        for k, joint in enumerate(movable):
-            stop = movable[k + 1].name if k + 1 < len(movable) else None
-            mass, moment = _segment(model, joint.child, stop)
-            self.masses.append(mass)
-            if mass > 0.0:  # the centre of mass, a point in stage k's child frame
-                source = leg_source(leg.stages[: k + 1], moment / mass)
-                code = compile_source(source, f"CoM of {leg.chain.leg} segment {k}", self)
-                self.com_jacobians.append((mass, code["jacobian_from_trig"]))
-        # a stage without its offset turns a vector as the leg turns it
-        turns = tuple(replace(stage, offset=np.zeros(3)) for stage in leg.stages)
-        self.axes: list[Callable[..., tuple[Any, Any, Any]]] = [
-            compile_source(
-                leg_source(turns[: k + 1], stage.axis), f"axis {stage.joint.name}", self
-            )["position_from_trig"]
-            for k, stage in enumerate(leg.stages)
-        ]
-
-    def gravity_torques(self, trig: Values, gravity: Values) -> list[Any]:
-        """g(q) [N m], per joint, for the leg's (c0, s0, c1, s1, c2, s2) and gravity [m/s^2]
-        (floats, or (K,) arrays): minus the torque gravity exerts on the links below each joint.
-        """
-        gx, gy, gz = gravity
-        torques: list[Any] = [0.0] * JOINTS_PER_LEG
-        for mass, jacobian in self.com_jacobians:
-            columns = jacobian(*trig)
-            for k in range(0, len(columns), 3):
-                torques[k // 3] -= mass * (
-                    columns[k] * gx + columns[k + 1] * gy + columns[k + 2] * gz
-                )
-        return torques
-
-    def solve(
-        self, trig: Values, efforts: Values, gravity: Values
-    ) -> tuple[tuple[Any, Any, Any], Any, Any]:
-        """``J^T F = g - tau`` by Cramer's rule, J that of the contact point, on floats or (K,)
-        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``.
-        """
-        gx, gy, gz = gravity
-        t0, t1, t2 = self.gravity_torques(trig, gravity)
-        r0, r1, r2 = t0 - efforts[0], t1 - efforts[1], t2 - efforts[2]
-        flat = self.contact_jacobian(*trig)
-        columns = [flat[0:3], flat[3:6], flat[6:9]]
-        if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
-            scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
-            dx, dy, dz = gx * scale, gy * scale, gz * scale
-            for k, axis in enumerate(self.axes):
-                ax, ay, az = axis(*trig)
-                cx, cy, cz = columns[k]
-                columns[k] = (
-                    cx - dy * az + dz * ay,
-                    cy - dz * ax + dx * az,
-                    cz - dx * ay + dy * ax,
-                )
-        j0, j1, j2 = columns
-        c12, c20, c01 = _cross(j1, j2), _cross(j2, j0), _cross(j0, j1)
-        det = _dot(j0, c12)
-        size = (_dot(j0, j0) * _dot(j1, j1) * _dot(j2, j2)) ** 0.5
-        scaled = (
-            r0 * c12[0] + r1 * c20[0] + r2 * c01[0],
-            r0 * c12[1] + r1 * c20[1] + r2 * c01[1],
-            r0 * c12[2] + r1 * c20[2] + r2 * c01[2],
-        )
-        return scaled, det, size
 
 
 class LeggedRobot(Protocol):
@@ -195,7 +108,7 @@ class FootForces:
         """
         self.min_condition = min_condition
         self._legs = tuple(
-            _LegStatics(quadruped.model, leg, foot_radius_m) for leg in quadruped.legs
+            LegStatics(quadruped.model, leg, foot_radius_m) for leg in quadruped.legs
         )
         self.foot_radii_m = tuple(leg.radius_m for leg in self._legs)
         """Each foot's contact sphere radius [m]."""
@@ -218,32 +131,40 @@ class FootForces:
         [rad] and 12 efforts [N m] (slot order), ``gravity_base`` (3,) [m/s^2] in the base frame;
         a :class:`ForceEstimate` of shapes (4, 3), (4,), (4,).
         """
-        q, tau = _row(angles, "joint angles")[0], _row(efforts, "joint efforts")[0]
-        floats = self.estimate_floats(q.tolist(), tau.tolist(), _gravity(gravity_base, 1)[0])
-        return ForceEstimate(*(np.array(values) for values in floats))
+        q = _row(angles, "joint angles")[0].tolist()
+        tau = _row(efforts, "joint efforts")[0].tolist()
+        gravity = _gravity(gravity_base, 1)[0].tolist()
+        out, missing, singular = self.estimate_floats(q, tau, gravity)
+        return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
 
     def estimate_floats(
-        self, angles: Sequence[float], efforts: Sequence[float], gravity: Sequence[float]
+        self, q: Sequence[float], tau: Sequence[float], gravity: Sequence[float]
     ) -> tuple[list[list[float]], list[bool], list[bool]]:
-        """:meth:`estimate` in floats, unchecked (the odometry's per sample): 12 angles [rad], 12
-        efforts [N m], gravity (3) [m/s^2], base frame -> per leg force [N], missing, singular.
+        """:meth:`estimate` on Python floats, without numpy (the node's per-message path): 12
+        angles [rad], 12 efforts [N m] and gravity (3,) [m/s^2]; per leg its force [N] (NaN when
+        none), whether it is missing and whether it is near-singular.
         """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
-        if not all(math.isfinite(value) for value in gravity):
+        isfinite = math.isfinite
+        if not (isfinite(gravity[0]) and isfinite(gravity[1]) and isfinite(gravity[2])):
             return out, missing, singular
-        isfinite, cos, sin = math.isfinite, math.cos, math.sin
         for slot, statics in enumerate(self._legs):
-            joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-            q, tau = angles[joints], efforts[joints]
-            missing[slot] = not (all(isfinite(v) for v in q) and all(isfinite(v) for v in tau))
+            first = slot * JOINTS_PER_LEG
+            q0, q1, q2 = q[first : first + JOINTS_PER_LEG]
+            t0, t1, t2 = tau[first : first + JOINTS_PER_LEG]
+            missing[slot] = not (
+                isfinite(q0) and isfinite(q1) and isfinite(q2)
+                and isfinite(t0) and isfinite(t1) and isfinite(t2)
+            )  # fmt: skip
             if missing[slot]:
                 continue
-            trig = [cos(q[0]), sin(q[0]), cos(q[1]), sin(q[1]), cos(q[2]), sin(q[2])]
-            scaled, det, size = statics.solve(trig, tau, gravity)
+            trig = (math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1), math.cos(q2),
+                    math.sin(q2))  # fmt: skip
+            scaled, det, size = statics.solve(trig, (t0, t1, t2), gravity)
             singular[slot] = not abs(det) >= self.min_condition * size
             if not singular[slot]:
-                out[slot] = [value / det for value in scaled]
+                out[slot] = [scaled[0] / det, scaled[1] / det, scaled[2] / det]
         return out, missing, singular
 
     def estimate_batch(
@@ -305,7 +226,7 @@ class FootForces:
         efforts: np.ndarray,
         gravity: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(K, 3) forces [N] and (K,) singular flags of one leg (:meth:`_LegStatics.solve`)."""
+        """(K, 3) forces [N] and (K,) singular flags of one leg (:meth:`LegStatics.solve`)."""
         scaled, det, size = self._legs[slot].solve(_trig(cos, sin), efforts.T, gravity.T)
         singular = ~(np.abs(det) >= self.min_condition * size)
         inverse = 1.0 / np.where(singular, 1.0, det)
@@ -318,56 +239,6 @@ class FootForces:
 def _trig(cos: np.ndarray, sin: np.ndarray) -> tuple[np.ndarray, ...]:
     """(c0, s0, c1, s1, c2, s2) of a leg's (K, 3) cosines and sines."""
     return cos[:, 0], sin[:, 0], cos[:, 1], sin[:, 1], cos[:, 2], sin[:, 2]
-
-
-def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
-    """``a . b`` of two 3-vectors (floats or (K,) arrays per component)."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a: Sequence[Any], b: Sequence[Any]) -> Columns:
-    """``a x b`` component by component (numpy's cross is slow on (K, 3) arrays)."""
-    return (
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    )
-
-
-def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:
-    """``point`` [m] of the foot link's frame in the last movable joint's child frame."""
-    joints = leg.chain.joints
-    last_movable = max(i for i, joint in enumerate(joints) if joint.movable)
-    rotation, offset = np.eye(3), np.zeros(3)
-    for joint in joints[last_movable + 1 :]:
-        offset = offset + rotation @ np.array(joint.origin_xyz)
-        rotation = rotation @ rpy_matrix(joint.origin_rpy)
-    result: np.ndarray = offset + rotation @ point
-    return result
-
-
-def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:
-    """Mass [kg] and first moment [kg m] (in ``link``'s frame) of ``link`` and everything below
-    it, except below the joint named ``stop_joint``; other joints at their zero angle.
-    """
-    mass, moment = 0.0, np.zeros(3)
-    pending = [(link, np.eye(3), np.zeros(3))]
-    while pending:
-        name, rotation, origin = pending.pop()
-        inertial = model.inertials.get(name)
-        if inertial is not None:
-            mass += inertial.mass
-            moment += inertial.mass * (origin + rotation @ np.array(inertial.center))
-        pending.extend(
-            (
-                joint.child,
-                rotation @ rpy_matrix(joint.origin_rpy),
-                origin + rotation @ np.array(joint.origin_xyz),
-            )
-            for joint in model.joints.values()
-            if joint.parent == name and joint.name != stop_joint
-        )
-    return mass, moment
 
 
 def _row(values: ArrayLike, what: str) -> np.ndarray:

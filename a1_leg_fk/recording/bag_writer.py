@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import struct
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
@@ -49,8 +50,8 @@ class BagWriter:
         self.writer = Writer(path, version=BAG_VERSION, storage_plugin=plugin)
         self.writer.open()
         # the CDR frame_id after the stamp of every base-frame and world-frame message
-        self.base_head = _frame_bytes(recording.quadruped.base_frame)
-        self.world_head = _frame_bytes(
+        self.base_head = frame_bytes(recording.quadruped.base_frame)
+        self.world_head = frame_bytes(
             recording.base_pose.world_frame if recording.base_pose is not None else ""
         )
         self.topics: dict[str, Connection] = {}
@@ -118,7 +119,7 @@ class BagWriter:
         if not len(rows):
             return
         connection = self._connection("/foot_contacts", "sensor_msgs/msg/JointState")
-        head, middle = _contacts_layout(self.recording.quadruped.base_frame)
+        layout = contacts_layout(self.recording.quadruped.base_frame)
         for row, probabilities, normal in zip(
             rows.tolist(), block.contacts[rows].tolist(), block.normal_forces[rows].tolist()
         ):
@@ -126,12 +127,7 @@ class BagWriter:
             self.writer.write(
                 connection,
                 bag_times[row],
-                _CDR_LE
-                + _STAMP.pack(sec, nanosec)
-                + head
-                + _LEG_VALUES.pack(*probabilities)
-                + middle
-                + _LEG_VALUES.pack(*normal),
+                contacts_bytes(layout, sec, nanosec, probabilities, normal),
             )
 
     def copy(self, connection: Connection, bag_time: int, raw: bytes) -> None:
@@ -185,7 +181,7 @@ _NO_TORQUE = _XYZ.pack(0.0, 0.0, 0.0)  # the torque of a WrenchStamped, after it
 _LEG_VALUES = struct.Struct(f"<{len(LEG_NAMES)}d")
 
 
-def _contacts_layout(frame: str) -> tuple[bytes, bytes]:
+def contacts_layout(frame: str) -> tuple[bytes, bytes]:
     """The constant CDR bytes of a ``/foot_contacts`` JointState: after the stamp, the frame,
     the leg names and the position count (padded to 8); between the positions and the efforts,
     the empty velocity and the effort count. Offsets relative to the encapsulation header.
@@ -204,7 +200,7 @@ def _contacts_layout(frame: str) -> tuple[bytes, bytes]:
     return bytes(body), struct.pack("<II", 0, len(LEG_NAMES))
 
 
-def _frame_bytes(frame: str) -> bytes:
+def frame_bytes(frame: str) -> bytes:
     """The CDR ``frame_id`` string after the stamp, padded so the float64s that follow are
     8-aligned (offsets relative to the 4-byte encapsulation header, which the stamp follows).
     """
@@ -212,6 +208,34 @@ def _frame_bytes(frame: str) -> bytes:
     text = struct.pack("<I", len(encoded)) + encoded
     padding = -(8 + len(text)) % 8
     return text + b"\0" * padding
+
+
+def wrench_bytes(head: bytes, sec: int, nanosec: int, force: Sequence[float]) -> bytes:
+    """A ``geometry_msgs/WrenchStamped``'s CDR: the stamp, ``head`` (:func:`frame_bytes`), the
+    force [N] and a zero torque.
+    """
+    return _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(*force) + _NO_TORQUE
+
+
+def contacts_bytes(
+    layout: tuple[bytes, bytes],
+    sec: int,
+    nanosec: int,
+    probabilities: Sequence[float],
+    normal: Sequence[float],
+) -> bytes:
+    """A ``foot_contacts`` JointState's CDR: the stamp, the :func:`contacts_layout` parts, the
+    four contact probabilities and the four normal forces [N].
+    """
+    head, middle = layout
+    return (
+        _CDR_LE
+        + _STAMP.pack(sec, nanosec)
+        + head
+        + _LEG_VALUES.pack(*probabilities)
+        + middle
+        + _LEG_VALUES.pack(*normal)
+    )
 
 
 def default_qos() -> Qos:

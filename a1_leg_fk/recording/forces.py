@@ -154,6 +154,37 @@ class ForcePass:
         normal = normal_forces(estimate.forces, gravity)
         return estimate.forces, normal, self.rule.update_batch(normal)
 
+    def message(
+        self, angles: Sequence[float], efforts: Sequence[float], gravity: Sequence[float]
+    ) -> tuple[list[list[float]], list[float], list[float]]:
+        """:meth:`rows` for one message, on floats (the node's per-message path): 4 forces [N,
+        base frame], 4 normal forces [N] and 4 contact probabilities for 12 angles [rad], 12
+        efforts [N m] (NaN where unknown) and gravity (3,) [m/s^2] in the base frame.
+        """
+        forces, missing, singular = self.model.estimate_floats(angles, efforts, gravity)
+        counts = self.counts
+        counts.missing += sum(missing)
+        counts.singular += sum(singular)
+        gx, gy, gz = gravity
+        scale = -1.0 / math.sqrt(gx * gx + gy * gy + gz * gz)  # up = -gravity / |gravity|
+        ux, uy, uz = gx * scale, gy * scale, gz * scale
+        normal = [x * ux + y * uy + z * uz for x, y, z in forces]
+        counts.estimated += sum(1 for value in normal if value == value)  # noqa: PLR0124 (NaN)
+        return forces, normal, self.rule.update(normal)
+
+    def message_efforts(self, names: Sequence[str], efforts: Sequence[float]) -> list[float]:
+        """One message's efforts [N m] in slot order (as :meth:`slot_efforts`): NaN for joints
+        not named, and for every joint when there are not as many efforts as names.
+        """
+        out = [math.nan] * JOINT_COUNT
+        if len(efforts) == len(names):
+            slots = self.name_to_slot
+            for name, value in zip(names, efforts, strict=True):
+                slot = slots.get(name)
+                if slot is not None:
+                    out[slot] = value
+        return out
+
 
 def check_has_efforts(
     reader: AnyReader, connection: Connection, ros1: bool, needs: str = "--forces"

@@ -9,9 +9,10 @@ rejections since the previous report. The node wraps the result in a DiagnosticA
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
+from a1_leg_fk.recording.forces import ForcePass
 from a1_leg_fk.tracking import REJECTIONS, TrackerCounts
 
 OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"
@@ -71,6 +72,7 @@ class FkReport:
     description_rejected: bool
     last_verify: str
     verify_disagreed: bool  # the latest verify_fk found a foot beyond the tolerance
+    forces: Mapping[str, object] = field(default_factory=dict)  # force_values()
 
 
 def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
@@ -108,8 +110,29 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         "stamp_jumps_back": report.stamp_jumps_back,
         "last_verify": report.last_verify,
         **description,
+        **report.forces,
     }
     return level, summary, values
+
+
+def force_values(forces: ForcePass | None, problem: str, imu: bool) -> dict[str, object]:
+    """The foot-force part of the status: whether forces are estimated (else ``problem``), the
+    leg forces estimated, the legs without one (efforts missing, not finite or of the wrong
+    length; near-singular), where gravity's direction comes from (``imu``: the latest Imu had an
+    orientation) and the contact thresholds [N].
+    """
+    if forces is None:
+        return {"foot_forces": problem}
+    counts, thresholds = forces.counts, forces.thresholds
+    return {
+        "foot_forces": "on",
+        "leg_forces_estimated": counts.estimated,
+        "legs_without_efforts": counts.missing,
+        "legs_near_singular": counts.singular,
+        "gravity_from": "imu orientation" if imu else "base -z (no imu orientation)",
+        "touchdown_force_n": f"{thresholds.touchdown_n:.3f}",
+        "liftoff_force_n": f"{thresholds.liftoff_n:.3f}",
+    }
 
 
 def robot_description_status(

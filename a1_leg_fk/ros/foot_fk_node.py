@@ -1,8 +1,13 @@
-"""``foot_fk_node``: sensor_msgs/JointState in, one geometry_msgs/PointStamped per foot out.
+"""``foot_fk_node``: sensor_msgs/JointState in, one geometry_msgs/PointStamped per foot out, and
+with joint efforts the foot forces (geometry_msgs/WrenchStamped) and contacts (JointState).
 
-Thin ROS glue over :mod:`a1_leg_fk.tracking` (merging, rejection, FK per message) and
-:mod:`a1_leg_fk.verify` (the ``verify_fk`` service). All topic and service names are
-relative, so ``__ns`` and remaps work; every parameter is declared with a description.
+Thin ROS glue over :mod:`a1_leg_fk.tracking` (merging, rejection, FK per message),
+:mod:`a1_leg_fk.recording.forces` (the forces and contacts of ``a1-leg-fk bag --forces``, one
+message at a time) and :mod:`a1_leg_fk.verify` (the ``verify_fk`` service); what it publishes per
+message is :mod:`a1_leg_fk.ros.foot_output`'s. All topic and service names are relative, so
+``__ns`` and remaps work; every parameter is declared with a description
+(:mod:`a1_leg_fk.ros.foot_fk_parameters`). Gravity's direction for the forces comes from the
+latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z.
 
 The joint states are subscribed raw (serialized) and read by the bag tools' decoder
 (:mod:`a1_leg_fk.recording.joint_state_wire`): no message object is built per JointState.
@@ -18,96 +23,36 @@ from typing import Unpack
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PointStamped, Vector3Stamped
-from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import deserialize_message
 from rclpy.service import Service
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
+from a1_leg_fk.estimation.imu import imu_reading
+from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, down_direction, unit_quaternion
 from a1_leg_fk.kinematics.robot_config import RobotConfig
-from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.forces import ForcePass
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
-from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status
+from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
+from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
+from a1_leg_fk.ros.foot_output import FootOutput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.markers import foot_markers
-from a1_leg_fk.ros.robot_source import (
-    BASE_FRAME_PARAMETER,
-    ParameterSpec,
-    RobotSource,
-)
-from a1_leg_fk.ros.serialized_output import SerializedStamped
-from a1_leg_fk.tracking import REJECTIONS, Foot, FootTracker
+from a1_leg_fk.ros.odometry_wire import imu_fields
+from a1_leg_fk.ros.robot_source import RobotSource
+from a1_leg_fk.tracking import REJECTIONS, FootTracker
 from a1_leg_fk.verify import PyBulletFeet
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0
 SUBSCRIBER_CHECK_PERIOD_S = 0.5
-
-MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
-PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
-VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
-"""Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
-
-PARAMETERS = (
-    BASE_FRAME_PARAMETER,
-    ParameterSpec(
-        "publish_velocities",
-        True,
-        ParameterType.PARAMETER_BOOL,
-        "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three "
-        "velocities",
-    ),
-    ParameterSpec(
-        "publish_markers",
-        True,
-        ParameterType.PARAMETER_BOOL,
-        "Publish foot_markers (MarkerArray) while someone subscribes",
-    ),
-    ParameterSpec(
-        "marker_rate_hz",
-        30.0,
-        ParameterType.PARAMETER_DOUBLE,
-        f"Highest rate of foot_markers [Hz], in {MARKER_RATE_RANGE_HZ}",
-        value_range=MARKER_RATE_RANGE_HZ,
-    ),
-    ParameterSpec(
-        "max_publish_rate_hz",
-        0.0,
-        ParameterType.PARAMETER_DOUBLE,
-        "Highest rate of foot positions/velocities [Hz], in "
-        f"{PUBLISH_RATE_RANGE_HZ}; 0 = one set per joint state (no throttling)",
-        value_range=PUBLISH_RATE_RANGE_HZ,
-    ),
-    ParameterSpec(
-        "enable_verify",
-        True,
-        ParameterType.PARAMETER_BOOL,
-        "Offer the verify_fk service (compares the FK with PyBullet's)",
-    ),
-    ParameterSpec(
-        "verify_tolerance_m",
-        1e-6,
-        ParameterType.PARAMETER_DOUBLE,
-        "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, in "
-        f"{VERIFY_TOLERANCE_RANGE_M}",
-        value_range=VERIFY_TOLERANCE_RANGE_M,
-    ),
-    ParameterSpec(
-        "preserialized_output",
-        True,
-        ParameterType.PARAMETER_BOOL,
-        "Publish the foot messages as bytes patched into a pre-serialized message (the same "
-        "messages, cheaper); false = as message objects",
-    ),
-)
-"""The node's own parameters; the model parameters are
-:class:`a1_leg_fk.ros.robot_source.RobotSource`'s."""
 
 
 class FootFkNode(Node):
@@ -135,18 +80,13 @@ class FootFkNode(Node):
         self._markers_wanted = False
         self._period = PeriodCounter()
         self._warnings = ros_glue.WarnThrottle(self)
+        self._gravity: tuple[float, float, float] | None = None  # from the latest imu, base frame
+        self._contacts: list[float] | None = None  # the latest contact probabilities
+        self._forces: ForcePass | None = None
+        self._output = FootOutput(self)
         self._apply_settings()
-        self._position_msgs = [PointStamped() for _ in LEG_NAMES]
-        self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
         self._set_frame_ids()
-        self._position_pubs = [
-            self.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS)
-            for leg in LEG_NAMES
-        ]
-        self._velocity_pubs = [
-            self.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
-            for leg in LEG_NAMES
-        ]
+        self._build_forces()
         self._marker_pub = self.create_publisher(MarkerArray, "foot_markers", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self._load_verifier()
@@ -159,6 +99,7 @@ class FootFkNode(Node):
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             raw=True,
         )
+        self.create_subscription(Imu, "imu", self._on_imu, JOINT_STATES_QOS, raw=True)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.create_timer(SUBSCRIBER_CHECK_PERIOD_S, self._check_subscribers)
         self.add_post_set_parameters_callback(self._after_set_parameters)
@@ -177,11 +118,10 @@ class FootFkNode(Node):
             self._warnings.warn("malformed", f"ignoring a joint_states message: {error}")
             return
         order = fields.order
+        names = self._decoder.names
+        efforts = doubles(fields.efforts, order) if fields.efforts else ()
         feet = self._tracker.update(
-            self._decoder.names,
-            doubles(fields.positions, order),
-            doubles(fields.velocities, order),
-            doubles(fields.efforts, order) if fields.efforts else (),
+            names, doubles(fields.positions, order), doubles(fields.velocities, order), efforts
         )
         if self._tracker.new_unknown_names:
             self._warn_unknown_names()
@@ -189,46 +129,43 @@ class FootFkNode(Node):
             self._report_problem()
         if not feet:
             return
+        forces = None
+        if efforts and self._forces is not None:  # every message, for the contacts' hysteresis
+            gravity = self._gravity or LEVEL_GRAVITY
+            slot_efforts = self._forces.message_efforts(names, efforts)
+            forces = self._forces.message(self._tracker.angles, slot_efforts, gravity)
+            self._contacts = forces[2]
         now = time.monotonic()
         if now - self._last_publish < self._min_publish_interval_s:
             return
         self._last_publish = now
         sec, nanosec = self._stamp_of(fields.stamp_ns)
-        if self._serialized is not None:
-            self._publish_serialized(self._serialized, feet, sec, nanosec)
-        else:
-            self._publish_objects(feet, Time(sec=sec, nanosec=nanosec))
+        self._output.feet(feet, sec, nanosec, self._publish_velocities)
+        if forces is not None:
+            self._output.forces(*forces, sec, nanosec)
         if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
             self._last_markers = now
             self._publish_markers(Time(sec=sec, nanosec=nanosec))
 
-    def _publish_objects(self, feet: list[Foot], stamp: Time) -> None:
-        """Publish the feet as message objects (one reused message per leg and kind)."""
-        for foot in feet:
-            position_msg = self._position_msgs[foot.leg_slot]
-            position_msg.header.stamp = stamp
-            point = position_msg.point
-            point.x, point.y, point.z = foot.position
-            self._position_pubs[foot.leg_slot].publish(position_msg)
-            if foot.velocity is not None and self._publish_velocities:
-                velocity_msg = self._velocity_msgs[foot.leg_slot]
-                velocity_msg.header.stamp = stamp
-                vector = velocity_msg.vector
-                vector.x, vector.y, vector.z = foot.velocity
-                self._velocity_pubs[foot.leg_slot].publish(velocity_msg)
-
-    def _publish_serialized(
-        self, writer: SerializedStamped, feet: list[Foot], sec: int, nanosec: int
-    ) -> None:
-        """Publish the feet as pre-serialized bytes (same messages, cheaper than message
-        objects).
+    def _on_imu(self, raw: bytes) -> None:
+        """Gravity's direction from an Imu's orientation (the IMU aligned with the base); none
+        (the base's -z) while the latest Imu has none (``orientation_covariance[0] == -1``).
         """
-        serialized = writer.serialized
-        velocities = self._publish_velocities
-        for foot in feet:
-            self._position_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.position))
-            if foot.velocity is not None and velocities:
-                self._velocity_pubs[foot.leg_slot].publish(serialized(sec, nanosec, foot.velocity))
+        fields = imu_fields(raw)
+        if fields is None:  # not little-endian CDR
+            msg = deserialize_message(raw, Imu)
+            q = msg.orientation
+            fields = (0, (q.x, q.y, q.z, q.w), tuple(msg.orientation_covariance), (0.0,) * 3, ())
+        _, orientation, covariance, _, _ = fields
+        reading = imu_reading(orientation, covariance, (0.0, 0.0, 0.0), (0.0,) * 9)
+        unit = None
+        if reading is not None and reading.orientation is not None:
+            unit = unit_quaternion(reading.orientation)
+        if unit is None:
+            self._gravity = None
+            return
+        x, y, z = down_direction(unit)
+        self._gravity = (STANDARD_GRAVITY * x, STANDARD_GRAVITY * y, STANDARD_GRAVITY * z)
 
     def _stamp_of(self, stamp_ns: int) -> tuple[int, int]:
         """(sec, nanosec) of the message's stamp [ns], or of the node clock's now where the stamp
@@ -284,7 +221,13 @@ class FootFkNode(Node):
 
     def _publish_markers(self, stamp: Time) -> None:
         self._marker_pub.publish(
-            foot_markers(self._model.quadruped, self._tracker.angles, self._base_frame, stamp)
+            foot_markers(
+                self._model.quadruped,
+                self._tracker.angles,
+                self._base_frame,
+                stamp,
+                self._contacts,
+            )
         )
 
     def _publish_diagnostics(self) -> None:
@@ -307,6 +250,7 @@ class FootFkNode(Node):
             description_rejected=robot.topic_rejected,
             last_verify=self._last_verify,
             verify_disagreed=self._verify_disagreed,
+            forces=force_values(self._forces, self._forces_problem, self._gravity is not None),
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
@@ -393,13 +337,23 @@ class FootFkNode(Node):
         self._preserialized_output = self._bool("preserialized_output")
 
     def _set_frame_ids(self) -> None:
-        """Stamp the output messages with the base frame; the pre-serialized writer is None when
-        ``preserialized_output`` is off or the rmw's CDR is not the one it patches.
+        self._output.configure(self._base_frame, self._preserialized_output)
+
+    def _build_forces(self) -> None:
+        """The force and contact rules for the current robot and thresholds; none while
+        ``publish_forces`` is off or the URDF or thresholds do not allow them (with a warning).
         """
-        for msg in (*self._position_msgs, *self._velocity_msgs):
-            msg.header.frame_id = self._base_frame
-        writer = SerializedStamped(self._base_frame) if self._preserialized_output else None
-        self._serialized = writer if writer is not None and writer.usable else None
+        self._forces, self._contacts, self._forces_problem = None, None, "off"
+        if not self._bool("publish_forces"):
+            return
+        thresholds = [
+            self._float(name) or None for name in ("touchdown_force_n", "liftoff_force_n")
+        ]
+        try:
+            self._forces = ForcePass(self._model.quadruped, None, thresholds)
+        except LegFkError as error:
+            self._forces_problem = f"none: {error}"
+            self.get_logger().warn(f"no foot forces: {error}")
 
     def _on_robot(self, config: RobotConfig) -> None:
         """Another robot was accepted (a parameter or the description topic): start over with
@@ -410,11 +364,14 @@ class FootFkNode(Node):
         self._tracker = FootTracker(config.quadruped)
         self._apply_settings()
         self._set_frame_ids()
+        self._build_forces()
         self._load_verifier()
 
     def _after_set_parameters(self, parameters: list[Parameter]) -> None:
         self._apply_settings()
         self._set_frame_ids()
+        if any(p.name in FORCE_PARAMETERS for p in parameters):
+            self._build_forces()
         if any(p.name == "enable_verify" for p in parameters):
             self._load_verifier()
         self._update_verify_service()

@@ -15,46 +15,29 @@ from typing import Any
 import numpy as np
 import pytest
 from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
-from pybullet_sim import A1_URDF, QuadrupedSim, record_trot, rotation
+from force_trot import A1, EMPTY_ROW, NAMES, NAN_FL_ROW, SHORT_ROW, a1_trot, recorded_efforts
+from pybullet_sim import rotation
 from rosbags.highlevel import AnyReader
 from shared import LEGS, STAND_LEG
 
 from a1_leg_fk import cli
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.kinematics.quadruped import Quadruped
 
-A1 = Quadruped.from_urdf()
-NAMES = list(A1.joint_names)
 STEP_NS = 2_000_000
 G = 9.80665  # the tools' gravity (PyBullet's was 9.81: only the magnitude differs)
 FORCE_COLUMNS = [f"{leg}_f{axis}" for leg in LEGS for axis in "xyz"]
 CONTACT_COLUMNS = [f"{leg}_contact" for leg in LEGS]
-NAN_FL_ROW, SHORT_ROW, EMPTY_ROW = 100, 200, 300
 
 
 @pytest.fixture(scope="module")
 def trot() -> dict[str, np.ndarray]:
     """3 s of the A1 trotting in PyBullet, 1500 samples."""
-    feet = [leg.chain.foot_link for leg in A1.legs]
-    stand_height = 0.03 - A1.fk(list(STAND_LEG) * 4)[:, 2].mean()
-    with QuadrupedSim(A1_URDF, NAMES, feet) as sim:
-        return record_trot(sim, STAND_LEG, stand_height, 3.0)
-
-
-def bag_efforts(torques: np.ndarray) -> list[list[float]]:
-    """The efforts as recorded: FL's knee NaN in one message, one message with 11 efforts, one
-    with none.
-    """
-    efforts = torques.tolist()
-    efforts[NAN_FL_ROW][5] = math.nan
-    efforts[SHORT_ROW] = efforts[SHORT_ROW][:11]
-    efforts[EMPTY_ROW] = []
-    return efforts
+    return a1_trot(3.0)
 
 
 def write_trot_bag(path: Path, record: dict[str, np.ndarray], kind: str, efforts=True) -> Path:
     spec = BagSpec()
-    recorded = bag_efforts(record["torques"]) if efforts else [[]] * len(record["angles"])
+    recorded = recorded_efforts(record["torques"]) if efforts else [[]] * len(record["angles"])
     imu = T["sensor_msgs/msg/Imu"]
     vector = T["geometry_msgs/msg/Vector3"]
     for row in range(len(record["angles"])):
@@ -103,7 +86,7 @@ def api_forces(record: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     efforts, gravity from the IMU's orientation.
     """
     efforts = np.array(
-        [row if len(row) == 12 else [math.nan] * 12 for row in bag_efforts(record["torques"])]
+        [row if len(row) == 12 else [math.nan] * 12 for row in recorded_efforts(record["torques"])]
     )
     gravity = np.array([rotation(q).T @ [0.0, 0.0, -G] for q in record["root_orientation"]])
     forces = A1.foot_forces_batch(record["angles"], efforts, gravity)

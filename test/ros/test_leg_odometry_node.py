@@ -4,13 +4,11 @@ same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for mes
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from bag_factory import joint_state
 from nav_msgs.msg import Odometry
-from node_harness import LEGS, Diagnostics
+from node_harness import LEGS, Diagnostics, SensorStream
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
 from pybullet_sim import simulate, walking_targets
 from rclpy.qos import QoSProfile
@@ -62,30 +60,19 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
     ros.node.create_subscription(
         Odometry, "leg_odometry", received.append, QoSProfile(depth=10000)
     )
-    imu_pub = ros.node.create_publisher(Imu, "imu", QoSProfile(depth=1000))
-    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=1000))
-    assert ros.spin_until(
-        lambda: (
-            imu_pub.get_subscription_count() > 0
-            and joint_pub.get_subscription_count() > 0
-            and ros.node.count_publishers("leg_odometry") > 0
-        ),
-        30.0,
-    ), processes.output(node)
-    ros.spin_for(0.5)  # the node's subscriptions match ours too
+    stream = SensorStream(ros, "leg_odometry")
+    assert stream.ready, processes.output(node)
     samples = len(run.stamps_s)
-    start = time.monotonic()
-    for row in range(samples):
-        imu_pub.publish(to_ros(imu_message(run, row), Imu))
-        ros.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in the bag
-        message = joint_state(joint_state_msg(run, row, efforts))
-        joint_pub.publish(to_ros(message, JointState))
-        delay = start + (row + 1) / RATE_HZ - time.monotonic()
-        if delay > 0:
-            ros.spin_for(delay)
-        # 500 Hz, unless the node (on a loaded machine) falls more than AHEAD samples behind
-        behind = row - AHEAD
-        ros.spin_until(lambda: len(received) >= behind, 10.0)  # noqa: B023 (used at once)
+    stream.send(
+        samples,
+        lambda row: (
+            to_ros(imu_message(run, row), Imu),
+            to_ros(joint_state(joint_state_msg(run, row, efforts)), JointState),
+        ),
+        lambda: len(received),
+        RATE_HZ,
+        AHEAD,
+    )
     assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
         f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"
     )

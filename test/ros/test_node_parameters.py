@@ -16,6 +16,8 @@ DOCUMENTED_RANGES = {
     "marker_rate_hz": (0.001, 1000.0),
     "max_publish_rate_hz": (0.0, 1_000_000.0),
     "verify_tolerance_m": (1e-12, 1.0),
+    "touchdown_force_n": (0.0, 1e6),
+    "liftoff_force_n": (0.0, 1e6),
 }
 
 
@@ -70,8 +72,34 @@ def test_an_out_of_range_value_at_start_is_a_leg_fk_error_naming_the_parameter(r
 
 
 def test_preserialized_output_can_be_turned_off_and_on_at_run_time(node):
-    assert node._serialized is not None  # on by default (and usable with this rmw)
+    assert node._output.preserialized  # on by default (and usable with this rmw)
     assert node.set_parameters([Parameter("preserialized_output", value=False)])[0].successful
-    assert node._serialized is None
+    assert not node._output.preserialized
     assert node.set_parameters([Parameter("preserialized_output", value=True)])[0].successful
-    assert node._serialized is not None
+    assert node._output.preserialized
+
+
+def _thresholds(node: FootFkNode) -> tuple[float, float]:
+    """The node's contact thresholds [N]: touchdown, liftoff."""
+    forces = node._forces
+    assert forces is not None, node._forces_problem
+    return forces.thresholds.touchdown_n, forces.thresholds.liftoff_n
+
+
+def test_contact_thresholds_default_to_the_weight_and_follow_the_parameters(node):
+    forces = node._forces
+    assert forces is not None
+    weight = forces.model.total_mass_kg * 9.80665  # the URDF's masses, not a constant
+    assert _thresholds(node) == pytest.approx((0.08 * weight, 0.04 * weight))
+    touchdown = Parameter("touchdown_force_n", value=20.0)
+    liftoff = Parameter("liftoff_force_n", value=8.0)
+    assert all(r.successful for r in node.set_parameters([touchdown, liftoff]))
+    assert _thresholds(node) == (20.0, 8.0)
+    # liftoff above touchdown: no forces (a warning, and diagnostics say why) until fixed
+    assert node.set_parameters([Parameter("liftoff_force_n", value=30.0)])[0].successful
+    assert node._forces is None and "liftoff" in node._forces_problem
+    assert node.set_parameters([Parameter("liftoff_force_n", value=0.0)])[0].successful
+    assert _thresholds(node) == pytest.approx((20.0, min(0.04 * weight, 20.0)))
+    assert node.set_parameters([Parameter("publish_forces", value=False)])[0].successful
+    assert node._forces_problem == "off"
+    assert not node.set_parameters([Parameter("touchdown_force_n", value=-1.0)])[0].successful

@@ -1,0 +1,96 @@
+"""The parameters of ``foot_fk_node`` (:mod:`a1_leg_fk.ros.foot_fk_node`): names, defaults, types,
+descriptions and the ranges rclpy enforces; the model parameters are
+:class:`a1_leg_fk.ros.robot_source.RobotSource`'s.
+"""
+
+from __future__ import annotations
+
+from rcl_interfaces.msg import ParameterType
+
+from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
+
+MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
+PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
+VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
+CONTACT_FORCE_RANGE_N = (0.0, 1e6)
+"""Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
+FORCE_PARAMETERS = ("publish_forces", "touchdown_force_n", "liftoff_force_n")
+"""The parameters whose change rebuilds the force and contact rules."""
+
+PARAMETERS = (
+    BASE_FRAME_PARAMETER,
+    ParameterSpec(
+        "publish_velocities",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish foot_velocities/<leg> (J q_dot, m/s) when a message has the leg's three "
+        "velocities",
+    ),
+    ParameterSpec(
+        "publish_markers",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish foot_markers (MarkerArray) while someone subscribes",
+    ),
+    ParameterSpec(
+        "marker_rate_hz",
+        30.0,
+        ParameterType.PARAMETER_DOUBLE,
+        f"Highest rate of foot_markers [Hz], in {MARKER_RATE_RANGE_HZ}",
+        value_range=MARKER_RATE_RANGE_HZ,
+    ),
+    ParameterSpec(
+        "max_publish_rate_hz",
+        0.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "Highest rate of foot positions/velocities [Hz], in "
+        f"{PUBLISH_RATE_RANGE_HZ}; 0 = one set per joint state (no throttling)",
+        value_range=PUBLISH_RATE_RANGE_HZ,
+    ),
+    ParameterSpec(
+        "enable_verify",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Offer the verify_fk service (compares the FK with PyBullet's)",
+    ),
+    ParameterSpec(
+        "verify_tolerance_m",
+        1e-6,
+        ParameterType.PARAMETER_DOUBLE,
+        "verify_fk succeeds when every foot is within this distance [m] of PyBullet's, in "
+        f"{VERIFY_TOLERANCE_RANGE_M}",
+        value_range=VERIFY_TOLERANCE_RANGE_M,
+    ),
+    ParameterSpec(
+        "preserialized_output",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish the foot messages as bytes patched into a pre-serialized message (the same "
+        "messages, cheaper); false = as message objects",
+    ),
+    ParameterSpec(
+        "publish_forces",
+        True,
+        ParameterType.PARAMETER_BOOL,
+        "Publish foot_forces/<leg> (N, the ground's force on the foot) and foot_contacts when a "
+        "message has the efforts of a leg's three joints",
+    ),
+    ParameterSpec(
+        "touchdown_force_n",
+        0.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "A foot touches down when its normal force reaches this [N], in "
+        f"{CONTACT_FORCE_RANGE_N}; 0 = 8 % of the robot's weight (URDF masses)",
+        value_range=CONTACT_FORCE_RANGE_N,
+    ),
+    ParameterSpec(
+        "liftoff_force_n",
+        0.0,
+        ParameterType.PARAMETER_DOUBLE,
+        "A foot in stance lifts off below this normal force [N] (at most the touchdown force), in "
+        f"{CONTACT_FORCE_RANGE_N}; 0 = 4 % of the robot's weight",
+        value_range=CONTACT_FORCE_RANGE_N,
+    ),
+)
+"""The node's own parameters; the model parameters are
+:class:`a1_leg_fk.ros.robot_source.RobotSource`'s."""

@@ -24,6 +24,17 @@ BUFFER_SAMPLES = 256
 """IMU samples kept for matching: ~0.25 s at 1 kHz, far more than a joint state's lag."""
 
 
+def has_orientation(covariance_0: float, quaternion: Sequence[float]) -> bool:
+    """Whether an Imu message's orientation may be used: its ``orientation_covariance[0]`` is not
+    -1 (the message's "no orientation") and the quaternion is a rotation (finite, not near zero;
+    it is normalised where used). The one rule of the foot forces and the odometry, live and from
+    bags.
+    """
+    x, y, z, w = quaternion
+    norm2 = x * x + y * y + z * z + w * w
+    return covariance_0 != NO_ORIENTATION and math.isfinite(norm2) and norm2 > 0.25
+
+
 def imu_reading(
     orientation: Sequence[float],
     orientation_covariance: Sequence[float],
@@ -39,12 +50,7 @@ def imu_reading(
         return None
     x, y, z, w = (float(orientation[0]), float(orientation[1]), float(orientation[2]),
                   float(orientation[3]))  # fmt: skip
-    norm2 = x * x + y * y + z * z + w * w
-    usable = (
-        float(orientation_covariance[0]) != NO_ORIENTATION
-        and math.isfinite(norm2)
-        and norm2 > 0.25  # a rotation, not a zero quaternion
-    )
+    usable = has_orientation(float(orientation_covariance[0]), (x, y, z, w))
     return ImuReading(
         (x, y, z, w) if usable else None,
         gyro,

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
+from a1_leg_fk.estimation.imu import has_orientation
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, gravity_in_base
 from a1_leg_fk.model.legs import JOINT_COUNT
@@ -46,29 +47,29 @@ class ImuGravity:
 
     @classmethod
     def read(cls, reader: AnyReader, connection: Connection) -> ImuGravity:
-        """Every message of ``connection`` that has an orientation (``orientation_covariance[0]
-        != -1``, a unit quaternion); :class:`LegFkError` if none has.
+        """Every message of ``connection`` that has an orientation
+        (:func:`~a1_leg_fk.estimation.imu.has_orientation`); :class:`LegFkError` if none has.
         """
         stamps, quaternions = [], []
         for _, bag_time, raw in reader.messages(connections=[connection]):
             message: Any = reader.deserialize(raw, connection.msgtype)
-            if message.orientation_covariance[0] == -1.0:
-                continue
             q = message.orientation
+            if not has_orientation(float(message.orientation_covariance[0]), (q.x, q.y, q.z, q.w)):
+                continue
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
             stamps.append(stamp or bag_time)
             quaternions.append((q.x, q.y, q.z, q.w))
-        norms = np.linalg.norm(np.array(quaternions, dtype=float).reshape(-1, 4), axis=1)
-        usable = np.isfinite(norms) & (np.abs(norms - 1.0) < 0.01)
-        if not usable.any():
+        if not quaternions:
             raise LegFkError(
-                f"--imu {connection.topic}: no message with an orientation (a unit quaternion "
+                f"--imu {connection.topic}: no message with an orientation (a rotation quaternion "
                 "with orientation_covariance[0] != -1)"
             )
-        order = np.argsort(np.array(stamps, dtype=np.int64)[usable], kind="stable")
-        unit = np.array(quaternions)[usable][order] / norms[usable][order, None]
-        sorted_stamps = np.array(stamps, dtype=np.int64)[usable][order]
-        return cls(sorted_stamps, gravity_in_base(unit), connection.topic)
+        order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
+        rotations = np.array(quaternions, dtype=float)[order]
+        unit = rotations / np.linalg.norm(rotations, axis=1)[:, None]
+        return cls(
+            np.array(stamps, dtype=np.int64)[order], gravity_in_base(unit), connection.topic
+        )
 
     def at(self, stamps_ns: np.ndarray) -> np.ndarray:
         """(N, 3) gravity [m/s^2] of the sample nearest in time to each stamp [ns]."""

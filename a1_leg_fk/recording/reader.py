@@ -184,7 +184,8 @@ def _force_pass(
     """
     from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuGravity, check_has_efforts
 
-    check_has_efforts(reader, joint_states, not reader.is2)
+    needs = "the force estimate (bag --forces, gait --contacts force)"
+    check_has_efforts(reader, joint_states, not reader.is2, needs)
     gravity = None
     if imu:
         connection = _pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")

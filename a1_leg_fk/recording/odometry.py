@@ -22,7 +22,7 @@ from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, Odomet
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import check_has_efforts
-from a1_leg_fk.recording.reader import _pick_topic, one_line
+from a1_leg_fk.recording.reader import one_line, pick_topic
 from a1_leg_fk.recording.trajectories import (
     BasePoses,
     BlockStats,
@@ -207,7 +207,7 @@ def _imu_connection(
         return None
     if wanted is None and not any(c.msgtype == IMU_TYPE for c in reader.connections):
         return None
-    return _pick_topic(reader, path, wanted, (IMU_TYPE,), "--imu", "Imu")
+    return pick_topic(reader, path, wanted, (IMU_TYPE,), "--imu", "Imu")
 
 
 def _imu_samples(

@@ -102,7 +102,7 @@ def open_recording(
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
     try:
-        joint_states = _pick_topic(
+        joint_states = pick_topic(
             reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
         )
         if not urdf:
@@ -132,7 +132,7 @@ def open_recording(
             source = f"embedded A1 ({robot.source})"
         poses = None
         if base_pose:
-            pose_connection = _pick_topic(
+            pose_connection = pick_topic(
                 reader, path, base_pose, BASE_POSE_TYPES, "--base-pose", "base pose"
             )
             require_types(
@@ -188,7 +188,7 @@ def _force_pass(
     check_has_efforts(reader, joint_states, not reader.is2, needs)
     gravity = None
     if imu:
-        connection = _pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")
+        connection = pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")
         try:
             gravity = ImuGravity.read(reader, connection)
         except LegFkError:
@@ -284,7 +284,7 @@ def one_line(error: BaseException) -> str:
     return text[:300]
 
 
-def _pick_topic(
+def pick_topic(
     reader: AnyReader, path: Path, wanted: str | None, types: Sequence[str], option: str, what: str
 ) -> Connection:
     """The connection of ``wanted`` (or the only one of ``types``); errors list the candidates."""

@@ -112,6 +112,19 @@ def scaled(coefficient: float, term: Term) -> Term:
     return coefficient * term if isinstance(term, float) else _scaled(coefficient, term)
 
 
+def product(first: Term, second: Term) -> Term:
+    """``first * second``: a constant when either is zero or both are constants, else an
+    expression (each a name, a product or a parenthesised sum), signs combined.
+    """
+    if isinstance(first, float):
+        if isinstance(second, float):
+            return first * second
+        return 0.0 if first == 0.0 else _scaled(first, second)
+    if isinstance(second, float):
+        return 0.0 if second == 0.0 else _scaled(second, first)
+    return _product(first, second)
+
+
 def term_tuple(terms: Sequence[Term]) -> str:
     """``a, b, c``: the terms as the items of a tuple display."""
     return ", ".join(repr(t) if isinstance(t, float) else t for t in terms)
@@ -172,7 +185,7 @@ def leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
             [
                 weighted_sum(
                     [
-                        ("", _rotate_row(terms, axis, velocity, cos, sin)),
+                        ("", rotated_row(terms, axis, velocity, cos, sin)),
                         (rate, _derivative_row(terms, axis, point, cos, sin)),
                     ]
                 )
@@ -180,7 +193,7 @@ def leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
             ]
         )
         tangents = [
-            jacobian_code.assign([_rotate_row(terms, axis, t, cos, sin) for axis in range(3)])
+            jacobian_code.assign([rotated_row(terms, axis, t, cos, sin) for axis in range(3)])
             for t in tangents
         ]
         tangents.insert(
@@ -191,12 +204,12 @@ def leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
         )
         first_new_line = len(position_code.lines)
         point = position_code.assign(
-            [_moved(terms, offset, axis, point, cos, sin) for axis in range(3)]
+            [moved_row(terms, offset, axis, point, cos, sin) for axis in range(3)]
         )
         velocity_code.lines.extend(position_code.lines[first_new_line:])
         if slot > 0:  # the root-side stage's point is not needed by any column
             jacobian_point = jacobian_code.assign(
-                [_moved(terms, offset, axis, jacobian_point, cos, sin) for axis in range(3)]
+                [moved_row(terms, offset, axis, jacobian_point, cos, sin) for axis in range(3)]
             )
     trig = "c0, s0, c1, s1, c2, s2"
     from_angles = [f"c{i} = _cos(q{i})\n    s{i} = _sin(q{i})" for i in range(len(stages))]
@@ -217,7 +230,7 @@ def leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:
     )
 
 
-def _moved(
+def moved_row(
     terms: tuple[np.ndarray, ...],
     offset: np.ndarray,
     axis: int,
@@ -225,16 +238,21 @@ def _moved(
     cos: str,
     sin: str,
 ) -> Term:
-    """Row ``axis`` of ``o + (C0 + cos C1 + sin C2) vector``: a point moved through a stage."""
+    """Row ``axis`` of ``o + (C0 + cos C1 + sin C2) vector``: a point moved through a stage
+    (``terms`` its Rodrigues terms, ``o`` its offset [m], ``cos``/``sin`` the names of its
+    angle's cosine and sine).
+    """
     return weighted_sum(
-        [("", float(offset[axis])), ("", _rotate_row(terms, axis, vector, cos, sin))]
+        [("", float(offset[axis])), ("", rotated_row(terms, axis, vector, cos, sin))]
     )
 
 
-def _rotate_row(
+def rotated_row(
     terms: tuple[np.ndarray, ...], axis: int, vector: Sequence[Term], cos: str, sin: str
 ) -> Term:
-    """Row ``axis`` of ``(C0 + cos C1 + sin C2) vector``."""
+    """Row ``axis`` of ``(C0 + cos C1 + sin C2) vector``: a vector turned by a stage (pass the
+    transposed terms to turn it back).
+    """
     c0, c1, c2 = terms
     return weighted_sum(
         [

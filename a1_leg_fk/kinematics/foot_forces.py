@@ -146,8 +146,9 @@ class FootForces:
         """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
-        isfinite = math.isfinite
-        if not (isfinite(gravity[0]) and isfinite(gravity[1]) and isfinite(gravity[2])):
+        isfinite, cos, sin = math.isfinite, math.cos, math.sin
+        gx, gy, gz = gravity
+        if not (isfinite(gx) and isfinite(gy) and isfinite(gz)):
             return out, missing, singular
         for slot, statics in enumerate(self._legs):
             first = slot * JOINTS_PER_LEG
@@ -159,12 +160,12 @@ class FootForces:
             )  # fmt: skip
             if missing[slot]:
                 continue
-            trig = (math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1), math.cos(q2),
-                    math.sin(q2))  # fmt: skip
-            scaled, det, size = statics.solve(trig, (t0, t1, t2), gravity)
+            x, y, z, det, size = statics.solve(
+                cos(q0), sin(q0), cos(q1), sin(q1), cos(q2), sin(q2), t0, t1, t2, gx, gy, gz
+            )
             singular[slot] = not abs(det) >= self.min_condition * size
             if not singular[slot]:
-                out[slot] = [scaled[0] / det, scaled[1] / det, scaled[2] / det]
+                out[slot] = [x / det, y / det, z / det]
         return out, missing, singular
 
     def estimate_batch(
@@ -213,8 +214,7 @@ class FootForces:
         out = np.empty_like(q)
         for slot, statics in enumerate(self._legs):
             joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-            g = gravity.T
-            torques = statics.gravity_torques(_trig(cos[:, joints], sin[:, joints]), g)
+            torques = statics.gravity_torques(*_trig(cos[:, joints], sin[:, joints]), *gravity.T)
             out[:, joints] = np.stack(np.broadcast_arrays(*torques), axis=1)
         return out
 
@@ -226,8 +226,8 @@ class FootForces:
         efforts: np.ndarray,
         gravity: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(K, 3) forces [N] and (K,) singular flags of one leg (:meth:`LegStatics.solve`)."""
-        scaled, det, size = self._legs[slot].solve(_trig(cos, sin), efforts.T, gravity.T)
+        """(K, 3) forces [N] and (K,) singular flags of one leg (:class:`LegStatics`)."""
+        *scaled, det, size = self._legs[slot].solve(*_trig(cos, sin), *efforts.T, *gravity.T)
         singular = ~(np.abs(det) >= self.min_condition * size)
         inverse = 1.0 / np.where(singular, 1.0, det)
         forces = np.empty((cos.shape[0], 3))

@@ -1,127 +1,226 @@
-"""One leg's statics as generated straight-line code (:mod:`a1_leg_fk.kinematics.fk_codegen`):
-the Jacobians of its segments' centres of mass and of the foot's contact point, its joint axes in
-the base frame, and from them the gravity torques g(q) and the Cramer's-rule solve of
-``J^T F = g - tau`` that :class:`~a1_leg_fk.kinematics.foot_forces.FootForces` runs per leg (see
-that module for the conventions and frames). Every function takes floats or (K,) arrays alike.
+"""One leg's statics as generated straight-line code: the gravity torques g(q) and the Cramer's
+rule solve of ``J^T F = g - tau`` that :class:`~a1_leg_fk.kinematics.foot_forces.FootForces`
+runs per leg (see that module for the conventions and frames).
+
+The code works in the stages' own frames (:mod:`a1_leg_fk.kinematics.leg_stages`), as the
+recursive Newton-Euler method does: gravity is turned into each joint's child frame on the way
+out (``g_k = R_k^T g_(k-1)``), the first moment ``mu_k`` [kg m] of everything below joint ``k``
+about it is carried in on the way back (``mu_k = m_k c_k + M_(k+1) o_(k+1) + R_(k+1)
+mu_(k+1)``), and then ``g(q)_k = -a_k . (mu_k x g_k)``; the contact point is carried in the same
+way and the Jacobian's column ``k`` is ``a_k x p_k`` (``a_k`` the joint's axis, ``p_k`` the contact
+point, both in joint ``k``'s child frame). The 3x3 system is solved in the hip joint's child frame
+and the force turned to the base frame at the end. Written out by the expression helpers of
+:mod:`a1_leg_fk.kinematics.fk_codegen` (every zero term and unused value dropped), the solve of one
+A1 leg is one function of 44 lines, on floats (the node, once per leg and message) or on (K,)
+arrays alike: 2.3x faster per message than the composition of the per-segment Jacobians it
+replaced (9.7 against 21.9 us for four legs), 1.4x on arrays.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from a1_leg_fk.kinematics.compiled_leg import CompiledLeg
-from a1_leg_fk.kinematics.fk_codegen import compile_source, leg_source
-from a1_leg_fk.kinematics.leg_stages import rpy_matrix
+from a1_leg_fk.kinematics.fk_codegen import (
+    Code,
+    Term,
+    compile_source,
+    linear,
+    moved_row,
+    product,
+    rotated_row,
+    scaled,
+    term_tuple,
+    weighted_sum,
+)
+from a1_leg_fk.kinematics.leg_stages import Stage, rpy_matrix
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, foot_sphere
 from a1_leg_fk.model.urdf import RobotModel
 
-Values = Sequence[Any] | np.ndarray
-"""Per joint or per axis: floats, or (K,) arrays (the rows of an array)."""
+Vector = tuple[Term, Term, Term]
+TRIG = "c0, s0, c1, s1, c2, s2"
+"""The generated functions' first arguments: the cosines and sines of the leg's three angles."""
+_NAME = re.compile(r"[A-Za-z_]\w*")
 
 
 class LegStatics:
-    """One leg's generated functions (see :mod:`a1_leg_fk.kinematics.fk_codegen`): per segment with
-    mass, the Jacobian of its centre of mass; per joint, its axis in the base frame; the Jacobian
-    of the foot sphere's centre, and the sphere's radius [m].
+    """One leg's generated statics (see the module text).
+
+    ``gravity_torques(c0, s0, c1, s1, c2, s2, gx, gy, gz) -> (g0, g1, g2)``: g(q) [N m] for
+    gravity [m/s^2] in the base frame. ``solve(c0, s0, c1, s1, c2, s2, e0, e1, e2, gx, gy, gz)
+    -> (det J * Fx, det J * Fy, det J * Fz, det J, |j0| |j1| |j2|)``: the force [N] the ground
+    exerts on the foot (base frame) times the determinant of the contact point's Jacobian, for
+    efforts ``e`` [N m], with what :class:`~a1_leg_fk.kinematics.foot_forces.FootForces` needs to
+    gate a near-singular Jacobian. Both take floats or (K,) arrays.
     """
 
     def __init__(self, model: RobotModel, leg: CompiledLeg, radius_m: float | None) -> None:
+        """The statics of ``leg``; the contact point on its foot link's collision sphere, or
+        (``radius_m`` [m] given) on a sphere of that radius about the foot link's origin.
+        """
         sphere = foot_sphere(model, leg.chain.foot_link) if radius_m is None else None
         self.radius_m = sphere.radius if sphere is not None else radius_m or 0.0
         center = _foot_point(leg, np.array(sphere.center) if sphere is not None else np.zeros(3))
-        self.contact_jacobian: Callable[..., tuple[Any, ...]] = compile_source(
-            leg_source(leg.stages, center), f"foot sphere of {leg.chain.leg}", self
-        )["jacobian_from_trig"]
         movable = leg.chain.movable
-        self.masses: list[float] = []
-        self.com_jacobians: list[tuple[float, Callable[..., tuple[Any, ...]]]] = []
-        for k, joint in enumerate(movable):
-            stop = movable[k + 1].name if k + 1 < len(movable) else None
-            mass, moment = _segment(model, joint.child, stop)
-            self.masses.append(mass)
-            if mass > 0.0:  # the centre of mass, a point in stage k's child frame
-                source = leg_source(leg.stages[: k + 1], moment / mass)
-                code = compile_source(source, f"CoM of {leg.chain.leg} segment {k}", self)
-                self.com_jacobians.append((mass, code["jacobian_from_trig"]))
-        # a stage without its offset turns a vector as the leg turns it
-        turns = tuple(replace(stage, offset=np.zeros(3)) for stage in leg.stages)
-        self.axes: list[Callable[..., tuple[Any, Any, Any]]] = [
-            compile_source(
-                leg_source(turns[: k + 1], stage.axis), f"axis {stage.joint.name}", self
-            )["position_from_trig"]
-            for k, stage in enumerate(leg.stages)
+        segments = [
+            _segment(model, joint.child, movable[k + 1].name if k + 1 < len(movable) else None)
+            for k, joint in enumerate(movable)
         ]
+        self.masses = [mass for mass, _ in segments]
+        """Each segment's mass [kg], root side first."""
+        self.source = statics_source(leg.stages, segments, center, self.radius_m)
+        namespace = compile_source(self.source, f"statics of {leg.chain.leg}", self)
+        self.gravity_torques: Callable[..., tuple[Any, Any, Any]] = namespace["gravity_torques"]
+        self.solve: Callable[..., tuple[Any, ...]] = namespace["solve"]
 
-    def gravity_torques(self, trig: Values, gravity: Values) -> list[Any]:
-        """g(q) [N m], per joint, for the leg's (c0, s0, c1, s1, c2, s2) and gravity [m/s^2]
-        (floats, or (K,) arrays): minus the torque gravity exerts on the links below each joint.
-        Straight-line arithmetic: the node's per-message path runs it on floats.
-        """
-        gx, gy, gz = gravity
-        torques: list[Any] = [0.0] * JOINTS_PER_LEG
-        for mass, jacobian in self.com_jacobians:
-            columns = jacobian(*trig)
-            mx, my, mz = mass * gx, mass * gy, mass * gz
-            torques[0] = torques[0] - (columns[0] * mx + columns[1] * my + columns[2] * mz)
-            if len(columns) > 3:
-                torques[1] = torques[1] - (columns[3] * mx + columns[4] * my + columns[5] * mz)
-            if len(columns) > 6:
-                torques[2] = torques[2] - (columns[6] * mx + columns[7] * my + columns[8] * mz)
-        return torques
 
-    def solve(
-        self, trig: Values, efforts: Values, gravity: Values
-    ) -> tuple[tuple[Any, Any, Any], Any, Any]:
-        """``J^T F = g - tau`` by Cramer's rule, J that of the contact point, on floats or (K,)
-        arrays alike: ``(det J * F [N] per axis, det J, |j0| |j1| |j2|)``. Written out
-        component by component: on floats (the node, once per leg and message) it is the cost.
-        """
-        gx, gy, gz = gravity
-        g0, g1, g2 = self.gravity_torques(trig, gravity)
-        r0, r1, r2 = g0 - efforts[0], g1 - efforts[1], g2 - efforts[2]
-        ax, ay, az, bx, by, bz, cx, cy, cz = self.contact_jacobian(*trig)[:9]
-        if self.radius_m:  # the contact point moves as the foot turns: dc/dq_k = J_k - d x a_k
-            scale = self.radius_m / (gx * gx + gy * gy + gz * gz) ** 0.5
-            dx, dy, dz = gx * scale, gy * scale, gz * scale
-            first, second, third = self.axes
-            ex, ey, ez = first(*trig)
-            ax, ay, az = (
-                ax - (dy * ez - dz * ey),
-                ay - (dz * ex - dx * ez),
-                az - (dx * ey - dy * ex),
-            )
-            ex, ey, ez = second(*trig)
-            bx, by, bz = (
-                bx - (dy * ez - dz * ey),
-                by - (dz * ex - dx * ez),
-                bz - (dx * ey - dy * ex),
-            )
-            ex, ey, ez = third(*trig)
-            cx, cy, cz = (
-                cx - (dy * ez - dz * ey),
-                cy - (dz * ex - dx * ez),
-                cz - (dx * ey - dy * ex),
-            )
-        # the columns j0 = a, j1 = b, j2 = c; their cross products b x c, c x a, a x b
-        bcx, bcy, bcz = by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx
-        cax, cay, caz = cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax
-        abx, aby, abz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-        det = ax * bcx + ay * bcy + az * bcz
-        size = (
-            (ax * ax + ay * ay + az * az)
-            * (bx * bx + by * by + bz * bz)
-            * (cx * cx + cy * cy + cz * cz)
-        ) ** 0.5
-        scaled = (
-            r0 * bcx + r1 * cax + r2 * abx,
-            r0 * bcy + r1 * cay + r2 * aby,
-            r0 * bcz + r1 * caz + r2 * abz,
+def statics_source(
+    stages: Sequence[Stage],
+    segments: Sequence[tuple[float, np.ndarray]],
+    center: np.ndarray,
+    radius_m: float,
+) -> str:
+    """Python source of ``gravity_torques`` and ``solve`` (see :class:`LegStatics`) for a leg's
+    stages, its segments' masses [kg] and first moments [kg m] (each in its joint's child frame),
+    and its contact sphere's centre [m] (in the last joint's child frame) and radius [m].
+    """
+    code = Code("w")
+    trig = [(f"c{k}", f"s{k}") for k in range(JOINTS_PER_LEG)]
+    gravity: Vector = ("gx", "gy", "gz")
+    local_gravity = []  # gravity [m/s^2] in each joint's child frame
+    for stage, (cos, sin) in zip(stages, trig, strict=True):
+        back = tuple(term.T for term in stage.rodrigues_terms)
+        gravity = _assign(code, [rotated_row(back, axis, gravity, cos, sin) for axis in range(3)])
+        local_gravity.append(gravity)
+    moments: list[Vector] = []  # about each joint, of the segments below it, foot side first
+    below = 0.0
+    for k in reversed(range(JOINTS_PER_LEG)):
+        mass, moment = segments[k]
+        if not moments:
+            moments.append(tuple(float(v) for v in moment))  # type: ignore[arg-type]
+        else:
+            child = stages[k + 1]
+            constant = moment + below * child.offset
+            moments.append(
+                _assign(
+                    code,
+                    [
+                        weighted_sum(
+                            [
+                                ("", float(constant[axis])),
+                                ("", rotated_row(child.rodrigues_terms, axis, moments[-1],
+                                                 *trig[k + 1])),
+                            ]
+                        )
+                        for axis in range(3)
+                    ],
+                )
+            )  # fmt: skip
+        below += mass
+    moments.reverse()
+    torques = _assign(
+        code,
+        [
+            scaled(-1.0, linear(stage.axis.tolist(), _cross(moment, gravity)))
+            for stage, moment, gravity in zip(stages, moments, local_gravity, strict=True)
+        ],
+    )
+    gravity_lines = list(code.lines)
+    point: Vector = tuple(float(v) for v in center)  # type: ignore[assignment]
+    if radius_m:  # on the sphere, along gravity from its centre
+        code.lines.append(f"r = {radius_m!r} * (gx*gx + gy*gy + gz*gz) ** -0.5")
+        point = _assign(
+            code, [weighted_sum([("", point[axis]), ("r", local_gravity[-1][axis])])
+                   for axis in range(3)]
+        )  # fmt: skip
+    points = [point]
+    for k in reversed(range(1, JOINTS_PER_LEG)):
+        stage = stages[k]
+        point = _assign(
+            code,
+            [moved_row(stage.rodrigues_terms, stage.offset, axis, point, *trig[k])
+             for axis in range(3)],
+        )  # fmt: skip
+        points.insert(0, point)
+    columns = []  # of the contact point's Jacobian, in the hip joint's child frame
+    for k, (stage, point) in enumerate(zip(stages, points, strict=True)):
+        column = _assign(code, [linear(row, point) for row in _skew(stage.axis)])
+        for inner in reversed(range(1, k + 1)):
+            column = _assign(
+                code,
+                [rotated_row(stages[inner].rodrigues_terms, axis, column, *trig[inner])
+                 for axis in range(3)],
+            )  # fmt: skip
+        columns.append(column)
+    a, b, c = columns
+    bc, ca, ab = (_assign(code, _cross(u, v)) for u, v in ((b, c), (c, a), (a, b)))
+    residuals = _assign(code, [weighted_sum([("", g), ("", f"-e{k}")]) for k, g in
+                               enumerate(torques)])  # fmt: skip
+    local_force = _assign(
+        code,
+        [
+            weighted_sum([("", product(r, column[axis])) for r, column in
+                          zip(residuals, (bc, ca, ab), strict=True)])
+            for axis in range(3)
+        ],
+    )  # fmt: skip
+    force = _assign(
+        code,
+        [rotated_row(stages[0].rodrigues_terms, axis, local_force, *trig[0]) for axis in range(3)],
+    )
+    det = weighted_sum([("", product(a[axis], bc[axis])) for axis in range(3)])
+    lengths = [weighted_sum([("", product(v, v)) for v in column]) for column in columns]
+    size = f"({lengths[0]} * {lengths[1]} * {lengths[2]}) ** 0.5"
+    return "\n".join(
+        [
+            _function(f"gravity_torques({TRIG}, gx, gy, gz)", gravity_lines, term_tuple(torques)),
+            _function(
+                f"solve({TRIG}, e0, e1, e2, gx, gy, gz)",
+                code.lines,
+                f"{term_tuple(force)}, {det}, {size}",
+            ),
+        ]
+    )
+
+
+def _function(signature: str, lines: Sequence[str], returned: str) -> str:
+    """``def signature`` of the assignments that ``returned`` needs, returning it."""
+    needed = set(_NAME.findall(returned))
+    kept = []
+    for line in reversed(lines):
+        name, _, expression = line.partition(" = ")
+        if name in needed:
+            kept.append(line)
+            needed |= set(_NAME.findall(expression))
+    body = "\n    ".join(reversed(kept)) if kept else "pass"
+    return f"def {signature}:\n    {body}\n    return ({returned})\n"
+
+
+def _assign(code: Code, expressions: Sequence[Term]) -> Vector:
+    """The three expressions bound to fresh names (constants stay constants)."""
+    first, second, third = code.assign(expressions)
+    return first, second, third
+
+
+def _cross(u: Sequence[Term], v: Sequence[Term]) -> list[Term]:
+    """``u x v`` as three expressions of the (bound or constant) terms of ``u`` and ``v``."""
+    return [
+        weighted_sum(
+            [("", product(u[(axis + 1) % 3], v[(axis + 2) % 3])),
+             ("", scaled(-1.0, product(u[(axis + 2) % 3], v[(axis + 1) % 3])))]
         )
-        return scaled, det, size
+        for axis in range(3)
+    ]  # fmt: skip
+
+
+def _skew(axis: np.ndarray) -> np.ndarray:
+    """The matrix of ``axis x``: ``_skew(a) @ v == a x v``."""
+    x, y, z = (float(v) for v in axis)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:

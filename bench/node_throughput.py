@@ -21,7 +21,10 @@ Scenarios
    CPU ratio to the run without efforts is printed); then at 1 kHz with verify_fk called 20
    times a second.
 3. node ramp: 5 s steps of rising rate, until two steps in a row lose >= 0.1 % of the inputs.
-4. baseline (the raw floor, same executor and QoS) at 1 kHz and the same ramp.
+4. baseline (the raw floor, same executor and QoS) at 1 kHz; at 1 kHz with efforts (the floor
+   then also publishes the five force messages, pre-serialized: what delivering them costs any
+   node; the split of the node's extra cost between that and its own work is printed); the
+   same ramp.
 
 Definitions (per phase; inputs are matched to outputs by their stamp)
 - in Hz: messages the generator sent / the phase's duration (what it achieved, not the target);
@@ -235,6 +238,9 @@ class Scenario:
                 break
             if phase.verify and verifier is not None:
                 verifier.send(op="go")
+            if self.target == "baseline":  # the floor publishes the force messages, or not
+                self.under_test.send(op="phase", efforts=phase.efforts)
+                time.sleep(0.3)
             self.generator.send(
                 op="phase",
                 rate=phase.rate,
@@ -351,6 +357,11 @@ OUTPUTS_PER_INPUT = 8  # per input without efforts: foot_positions/<leg>, foot_v
 OUTPUTS_WITH_FORCES = OUTPUTS_PER_INPUT + 5  # and foot_forces/<leg>, foot_contacts
 
 
+def per_input_us(result: dict) -> float:
+    """The CPU [us] per input of a phase."""
+    return 1e4 * result["cpu_under_test"] / result["rate_hz"]
+
+
 def per_message(result: dict, messages: int) -> float:
     """The node's CPU [us] per output message of a phase."""
     return 1e4 * result["cpu_under_test"] / result["rate_hz"] / messages
@@ -373,7 +384,8 @@ def print_report(
     )
     print(header)
     print("-" * len(header))
-    base_1k = next((p.result for p in base_phases if not p.ramp and p.result), {})
+    base_1k = next((p.result for p in base_phases if not (p.ramp or p.efforts) and p.result), {})
+    base_forces_1k = next((p.result for p in base_phases if p.efforts and p.result), {})
 
     def row(label: str, r: dict, ratio: str = "") -> None:
         print(
@@ -387,8 +399,9 @@ def print_report(
     for phase in node_phases:
         if phase.result and not phase.ramp:
             ratio = ""
-            if base_1k and not phase.verify:
-                ratio = f"{phase.result['cpu_under_test'] / base_1k['cpu_under_test']:.2f}x"
+            floor = base_forces_1k if phase.efforts else base_1k
+            if floor and not phase.verify:
+                ratio = f"{phase.result['cpu_under_test'] / floor['cpu_under_test']:.2f}x"
             row(f"node {phase.name}", phase.result, ratio)
     for phase in base_phases:
         if phase.result and not phase.ramp:
@@ -489,6 +502,17 @@ def print_report(
                     f"{OUTPUTS_PER_INPUT} messages per input)"
                 ),
             )
+        )
+    if main_1k and forces_1k and base_1k and base_forces_1k:
+        delivery, total = (
+            per_input_us(base_forces_1k) - per_input_us(base_1k),
+            per_input_us(forces_1k) - per_input_us(main_1k),
+        )
+        print(
+            f"  efforts and forces cost {total:.0f} us per input: {delivery:.0f} us publishing "
+            f"the {OUTPUTS_WITH_FORCES - OUTPUTS_PER_INPUT} more messages (the raw floor's "
+            f"own difference, {per_input_us(base_forces_1k) / per_input_us(base_1k):.2f}x: the "
+            f"least any node publishing them can cost), {total - delivery:.0f} us the rest"
         )
     if base_phases and any(p.ramp and p.result for p in node_phases):
         goals += [
@@ -592,7 +616,14 @@ def main() -> int:
         Phase("1 kHz + verify_fk 20 Hz", 1000, args.verify_duration, verify=True),
     ]
     node_phases += [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates]
-    base_phases = [] if args.no_baseline else [Phase("1 kHz", 1000, args.baseline_duration)]
+    base_phases = (
+        []
+        if args.no_baseline
+        else [
+            Phase("1 kHz", 1000, args.baseline_duration),
+            Phase("1 kHz with efforts and forces", 1000, args.baseline_duration, efforts=True),
+        ]
+    )
     base_phases += (
         [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates] if base_phases else []
     )

@@ -26,7 +26,10 @@ Roles
   ``foot_forces/<leg>`` and ``foot_contacts``, so that the node publishes them to a reader.
 - ``baseline``: the raw floor: same QoS and executor as the node; per JointState (subscribed raw)
   it reads the stamp from the bytes and publishes the node's eight outputs as pre-serialized
-  messages (the node's own writer, fixed values); no decoding, no rules, no FK.
+  messages (the node's own writer, fixed values); no decoding, no rules, no FK. After
+  ``{"op": "phase", "efforts": true}`` it also publishes what the node adds for efforts,
+  ``foot_forces/<leg>`` and ``foot_contacts`` (the node's CDR writers, fixed values), until a
+  phase command without efforts.
 - ``verifier``: calls ``verify_fk`` 20 times a second between ``{"op": "go"}`` and
   ``{"op": "stop"}``.
 """
@@ -299,11 +302,19 @@ def receiver(output: str, force_reader: bool = True) -> None:
 
 def baseline(executor_name: str) -> None:
     """The floor: raw JointState in, the stamp read from its bytes, eight pre-serialized messages
-    out (the node's own output writer), no decoding, no rules, no FK."""
+    out (the node's own output writer), and in a phase with efforts the five force messages;
+    no decoding, no rules, no FK."""
+    from a1_leg_fk.recording.bag_writer import (
+        contacts_bytes,
+        contacts_layout,
+        frame_bytes,
+        wrench_bytes,
+    )
     from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
     from a1_leg_fk.ros.serialized_output import SerializedStamped
 
-    rclpy.init()
+    _init()
+    control = Control()
     node = Node("bench_raw_floor")
     writer = SerializedStamped("trunk")
     publishers = [
@@ -313,14 +324,26 @@ def baseline(executor_name: str) -> None:
         node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
         for leg in shared.LEGS
     ]
+    force_publishers = [
+        node.create_publisher(WrenchStamped, f"foot_forces/{leg}", OUTPUT_QOS)
+        for leg in shared.LEGS
+    ]
+    contacts_publisher = node.create_publisher(JointState, "foot_contacts", OUTPUT_QOS)
+    head, layout = frame_bytes("trunk"), contacts_layout("trunk")
     stamp = struct.Struct("<iI").unpack_from
-    values = (0.1, 0.2, 0.3)
+    values, force = (0.1, 0.2, 0.3), (1.0, 2.0, 30.0)
+    probabilities, normal = (1.0, 0.0, 0.0, 1.0), (30.0, 0.0, 0.0, 30.0)
+    forces = [False]  # set per phase: the inputs carry efforts
 
     def on_joint_state(raw: bytes) -> None:
         sec, nanosec = stamp(raw, 4)
         serialized = writer.serialized
         for publisher in publishers:
             publisher.publish(serialized(sec, nanosec, values))
+        if forces[0]:
+            for publisher in force_publishers:
+                publisher.publish(wrench_bytes(head, sec, nanosec, force))
+            contacts_publisher.publish(contacts_bytes(layout, sec, nanosec, probabilities, normal))
 
     node.create_subscription(
         JointState, "joint_states", on_joint_state, JOINT_STATES_QOS, raw=True
@@ -328,8 +351,11 @@ def baseline(executor_name: str) -> None:
     executor = make_executor(executor_name)
     executor.add_node(node)
     try:
-        while rclpy.ok():
+        while rclpy.ok() and not control.stopping:
             executor.spin_once(timeout_sec=0.1)
+            command = control.poll()
+            if command is not None and command.get("op") == "phase":
+                forces[0] = bool(command.get("efforts"))
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     finally:

@@ -27,9 +27,9 @@ Near a singular Jacobian (the knee straight) the solve amplifies any effort erro
 there, and where the efforts or angles of a leg are missing or not finite, a leg gets no force
 (NaN), and the result says which and why.
 
-The math is built from the compiled legs (:mod:`a1_leg_fk.kinematics.compiled_leg`, the same
-generated straight-line code: the Jacobians of each segment's centre of mass and of the contact
-point), one leg at a time in :mod:`a1_leg_fk.kinematics.leg_statics`. It is the statics of the
+The math is generated from each compiled leg's stages (:mod:`a1_leg_fk.kinematics.compiled_leg`),
+one straight-line function per leg that computes g(q) and solves for F in the joints' own frames
+(:mod:`a1_leg_fk.kinematics.leg_statics`). It is the statics of the
 kinematic chain, so it sits in the kinematics beside the Jacobians, below
 :class:`~a1_leg_fk.kinematics.quadruped.Quadruped`, whose ``foot_forces`` is a thin method over
 it; the contact rule built on these forces is :mod:`a1_leg_fk.estimation`'s.

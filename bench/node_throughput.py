@@ -503,7 +503,7 @@ def print_report(
                 ),
             )
         )
-    if main_1k and forces_1k and base_1k and base_forces_1k:
+    if main_1k and forces_1k and base_1k and base_forces_1k and args.baseline_duration >= 5:
         delivery, total = (
             per_input_us(base_forces_1k) - per_input_us(base_1k),
             per_input_us(forces_1k) - per_input_us(main_1k),
@@ -513,7 +513,7 @@ def print_report(
             f"the {OUTPUTS_WITH_FORCES - OUTPUTS_PER_INPUT} more messages (the raw floor's "
             f"own difference, {per_input_us(base_forces_1k) / per_input_us(base_1k):.2f}x: the "
             f"least any node publishing them can cost), {total - delivery:.0f} us the rest"
-        )
+        )  # not from --quick's 2 s floor phases: too short to split a few tens of us
     if base_phases and any(p.ramp and p.result for p in node_phases):
         goals += [
             ("ramp: node/baseline >= 90 %", rate_ratio >= GOALS["ratio"], fmt(rate_ratio, ".2f")),

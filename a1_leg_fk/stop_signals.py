@@ -19,17 +19,13 @@ if TYPE_CHECKING:
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
-class StartupInterrupted(BaseException):
-    """Raised once by the handler of a :class:`StopSignals` while its ``interrupting`` is set: a
-    signal during an executable's imports, where nothing needs cleaning up, ends them at once.
-    """
-
-
 class StopSignals:
     """Turns SIGINT and SIGTERM into a flag (``stop.is_set()``) instead of an exception.
 
-    With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call or of the
-    cleanup; every loop that uses it waits in short slices and checks the flag. Entered inside
+    With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call, of the
+    cleanup or of an import (an exception raised at an arbitrary line can land in a library's
+    ``except:`` or finalizer, which prints it and goes on); every loop that uses it waits in short
+    slices and checks the flag. Entered inside
     another StopSignals (an executable's, installed before its imports), it shares that one's
     ``stop``: a signal that came before is not lost. Enter it in the main thread (Python's signal
     rule).
@@ -41,8 +37,6 @@ class StopSignals:
 
     def __init__(self) -> None:
         self.stop = threading.Event()
-        self.interrupting = False
-        """While true, the next signal also raises :class:`StartupInterrupted` (then false)."""
         self.signal_name = ""
         self._previous: dict[int, Callable[[int, FrameType | None], Any] | int | None] = {}
         self._blocked: set[int] = set()
@@ -68,6 +62,3 @@ class StopSignals:
     def _handle(self, number: int, _frame: object) -> None:
         self.signal_name = signal.Signals(number).name
         self.stop.set()
-        if self.interrupting:
-            self.interrupting = False
-            raise StartupInterrupted(self.signal_name)

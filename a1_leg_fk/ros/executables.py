@@ -2,37 +2,26 @@
 
 Standard library only at import time (``signal`` and ``threading``). Each script enters
 :class:`StopSignals` first and only then imports its node's module (rclpy, numpy, PyBullet: about
-0.3 s). A Ctrl-C/SIGTERM during those imports ends them at once with exit 0 (nothing is started
-yet); one after them sets the flag :func:`a1_leg_fk.ros.glue.run_node` shares, which stops the
-node with exit 0. What comes before the script's first line is the interpreter's own start-up
-(see :class:`StopSignals` for a parent that blocks the signals over it).
+0.3 s). A Ctrl-C/SIGTERM from then on sets the flag :func:`a1_leg_fk.ros.glue.run_node` shares:
+one during the imports lets them finish and ends with exit 0 before anything is started (no
+exception is raised into the imports: library code would catch and print it), one after them
+stops the node with exit 0. What comes before the script's first line is the interpreter's own
+start-up (see :class:`StopSignals` for a parent that blocks the signals over it).
 """
 
 from __future__ import annotations
 
-from a1_leg_fk.stop_signals import StartupInterrupted, StopSignals
+from a1_leg_fk.stop_signals import StopSignals
 
 
 def _run(module: str) -> int:
-    """Import ``module`` under a :class:`StopSignals` and run its ``main()``; 0 if stopped while
-    importing.
+    """Import ``module`` under a :class:`StopSignals` and run its ``main()``; 0 without running
+    it if stopped while importing.
     """
     with StopSignals() as signals:  # a signal pending since the exec arrives here: the flag
-        try:
-            signals.interrupting = True
-            if signals.stop.is_set():
-                return 0
-            main = __import__(module, fromlist=["main"]).main
-            signals.interrupting = False
-        except StartupInterrupted:
+        main = __import__(module, fromlist=["main"]).main
+        if signals.stop.is_set():
             return 0
-        except BaseException:
-            # A C extension importing a module when the signal came turns the exception into
-            # its own ImportError (numpy: "PyCapsule_Import could not import module ..."). The
-            # stop was asked for: no traceback.
-            if signals.stop.is_set():
-                return 0
-            raise
         return int(main())
 
 

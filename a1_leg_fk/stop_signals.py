@@ -25,10 +25,9 @@ class StopSignals:
     With rclpy's own signal handlers off, nothing is raised in the middle of a DDS call, of the
     cleanup or of an import (an exception raised at an arbitrary line can land in a library's
     ``except:`` or finalizer, which prints it and goes on); every loop that uses it waits in short
-    slices and checks the flag. Entered inside
-    another StopSignals (an executable's, installed before its imports), it shares that one's
-    ``stop``: a signal that came before is not lost. Enter it in the main thread (Python's signal
-    rule).
+    slices and checks the flag. Entered inside another StopSignals (an executable's, installed
+    before its imports), it shares that one's ``stop``: a signal that came before is not lost.
+    Enter it in the main thread (Python's signal rule).
 
     Entering also unblocks both signals (restored on exit): a parent that starts the process with
     them blocked (``env --block-signal=INT,TERM ...``) covers the interpreter's own start-up,

@@ -15,14 +15,12 @@ from a1_leg_fk.stop_signals import StopSignals
 
 
 def _run(module: str) -> int:
-    """Import ``module`` under a :class:`StopSignals` and run its ``main()``; 0 without running
-    it if stopped while importing.
+    """Import ``module`` under a :class:`StopSignals` and run its ``main()``, whose
+    :func:`~a1_leg_fk.ros.glue.run_node` returns 0 before starting anything if a signal came
+    meanwhile.
     """
-    with StopSignals() as signals:  # a signal pending since the exec arrives here: the flag
-        main = __import__(module, fromlist=["main"]).main
-        if signals.stop.is_set():
-            return 0
-        return int(main())
+    with StopSignals():  # a signal pending since the exec arrives here: the flag
+        return int(__import__(module, fromlist=["main"]).main())
 
 
 def foot_fk_node() -> int:

@@ -79,7 +79,7 @@ def run_node(
     :data:`SPIN_SLICE_S` apart).
     """
     with StopSignals() as signals:
-        if signals.stop.is_set():  # during the imports, where no handler of ours raised
+        if signals.stop.is_set():  # a signal during the imports
             return 0
         try:
             rclpy.init(

@@ -364,7 +364,7 @@ def per_input_us(result: dict) -> float:
 
 def per_message(result: dict, messages: int) -> float:
     """The node's CPU [us] per output message of a phase."""
-    return 1e4 * result["cpu_under_test"] / result["rate_hz"] / messages
+    return per_input_us(result) / messages
 
 
 def print_report(
@@ -392,7 +392,7 @@ def print_report(
             f"{label:<30} {r['rate_hz']:>7.0f} {r['out_hz']:>7.0f} {r['input_loss']:>8.2%} "
             f"{r['foot_loss']:>9.2%} {r['p50']:>7.2f} {r['p95']:>7.2f} {r['p99']:>7.2f} "
             f"{r['max']:>7.1f} {r['cpu_under_test']:>6.1f} "
-            f"{1e4 * r['cpu_under_test'] / r['rate_hz']:>6.0f} {r['cpu_receiver']:>7.1f} "
+            f"{per_input_us(r):>6.0f} {r['cpu_receiver']:>7.1f} "
             f"{r['cpu_others']:>7.0f} {ratio:>6}"
         )
 

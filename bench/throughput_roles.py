@@ -356,8 +356,6 @@ def baseline(executor_name: str) -> None:
             command = control.poll()
             if command is not None and command.get("op") == "phase":
                 forces[0] = bool(command.get("efforts"))
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

@@ -17,6 +17,7 @@ from synthetic_urdf import SYNTHETIC_JOINTS, SYNTHETIC_URDF
 
 from a1_leg_fk.kinematics.foot_forces import MIN_JACOBIAN_CONDITION, FootForces
 from a1_leg_fk.kinematics.quadruped import Quadruped
+from a1_leg_fk.model.legs import LEG_NAMES
 
 # The base's inertial frame on the URDF root frame, so that PyBullet's fixed base (placed by its
 # centre of mass) puts the root frame at the world's origin, unrotated: world = base frame.
@@ -63,21 +64,24 @@ def pybullet_gravity_torques(robot, angles: np.ndarray, gravity) -> np.ndarray:
     )
 
 
-def pybullet_contact_jacobian(robot, angles: np.ndarray, leg: int, offset_world) -> np.ndarray:
-    """(3, 3): d(contact point)/d(the leg's angles), the point ``offset_world`` [m] from the
-    foot link's origin, carried by the foot."""
+def pybullet_contact_jacobians(robot, angles: np.ndarray, offset_world) -> list[np.ndarray]:
+    """Per leg, (3, 3): d(contact point)/d(the leg's angles), the point ``offset_world`` [m]
+    from the foot link's origin, carried by the foot."""
     client, body, movable, feet = robot
     for index, angle in zip(movable, angles, strict=True):
         pybullet.resetJointState(body, index, float(angle), physicsClientId=client)
-    foot = feet[f"{('FR', 'FL', 'RR', 'RL')[leg]}_foot"]
-    orientation = pybullet.getLinkState(body, foot, physicsClientId=client)[5]
-    rotation = np.array(pybullet.getMatrixFromQuaternion(orientation)).reshape(3, 3)
-    local = rotation.T @ np.asarray(offset_world)  # the foot's inertial frame is its link frame
     zeros = [0.0] * 12
-    linear, _ = pybullet.calculateJacobian(
-        body, foot, local.tolist(), angles.tolist(), zeros, zeros, physicsClientId=client
-    )
-    return np.array(linear)[:, 3 * leg : 3 * leg + 3]
+    jacobians = []
+    for leg, name in enumerate(LEG_NAMES):
+        foot = feet[f"{name}_foot"]
+        orientation = pybullet.getLinkState(body, foot, physicsClientId=client)[5]
+        rotation = np.array(pybullet.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+        local = rotation.T @ np.asarray(offset_world)  # its inertial frame is its link frame
+        linear, _ = pybullet.calculateJacobian(
+            body, foot, local.tolist(), angles.tolist(), zeros, zeros, physicsClientId=client
+        )
+        jacobians.append(np.array(linear)[:, 3 * leg : 3 * leg + 3])
+    return jacobians
 
 
 def test_gravity_torques_match_pybullet_on_a_tilted_robot(robot) -> None:
@@ -101,8 +105,8 @@ def test_forces_invert_pybullets_statics_on_a_tilted_robot(robot, radius: float)
             truth = rng.uniform(-20.0, 20.0, (4, 3)) + np.array([0.0, 0.0, 40.0])  # [N], base
             efforts = pybullet_gravity_torques(robot, angles, gravity)
             conditions = []
-            for leg in range(4):
-                jacobian = pybullet_contact_jacobian(robot, angles, leg, radius * down)
+            jacobians = pybullet_contact_jacobians(robot, angles, radius * down)
+            for leg, jacobian in enumerate(jacobians):
                 efforts[3 * leg : 3 * leg + 3] -= jacobian.T @ truth[leg]
                 conditions.append(
                     abs(np.linalg.det(jacobian)) / np.prod(np.linalg.norm(jacobian, axis=0))

@@ -70,10 +70,15 @@ class Joint:
 
 @dataclass(frozen=True)
 class Inertial:
-    """A link's mass [kg] and centre of mass [m, in the link frame] (its ``<inertial>``)."""
+    """A link's ``<inertial>``: mass [kg], centre of mass [m, in the link frame], the inertial
+    frame's orientation ``rpy`` [rad] in the link frame, and the inertia tensor [kg m^2] about the
+    centre of mass in that frame, ``(ixx, ixy, ixz, iyy, iyz, izz)`` (zeros without ``<inertia>``).
+    """
 
     mass: float
     center: Vector3
+    rpy: Vector3 = (0.0, 0.0, 0.0)
+    inertia: tuple[float, float, float, float, float, float] = (0.0,) * 6
 
 
 @dataclass(frozen=True)
@@ -245,8 +250,8 @@ def _parse_joint(element: ElementTree.Element, source: str) -> Joint:
 
 
 def _parse_inertial(element: ElementTree.Element, where: str) -> Inertial:
-    """Mass [kg] (0 without ``<mass>``: FK never needed it) and centre of mass [m] of an
-    ``<inertial>``.
+    """Mass [kg] (0 without ``<mass>``: FK never needed it), centre of mass [m], orientation and
+    inertia tensor [kg m^2] of an ``<inertial>``.
     """
     mass_element = element.find("mass")
     text = "0" if mass_element is None else mass_element.get("value", "0")
@@ -256,7 +261,30 @@ def _parse_inertial(element: ElementTree.Element, where: str) -> Inertial:
         raise LegFkError(f"{where}: <mass value='{text}'> is not a number") from error
     if not (math.isfinite(mass) and mass >= 0.0):
         raise LegFkError(f"{where}: <mass value='{text}'> is not a finite mass >= 0")
-    return Inertial(mass, _vector(element.find("origin"), "xyz", (0.0, 0.0, 0.0), where))
+    origin = element.find("origin")
+    return Inertial(
+        mass,
+        _vector(origin, "xyz", (0.0, 0.0, 0.0), where),
+        _vector(origin, "rpy", (0.0, 0.0, 0.0), where),
+        _inertia(element.find("inertia"), where),
+    )
+
+
+def _inertia(
+    element: ElementTree.Element | None, where: str
+) -> tuple[float, float, float, float, float, float]:
+    """``(ixx, ixy, ixz, iyy, iyz, izz)`` [kg m^2] of an ``<inertia>`` (missing: zeros)."""
+    values = []
+    for name in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+        text = "0" if element is None else element.get(name, "0")
+        try:
+            values.append(float(text))
+        except ValueError as error:
+            raise LegFkError(f"{where}: <inertia {name}='{text}'> is not a number") from error
+    if not all(math.isfinite(value) for value in values):
+        raise LegFkError(f"{where}: <inertia> has a value that is not finite")
+    ixx, ixy, ixz, iyy, iyz, izz = values
+    return ixx, ixy, ixz, iyy, iyz, izz
 
 
 def _collision_spheres(link: ElementTree.Element, where: str) -> tuple[Sphere, ...]:

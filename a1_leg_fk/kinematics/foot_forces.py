@@ -133,7 +133,7 @@ class FootForces:
         """
         q = _row(angles, "joint angles")[0].tolist()
         tau = _row(efforts, "joint efforts")[0].tolist()
-        gravity = _gravity(gravity_base, 1)[0].tolist()
+        gravity = gravity_rows(gravity_base, 1)[0].tolist()
         out, missing, singular = self.estimate_floats(q, tau, gravity)
         return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
 
@@ -175,11 +175,11 @@ class FootForces:
         (N, 3) [m/s^2] in the base frame (default :data:`LEVEL_GRAVITY`). Non-finite values
         make their leg :attr:`ForceEstimate.missing`, never an error.
         """
-        q = _batch(angles, "angles")
-        tau = _batch(efforts, "efforts")
+        q = batch_array(angles, "angles")
+        tau = batch_array(efforts, "efforts")
         if tau.shape != q.shape:
             raise LegFkError(f"efforts have shape {tau.shape}, angles {q.shape}")
-        gravity = _gravity(gravity_base, q.shape[0])
+        gravity = gravity_rows(gravity_base, q.shape[0])
         rows = q.shape[0]
         forces = np.full((rows, LEGS, 3), math.nan)
         singular = np.zeros((rows, LEGS), dtype=bool)
@@ -206,10 +206,10 @@ class FootForces:
         """(N, 12) g(q) [N m]: the efforts that hold the legs still in the air, for (N, 12)
         angles [rad] and gravity (3,) or (N, 3) [m/s^2] in the base frame.
         """
-        q = _batch(angles, "angles")
+        q = batch_array(angles, "angles")
         if not np.isfinite(q).all():
             raise LegFkError("angles: NaN or infinite values")
-        gravity = _gravity(gravity_base, q.shape[0])
+        gravity = gravity_rows(gravity_base, q.shape[0])
         cos, sin = np.cos(q), np.sin(q)
         out = np.empty_like(q)
         for slot, statics in enumerate(self._legs):
@@ -251,7 +251,8 @@ def _row(values: ArrayLike, what: str) -> np.ndarray:
     return row[np.newaxis]
 
 
-def _batch(values: ArrayLike, what: str) -> np.ndarray:
+def batch_array(values: ArrayLike, what: str) -> np.ndarray:
+    """(N, 12) float64 of ``values``; :class:`LegFkError` naming ``what`` otherwise."""
     try:
         array = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -261,7 +262,7 @@ def _batch(values: ArrayLike, what: str) -> np.ndarray:
     return array
 
 
-def _gravity(gravity_base: ArrayLike | None, rows: int) -> np.ndarray:
+def gravity_rows(gravity_base: ArrayLike | None, rows: int) -> np.ndarray:
     """(rows, 3) gravity [m/s^2] from None (level), a (3,) vector or a (rows, 3) array."""
     gravity = np.asarray(LEVEL_GRAVITY if gravity_base is None else gravity_base, dtype=float)
     if gravity.shape == (3,):

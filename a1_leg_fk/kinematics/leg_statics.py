@@ -18,7 +18,6 @@ replaced (9.3 against 21.9 us for four legs), 1.4x on arrays.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -37,14 +36,15 @@ from a1_leg_fk.kinematics.fk_codegen import (
     term_tuple,
     weighted_sum,
 )
+from a1_leg_fk.kinematics.leg_segments import leg_segments
 from a1_leg_fk.kinematics.leg_stages import Stage, rpy_matrix
+from a1_leg_fk.kinematics.traced_code import function_source
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, foot_sphere
 from a1_leg_fk.model.urdf import RobotModel
 
 Vector = tuple[Term, Term, Term]
 TRIG = "c0, s0, c1, s1, c2, s2"
 """The generated functions' first arguments: the cosines and sines of the leg's three angles."""
-_NAME = re.compile(r"[A-Za-z_]\w*")
 
 
 class LegStatics:
@@ -55,7 +55,10 @@ class LegStatics:
     -> (det J * Fx, det J * Fy, det J * Fz, det J, |j0| |j1| |j2|)``: the force [N] the ground
     exerts on the foot (base frame) times the determinant of the contact point's Jacobian, for
     efforts ``e`` [N m], with what :class:`~a1_leg_fk.kinematics.foot_forces.FootForces` needs to
-    gate a near-singular Jacobian. Both take floats or (K,) arrays.
+    gate a near-singular Jacobian. ``solve_torques(c0, s0, c1, s1, c2, s2, t0, t1, t2, gx, gy,
+    gz)``: the same for ``J^T F = t``, an external joint torque ``t`` [N m] (the momentum
+    observer's), gravity giving only the contact point's side of the sphere. All take floats or
+    (K,) arrays.
     """
 
     def __init__(self, model: RobotModel, leg: CompiledLeg, radius_m: float | None) -> None:
@@ -65,17 +68,14 @@ class LegStatics:
         sphere = foot_sphere(model, leg.chain.foot_link) if radius_m is None else None
         self.radius_m = sphere.radius if sphere is not None else radius_m or 0.0
         center = _foot_point(leg, np.array(sphere.center) if sphere is not None else np.zeros(3))
-        movable = leg.chain.movable
-        segments = [
-            _segment(model, joint.child, movable[k + 1].name if k + 1 < len(movable) else None)
-            for k, joint in enumerate(movable)
-        ]
+        segments = [(part.mass, part.moment) for part in leg_segments(model, leg)]
         self.masses = [mass for mass, _ in segments]
         """Each segment's mass [kg], root side first."""
         self.source = statics_source(leg.stages, segments, center, self.radius_m)
         namespace = compile_source(self.source, f"statics of {leg.chain.leg}", self)
         self.gravity_torques: Callable[..., tuple[Any, Any, Any]] = namespace["gravity_torques"]
         self.solve: Callable[..., tuple[Any, ...]] = namespace["solve"]
+        self.solve_torques: Callable[..., tuple[Any, ...]] = namespace["solve_torques"]
 
 
 def statics_source(
@@ -150,44 +150,48 @@ def statics_source(
     bc, ca, ab = (_assign(code, _cross(u, v)) for u, v in ((b, c), (c, a), (a, b)))
     residuals = _assign(code, [weighted_sum([("", g), ("", f"-e{k}")]) for k, g in
                                enumerate(torques)])  # fmt: skip
-    local_force = _assign(
-        code,
-        [
-            weighted_sum([("", product(r, column[axis])) for r, column in
-                          zip(residuals, (bc, ca, ab), strict=True)])
-            for axis in range(3)
-        ],
-    )  # fmt: skip
-    force = _assign(
-        code,
-        [rotated_row(stages[0].rodrigues_terms, axis, local_force, *trig[0]) for axis in range(3)],
-    )
+    force = _solved(code, stages, (bc, ca, ab), residuals)
+    external = _solved(code, stages, (bc, ca, ab), ("t0", "t1", "t2"))
     det = weighted_sum([("", product(a[axis], bc[axis])) for axis in range(3)])
     lengths = [weighted_sum([("", product(v, v)) for v in column]) for column in columns]
     size = f"({lengths[0]} * {lengths[1]} * {lengths[2]}) ** 0.5"
     return "\n".join(
         [
-            _function(f"gravity_torques({TRIG}, gx, gy, gz)", gravity_lines, term_tuple(torques)),
-            _function(
+            function_source(
+                f"gravity_torques({TRIG}, gx, gy, gz)", gravity_lines, term_tuple(torques)
+            ),
+            function_source(
                 f"solve({TRIG}, e0, e1, e2, gx, gy, gz)",
                 code.lines,
                 f"{term_tuple(force)}, {det}, {size}",
+            ),
+            function_source(
+                f"solve_torques({TRIG}, t0, t1, t2, gx, gy, gz)",
+                code.lines,
+                f"{term_tuple(external)}, {det}, {size}",
             ),
         ]
     )
 
 
-def _function(signature: str, lines: Sequence[str], returned: str) -> str:
-    """``def signature`` of the assignments that ``returned`` needs, returning it."""
-    needed = set(_NAME.findall(returned))
-    kept = []
-    for line in reversed(lines):
-        name, _, expression = line.partition(" = ")
-        if name in needed:
-            kept.append(line)
-            needed |= set(_NAME.findall(expression))
-    body = "\n    ".join(reversed(kept)) if kept else "pass"
-    return f"def {signature}:\n    {body}\n    return ({returned})\n"
+def _solved(
+    code: Code, stages: Sequence[Stage], adjugate: Sequence[Vector], torques: Sequence[Term]
+) -> Vector:
+    """``det J`` times the force [N, base frame] with ``J^T F = torques``: Cramer's rule on the
+    Jacobian's columns' cross products ``adjugate`` (hip joint's child frame), turned to the base.
+    """
+    local = _assign(
+        code,
+        [
+            weighted_sum([("", product(t, column[axis])) for t, column in
+                          zip(torques, adjugate, strict=True)])
+            for axis in range(3)
+        ],
+    )  # fmt: skip
+    return _assign(
+        code,
+        [rotated_row(stages[0].rodrigues_terms, axis, local, "c0", "s0") for axis in range(3)],
+    )
 
 
 def _assign(code: Code, expressions: Sequence[Term]) -> Vector:
@@ -229,27 +233,3 @@ def _foot_point(leg: CompiledLeg, point: np.ndarray) -> np.ndarray:
         rotation = rotation @ rpy_matrix(joint.origin_rpy)
     result: np.ndarray = offset + rotation @ point
     return result
-
-
-def _segment(model: RobotModel, link: str, stop_joint: str | None) -> tuple[float, np.ndarray]:
-    """Mass [kg] and first moment [kg m] (in ``link``'s frame) of ``link`` and everything below
-    it, except below the joint named ``stop_joint``; other joints at their zero angle.
-    """
-    mass, moment = 0.0, np.zeros(3)
-    pending = [(link, np.eye(3), np.zeros(3))]
-    while pending:
-        name, rotation, origin = pending.pop()
-        inertial = model.inertials.get(name)
-        if inertial is not None:
-            mass += inertial.mass
-            moment += inertial.mass * (origin + rotation @ np.array(inertial.center))
-        pending.extend(
-            (
-                joint.child,
-                rotation @ rpy_matrix(joint.origin_rpy),
-                origin + rotation @ np.array(joint.origin_xyz),
-            )
-            for joint in model.joints.values()
-            if joint.parent == name and joint.name != stop_joint
-        )
-    return mass, moment

@@ -83,7 +83,8 @@ def test_momentum_and_coriolis_match_pybullet(robot) -> None:
         q, dq = angles[slots], rates[slots]  # PyBullet's order
 
         def mass_matrix(at: np.ndarray) -> np.ndarray:
-            return np.array(pybullet.calculateMassMatrix(body, at.tolist(), physicsClientId=client))
+            matrix = pybullet.calculateMassMatrix(body, at.tolist(), physicsClientId=client)
+            return np.array(matrix)
 
         momentum = mass_matrix(q) @ dq
         step = 1e-6

@@ -1,0 +1,141 @@
+"""The momentum observer judged by PyBullet: an A1 thrown spinning into the air, its legs swinging
+fast under torque control, touches nothing, so every foot force must be zero; the quasi-static
+estimate reads the legs' swing as tens of newtons, and the observer without the IMU's gyro and
+accelerometer (an inertial base) reads the fall as load. At rest, the observer is the statics.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pybullet
+import pybullet_data
+import pytest
+
+from a1_leg_fk.estimation.momentum_observer import MomentumObserver
+from a1_leg_fk.kinematics.foot_forces import FootForces
+from a1_leg_fk.kinematics.quadruped import Quadruped
+
+A1 = Quadruped.from_urdf()
+STEP_S = 1.0 / 500.0
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def targets(t: float) -> list[float]:
+    """Joint targets [rad]: every joint swinging at 2-3 Hz, inside its limits."""
+    out = []
+    for leg in range(4):
+        out += [
+            0.3 * math.sin(4 * math.pi * t + leg),
+            0.8 + 0.6 * math.sin(6 * math.pi * t + leg),
+            -1.6 + 0.5 * math.sin(5 * math.pi * t + 2 * leg),
+        ]
+    return out
+
+
+def thrown(seconds: float) -> dict[str, np.ndarray]:
+    """The A1 in the air from 3 m, spinning, its joints driven by PD torques: per step the joint
+    angles, rates and torques, the root's gyro and specific force (root frame) and gravity in the
+    root frame.
+    """
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        pb = {"physicsClientId": client}
+        pybullet.setGravity(*GRAVITY, **pb)
+        pybullet.setTimeStep(STEP_S, **pb)
+        body = pybullet.loadURDF(
+            str(Path(pybullet_data.getDataPath()) / "a1" / "a1.urdf"),
+            [0, 0, 3],
+            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+            **pb,
+        )
+        count = pybullet.getNumJoints(body, **pb)
+        index = {pybullet.getJointInfo(body, j, **pb)[1].decode(): j for j in range(count)}
+        joints = [index[name] for name in A1.joint_names]
+        for link in range(-1, count):
+            pybullet.changeDynamics(body, link, linearDamping=0, angularDamping=0, **pb)
+        for joint in range(count):
+            pybullet.setJointMotorControl2(body, joint, pybullet.VELOCITY_CONTROL, force=0, **pb)
+        pybullet.resetBaseVelocity(body, [0.3, 0, 0], [1.5, -2.0, 2.5], **pb)
+        com_in_root = pybullet.getDynamicsInfo(body, -1, **pb)[3:5]
+        to_root = pybullet.invertTransform(*com_in_root)
+        rows: dict[str, list] = {k: [] for k in ("q", "dq", "tau", "gyro", "force", "gravity")}
+        previous = None
+        for step in range(round(seconds / STEP_S)):
+            states = pybullet.getJointStates(body, joints, **pb)
+            tau = [
+                float(np.clip(40.0 * (goal - s[0]) - 1.0 * s[1], -33.5, 33.5))
+                for goal, s in zip(targets(step * STEP_S), states, strict=True)
+            ]
+            pybullet.setJointMotorControlArray(
+                body, joints, pybullet.TORQUE_CONTROL, forces=tau, **pb
+            )
+            pybullet.stepSimulation(**pb)
+            states = pybullet.getJointStates(body, joints, **pb)
+            com, orientation = pybullet.getBasePositionAndOrientation(body, **pb)
+            root, root_orientation = pybullet.multiplyTransforms(com, orientation, *to_root)
+            linear, angular = pybullet.getBaseVelocity(body, **pb)
+            rotation = np.array(pybullet.getMatrixFromQuaternion(root_orientation)).reshape(3, 3)
+            velocity = np.array(linear) + np.cross(angular, np.subtract(root, com))
+            acceleration = np.zeros(3) if previous is None else (velocity - previous) / STEP_S
+            previous = velocity
+            rows["q"].append([s[0] for s in states])
+            rows["dq"].append([s[1] for s in states])
+            rows["tau"].append(tau)
+            rows["gyro"].append(rotation.T @ np.array(angular))
+            rows["force"].append(rotation.T @ (acceleration - GRAVITY))
+            rows["gravity"].append(rotation.T @ GRAVITY)
+        assert not pybullet.getContactPoints(bodyA=body, **pb)
+    finally:
+        pybullet.disconnect(client)
+    return {key: np.array(value) for key, value in rows.items()}
+
+
+@pytest.fixture(scope="module")
+def flight() -> dict[str, np.ndarray]:
+    return thrown(1.5)
+
+
+def forces(flight: dict[str, np.ndarray], imu: bool) -> np.ndarray:
+    """(N, 4, 3) the observer's forces [N], the first 0.1 s (its start) left out."""
+    stamps = STEP_S * np.arange(1, len(flight["q"]) + 1)
+    estimate = MomentumObserver(A1).step_batch(
+        stamps,
+        (flight["q"], flight["dq"], flight["tau"]),
+        flight["gravity"],
+        flight["force"] if imu else None,
+        flight["gyro"] if imu else None,
+    )
+    assert not estimate.missing.any()
+    return estimate.forces[50:]
+
+
+def test_a_leg_in_the_air_feels_no_force(flight: dict[str, np.ndarray]) -> None:
+    observed = np.linalg.norm(forces(flight, imu=True), axis=2)
+    assert np.sqrt(np.nanmean(observed**2)) < 0.5  # [N]: PyBullet's integration step
+    assert np.nanpercentile(observed, 99) < 2.0
+    static = FootForces(A1).estimate_batch(flight["q"], flight["tau"], flight["gravity"])
+    quasi = np.linalg.norm(static.forces[50:], axis=2)
+    assert np.nanpercentile(quasi, 95) > 20.0  # the swing read as load
+    assert np.abs(flight["gyro"]).max() > 1.0  # it spins
+
+
+def test_without_the_imu_the_fall_reads_as_load(flight: dict[str, np.ndarray]) -> None:
+    inertial = np.linalg.norm(forces(flight, imu=False), axis=2)
+    assert np.nanmedian(inertial) > 3.0  # [N]: the legs' weight, which free fall cancels
+
+
+def test_at_rest_the_observer_is_the_statics() -> None:
+    rng = np.random.default_rng(2)
+    angles = np.tile([0.05, 0.8, -1.5], 4) + rng.uniform(-0.2, 0.2, 12)
+    efforts = rng.uniform(-10.0, 10.0, 12)
+    gravity = [0.8, -0.5, -9.7]
+    observer = MomentumObserver(A1)
+    for step in range(5):
+        dynamic, _, _ = observer.step_floats(
+            0.002 * step, (angles.tolist(), [0.0] * 12, efforts.tolist()), gravity
+        )
+    static = FootForces(A1).estimate(angles, efforts, gravity).forces
+    assert np.abs(np.array(dynamic) - static).max() < 1e-9

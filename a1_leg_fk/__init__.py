@@ -21,6 +21,8 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
+    from a1_leg_fk.estimation.momentum_observer import MomentumObserver
     from a1_leg_fk.gait.analysis import GaitReport, analyze_gait
     from a1_leg_fk.kinematics.quadruped import Quadruped
     from a1_leg_fk.kinematics.robot_config import RobotConfig, load_robot
@@ -40,14 +42,20 @@ _HOMES = {
     "read_foot_trajectories": "a1_leg_fk.recording.trajectories",
     "GaitReport": "a1_leg_fk.gait.analysis",
     "analyze_gait": "a1_leg_fk.gait.analysis",
+    "MomentumObserver": "a1_leg_fk.estimation.momentum_observer",
+    "ContactEstimator": "a1_leg_fk.estimation.contact_estimator",
+    "ImuSample": "a1_leg_fk.estimation.contact_estimator",
 }
 """Each public name and the module that defines it."""
 
 __all__ = [
     "LEG_NAMES",
+    "ContactEstimator",
     "FootTrajectories",
     "GaitReport",
+    "ImuSample",
     "LegFkError",
+    "MomentumObserver",
     "Quadruped",
     "RobotConfig",
     "RobotModel",

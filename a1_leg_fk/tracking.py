@@ -48,6 +48,16 @@ class Foot(NamedTuple):
     velocity: tuple[float, float, float] | None
 
 
+def leg_feet(feet: Sequence[Foot]) -> list[tuple[Sequence[float], Sequence[float]] | None]:
+    """Per leg slot, its foot's position [m] and velocity [m/s] (NaN when the message had no
+    rates for it), or None when the message gave no foot for that leg.
+    """
+    out: list[tuple[Sequence[float], Sequence[float]] | None] = [None] * LEG_COUNT
+    for foot in feet:
+        out[foot.leg_slot] = (foot.position, foot.velocity or (math.nan,) * 3)
+    return out
+
+
 @dataclass(frozen=True)
 class BlockResult:
     """What K messages did (see :meth:`FootTracker.update_block`): ``accepted`` (K,) bool;

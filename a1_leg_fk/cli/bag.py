@@ -20,6 +20,13 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     non_negative,
 )
+from a1_leg_fk.estimation.contact_estimator import (
+    CONTACT_RULES,
+    DYNAMIC,
+    FILTER,
+    FORCE_MODELS,
+    THRESHOLD,
+)
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.trajectories import (
     DEFAULT_MAX_POSE_GAP_S,
@@ -49,20 +56,36 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--imu",
         metavar="TOPIC",
-        help="sensor_msgs/msg/Imu aligned with the base: gravity's direction for the foot forces "
-        "(nearest sample in time; default: the base is level)",
+        help="sensor_msgs/msg/Imu aligned with the base, at its origin: gravity's direction from "
+        "its orientation (default: the base is level), the base's motion from its gyro and "
+        "accelerometer, for the foot forces and contacts (nearest sample in time)",
+    )
+    parser.add_argument(
+        "--force-model",
+        choices=FORCE_MODELS,
+        default=DYNAMIC,
+        help="foot forces from the legs' dynamics (momentum observer; default) or quasi-static",
+    )
+    parser.add_argument(
+        "--contact-rule",
+        choices=CONTACT_RULES,
+        default=FILTER,
+        help="contacts from the fused filter (force, foot heights and speeds; default) or the "
+        "normal force between --touchdown-force and --liftoff-force",
     )
     parser.add_argument(
         "--touchdown-force",
         type=non_negative,
         metavar="N",
-        help="a foot touches down at this normal force [N] (default: 8 %% of the robot's weight)",
+        help="--contact-rule threshold: a foot touches down at this normal force [N] (default: 8 "
+        "%% of the robot's weight)",
     )
     parser.add_argument(
         "--liftoff-force",
         type=non_negative,
         metavar="N",
-        help="a foot lifts off below this normal force [N] (default: 4 %% of the weight)",
+        help="--contact-rule threshold: a foot lifts off below this normal force [N] (default: 4 "
+        "%% of the weight)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -98,9 +121,12 @@ def add_input_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def recording_options(options: argparse.Namespace, forces: bool = False) -> RecordingChoices:
+def recording_options(
+    options: argparse.Namespace, forces: bool = False, contacts: bool = False
+) -> RecordingChoices:
     """The keyword arguments of :func:`~a1_leg_fk.recording.trajectories.open_recording` from
-    parsed options; ``forces``: foot forces and contacts from the efforts too.
+    parsed options; ``forces``: foot forces and contacts from the efforts too; ``contacts``:
+    contacts with or without efforts.
     """
     return {
         "topic": options.topic,
@@ -110,8 +136,11 @@ def recording_options(options: argparse.Namespace, forces: bool = False) -> Reco
         "base_pose": options.base_pose,
         "max_pose_gap_s": options.max_pose_gap,
         "forces": forces,
+        "estimate_contacts": contacts,
         "imu": options.imu,
         "contact_thresholds": (options.touchdown_force, options.liftoff_force),
+        "force_model": options.force_model,
+        "contact_rule": options.contact_rule,
     }
 
 
@@ -132,18 +161,22 @@ def trajectories_from_options(
 
 
 def check_force_options(options: argparse.Namespace, forces: bool, needs: str) -> None:
-    """:class:`LegFkError` for force options given without force estimation (``needs``: the
-    option that turns it on).
+    """:class:`LegFkError` for force and contact options given without force or contact
+    estimation (``needs``: the options that turn it on), or threshold forces without the
+    threshold rule.
     """
-    if forces:
-        return
-    for option, value in (
-        ("--imu", options.imu),
-        ("--touchdown-force", options.touchdown_force),
-        ("--liftoff-force", options.liftoff_force),
-    ):
-        if value is not None:
+    chosen = [
+        ("--imu", options.imu is not None),
+        ("--force-model", options.force_model != DYNAMIC),
+        ("--contact-rule", options.contact_rule != FILTER),
+        ("--touchdown-force", options.touchdown_force is not None),
+        ("--liftoff-force", options.liftoff_force is not None),
+    ]
+    for option, given in chosen:
+        if given and not forces:
             raise LegFkError(f"{option} needs {needs}")
+        if given and option.endswith("-force") and options.contact_rule != THRESHOLD:
+            raise LegFkError(f"{option} needs --contact-rule threshold")
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -162,6 +195,13 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="FILE",
         help="one row per accepted JointState: stamps, feet [m], velocities [m/s], world feet [m] "
         "(and with --forces, foot forces [N] and contact probabilities)",
+    )
+    bag.add_argument(
+        "--contacts",
+        action="store_true",
+        help="contact probabilities, with the joint efforts' forces as evidence when the "
+        "JointStates carry them and from the feet's heights and speeds alone when not: CSV "
+        "columns FR_contact .. RL_contact, /foot_contacts in --output-bag",
     )
     bag.add_argument(
         "--forces",
@@ -206,7 +246,8 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             )
         if options.copy_input and not options.output_bag:
             raise LegFkError("--copy-input needs --output-bag")
-        check_force_options(options, options.forces, "--forces")
+        estimated = options.forces or options.contacts
+        check_force_options(options, estimated, "--forces or --contacts")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         outputs = Outputs.checked(
@@ -222,7 +263,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             Path(options.input),
             outputs,
             progress=show_progress(options),
-            **recording_options(options, options.forces),
+            **recording_options(options, options.forces, options.contacts),
         )
     except (LegFkError, OSError) as error:  # OSError: an output folder not writable, a full disk
         print(f"a1-leg-fk bag: {error}", file=sys.stderr)

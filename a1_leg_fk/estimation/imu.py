@@ -35,6 +35,23 @@ def has_orientation(covariance_0: float, quaternion: Sequence[float]) -> bool:
     return covariance_0 != NO_ORIENTATION and math.isfinite(norm2) and norm2 > 0.25
 
 
+def measured_vector(
+    vector: Sequence[float], covariance_0: float, zero_is_none: bool = False
+) -> tuple[float, float, float] | None:
+    """An Imu message's angular velocity [rad/s] or linear acceleration [m/s^2] if it was
+    measured: not when its ``covariance[0]`` is -1 (the message's "not measured"), when it is
+    not finite, or (``zero_is_none``, for the accelerometer, which always feels gravity unless
+    falling freely) when it is exactly zero, as drivers without one fill it. The one rule of the
+    node and the bag tools.
+    """
+    x, y, z = float(vector[0]), float(vector[1]), float(vector[2])
+    if covariance_0 == NO_ORIENTATION or not math.isfinite(x + y + z):
+        return None
+    if zero_is_none and x == y == z == 0.0:
+        return None
+    return (x, y, z)
+
+
 def imu_reading(
     orientation: Sequence[float],
     orientation_covariance: Sequence[float],

@@ -23,8 +23,9 @@ Without a gyro the base is taken as not turning, without an accelerometer as not
 (gravity from the orientation, or level): an inertial base.
 
 A leg's first joint state, one after a gap of more than ``max_gap_s``, or one after a joint
-state with that leg's values missing starts its observer again from the quasi-static estimate
-(``dp/dt = 0``). Joint states at the same stamp or older hold the estimate.
+state with that leg's values missing (or absurd: a residual that is not finite) starts its
+observer again from the quasi-static estimate (``dp/dt = 0``); a joint state without the leg's
+rates gets the quasi-static estimate. Joint states at the same stamp or older hold the estimate.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ from a1_leg_fk.kinematics.leg_statics import LegStatics
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
-DEFAULT_GAIN_PER_S = 100.0
+DEFAULT_GAIN_PER_S = 1000.0
 """The observer's gain K [1/s]: the external torque through a lag of 1 / K = 10 ms."""
 MAX_GAP_S = 0.05
 """[s] A longer gap between joint states restarts the observers from the quasi-static estimate."""
@@ -147,17 +148,25 @@ class MomentumObserver:
         for slot in range(LEGS):
             joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
             q, dq, tau = angles[joints], rates[joints], efforts[joints]
-            if not all(isfinite(v) for v in (*q, *dq, *tau)):
+            if not all(isfinite(v) for v in (*q, *tau)):
                 self._states[slot] = _LegState()
                 continue
             missing[slot] = False
             trig = (cos(q[0]), sin(q[0]), cos(q[1]), sin(q[1]), cos(q[2]), sin(q[2]))
-            dtdq0, dtdq1, dtdq2, *momentum = self._dynamics[slot].kinetic_terms(*trig, *dq, *omega)
             g0, g1, g2 = self._statics[slot].gravity_torques(*trig, *felt)
-            driving = (tau[0] - g0 + dtdq0, tau[1] - g1 + dtdq1, tau[2] - g2 + dtdq2)
-            residual = self._states[slot].update(
-                stamp_s, momentum, driving, self.gain_per_s, self.max_gap_s
-            )
+            if all(isfinite(v) for v in dq):
+                dtdq0, dtdq1, dtdq2, *momentum = self._dynamics[slot].kinetic_terms(
+                    *trig, *dq, *omega
+                )
+                driving = (tau[0] - g0 + dtdq0, tau[1] - g1 + dtdq1, tau[2] - g2 + dtdq2)
+                residual = self._states[slot].update(
+                    stamp_s, momentum, driving, self.gain_per_s, self.max_gap_s
+                )
+                if not all(isfinite(v) for v in residual):  # absurd values: start again
+                    self._states[slot] = _LegState()
+            else:  # no rates: the quasi-static estimate
+                self._states[slot] = _LegState()
+                residual = [g0 - tau[0], g1 - tau[1], g2 - tau[2]]
             x, y, z, det, size = self._statics[slot].solve_torques(*trig, *residual, *gravity)
             singular[slot] = not abs(det) >= self.min_condition * size
             if not singular[slot]:

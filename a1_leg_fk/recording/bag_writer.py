@@ -3,9 +3,9 @@
 ``/foot_positions/<leg>`` (``geometry_msgs/msg/PointStamped``, base frame),
 ``/foot_velocities/<leg>`` (``Vector3Stamped``, when velocities exist) and
 ``/foot_positions_world/<leg>`` (``PointStamped``, world frame, with a base pose), with forces
-``/foot_forces/<leg>`` (``WrenchStamped``, base frame, the ground's force on the foot [N]) and
-``/foot_contacts`` (``JointState``: name FR, FL, RR, RL, position the contact probability, effort
-the normal force [N] along minus gravity, velocity empty), in MCAP or
+``/foot_forces/<leg>`` (``WrenchStamped``, base frame, the ground's force on the foot [N]), with
+forces or contacts ``/foot_contacts`` (``JointState``: name FR, FL, RR, RL, position the contact
+probability, effort the normal force [N] along minus gravity, velocity empty), in MCAP or
 sqlite3, metadata version and QoS profiles as rosbag2 Jazzy writes them. The messages are
 serialized here (little-endian CDR: a header, then three float64 [m or m/s]) with the JointState's
 header stamp and bag time; optionally every input message is copied too. ``rosbags`` is
@@ -90,11 +90,11 @@ class BagWriter:
                 )
             )
         stamps, bag_times = block.stamps_ns.tolist(), block.bag_times_ns.tolist()
-        if block.forces is not None:
+        if block.forces is not None and self.recording.force_output:
             groups.append(
                 ("/foot_forces", "geometry_msgs/msg/WrenchStamped", self.base_head, block.forces)
             )
-            self._write_contacts(block, stamps, bag_times)
+        self._write_contacts(block, stamps, bag_times)
         for prefix, msgtype, head, values in groups:
             for leg_slot, leg in enumerate(LEG_NAMES):
                 leg_values = values[:, leg_slot]

@@ -344,9 +344,15 @@ def _finish(
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
     rates[~np.repeat(np.isfinite(foot_velocities).all(axis=2), JOINTS_PER_LEG, axis=1)] = math.nan
     forces: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = (None, None, None)
-    if recording.forces is not None and efforts is not None:
-        slot_efforts = recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
-        forces = recording.forces.rows(stamps, angles[rows], slot_efforts)
+    if recording.forces is not None:
+        slot_efforts = (
+            recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
+            if efforts is not None and efforts.shape[1]
+            else None
+        )
+        forces = recording.forces.rows(
+            stamps, (angles[rows], rates, slot_efforts), (feet, foot_velocities)
+        )
     yield FootBlock(
         stamps,
         bag_times,

@@ -1,8 +1,11 @@
-"""Foot forces and contacts over a recording (``a1-leg-fk bag --forces``): the JointState efforts
-through :mod:`a1_leg_fk.kinematics.foot_forces` and :mod:`a1_leg_fk.estimation.contacts`, the same
-rules the node uses. Gravity's direction comes from an ``sensor_msgs/msg/Imu`` topic (the nearest
-sample in time; an IMU aligned with the base), else the base is taken as level. No ROS install:
-the bag reader is ``rosbags``'s, passed in by :mod:`a1_leg_fk.recording.reader`.
+"""Foot forces and contacts over a recording (``a1-leg-fk bag --forces/--contacts``, ``gait``) and
+in the node, one joint state at a time: the pipeline of
+:mod:`a1_leg_fk.estimation.contact_estimator`, fed the JointState's angles, rates and efforts (a
+recording without efforts still gets kinematic contacts). The IMU comes from an
+``sensor_msgs/msg/Imu`` topic (the nearest sample in time; aligned with the base): gravity's
+direction from its orientation, else the base taken as level; its gyro and accelerometer for the
+legs' dynamics. No ROS install: the bag reader is ``rosbags``'s, passed in by
+:mod:`a1_leg_fk.recording.reader`.
 """
 
 from __future__ import annotations
@@ -14,10 +17,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
-from a1_leg_fk.estimation.imu import has_orientation
-from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
-from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, gravity_in_base
+from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER, ContactEstimator, ImuSample
+from a1_leg_fk.estimation.imu import has_orientation, measured_vector
+from a1_leg_fk.kinematics.frames import gravity_in_base
 from a1_leg_fk.model.legs import JOINT_COUNT
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
@@ -29,6 +31,7 @@ if TYPE_CHECKING:  # rosbags is imported when a bag is read
     from a1_leg_fk.kinematics.quadruped import Quadruped
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
+Vector = tuple[float, float, float]
 
 
 class MissingEfforts(LegFkError):
@@ -36,51 +39,81 @@ class MissingEfforts(LegFkError):
 
 
 @dataclass(frozen=True)
-class ImuGravity:
-    """Gravity [m/s^2] in the base frame over time, from an IMU's orientation (the IMU aligned
-    with the base): ``stamps_ns`` sorted (M,), ``gravity`` (M, 3).
+class ImuTrack:
+    """An IMU (aligned with the base, at its origin) over time, base frame: ``stamps_ns`` sorted
+    (M,); ``gravity`` (M, 3) [m/s^2] from the orientation, ``angular_velocity`` (M, 3) [rad/s]
+    and ``specific_force`` (M, 3) [m/s^2]; NaN rows where a message had none of it
+    (``*_covariance[0] == -1``, or not finite).
     """
 
     stamps_ns: np.ndarray
     gravity: np.ndarray
+    angular_velocity: np.ndarray
+    specific_force: np.ndarray
     topic: str
 
     @classmethod
-    def read(cls, reader: AnyReader, connection: Connection) -> ImuGravity:
-        """Every message of ``connection`` that has an orientation
-        (:func:`~a1_leg_fk.estimation.imu.has_orientation`); :class:`LegFkError` if none has.
+    def read(cls, reader: AnyReader, connection: Connection) -> ImuTrack:
+        """Every message of ``connection``; :class:`LegFkError` if none has an orientation
+        (:func:`~a1_leg_fk.estimation.imu.has_orientation`).
         """
-        stamps, quaternions = [], []
+        stamps, quaternions, gyros, accelerations = [], [], [], []
         for _, bag_time, raw in reader.messages(connections=[connection]):
             message: Any = reader.deserialize(raw, connection.msgtype)
             q = message.orientation
-            if not has_orientation(float(message.orientation_covariance[0]), (q.x, q.y, q.z, q.w)):
-                continue
+            quaternion = (q.x, q.y, q.z, q.w)
+            usable = has_orientation(float(message.orientation_covariance[0]), quaternion)
+            quaternions.append(quaternion if usable else (math.nan,) * 4)
+            gyros.append(_vector(message.angular_velocity, message.angular_velocity_covariance))
+            accelerations.append(
+                _vector(message.linear_acceleration, message.linear_acceleration_covariance, True)
+            )
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
             stamps.append(stamp or bag_time)
-            quaternions.append((q.x, q.y, q.z, q.w))
-        if not quaternions:
+        rotations = np.array(quaternions, dtype=float).reshape(-1, 4)
+        if not np.isfinite(rotations).all(axis=1).any():
             raise LegFkError(
                 f"--imu {connection.topic}: no message with an orientation (a rotation quaternion "
                 "with orientation_covariance[0] != -1)"
             )
         order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
-        rotations = np.array(quaternions, dtype=float)[order]
-        unit = rotations / np.linalg.norm(rotations, axis=1)[:, None]
+        unit = rotations[order] / np.linalg.norm(rotations[order], axis=1)[:, None]
         return cls(
-            np.array(stamps, dtype=np.int64)[order], gravity_in_base(unit), connection.topic
+            np.array(stamps, dtype=np.int64)[order],
+            gravity_in_base(unit),
+            np.array(gyros, dtype=float)[order],
+            np.array(accelerations, dtype=float)[order],
+            connection.topic,
         )
 
     def at(self, stamps_ns: np.ndarray) -> np.ndarray:
-        """(N, 3) gravity [m/s^2] of the sample nearest in time to each stamp [ns]."""
-        after = np.clip(np.searchsorted(self.stamps_ns, stamps_ns), 1, len(self.stamps_ns) - 1)
+        """(N,) index of the sample nearest in time to each stamp [ns]."""
         if len(self.stamps_ns) == 1:
-            return np.broadcast_to(self.gravity[0], (len(stamps_ns), 3))
+            return np.zeros(len(stamps_ns), dtype=np.intp)
+        after = np.clip(np.searchsorted(self.stamps_ns, stamps_ns), 1, len(self.stamps_ns) - 1)
         before = after - 1
-        nearer = np.where(
+        nearer: np.ndarray = np.where(
             stamps_ns - self.stamps_ns[before] <= self.stamps_ns[after] - stamps_ns, before, after
         )
-        return self.gravity[nearer]
+        return nearer
+
+    def sample(self, index: int) -> ImuSample:
+        """Sample ``index`` as the contact estimator takes it (None for what it lacks)."""
+        return ImuSample(*(_known(values[index]) for values in (
+            self.gravity, self.angular_velocity, self.specific_force)))  # fmt: skip
+
+
+def _vector(vector: Any, covariance: Sequence[float], zero_is_none: bool = False) -> Vector:
+    """A message's measured 3-vector (:func:`~a1_leg_fk.estimation.imu.measured_vector`), NaN
+    where it has none.
+    """
+    values = (vector.x, vector.y, vector.z)
+    return measured_vector(values, covariance[0], zero_is_none) or (math.nan,) * 3
+
+
+def _known(row: np.ndarray) -> list[float] | None:
+    """A row as floats, None when it is not finite."""
+    return row.tolist() if np.isfinite(row).all() else None
 
 
 @dataclass
@@ -102,30 +135,62 @@ class ForceCounts:
 
 
 class ForcePass:
-    """Forces and contact probabilities row by row over one pass (the contact rule's state is
-    carried from block to block).
+    """Forces and contact probabilities row by row over one pass, the node's messages or a
+    recording's rows alike (:class:`~a1_leg_fk.estimation.contact_estimator.ContactEstimator`:
+    its state is carried from block to block).
     """
 
     def __init__(
         self,
         quadruped: Quadruped,
-        imu: ImuGravity | None,
-        thresholds: Sequence[float | None] = (None, None),
+        imu: ImuTrack | None,
+        thresholds: tuple[float | None, float | None] = (None, None),
+        force_model: str = DYNAMIC,
+        contact_rule: str = FILTER,
     ) -> None:
-        """``thresholds``: touchdown and liftoff normal forces [N], ``None`` for the default
-        (:meth:`ContactThresholds.for_weight` of the URDF's total mass).
+        """``thresholds``: touchdown and liftoff normal forces [N] of the ``"threshold"`` contact
+        rule, ``None`` for the default (:meth:`ContactThresholds.for_weight` of the URDF's total
+        mass); ``force_model`` and ``contact_rule`` as the estimator takes them.
         """
-        self.model = FootForces(quadruped)
+        self.estimator = ContactEstimator(quadruped, force_model, contact_rule, thresholds)
+        self.thresholds = self.estimator.rule.thresholds
         self.name_to_slot: Mapping[str, int] = quadruped.name_to_slot
         self.imu = imu
-        weight = self.model.total_mass_kg * STANDARD_GRAVITY
-        self.thresholds = ContactThresholds.for_weight(weight, *thresholds)
-        self.restart()
+        self.counts = ForceCounts()
 
     def restart(self) -> None:
-        """A new pass: every foot in swing, counts zero."""
-        self.rule = ContactRule(self.thresholds)
+        """A new pass: the estimator's state and the counts anew."""
+        self.estimator.reset()
         self.counts = ForceCounts()
+
+    def summary(self, forces: bool) -> str:
+        """The summary's lines (joined by newlines): the force counts (with ``forces``), and
+        where the contacts came from: the rule, the force model, the evidence per sample and
+        what the IMU gave.
+        """
+        estimator = self.estimator
+        imu = self.imu
+        motion = "none (the base taken as inertial)"
+        if imu is not None:
+            parts = [
+                name
+                for name, values in (
+                    ("gyro", imu.angular_velocity),
+                    ("accelerometer", imu.specific_force),
+                )
+                if np.isfinite(values).all(axis=1).any()
+            ]
+            motion = f"{', '.join(parts)} of {imu.topic}" if parts else motion
+        rule = (
+            f"contacts:  the {estimator.contact_rule} rule on {estimator.force_model} forces; "
+            f"the base's motion from {motion}"
+        )
+        lines = [self.counts.line()] if forces else []
+        if estimator.contact_rule == FILTER:
+            lines += [rule, estimator.counts.line()]
+        else:
+            lines.append(rule)
+        return "\n".join(lines)
 
     def slot_efforts(self, names: Sequence[str], efforts: np.ndarray) -> np.ndarray:
         """(K, 12) efforts [N m] in slot order from the messages' (K, m) effort arrays; NaN for
@@ -141,37 +206,49 @@ class ForcePass:
         return out
 
     def rows(
-        self, stamps_ns: np.ndarray, angles: np.ndarray, efforts: np.ndarray
+        self,
+        stamps_ns: np.ndarray,
+        joints: tuple[np.ndarray, np.ndarray, np.ndarray | None],
+        feet: tuple[np.ndarray, np.ndarray],
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 4, 3) forces [N, base frame], (N, 4) normal forces [N] along minus gravity and
-        (N, 4) contact probabilities for rows of (N, 12) angles [rad] and efforts [N m] (NaN
-        where unknown).
+        (N, 4) contact probabilities for rows of (N, 12) angles [rad], rates [rad/s] and efforts
+        [N m] (NaN where unknown; efforts None: none), and (N, 4, 3) feet [m] and their
+        velocities [m/s], base frame.
         """
-        gravity = LEVEL_GRAVITY if self.imu is None else self.imu.at(stamps_ns)
-        estimate = self.model.estimate_batch(angles, efforts, gravity)
-        self.counts.missing += int(estimate.missing.sum())
-        self.counts.singular += int(estimate.singular.sum())
-        self.counts.estimated += int(np.isfinite(estimate.forces).all(axis=2).sum())
-        normal = normal_forces(estimate.forces, gravity)
-        return estimate.forces, normal, self.rule.update_batch(normal)
+        angles, rates, efforts = joints
+        rows = len(stamps_ns)
+        forces = np.full((rows, 4, 3), math.nan)
+        normals, probabilities = np.full((rows, 4), math.nan), np.full((rows, 4), math.nan)
+        nearest = None if self.imu is None else self.imu.at(stamps_ns)
+        for row in range(rows):
+            forces[row], normals[row], probabilities[row] = self.message(
+                int(stamps_ns[row]),
+                (angles[row].tolist(), rates[row].tolist(),
+                 None if efforts is None else efforts[row].tolist()),
+                [(foot, velocity) for foot, velocity in
+                 zip(feet[0][row].tolist(), feet[1][row].tolist(), strict=True)],
+                ImuSample() if nearest is None or self.imu is None
+                else self.imu.sample(int(nearest[row])),
+            )  # fmt: skip
+        return forces, normals, probabilities
 
     def message(
-        self, angles: Sequence[float], efforts: Sequence[float], gravity: Sequence[float]
+        self,
+        stamp_ns: int,
+        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
+        feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
+        imu: ImuSample,
     ) -> tuple[list[list[float]], list[float], list[float]]:
-        """:meth:`rows` for one message, on floats (the node's per-message path): 4 forces [N,
-        base frame], 4 normal forces [N] and 4 contact probabilities for 12 angles [rad], 12
-        efforts [N m] (NaN where unknown) and gravity (3,) [m/s^2] in the base frame.
+        """:meth:`rows` for one joint state, on floats (the node's per-message path): 4 forces
+        [N, base frame], 4 normal forces [N] and 4 contact probabilities.
         """
-        forces, missing, singular = self.model.estimate_floats(angles, efforts, gravity)
+        step = self.estimator.step(stamp_ns * 1e-9, joints, feet, imu)
         counts = self.counts
-        counts.missing += sum(missing)
-        counts.singular += sum(singular)
-        gx, gy, gz = gravity
-        scale = -1.0 / math.sqrt(gx * gx + gy * gy + gz * gz)  # up = -gravity / |gravity|
-        ux, uy, uz = gx * scale, gy * scale, gz * scale
-        normal = [x * ux + y * uy + z * uz for x, y, z in forces]
-        counts.estimated += sum(1 for value in normal if value == value)  # noqa: PLR0124 (NaN)
-        return forces, normal, self.rule.update(normal)
+        counts.missing += sum(step.missing)
+        counts.singular += sum(step.singular)
+        counts.estimated += sum(1 for value in step.normals if value == value)  # noqa: PLR0124
+        return step.forces, step.normals, step.probabilities
 
     def message_efforts(self, names: Sequence[str], efforts: Sequence[float]) -> list[float]:
         """One message's efforts [N m] in slot order (as :meth:`slot_efforts`): NaN for joints

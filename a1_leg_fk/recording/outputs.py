@@ -36,9 +36,8 @@ AXES = ("x", "y", "z")
 POSITION_COLUMNS = [f"{leg}_{axis}" for leg in LEG_NAMES for axis in AXES]
 VELOCITY_COLUMNS = [f"{leg}_v{axis}" for leg in LEG_NAMES for axis in AXES]
 WORLD_COLUMNS = [f"{leg}_w{axis}" for leg in LEG_NAMES for axis in AXES]
-FORCE_COLUMNS = [f"{leg}_f{axis}" for leg in LEG_NAMES for axis in AXES] + [
-    f"{leg}_contact" for leg in LEG_NAMES
-]
+CONTACT_COLUMNS = [f"{leg}_contact" for leg in LEG_NAMES]
+FORCE_COLUMNS = [f"{leg}_f{axis}" for leg in LEG_NAMES for axis in AXES] + CONTACT_COLUMNS
 
 
 @dataclass
@@ -224,7 +223,8 @@ def convert(
 
 class CsvWriter:
     """Rows ``stamp_ns, bag_time_ns, FR_x .. RL_z[, FR_vx .. RL_vz][, FR_wx .. RL_wz][, FR_fx ..
-    RL_fz, FR_contact .. RL_contact]`` (forces [N] in the base frame, contact probabilities);
+    RL_fz][, FR_contact .. RL_contact]`` (forces [N] in the base frame, with ``--forces``;
+    contact probabilities, with ``--forces`` or ``--contacts``);
     values written so that ``float(text)`` gives the same float back
     (:mod:`a1_leg_fk.recording.csv_text`); empty cells for NaN. The velocity columns are there when
     the recording has foot velocities: decided by the first block of rows; should velocities first
@@ -236,7 +236,8 @@ class CsvWriter:
         self.path = path
         self.recording = recording
         self.world = recording.base_pose is not None
-        self.forces = recording.forces is not None
+        self.contacts = recording.forces is not None
+        self.forces = recording.force_output
         self.velocity_columns: bool | None = None  # not decided before the first rows
         self.file = open(path, "wb")  # noqa: SIM115 (open until close() or abort())
 
@@ -247,7 +248,7 @@ class CsvWriter:
             *POSITION_COLUMNS,
             *(VELOCITY_COLUMNS if self.velocity_columns else []),
             *(WORLD_COLUMNS if self.world else []),
-            *(FORCE_COLUMNS if self.forces else []),
+            *(FORCE_COLUMNS if self.forces else CONTACT_COLUMNS if self.contacts else []),
         ]
         return (",".join(columns) + "\n").encode()
 
@@ -265,8 +266,10 @@ class CsvWriter:
             parts.append(block.velocities.reshape(rows, -1))
         if block.world_positions is not None:
             parts.append(block.world_positions.reshape(rows, -1))
-        if block.forces is not None and block.contacts is not None:
-            parts += [block.forces.reshape(rows, -1), block.contacts]
+        if self.forces and block.forces is not None:
+            parts.append(block.forces.reshape(rows, -1))
+        if self.contacts and block.contacts is not None:
+            parts.append(block.contacts)
         self.file.write(
             format_rows(
                 np.stack([block.stamps_ns, block.bag_times_ns], axis=1),

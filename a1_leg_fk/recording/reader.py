@@ -15,6 +15,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, TypedDict
 
+from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER
 from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_S, BasePoses
@@ -44,8 +45,11 @@ class RecordingChoices(TypedDict, total=False):
     base_pose: str | None
     max_pose_gap_s: float
     forces: bool
+    estimate_contacts: bool
     imu: str | None
     contact_thresholds: tuple[float | None, float | None]
+    force_model: str
+    contact_rule: str
 
 
 @dataclass
@@ -67,7 +71,8 @@ class Recording:
     stopped: str = ""
     salvage_note: str = ""  # what was read of a truncated MCAP file
     tracker: FootTracker | None = None  # the rules' state and counts of the current pass
-    forces: ForcePass | None = None  # foot forces and contacts from the efforts, when asked for
+    forces: ForcePass | None = None  # foot forces and contacts, when asked for
+    force_output: bool = False  # the forces are wanted in the outputs (bag --forces)
     efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
 
 
@@ -90,14 +95,19 @@ def open_recording(
     base_pose: str | None = None,
     max_pose_gap_s: float = DEFAULT_MAX_POSE_GAP_S,
     forces: bool = False,
+    estimate_contacts: bool = False,
     imu: str | None = None,
     contact_thresholds: tuple[float | None, float | None] = (None, None),
+    force_model: str = DYNAMIC,
+    contact_rule: str = FILTER,
 ) -> Recording:
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
     problem for bad input. Close with :func:`close_recording`. ``forces``: foot forces and
-    contacts from the efforts (:mod:`a1_leg_fk.recording.forces`), gravity from the
-    ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``contact_thresholds`` the touchdown and
-    liftoff forces [N] (``None``: the defaults for the robot's weight).
+    contacts from the efforts (:mod:`a1_leg_fk.recording.forces`; the JointStates must carry
+    efforts); ``estimate_contacts``: contacts with or without efforts; the IMU from the
+    ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule`` and
+    ``contact_thresholds`` (the threshold rule's touchdown and liftoff forces [N], ``None``: the
+    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.ForcePass` takes them.
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
@@ -149,8 +159,14 @@ def open_recording(
                     f"--base-pose {base_pose}: cannot read it: {one_line(error)}"
                 ) from None
         force_pass = (
-            _force_pass(reader, path, joint_states, robot.quadruped, imu, contact_thresholds)
-            if forces
+            _force_pass(
+                reader,
+                (path, joint_states, imu),
+                robot.quadruped,
+                forces,
+                (contact_thresholds, force_model, contact_rule),
+            )
+            if forces or estimate_contacts
             else None
         )
         return Recording(
@@ -165,6 +181,7 @@ def open_recording(
             types,
             salvage_note=salvage_note,
             forces=force_pass,
+            force_output=forces,
         )
     except BaseException:
         _close_reader(reader)
@@ -173,29 +190,33 @@ def open_recording(
 
 def _force_pass(
     reader: AnyReader,
-    path: Path,
-    joint_states: Connection,
+    where: tuple[Path, Connection, str | None],
     quadruped: Quadruped,
-    imu: str | None,
-    thresholds: tuple[float | None, float | None],
+    needs_efforts: bool,
+    settings: tuple[tuple[float | None, float | None], str, str],
 ) -> ForcePass:
-    """The force estimation of a pass; :class:`LegFkError` if the JointStates carry no efforts or
-    the IMU topic gives no orientation.
+    """The force and contact estimation of a pass over the JointStates of ``where`` (the bag,
+    the connection, the IMU topic or None); :class:`LegFkError` if the JointStates carry no
+    efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
+    contact thresholds, the force model and the contact rule.
     """
-    from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuGravity, check_has_efforts
+    from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuTrack, check_has_efforts
 
-    needs = "the force estimate (bag --forces, gait --contacts force)"
-    check_has_efforts(reader, joint_states, not reader.is2, needs)
-    gravity = None
+    path, joint_states, imu = where
+    if needs_efforts:
+        needs = "the force estimate (bag --forces, gait --contacts force)"
+        check_has_efforts(reader, joint_states, not reader.is2, needs)
+    track = None
     if imu:
         connection = pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")
         try:
-            gravity = ImuGravity.read(reader, connection)
+            track = ImuTrack.read(reader, connection)
         except LegFkError:
             raise
         except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
             raise LegFkError(f"--imu {imu}: cannot read it: {one_line(error)}") from None
-    return ForcePass(quadruped, gravity, thresholds)
+    thresholds, force_model, contact_rule = settings
+    return ForcePass(quadruped, track, thresholds, force_model, contact_rule)
 
 
 def close_recording(recording: Recording) -> None:

@@ -59,7 +59,7 @@ class RecordingSummary:
     wall_time_s: float
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
     types: str = ""  # which message types the bag was read with (recording.typestores)
-    forces: str = ""  # with forces: what the estimate gave (ForceCounts.line)
+    forces: str = ""  # with forces or contacts: what the estimate gave (ForcePass.summary)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -106,7 +106,7 @@ class RecordingSummary:
                 "pose (outside its time range or in a gap)"
             )
         if self.forces:
-            lines.append(self.forces)
+            lines.extend(self.forces.split("\n"))
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -180,7 +180,7 @@ class BlockStats:
             time.perf_counter() - self.started,
             "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
             recording.types,
-            recording.forces.counts.line() if recording.forces is not None else "",
+            recording.forces.summary(recording.force_output) if recording.forces else "",
         )
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.recording.forces import ForcePass
 from a1_leg_fk.tracking import REJECTIONS, TrackerCounts
 
@@ -115,21 +116,37 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
     return level, summary, values
 
 
-def force_values(forces: ForcePass | None, problem: str, imu: bool) -> dict[str, object]:
+def force_values(forces: ForcePass | None, problem: str, imu: ImuSample) -> dict[str, object]:
     """The foot-force part of the status: whether forces are estimated (else ``problem``), the
-    leg forces estimated, the legs without one (efforts missing, not finite or of the wrong
-    length; near-singular), where gravity's direction comes from (``imu``: the latest Imu had an
-    orientation) and the contact thresholds [N].
+    force model and contact rule, the leg forces estimated, the legs without one (efforts
+    missing, not finite or of the wrong length; near-singular), the joint states whose contacts
+    had force evidence and those with kinematic evidence alone, what the latest ``imu`` gave
+    (gravity's direction, gyro, accelerometer) and the threshold rule's forces [N].
     """
     if forces is None:
         return {"foot_forces": problem}
-    counts, thresholds = forces.counts, forces.thresholds
+    counts, thresholds, estimator = forces.counts, forces.thresholds, forces.estimator
     return {
         "foot_forces": "on",
+        "force_model": estimator.force_model,
+        "contact_rule": estimator.contact_rule,
         "leg_forces_estimated": counts.estimated,
         "legs_without_efforts": counts.missing,
         "legs_near_singular": counts.singular,
-        "gravity_from": "imu orientation" if imu else "base -z (no imu orientation)",
+        "contacts_with_force_evidence": estimator.counts.force,
+        "contacts_with_kinematic_evidence_only": estimator.counts.kinematic,
+        "gravity_from": "imu orientation"
+        if imu.gravity is not None
+        else "base -z (no imu orientation)",
+        "base_motion_from": ", ".join(
+            name
+            for name, value in (
+                ("gyro", imu.angular_velocity),
+                ("accelerometer", imu.specific_force),
+            )
+            if value is not None
+        )
+        or "none (the base taken as inertial)",
         "touchdown_force_n": f"{thresholds.touchdown_n:.3f}",
         "liftoff_force_n": f"{thresholds.liftoff_n:.3f}",
     }

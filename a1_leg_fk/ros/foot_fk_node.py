@@ -32,9 +32,7 @@ from sensor_msgs.msg import Imu, JointState
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
-from a1_leg_fk.estimation.imu import imu_reading
-from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY
-from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, down_direction, unit_quaternion
+from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import ForcePass
@@ -45,9 +43,9 @@ from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.markers import foot_markers
-from a1_leg_fk.ros.odometry_wire import imu_fields
+from a1_leg_fk.ros.odometry_wire import imu_fields, imu_message_fields, imu_sample
 from a1_leg_fk.ros.robot_source import RobotSource
-from a1_leg_fk.tracking import REJECTIONS, FootTracker
+from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
 
 NODE_NAME = "a1_leg_fk"
@@ -80,7 +78,7 @@ class FootFkNode(Node):
         self._markers_wanted = False
         self._period = PeriodCounter()
         self._warnings = ros_glue.WarnThrottle(self)
-        self._gravity: tuple[float, float, float] | None = None  # from the latest imu, base frame
+        self._imu = ImuSample()  # the latest imu
         self._contacts: list[float] | None = None  # the latest contact probabilities
         self._forces: ForcePass | None = None
         self._output = FootOutput(self)
@@ -130,10 +128,17 @@ class FootFkNode(Node):
         if not feet:
             return
         forces = None
-        if efforts and self._forces is not None:  # every message, for the contacts' hysteresis
-            gravity = self._gravity or LEVEL_GRAVITY
-            slot_efforts = self._forces.message_efforts(names, efforts)
-            forces = self._forces.message(self._tracker.angles, slot_efforts, gravity)
+        if self._forces is not None:  # every message: the contacts carry their state
+            forces = self._forces.message(
+                fields.stamp_ns or self.get_clock().now().nanoseconds,
+                (
+                    self._tracker.angles,
+                    self._tracker.rates,
+                    self._forces.message_efforts(names, efforts) if efforts else None,
+                ),
+                leg_feet(feet),
+                self._imu,
+            )
             self._contacts = forces[2]
         now = time.monotonic()
         if now - self._last_publish < self._min_publish_interval_s:
@@ -148,24 +153,11 @@ class FootFkNode(Node):
             self._publish_markers(Time(sec=sec, nanosec=nanosec))
 
     def _on_imu(self, raw: bytes) -> None:
-        """Gravity's direction from an Imu's orientation (the IMU aligned with the base); none
-        (the base's -z) while the latest Imu has none (``orientation_covariance[0] == -1``).
+        """The IMU for the forces and contacts: gravity's direction from its orientation (the
+        IMU aligned with the base; none: the base's -z), its gyro and accelerometer.
         """
-        fields = imu_fields(raw)
-        if fields is None:  # not little-endian CDR
-            msg = deserialize_message(raw, Imu)
-            q = msg.orientation
-            fields = (0, (q.x, q.y, q.z, q.w), tuple(msg.orientation_covariance), (0.0,) * 3, ())
-        _, orientation, covariance, _, _ = fields
-        reading = imu_reading(orientation, covariance, (0.0, 0.0, 0.0), (0.0,) * 9)
-        unit = None
-        if reading is not None and reading.orientation is not None:
-            unit = unit_quaternion(reading.orientation)
-        if unit is None:
-            self._gravity = None
-            return
-        x, y, z = down_direction(unit)
-        self._gravity = (STANDARD_GRAVITY * x, STANDARD_GRAVITY * y, STANDARD_GRAVITY * z)
+        fields = imu_fields(raw) or imu_message_fields(deserialize_message(raw, Imu))
+        self._imu = imu_sample(fields)
 
     def _stamp_of(self, stamp_ns: int) -> tuple[int, int]:
         """(sec, nanosec) of the message's stamp [ns], or of the node clock's now where the stamp
@@ -250,7 +242,7 @@ class FootFkNode(Node):
             description_rejected=robot.topic_rejected,
             last_verify=self._last_verify,
             verify_disagreed=self._verify_disagreed,
-            forces=force_values(self._forces, self._forces_problem, self._gravity is not None),
+            forces=force_values(self._forces, self._forces_problem, self._imu),
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
@@ -346,11 +338,12 @@ class FootFkNode(Node):
         self._forces, self._contacts, self._forces_problem = None, None, "off"
         if not self._bool("publish_forces"):
             return
-        thresholds = [
+        touchdown, liftoff = (
             self._float(name) or None for name in ("touchdown_force_n", "liftoff_force_n")
-        ]
+        )
+        choices = [self.get_parameter(name).value for name in ("force_model", "contact_rule")]
         try:
-            self._forces = ForcePass(self._model.quadruped, None, thresholds)
+            self._forces = ForcePass(self._model.quadruped, None, (touchdown, liftoff), *choices)
         except LegFkError as error:
             self._forces_problem = f"none: {error}"
             self.get_logger().warn(f"no foot forces: {error}")

@@ -14,7 +14,13 @@ PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
 VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
 CONTACT_FORCE_RANGE_N = (0.0, 1e6)
 """Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
-FORCE_PARAMETERS = ("publish_forces", "touchdown_force_n", "liftoff_force_n")
+FORCE_PARAMETERS = (
+    "publish_forces",
+    "force_model",
+    "contact_rule",
+    "touchdown_force_n",
+    "liftoff_force_n",
+)
 """The parameters whose change rebuilds the force and contact rules."""
 
 PARAMETERS = (
@@ -72,14 +78,28 @@ PARAMETERS = (
         "publish_forces",
         True,
         ParameterType.PARAMETER_BOOL,
-        "Publish foot_forces/<leg> (N, the ground's force on the foot) and foot_contacts when a "
-        "message has the efforts of a leg's three joints",
+        "Publish foot_forces/<leg> (N, the ground's force on the foot) when a message has the "
+        "efforts of a leg's three joints, and foot_contacts (with or without efforts)",
+    ),
+    ParameterSpec(
+        "force_model",
+        "dynamic",
+        ParameterType.PARAMETER_STRING,
+        "Foot forces from the legs' dynamics ('dynamic': momentum observer, the imu's gyro and "
+        "accelerometer for the base's motion) or quasi-statically ('static': F = J^-T (g - tau))",
+    ),
+    ParameterSpec(
+        "contact_rule",
+        "filter",
+        ParameterType.PARAMETER_STRING,
+        "foot_contacts from the fused filter ('filter': normal force, foot heights and speeds; "
+        "contacts without efforts too) or the normal force between two thresholds ('threshold')",
     ),
     ParameterSpec(
         "touchdown_force_n",
         0.0,
         ParameterType.PARAMETER_DOUBLE,
-        "A foot touches down when its normal force reaches this [N], in "
+        "contact_rule 'threshold': a foot touches down when its normal force reaches this [N], in "
         f"{CONTACT_FORCE_RANGE_N}; 0 = 8 % of the robot's weight (URDF masses)",
         value_range=CONTACT_FORCE_RANGE_N,
     ),
@@ -87,7 +107,8 @@ PARAMETERS = (
         "liftoff_force_n",
         0.0,
         ParameterType.PARAMETER_DOUBLE,
-        "A foot in stance lifts off below this normal force [N] (at most the touchdown force), in "
+        "contact_rule 'threshold': a foot in stance lifts off below this normal force [N] (at "
+        "most the touchdown force), in "
         f"{CONTACT_FORCE_RANGE_N}; 0 = 4 % of the robot's weight",
         value_range=CONTACT_FORCE_RANGE_N,
     ),

@@ -108,8 +108,8 @@ class FootOutput:
         nanosec: int,
     ) -> None:
         """Publish ``foot_forces/<leg>`` for each leg with a force [N] (not NaN) and, if any
-        has one, ``foot_contacts`` (the probabilities and normal forces [N], NaN for the legs
-        without a force).
+        has one or any leg has a contact probability, ``foot_contacts`` (the probabilities and
+        normal forces [N], NaN for the legs without them).
         """
         serialized = self._serialized is not None
         published = False
@@ -125,7 +125,7 @@ class FootOutput:
             _stamp(msg, sec, nanosec)
             msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = x, y, z
             self._forces[slot].publish(msg)
-        if not published:
+        if not published and not any(p == p for p in probabilities):  # noqa: PLR0124 (NaN)
             return
         if serialized:
             self._contacts.publish(

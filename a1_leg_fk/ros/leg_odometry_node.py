@@ -39,7 +39,7 @@ from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
 
@@ -190,16 +190,8 @@ class LegOdometryNode(Node):
         fields = imu_fields(raw)
         if fields is None:
             msg = deserialize_message(raw, Imu)
-            q, w = msg.orientation, msg.angular_velocity
-            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-            fields = (
-                stamp,
-                (q.x, q.y, q.z, q.w),
-                tuple(msg.orientation_covariance),
-                (w.x, w.y, w.z),
-                tuple(msg.angular_velocity_covariance),
-            )
-        stamp, orientation, orientation_covariance, gyro, gyro_covariance = fields
+            fields = imu_message_fields(msg)
+        stamp, orientation, orientation_covariance, gyro, gyro_covariance, *_ = fields
         reading = imu_reading(orientation, orientation_covariance, gyro, gyro_covariance)
         if reading is None:
             self._warnings.warn(

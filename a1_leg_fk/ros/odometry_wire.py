@@ -3,13 +3,19 @@ message object, nav_msgs/Odometry written by patching a pre-serialized probe. At
 the two would otherwise cost about as much as the odometry itself (rclpy's conversion between
 message objects and C, with numpy arrays for every covariance).
 
-No ROS imports: :class:`SerializedOdometry` takes the probe's bytes from the caller.
+:func:`imu_sample` turns an Imu's fields into what the foot forces and contacts take. No ROS
+imports: :class:`SerializedOdometry` takes the probe's bytes from the caller.
 """
 
 from __future__ import annotations
 
 import struct
 from collections.abc import Sequence
+from typing import Any
+
+from a1_leg_fk.estimation.contact_estimator import ImuSample
+from a1_leg_fk.estimation.imu import has_orientation, measured_vector
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, down_direction, unit_quaternion
 
 IMU_DOUBLES = struct.Struct("<37d")
 """An Imu's fields after its header: orientation (4), its covariance (9), angular velocity (3),
@@ -18,9 +24,10 @@ _STAMP = struct.Struct("<iI")
 _LENGTH = struct.Struct("<I")
 LITTLE_ENDIAN_CDR = b"\x00\x01"
 
-ImuFields = tuple[int, tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]
+Values = tuple[float, ...]
+ImuFields = tuple[int, Values, Values, Values, Values, Values, Values]
 """(stamp [ns], orientation x y z w, orientation covariance (9), angular velocity [rad/s] (3),
-its covariance (9))."""
+its covariance (9), linear acceleration [m/s^2] (3), its covariance (9))."""
 
 
 def imu_fields(raw: bytes) -> ImuFields | None:
@@ -35,7 +42,48 @@ def imu_fields(raw: bytes) -> ImuFields | None:
     if start + IMU_DOUBLES.size != len(raw):
         return None
     values = IMU_DOUBLES.unpack_from(raw, start)
-    return (sec * 1_000_000_000 + nanosec, values[0:4], values[4:13], values[13:16], values[16:25])
+    return (
+        sec * 1_000_000_000 + nanosec,
+        values[0:4],
+        values[4:13],
+        values[13:16],
+        values[16:25],
+        values[25:28],
+        values[28:37],
+    )
+
+
+def imu_message_fields(msg: Any) -> ImuFields:
+    """:func:`imu_fields` of a deserialized sensor_msgs/msg/Imu."""
+    q, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
+    return (
+        msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+        (q.x, q.y, q.z, q.w),
+        tuple(msg.orientation_covariance),
+        (w.x, w.y, w.z),
+        tuple(msg.angular_velocity_covariance),
+        (a.x, a.y, a.z),
+        tuple(msg.linear_acceleration_covariance),
+    )
+
+
+def imu_sample(fields: ImuFields) -> ImuSample:
+    """What an Imu's fields tell the foot forces and contacts (an IMU aligned with the base):
+    gravity [m/s^2] from its orientation, angular velocity [rad/s] and specific force [m/s^2],
+    each None where the message has none (``*_covariance[0] == -1``, a zero quaternion, values
+    not finite).
+    """
+    _, orientation, orientation_covariance, gyro, gyro_covariance, accel, accel_covariance = fields
+    gravity = None
+    if has_orientation(orientation_covariance[0], orientation):
+        unit = unit_quaternion(orientation)
+        if unit is not None:
+            gravity = [STANDARD_GRAVITY * v for v in down_direction(unit)]
+    return ImuSample(
+        gravity,
+        measured_vector(gyro, gyro_covariance[0]),
+        measured_vector(accel, accel_covariance[0], zero_is_none=True),
+    )
 
 
 class SerializedOdometry:

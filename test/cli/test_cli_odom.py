@@ -19,7 +19,7 @@ from sensor_msgs.msg import Imu
 
 from a1_leg_fk import cli
 from a1_leg_fk.cli.odom import CSV_HEADER
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
 
 SIM_S = 4.0
 
@@ -174,9 +174,14 @@ def test_imu_fields_read_rclpys_bytes() -> None:
         msg.orientation_covariance = [float(i) for i in range(9)]
         msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 1.5, -2.5, 3.5
         msg.angular_velocity_covariance = [0.1 * i for i in range(9)]
+        a = msg.linear_acceleration
+        a.x, a.y, a.z = 0.25, -9.5, 1.75
+        msg.linear_acceleration_covariance = [0.01 * i for i in range(9)]
         fields = imu_fields(serialize_message(msg))
-        assert fields is not None
-        stamp, orientation, orientation_cov, gyro, gyro_cov = fields
+        assert fields is not None and fields == imu_message_fields(msg)
+        stamp, orientation, orientation_cov, gyro, gyro_cov, accel, accel_cov = fields
+        assert accel == (0.25, -9.5, 1.75)
+        assert list(accel_cov) == list(msg.linear_acceleration_covariance)
         assert stamp == 1_700_000_000_123_456_789
         assert orientation == (0.1, -0.2, 0.3, 0.9) and gyro == (1.5, -2.5, 3.5)
         assert list(orientation_cov) == list(msg.orientation_covariance)

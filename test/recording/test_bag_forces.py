@@ -108,6 +108,7 @@ def test_bag_forces_equal_the_python_api(
     out, out_bag = tmp_path / "feet.csv", tmp_path / "out"
     arguments = ["bag", str(bag), "--topic", "/joint_states", "--csv", str(out), "--forces"]
     arguments += ["--imu", "/imu", "--output-bag", str(out_bag), "--quiet"]
+    arguments += ["--force-model", "static", "--contact-rule", "threshold"]  # the API's rule
     assert cli.main(arguments) == 0
     printed = capsys.readouterr().out
     header_row = next(csv.reader(out.open()))
@@ -169,7 +170,13 @@ def test_bag_without_efforts_is_refused_in_one_line(
     assert error.count("\n") == 1 and "carry no efforts" in error and "--forces" in error
     assert not out.exists()
     assert cli.main(["bag", str(bag), "--csv", str(out), "--imu", "/imu"]) == 2
-    assert "--imu needs --forces" in capsys.readouterr().err
+    assert "--imu needs --forces or --contacts" in capsys.readouterr().err
+    assert cli.main(["bag", str(bag), "--csv", str(out), "--contacts", "--quiet"]) == 0
+    header_row = next(csv.reader(out.open()))
+    assert header_row[-4:] == CONTACT_COLUMNS and "FR_fx" not in header_row
+    contacts = csv_columns(out, CONTACT_COLUMNS)[500:]  # kinematic evidence alone
+    assert np.isfinite(contacts).all() and ((contacts >= 0.5).mean(axis=0) > 0.3).all()
+    assert "kinematic evidence alone for 1500" in capsys.readouterr().out.replace("\n", " ")
 
 
 @pytest.mark.parametrize("mode", ["auto", "force", "kinematic"])
@@ -212,7 +219,10 @@ def test_efforts_by_name_partial_unknown_and_wrong_length() -> None:
     np.testing.assert_array_equal(efforts, expected)
     assert np.isnan(forces.slot_efforts(names, np.ones((2, 3)))).all()
     angles = np.tile(list(STAND_LEG) * 4, (2, 1))
-    result = forces.rows(np.array([T0, T0 + 1]), angles, efforts)
+    feet = A1.fk_batch(angles)
+    result = forces.rows(
+        np.array([T0, T0 + 1]), (angles, np.zeros_like(angles), efforts), (feet, 0.0 * feet)
+    )
     assert np.isnan(result[0]).all()  # no leg has its three efforts
     assert forces.counts.missing == 8 and forces.counts.estimated == 0
 

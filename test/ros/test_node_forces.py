@@ -127,7 +127,7 @@ def test_node_gives_the_bag_tools_forces_and_contacts(trot, ros, processes, tmp_
     stream.send(
         len(trot["angles"]),
         lambda row: (imu(trot, row), joint_state(trot, row, efforts[row])),
-        lambda: len(contacts) + 3,  # three inputs give no contacts
+        lambda: len(contacts),  # every input gives contacts (without efforts: kinematic)
     )
     assert ros.spin_until(lambda: len(contacts) >= len(bag_contacts), 20.0), (
         f"{len(contacts)} of {len(bag_contacts)} contact messages\n{processes.output(node)}"
@@ -143,7 +143,9 @@ def test_node_gives_the_bag_tools_forces_and_contacts(trot, ros, processes, tmp_
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-9)
     rows = sorted(bag_contacts)
     assert sorted(contacts) == rows
-    assert T0 + STEP_NS * EMPTY_ROW not in contacts and T0 + STEP_NS * SHORT_ROW not in contacts
+    for row in (EMPTY_ROW, SHORT_ROW):  # no efforts: contacts from the kinematics alone
+        assert np.isnan(contacts[T0 + STEP_NS * row].effort).all()
+        assert np.isfinite(contacts[T0 + STEP_NS * row].position).all()
     assert T0 + STEP_NS * NAN_FL_ROW not in forces["FL"] and T0 + STEP_NS * NAN_FL_ROW in contacts
     for key in ("position", "effort"):
         ours = np.array([list(getattr(contacts[s], key)) for s in rows])
@@ -159,7 +161,10 @@ def test_node_gives_the_bag_tools_forces_and_contacts(trot, ros, processes, tmp_
     print(f"node vs bag: {len(rows)} contact messages; stance agrees with PyBullet {agree:.2%}")
     assert agree > 0.97
     assert status["gravity_from"] == "imu orientation"
-    assert status["legs_without_efforts"] == "5"  # FL's NaN knee; the 11 efforts of one message
+    # FL's NaN knee; the 11 efforts of one message, the message without efforts
+    assert status["legs_without_efforts"] == "9"
+    assert status["force_model"] == "dynamic" and status["contact_rule"] == "filter"
+    assert status["contacts_with_kinematic_evidence_only"] == "2"
     assert status["legs_near_singular"] == "0"
     estimated = sum(len(forces[leg]) for leg in LEGS)
     assert status["leg_forces_estimated"] == str(estimated)
@@ -189,8 +194,8 @@ def test_bad_efforts_cost_their_legs_only(ros, processes) -> None:
     standing = [1.0, -3.0, 2.4] * 4  # N m: any finite efforts give a force
     nan = float("nan")
     cases = [
-        [],  # no efforts: nothing
-        standing[:11],  # wrong length: no leg
+        [],  # no efforts: no force, kinematic contacts
+        standing[:11],  # wrong length: no leg's force, kinematic contacts
         [nan, *standing[1:]],  # FR's hip NaN: FL, RR, RL
         [*standing[:6], float("inf"), *standing[7:]],  # RR's hip infinite: FR, FL, RL
         [1e308] * 12,  # huge: whatever the estimate gives, no crash
@@ -211,7 +216,8 @@ def test_bad_efforts_cost_their_legs_only(ros, processes) -> None:
     assert 4 not in seen["RR"] and 3 in seen["RR"]
     assert all(6 in seen[leg] and not {1, 2} & set(seen[leg]) for leg in LEGS)
     assert {m.header.stamp.nanosec for m in contacts} >= {3, 4, 6}
-    assert not {1, 2} & {m.header.stamp.nanosec for m in contacts}
+    kinematic = [m for m in contacts if m.header.stamp.nanosec in {1, 2}]
+    assert len(kinematic) == 2 and all(np.isnan(m.effort).all() for m in kinematic)
     assert int(status["legs_without_efforts"]) >= 4 + 1 + 1
     assert status["gravity_from"] == "base -z (no imu orientation)"
 

@@ -89,7 +89,7 @@ def _thresholds(node: FootFkNode) -> tuple[float, float]:
 def test_contact_thresholds_default_to_the_weight_and_follow_the_parameters(node):
     forces = node._forces
     assert forces is not None
-    weight = forces.model.total_mass_kg * 9.80665  # the URDF's masses, not a constant
+    weight = forces.estimator.statics.total_mass_kg * 9.80665  # the URDF's masses
     assert _thresholds(node) == pytest.approx((0.08 * weight, 0.04 * weight))
     touchdown = Parameter("touchdown_force_n", value=20.0)
     liftoff = Parameter("liftoff_force_n", value=8.0)
@@ -100,6 +100,12 @@ def test_contact_thresholds_default_to_the_weight_and_follow_the_parameters(node
     assert node._forces is None and "liftoff" in node._forces_problem
     assert node.set_parameters([Parameter("liftoff_force_n", value=0.0)])[0].successful
     assert _thresholds(node) == pytest.approx((20.0, min(0.04 * weight, 20.0)))
+    for name, value in (("force_model", "static"), ("contact_rule", "threshold")):
+        assert node.set_parameters([Parameter(name, value=value)])[0].successful
+        assert node._forces is not None and getattr(node._forces.estimator, name) == value
+    assert node.set_parameters([Parameter("force_model", value="guess")])[0].successful
+    assert node._forces is None and "force model must be one of" in node._forces_problem
+    assert node.set_parameters([Parameter("force_model", value="dynamic")])[0].successful
     assert node.set_parameters([Parameter("publish_forces", value=False)])[0].successful
     assert node._forces_problem == "off"
     assert not node.set_parameters([Parameter("touchdown_force_n", value=-1.0)])[0].successful

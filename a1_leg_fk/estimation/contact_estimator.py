@@ -1,0 +1,207 @@
+"""Foot forces and contact probabilities per joint state, the one pipeline of the node
+(``foot_fk_node``'s ``foot_forces/<leg>`` and ``foot_contacts``) and the bag tools (``a1-leg-fk
+bag --forces/--contacts``, ``gait``), without ROS.
+
+Per joint state: the foot forces [N, base frame] from the efforts, by the legs' dynamics
+(:mod:`a1_leg_fk.estimation.momentum_observer`, ``force_model="dynamic"``, the default) or
+quasi-statically (:mod:`a1_leg_fk.kinematics.foot_forces`, ``"static"``); their normal parts
+along minus gravity; and each foot's probability of stance from the contact filter
+(:mod:`a1_leg_fk.estimation.contact_filter`), which fuses the normal force (where there is one)
+with the feet's heights and speeds (:mod:`a1_leg_fk.estimation.leg_motion`). A joint state without
+efforts still gets its contacts, from the kinematic evidence alone; :attr:`ContactEstimator.counts`
+says how many samples had which evidence.
+
+The IMU, when there is one, gives gravity's direction (its orientation), the base's angular
+velocity (its gyro) and its specific force (accelerometer); each may be missing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds
+from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.momentum_observer import MomentumObserver
+from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
+from a1_leg_fk.kinematics.quadruped import Quadruped
+from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
+
+DYNAMIC, STATIC = "dynamic", "static"
+FORCE_MODELS = (DYNAMIC, STATIC)
+FILTER, THRESHOLD = "filter", "threshold"
+CONTACT_RULES = (FILTER, THRESHOLD)
+"""The fused filter (default), or the normal force's hysteresis between two thresholds
+(:class:`~a1_leg_fk.estimation.contacts.ContactRule`; no contacts without efforts)."""
+LEGS = len(LEG_NAMES)
+Vector = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ImuSample:
+    """What the IMU (aligned with the base, at its origin) says at a joint state, base frame:
+    gravity [m/s^2] (from the orientation; None: the base taken as level), angular velocity
+    [rad/s] and specific force [m/s^2] (None: unknown).
+    """
+
+    gravity: Sequence[float] | None = None
+    angular_velocity: Sequence[float] | None = None
+    specific_force: Sequence[float] | None = None
+
+
+@dataclass
+class EvidenceCounts:
+    """Joint states whose contacts fused a force with the kinematics, and those with the
+    kinematics alone (no efforts).
+    """
+
+    force: int = 0
+    kinematic: int = 0
+
+    def line(self) -> str:
+        """The counts in words (summaries and diagnostics)."""
+        return (
+            f"evidence:  force + kinematic for {self.force} samples, kinematic evidence alone "
+            f"for {self.kinematic}"
+        )
+
+
+@dataclass(frozen=True)
+class ContactStep:
+    """One joint state's result: 4 forces [N, base frame] (NaN: none), 4 normal forces [N]
+    along minus gravity, 4 probabilities of stance, and per leg whether its values were missing
+    and whether its Jacobian was near singular.
+    """
+
+    forces: list[list[float]]
+    normals: list[float]
+    probabilities: list[float]
+    missing: list[bool]
+    singular: list[bool]
+
+
+class ContactEstimator:
+    """Forces and contacts of one robot, stepped with each joint state in time order."""
+
+    def __init__(
+        self,
+        quadruped: Quadruped,
+        force_model: str = DYNAMIC,
+        contact_rule: str = FILTER,
+        thresholds: tuple[float | None, float | None] = (None, None),
+    ) -> None:
+        """``force_model``: ``"dynamic"`` or ``"static"``; ``contact_rule``: ``"filter"`` (its
+        scales :meth:`ContactModel.for_robot` of the URDF's weight and leg length) or
+        ``"threshold"`` (touchdown and liftoff normal forces ``thresholds`` [N], None for
+        :meth:`ContactThresholds.for_weight`'s defaults).
+        """
+        for name, value, choices in (
+            ("force model", force_model, FORCE_MODELS),
+            ("contact rule", contact_rule, CONTACT_RULES),
+        ):
+            if value not in choices:
+                raise LegFkError(f"{name} must be one of {', '.join(choices)}: {value!r}")
+        self.force_model, self.contact_rule = force_model, contact_rule
+        self.statics = FootForces(quadruped)
+        self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
+        self.motion = LegMotion(quadruped)
+        weight = self.statics.total_mass_kg * STANDARD_GRAVITY
+        self.model = ContactModel.for_robot(weight, leg_length_m(quadruped))
+        self.rule = ContactRule(ContactThresholds.for_weight(weight, *thresholds))
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the past (a new pass over a recording): every foot at even odds (in swing for
+        the threshold rule), the observers restarting, the counts zero.
+        """
+        if self.observer is not None:
+            self.observer.reset()
+        self.filter = ContactFilter(self.model)
+        self.rule = ContactRule(self.rule.thresholds)
+        self.counts = EvidenceCounts()
+        self._stamp_s = math.nan
+
+    def step(
+        self,
+        stamp_s: float,
+        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
+        feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
+        imu: ImuSample,
+    ) -> ContactStep:
+        """One joint state at ``stamp_s`` [s]: ``joints`` the 12 angles [rad], rates [rad/s] and
+        efforts [N m] (slot order, NaN where unknown; efforts None: none); ``feet`` per leg its
+        position [m] and velocity ``J q_dot`` [m/s], base frame (None: unknown; a NaN velocity
+        gives that foot no speed evidence).
+        """
+        angles, rates, efforts = joints
+        gravity = tuple(imu.gravity) if imu.gravity is not None else LEVEL_GRAVITY
+        norm = math.sqrt(sum(g * g for g in gravity))
+        down: Vector = (gravity[0] / norm, gravity[1] / norm, gravity[2] / norm)
+        forces, missing, singular = self._forces(stamp_s, joints, gravity, imu)
+        normals = [-(f[0] * down[0] + f[1] * down[1] + f[2] * down[2]) for f in forces]
+        if self.contact_rule == THRESHOLD:
+            probabilities = self.rule.update(normals) if efforts is not None else [math.nan] * LEGS
+            return ContactStep(forces, normals, probabilities, missing, singular)
+        motions = [self._motion(leg, angles, rates, foot, down) for leg, foot in enumerate(feet)]
+        dt = stamp_s - self._stamp_s
+        self._stamp_s = stamp_s if not dt < 0.0 else self._stamp_s
+        with_force = efforts is not None and any(n == n for n in normals)  # noqa: PLR0124 (NaN)
+        if with_force:
+            self.counts.force += 1
+        else:
+            self.counts.kinematic += 1
+        probabilities = self.filter.update(
+            dt if math.isfinite(dt) else 0.0,
+            motions,
+            (imu.angular_velocity or (0.0, 0.0, 0.0), imu.specific_force),
+            normals if with_force else None,
+        )
+        return ContactStep(forces, normals, probabilities, missing, singular)
+
+    def _forces(
+        self,
+        stamp_s: float,
+        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
+        gravity: Sequence[float],
+        imu: ImuSample,
+    ) -> tuple[list[list[float]], list[bool], list[bool]]:
+        """The foot forces of the chosen model (all NaN without efforts)."""
+        angles, rates, efforts = joints
+        if efforts is None:
+            return [[math.nan] * 3 for _ in range(LEGS)], [True] * LEGS, [False] * LEGS
+        if self.observer is None:
+            return self.statics.estimate_floats(angles, efforts, gravity)
+        return self.observer.step_floats(
+            stamp_s, (angles, rates, efforts), gravity, imu.specific_force, imu.angular_velocity
+        )
+
+    def _motion(
+        self,
+        leg: int,
+        angles: Sequence[float],
+        rates: Sequence[float],
+        foot: tuple[Sequence[float], Sequence[float]] | None,
+        down: Vector,
+    ) -> FootMotion | None:
+        """The filter's view of one foot (None when its position is unknown)."""
+        if foot is None or not all(math.isfinite(v) for v in foot[0]):
+            return None
+        joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
+        return self.motion.foot(leg, angles[joints], rates[joints], foot[0], foot[1], down)
+
+
+def leg_length_m(quadruped: Quadruped) -> float:
+    """The mean over the legs of thigh plus calf length [m]: the knee joint's distance from the
+    hip-pitch joint plus the foot's from the knee.
+    """
+    lengths = [
+        float(np.linalg.norm(leg.stages[2].offset) + np.linalg.norm(leg.foot_offset))
+        for leg in quadruped.legs
+    ]
+    return sum(lengths) / len(lengths)

@@ -1,0 +1,204 @@
+"""Which feet are on the ground, as a probability: a two-state (swing, stance) Bayesian filter per
+foot that fuses the foot's normal force with its kinematics, without ROS (plain floats, per
+sample: the node runs it for every joint state).
+
+Each foot is a hidden Markov model (after Bledt et al., ICRA 2018, and Camurri et al., RA-L 2017):
+between two samples ``dt`` apart it changes state with probability ``1 - exp(-dt /
+switch_time_s)`` (the transition model), then each piece of evidence multiplies the odds of
+stance by its likelihood ratio. Each is the log-likelihood ratio of a logistic model, clipped so
+that no single sample decides alone:
+
+- the foot's *normal force* [N] (from the momentum observer or the statics), when there is one:
+  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``;
+- its *height* [m] above the lowest foot along gravity: ``(height_half_m - h) / height_scale_m``;
+- its *speed* [m/s] relative to the other low feet (those within ``height_half_m`` of the lowest):
+  the distance between the base velocity this foot gives if it were still
+  (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
+  speed_scale_mps``;
+- *free fall*, from the IMU's specific force ``f`` when there is one: no foot bears load while
+  ``|f|`` is far below gravity; ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
+- optionally a gait-phase prior: a probability of stance from a gait scheduler, its log-odds
+  times ``phase_weight``.
+
+The kinematic evidence is asymmetric: a foot high or fast is strong evidence of swing (down to
+``-max_log_ratio``), one low and still only weak evidence of stance (up to
+``max_kinematic_stance``), because an unloaded foot, or every foot in a flight phase, is low and
+still too. Defaults scale with the robot (:meth:`ContactModel.for_robot`): forces with its
+weight, heights and speeds with its leg length.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
+from a1_leg_fk.model.legs import LEG_NAMES
+from a1_leg_fk.model.urdf import LegFkError
+
+LEGS = len(LEG_NAMES)
+Vector = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ContactModel:
+    """The filter's transition and evidence scales (see the module text); units in the names."""
+
+    switch_time_s: float
+    force_half_n: float
+    force_scale_n: float
+    height_half_m: float
+    height_scale_m: float
+    speed_half_mps: float
+    speed_scale_mps: float
+    fall_half_mps2: float = 0.3 * STANDARD_GRAVITY
+    fall_scale_mps2: float = 0.05 * STANDARD_GRAVITY
+    max_log_ratio: float = 4.0
+    max_kinematic_stance: float = 1.0
+    phase_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        values = [getattr(self, name) for name in self.__dataclass_fields__]
+        if not all(math.isfinite(value) and value > 0.0 for value in values):
+            raise LegFkError(f"contact model values must be finite and positive: {self}")
+
+    @classmethod
+    def for_robot(cls, weight_n: float, leg_length_m: float) -> ContactModel:
+        """The defaults for a robot of ``weight_n`` [N] with legs ``leg_length_m`` [m] long
+        (thigh plus calf).
+        """
+        return cls(
+            switch_time_s=SWITCH_TIME_S,
+            force_half_n=FORCE_HALF_SHARE * weight_n,
+            force_scale_n=FORCE_SCALE_SHARE * weight_n,
+            height_half_m=HEIGHT_HALF_SHARE * leg_length_m,
+            height_scale_m=HEIGHT_SCALE_SHARE * leg_length_m,
+            speed_half_mps=SPEED_HALF_PER_S * leg_length_m,
+            speed_scale_mps=SPEED_SCALE_PER_S * leg_length_m,
+        )
+
+
+SWITCH_TIME_S = 0.1
+"""Mean time [s] between state changes in the transition model."""
+FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.05, 0.015
+"""Normal force at even odds, and per unit of log-odds, as shares of the weight."""
+HEIGHT_HALF_SHARE, HEIGHT_SCALE_SHARE = 0.04, 0.01
+"""Height above the lowest foot at even odds, and per unit of log-odds, in leg lengths."""
+SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
+"""Speed over the ground at even odds, and per unit of log-odds, in leg lengths per second."""
+
+
+class ContactFilter:
+    """The four feet's filters, carried from one sample to the next. Every foot starts at even
+    odds.
+    """
+
+    def __init__(self, model: ContactModel) -> None:
+        self.model = model
+        self.probabilities = [0.5] * LEGS
+        """Each foot's probability of stance after the latest sample."""
+
+    def update(
+        self,
+        dt_s: float,
+        feet: Sequence[FootMotion | None],
+        imu: tuple[Sequence[float], Sequence[float] | None],
+        normal_forces: Sequence[float] | None = None,
+        phase_prior: Sequence[float] | None = None,
+    ) -> list[float]:
+        """The 4 probabilities of stance after a sample ``dt_s`` [s] after the previous one:
+        each foot's motion (None: unknown); ``imu``: the base's angular velocity [rad/s, base
+        frame; zeros if unknown] and specific force [m/s^2] (None: unknown); normal forces [N]
+        (None: no force evidence; NaN: none for that foot); the gait phase's probabilities of
+        stance (None: no prior).
+        """
+        model = self.model
+        switch = 1.0 - math.exp(-max(dt_s, 0.0) / model.switch_time_s)
+        omega, specific_force = imu
+        common = 0.0
+        if specific_force is not None:
+            felt = math.sqrt(sum(f * f for f in specific_force))
+            if math.isfinite(felt):
+                common = min(
+                    0.0, self._clip((felt - model.fall_half_mps2) / model.fall_scale_mps2)
+                )
+        forced = [normal_forces is not None and math.isfinite(normal_forces[leg])
+                  for leg in range(LEGS)]  # fmt: skip
+        # falling, no foot stands however low and still it is: the kinematics' stance is weak
+        kinematic = _kinematic(model, feet, omega, [common < -1.0 or f for f in forced])
+        posterior = []
+        for leg, previous in enumerate(self.probabilities):
+            odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + common + kinematic[leg]
+            if normal_forces is not None and forced[leg]:
+                odds += self._clip((normal_forces[leg] - model.force_half_n) / model.force_scale_n)
+            if phase_prior is not None and math.isfinite(phase_prior[leg]):
+                odds += model.phase_weight * _logit(phase_prior[leg])
+            posterior.append(1.0 / (1.0 + math.exp(-odds)))
+        self.probabilities = posterior
+        return posterior
+
+    def _clip(self, log_ratio: float) -> float:
+        limit = self.model.max_log_ratio
+        return min(max(log_ratio, -limit), limit)
+
+
+def _kinematic(
+    model: ContactModel,
+    feet: Sequence[FootMotion | None],
+    omega: Sequence[float],
+    forced: Sequence[bool],
+) -> list[float]:
+    """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
+    the feet whose force is evidence too, and for all while the base falls (``forced``).
+    """
+    depths = [foot.depth for foot in feet if foot is not None and math.isfinite(foot.depth)]
+    if not depths:
+        return [0.0] * LEGS
+    lowest = max(depths)  # depth grows downwards
+    heights = [math.nan if foot is None else lowest - foot.depth for foot in feet]
+    velocities = [None if foot is None else _still_velocity(foot, omega) for foot in feet]
+    low = [
+        leg
+        for leg, (height, velocity) in enumerate(zip(heights, velocities, strict=True))
+        if height < model.height_half_m and velocity is not None and _finite(velocity)
+    ]
+    out = []
+    for leg, (height, velocity) in enumerate(zip(heights, velocities, strict=True)):
+        cap = model.max_kinematic_stance if forced[leg] else model.max_log_ratio
+        evidence = 0.0
+        if math.isfinite(height):
+            evidence += _clip((model.height_half_m - height) / model.height_scale_m, model, cap)
+        others = [v for other in low if other != leg and (v := velocities[other]) is not None]
+        if velocity is not None and _finite(velocity) and others:
+            count = len(others)
+            speed = math.sqrt(
+                sum((velocity[axis] - sum(v[axis] for v in others) / count) ** 2
+                    for axis in range(3))
+            )  # fmt: skip
+            evidence += _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model, cap)
+        out.append(evidence)
+    return out
+
+
+def _clip(log_ratio: float, model: ContactModel, cap: float) -> float:
+    """A kinematic log-likelihood ratio, within ``-max_log_ratio`` and ``cap``."""
+    return min(max(log_ratio, -model.max_log_ratio), cap)
+
+
+def _finite(vector: Vector) -> bool:
+    return math.isfinite(vector[0] + vector[1] + vector[2])
+
+
+def _still_velocity(foot: FootMotion, omega: Sequence[float]) -> Vector:
+    """The base velocity [m/s, base frame] the foot gives if it stands: ``e - w x r``."""
+    (ex, ey, ez), (rx, ry, rz) = foot.e, foot.r
+    wx, wy, wz = omega
+    return ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
+
+
+def _logit(probability: float) -> float:
+    """The log-odds of a probability, kept finite (within +-20)."""
+    p = min(max(probability, 2e-9), 1.0 - 2e-9)
+    return math.log(p / (1.0 - p))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import itertools
 import linecache
 import math
+import re
 import weakref
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -30,6 +31,7 @@ Term = float | str
 (``-0.2*s2``), or a parenthesised sum."""
 
 _sources = itertools.count()
+_NAME = re.compile(r"[A-Za-z_]\w*")
 
 
 def compile_source(source: str, what: str, owner: object) -> dict[str, Any]:
@@ -160,6 +162,21 @@ def _joined(constant: float, terms: list[str]) -> Term:
         negative, body = _signed(term)
         parts.append((f"- {body}" if negative else f"+ {term}") if parts else term)
     return parts[0] if len(parts) == 1 else "(" + " ".join(parts) + ")"
+
+
+def function_source(signature: str, lines: Sequence[str], returned: str) -> str:
+    """``def signature`` of the assignments (``name = expression``, in order) that ``returned``
+    needs, returning it: every line whose value nothing returned depends on is dropped.
+    """
+    needed = set(_NAME.findall(returned))
+    kept = []
+    for line in reversed(lines):
+        name, _, expression = line.partition(" = ")
+        if name in needed:
+            kept.append(line)
+            needed |= set(_NAME.findall(expression))
+    body = "\n    ".join(reversed(kept)) if kept else "pass"
+    return f"def {signature}:\n    {body}\n    return ({returned})\n"
 
 
 def leg_source(stages: Sequence[Stage], foot: np.ndarray) -> str:

@@ -28,6 +28,7 @@ from a1_leg_fk.kinematics.fk_codegen import (
     Code,
     Term,
     compile_source,
+    function_source,
     linear,
     moved_row,
     product,
@@ -38,7 +39,6 @@ from a1_leg_fk.kinematics.fk_codegen import (
 )
 from a1_leg_fk.kinematics.leg_segments import leg_segments
 from a1_leg_fk.kinematics.leg_stages import Stage, rpy_matrix
-from a1_leg_fk.kinematics.traced_code import function_source
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, foot_sphere
 from a1_leg_fk.model.urdf import RobotModel
 

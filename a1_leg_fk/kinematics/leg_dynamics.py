@@ -12,13 +12,14 @@ specific force (``g - a = -f``). With ``p`` and ``dT/dq``, Lagrange's equation o
     dp/dt = tau + tau_ext - g(q) + dT/dq        (dT/dq = C(q, dq)^T dq, the observer's form)
 
 The code writes out the recursion of the Newton-Euler method in the joints' own frames. Out
-along the leg, each joint's velocities: ``w_k = R_k^T w_(k-1) + a_k dq_k``, ``v_k = R_k^T (v_(k-1) +
-w_(k-1) x o_k)`` (``w_(-1) = omega``, ``v_(-1) = 0``). Back in, the momenta of everything below
-joint ``k``, about its origin: ``h_k = m_k v_k + w_k x mu_k + R_(k+1) h_(k+1)`` and ``l_k = mu_k x
-v_k + I_k w_k + R_(k+1) l_(k+1) + o_(k+1) x R_(k+1) h_(k+1)``. Then ``p_k = a_k . l_k`` and ``dT/dq_k
-= -a_k . (v_k x h_k + w_k x l_k)``: turning joint ``k`` turns the velocities the segments below it
-see by ``-a_k x``, and ``h_k``, ``l_k`` are ``T``'s gradients in them. Every term that is zero for
-this leg's geometry is dropped when the code is written (186 lines for an A1 leg, 3.4 us).
+along the leg, each joint's velocities: ``w_k = R_k^T w_(k-1) + a_k dq_k``, ``v_k = R_k^T
+(v_(k-1) + w_(k-1) x o_k)`` (``w_(-1) = omega``, ``v_(-1) = 0``). Back in, the momenta of
+everything below joint ``k``, about its origin: ``h_k = m_k v_k + w_k x mu_k + R_(k+1) h_(k+1)``
+and ``l_k = mu_k x v_k + I_k w_k + R_(k+1) l_(k+1) + o_(k+1) x R_(k+1) h_(k+1)``. Then ``p_k =
+a_k . l_k`` and ``dT/dq_k = -a_k . (v_k x h_k + w_k x l_k)``: turning joint ``k`` turns the
+velocities the segments below it see by ``-a_k x``, and ``h_k``, ``l_k`` are ``T``'s gradients
+in them. Every term that is zero for this leg's geometry is dropped when the code is written (186
+lines for an A1 leg, 3.4 us).
 """
 
 from __future__ import annotations

@@ -153,31 +153,43 @@ def _kinematic(
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too, and for all while the base falls (``forced``).
     """
-    depths = [foot.depth for foot in feet if foot is not None and math.isfinite(foot.depth)]
-    if not depths:
+    lowest = max((foot.depth for foot in feet if foot is not None), default=math.nan)
+    if not math.isfinite(lowest):
         return [0.0] * LEGS
-    lowest = max(depths)  # depth grows downwards
-    heights = [math.nan if foot is None else lowest - foot.depth for foot in feet]
-    velocities = [None if foot is None else _still_velocity(foot, omega) for foot in feet]
-    low = [
-        leg
-        for leg, (height, velocity) in enumerate(zip(heights, velocities, strict=True))
-        if height < model.height_half_m and velocity is not None and _finite(velocity)
-    ]
+    wx, wy, wz = omega
+    half, scale = model.height_half_m, model.height_scale_m
+    velocities: list[Vector | None] = [None] * LEGS
+    heights = [math.nan] * LEGS
+    low, sx, sy, sz = 0, 0.0, 0.0, 0.0  # the low feet with a velocity: count and sums
+    for leg, foot in enumerate(feet):
+        if foot is None:
+            continue
+        heights[leg] = lowest - foot.depth
+        (ex, ey, ez), (rx, ry, rz) = foot.e, foot.r  # the base velocity if it stands: e - w x r
+        vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
+        if math.isfinite(vx + vy + vz):
+            velocities[leg] = (vx, vy, vz)
+            if heights[leg] < half:
+                low, sx, sy, sz = low + 1, sx + vx, sy + vy, sz + vz
     out = []
-    for leg, (height, velocity) in enumerate(zip(heights, velocities, strict=True)):
+    for leg in range(LEGS):
         cap = model.max_kinematic_stance if forced[leg] else model.max_log_ratio
+        height, velocity = heights[leg], velocities[leg]
         evidence = 0.0
-        if math.isfinite(height):
-            evidence += _clip((model.height_half_m - height) / model.height_scale_m, model, cap)
-        others = [v for other in low if other != leg and (v := velocities[other]) is not None]
-        if velocity is not None and _finite(velocity) and others:
-            count = len(others)
-            speed = math.sqrt(
-                sum((velocity[axis] - sum(v[axis] for v in others) / count) ** 2
-                    for axis in range(3))
-            )  # fmt: skip
-            evidence += _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model, cap)
+        if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
+            evidence = _clip((half - height) / scale, model, cap)
+        if velocity is not None:
+            mine = height < half  # its own velocity is in the sums: leave it out
+            others = low - mine
+            if others:
+                vx, vy, vz = velocity
+                speed = math.sqrt(
+                    (vx - (sx - mine * vx) / others) ** 2
+                    + (vy - (sy - mine * vy) / others) ** 2
+                    + (vz - (sz - mine * vz) / others) ** 2
+                )
+                speed_odds = (model.speed_half_mps - speed) / model.speed_scale_mps
+                evidence += _clip(speed_odds, model, cap)
         out.append(evidence)
     return out
 
@@ -185,17 +197,6 @@ def _kinematic(
 def _clip(log_ratio: float, model: ContactModel, cap: float) -> float:
     """A kinematic log-likelihood ratio, within ``-max_log_ratio`` and ``cap``."""
     return min(max(log_ratio, -model.max_log_ratio), cap)
-
-
-def _finite(vector: Vector) -> bool:
-    return math.isfinite(vector[0] + vector[1] + vector[2])
-
-
-def _still_velocity(foot: FootMotion, omega: Sequence[float]) -> Vector:
-    """The base velocity [m/s, base frame] the foot gives if it stands: ``e - w x r``."""
-    (ex, ey, ez), (rx, ry, rz) = foot.e, foot.r
-    wx, wy, wz = omega
-    return ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
 
 
 def _logit(probability: float) -> float:

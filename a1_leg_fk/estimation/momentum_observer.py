@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from math import cos, isfinite, sin
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -57,37 +58,41 @@ NO_ROTATION = (0.0, 0.0, 0.0)
 
 
 class _LegState:
-    """One leg's observer between joint states."""
+    """One leg's observer between joint states: the latest stamp [s], momentum ``p`` [N m s]
+    and residual ``r`` [N m].
+    """
 
-    __slots__ = ("driving", "momentum", "residual", "stamp_s")
+    __slots__ = ("momentum", "residual", "stamp_s")
 
     def __init__(self) -> None:
         self.stamp_s = math.nan
-        self.momentum = [0.0, 0.0, 0.0]  # p [N m s]
-        self.driving = [0.0, 0.0, 0.0]  # s = tau - beta [N m]
-        self.residual = [0.0, 0.0, 0.0]  # r [N m]
+        self.momentum = (0.0, 0.0, 0.0)
+        self.residual = (0.0, 0.0, 0.0)
 
     def update(
-        self, stamp_s: float, momentum: Sequence[float], driving: Sequence[float], gain: float,
-        max_gap_s: float,
-    ) -> list[float]:  # fmt: skip
+        self, stamp_s: float, momentum: tuple[float, float, float],
+        driving: tuple[float, float, float], gain: float, max_gap_s: float,
+    ) -> tuple[float, float, float]:  # fmt: skip
         """The residual [N m] after a joint state at ``stamp_s`` [s] with momentum ``p`` and
         ``s = tau - beta``.
         """
         dt = stamp_s - self.stamp_s
         if dt <= 0.0:  # the same stamp, or older: hold
             return self.residual
+        s0, s1, s2 = driving
         if dt <= max_gap_s:  # NaN (the first) is neither
             keep = math.exp(-gain * dt)
-            self.residual = [
-                keep * r + (1.0 - keep) * ((p - p0) / dt - s)
-                for r, p, p0, s, s0 in zip(
-                    self.residual, momentum, self.momentum, driving, self.driving, strict=True
-                )
-            ]
+            r0, r1, r2 = self.residual
+            (p0, p1, p2), (q0, q1, q2) = momentum, self.momentum
+            change = (1.0 - keep) / dt
+            self.residual = (
+                keep * r0 + change * (p0 - q0 - dt * s0),
+                keep * r1 + change * (p1 - q1 - dt * s1),
+                keep * r2 + change * (p2 - q2 - dt * s2),
+            )
         else:  # quasi-static: dp/dt = 0
-            self.residual = [-s for s in driving]
-        self.stamp_s, self.momentum, self.driving = stamp_s, list(momentum), list(driving)
+            self.residual = (-s0, -s1, -s2)
+        self.stamp_s, self.momentum = stamp_s, momentum
         return self.residual
 
 
@@ -139,35 +144,41 @@ class MomentumObserver:
         angles, rates, efforts = sample
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
-        felt = gravity if specific_force is None else [-f for f in specific_force]
-        omega = NO_ROTATION if angular_velocity is None else angular_velocity
-        if not all(math.isfinite(v) for v in (*gravity, *felt, *omega)):
+        gx, gy, gz = gravity
+        fx, fy, fz = gravity if specific_force is None else [-f for f in specific_force]
+        wx, wy, wz = NO_ROTATION if angular_velocity is None else angular_velocity
+        if not isfinite(gx + gy + gz + fx + fy + fz + wx + wy + wz):
             self.reset()
             return out, missing, singular
-        cos, sin, isfinite = math.cos, math.sin, math.isfinite
         for slot in range(LEGS):
-            joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-            q, dq, tau = angles[joints], rates[joints], efforts[joints]
-            if not all(isfinite(v) for v in (*q, *tau)):
+            first = slot * JOINTS_PER_LEG
+            q0, q1, q2 = angles[first : first + 3]
+            t0, t1, t2 = efforts[first : first + 3]
+            if not isfinite(q0 + q1 + q2 + t0 + t1 + t2):
                 self._states[slot] = _LegState()
                 continue
             missing[slot] = False
-            trig = (cos(q[0]), sin(q[0]), cos(q[1]), sin(q[1]), cos(q[2]), sin(q[2]))
-            g0, g1, g2 = self._statics[slot].gravity_torques(*trig, *felt)
-            if all(isfinite(v) for v in dq):
-                dtdq0, dtdq1, dtdq2, *momentum = self._dynamics[slot].kinetic_terms(
-                    *trig, *dq, *omega
+            c0, s0, c1, s1, c2, s2 = cos(q0), sin(q0), cos(q1), sin(q1), cos(q2), sin(q2)
+            statics = self._statics[slot]
+            g0, g1, g2 = statics.gravity_torques(c0, s0, c1, s1, c2, s2, fx, fy, fz)
+            d0, d1, d2 = rates[first : first + 3]
+            if isfinite(d0 + d1 + d2):
+                k0, k1, k2, p0, p1, p2 = self._dynamics[slot].kinetic_terms(
+                    c0, s0, c1, s1, c2, s2, d0, d1, d2, wx, wy, wz
                 )
-                driving = (tau[0] - g0 + dtdq0, tau[1] - g1 + dtdq1, tau[2] - g2 + dtdq2)
-                residual = self._states[slot].update(
-                    stamp_s, momentum, driving, self.gain_per_s, self.max_gap_s
-                )
-                if not all(isfinite(v) for v in residual):  # absurd values: start again
+                state = self._states[slot]
+                r0, r1, r2 = state.update(
+                    stamp_s, (p0, p1, p2), (t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2),
+                    self.gain_per_s, self.max_gap_s,
+                )  # fmt: skip
+                if not isfinite(r0 + r1 + r2):  # absurd values: start again
                     self._states[slot] = _LegState()
             else:  # no rates: the quasi-static estimate
                 self._states[slot] = _LegState()
-                residual = [g0 - tau[0], g1 - tau[1], g2 - tau[2]]
-            x, y, z, det, size = self._statics[slot].solve_torques(*trig, *residual, *gravity)
+                r0, r1, r2 = g0 - t0, g1 - t1, g2 - t2
+            x, y, z, det, size = statics.solve_torques(
+                c0, s0, c1, s1, c2, s2, r0, r1, r2, gx, gy, gz
+            )
             singular[slot] = not abs(det) >= self.min_condition * size
             if not singular[slot]:
                 out[slot] = [x / det, y / det, z / det]

@@ -2,7 +2,7 @@
 through :mod:`a1_leg_fk.kinematics.foot_forces` and :mod:`a1_leg_fk.estimation.contacts`, the same
 rules the node uses. Gravity's direction comes from an ``sensor_msgs/msg/Imu`` topic (the nearest
 sample in time; an IMU aligned with the base), else the base is taken as level. No ROS install:
-the bag reader is ``rosbags``'s, passed in by :mod:`a1_leg_fk.recording.reader`.
+the bag is read through :class:`~a1_leg_fk.recording.reads.RecordingReads`.
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is read
-    from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
 
     from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.recording.reads import RecordingReads
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 
@@ -46,13 +46,14 @@ class ImuGravity:
     topic: str
 
     @classmethod
-    def read(cls, reader: AnyReader, connection: Connection) -> ImuGravity:
+    def read(cls, reads: RecordingReads, connection: Connection) -> ImuGravity:
         """Every message of ``connection`` that has an orientation
-        (:func:`~a1_leg_fk.estimation.imu.has_orientation`); :class:`LegFkError` if none has.
+        (:func:`~a1_leg_fk.estimation.imu.has_orientation`), up to damage;
+        :class:`LegFkError` if none has (:class:`DamagedRecording` if damage came first).
         """
         stamps, quaternions = [], []
-        for _, bag_time, raw in reader.messages(connections=[connection]):
-            message: Any = reader.deserialize(raw, connection.msgtype)
+        message: Any
+        for bag_time, message in reads.decoded(connection):
             q = message.orientation
             if not has_orientation(float(message.orientation_covariance[0]), (q.x, q.y, q.z, q.w)):
                 continue
@@ -60,6 +61,7 @@ class ImuGravity:
             stamps.append(stamp or bag_time)
             quaternions.append((q.x, q.y, q.z, q.w))
         if not quaternions:
+            reads.check()
             raise LegFkError(
                 f"--imu {connection.topic}: no message with an orientation (a rotation quaternion "
                 "with orientation_covariance[0] != -1)"
@@ -188,16 +190,18 @@ class ForcePass:
 
 
 def check_has_efforts(
-    reader: AnyReader, connection: Connection, ros1: bool, needs: str = "--forces"
+    reads: RecordingReads, connection: Connection, ros1: bool, needs: str = "--forces"
 ) -> None:
     """:class:`LegFkError` if the first JointState of ``connection`` has no efforts (``needs``:
-    the option that needs them, for the message).
+    the option that needs them, for the message). Damage before it or in it decides nothing:
+    the pass over the JointStates ends there.
     """
-    for _, _, raw in reader.messages(connections=[connection]):
+    for _, bag_time, raw in reads.messages([connection]):
         try:
             efforts = JointStateDecoder(ros1).fields(raw).efforts
         except WireError as error:
-            raise LegFkError(f"{connection.topic}: {error}") from None
+            reads.undecodable(bag_time, 1, connection.topic, str(error))
+            return
         if not efforts:
             raise MissingEfforts(
                 f"{connection.topic}: its JointState messages carry no efforts (the first one's "

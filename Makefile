@@ -6,6 +6,7 @@
 #   make test       the whole test suite (node tests pick their own ROS domain)
 #   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, node_throughput.py, odometry_throughput.py, bag_speed.py
 #   make soak       bench/soak.py
+#   make fuzz       bench/fuzz_recordings.py: 4000 damaged recordings through bag, gait and odom
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
 
 SHELL := bash
@@ -33,10 +34,10 @@ PACKAGE_STAMP := $(VENV)/.a1_leg_fk-editable.stamp
 # Two `make test` started together (several people share a tree) must not both install.
 VENV_LOCK := $(or $(TMPDIR),/tmp)/a1_leg_fk-venv-$(shell echo '$(abspath $(VENV))' | sha256sum | cut -c1-16).lock
 
-.PHONY: help venv venv-unlocked demo lint test bench soak clean distclean
+.PHONY: help venv venv-unlocked demo lint test bench soak fuzz clean distclean
 
 help:
-	@sed -n '3,10p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
+	@sed -n '3,11p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
 
 venv:
 	@flock '$(VENV_LOCK)' $(MAKE) --no-print-directory venv-unlocked
@@ -99,6 +100,11 @@ bench: venv
 
 soak: venv
 	$(BIN)/python bench/soak.py
+
+# FUZZ_ARGS: e.g. --copies 1 --first-seed SEED to rerun a failure the run printed.
+FUZZ_ARGS ?=
+fuzz: venv
+	$(BIN)/python bench/fuzz_recordings.py $(FUZZ_ARGS)
 
 clean:
 	rm -rf build install log dist .pytest_cache .hypothesis .coverage .coverage.* htmlcov \

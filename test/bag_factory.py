@@ -115,9 +115,12 @@ class BagSpec:
 def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
     """Write ``spec`` as ``kind``: "mcap" or "sqlite3" (a ROS 2 bag directory), "humble" or "foxy"
     (a ROS 2 bag directory as those distros' rosbag2 wrote it), "ros1" or "ros1-roslib" (.bag,
-    the latter with ``roslib/Header`` in its definitions).
+    the latter with ``roslib/Header`` in its definitions), "mcap-zstd" (a directory with one
+    ``.mcap`` file of zstd chunks, see :func:`write_chunked_mcap`).
     """
     entries = sorted(spec.entries, key=lambda entry: entry[2])
+    if kind == "mcap-zstd":
+        return write_chunked_mcap(path, entries)
     if kind in PRE_IRON:
         return write_pre_iron_bag(path, entries, kind)
     if kind in ("ros1", "ros1-roslib"):
@@ -142,6 +145,32 @@ def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
             if topic not in connections:
                 connections[topic] = writer.add_connection(topic, msgtype, typestore=TYPESTORE)
             writer.write(connections[topic], stamp, TYPESTORE.serialize_cdr(message, msgtype))
+    return path
+
+
+def write_chunked_mcap(
+    path: Path, entries: list[tuple[str, str, int, object]], chunk_bytes: int = 16384
+) -> Path:
+    """A directory holding one ``.mcap`` file (no ``metadata.yaml``) written by the format's
+    reference library as rosbag2's MCAP plugin records: ``ros2msg`` schemas, CDR messages,
+    zstd-compressed chunks (here small, ``chunk_bytes``, so that a short recording has many),
+    message indexes and a summary."""
+    from mcap.writer import CompressionType
+    from mcap.writer import Writer as McapWriter
+
+    path.mkdir()
+    channels: dict[str, int] = {}
+    with (path / f"{path.name}.mcap").open("wb") as stream:
+        writer = McapWriter(stream, chunk_size=chunk_bytes, compression=CompressionType.ZSTD)
+        writer.start(profile="ros2", library="bag_factory")
+        for topic, msgtype, stamp, message in entries:
+            if topic not in channels:
+                definition, _ = TYPESTORE.generate_msgdef(msgtype, ros_version=2)
+                schema = writer.register_schema(msgtype, "ros2msg", definition.encode())
+                channels[topic] = writer.register_channel(topic, "cdr", schema)
+            data = bytes(TYPESTORE.serialize_cdr(message, msgtype))
+            writer.add_message(channels[topic], stamp, data, stamp)
+        writer.finish()
     return path
 
 

@@ -45,10 +45,16 @@ def joint_state_msg(run: SimRun, row: int, efforts: bool = False) -> JointStateM
 
 
 def write_sim_bag(
-    path: Path, run: SimRun, imu: bool = True, truth: bool = True, efforts: bool = False
+    path: Path,
+    run: SimRun,
+    imu: bool = True,
+    truth: bool = True,
+    efforts: bool = False,
+    kind: str = "mcap",
 ) -> Path:
-    """The run as an MCAP bag: joint_states (positions, velocities, and with ``efforts`` the
-    motor torques), imu, truth (PoseStamped of the URDF root in the world)."""
+    """The run as a bag (``kind`` as :func:`bag_factory.write_bag`'s, MCAP by default):
+    joint_states (positions, velocities, and with ``efforts`` the motor torques), imu, truth
+    (PoseStamped of the URDF root in the world)."""
     spec = BagSpec()
     for row in range(len(run.stamps_s)):
         stamp = stamp_of(run, row)
@@ -65,4 +71,4 @@ def write_sim_bag(
                     pose(run.base_positions[row], run.base_quaternions[row]),
                 ),
             )
-    return write_bag(path, spec)
+    return write_bag(path, spec, kind)

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from a1_leg_fk.cli.common import (
-    EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    input_error,
     non_negative,
 )
 from a1_leg_fk.estimation.contact_estimator import (
@@ -266,8 +266,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             **recording_options(options, options.forces, options.contacts),
         )
     except (LegFkError, OSError) as error:  # OSError: an output folder not writable, a full disk
-        print(f"a1-leg-fk bag: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return input_error("a1-leg-fk bag", error)
     except KeyboardInterrupt:
         print("a1-leg-fk bag: interrupted; no output written", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -27,12 +27,25 @@ PROG = "a1-leg-fk"
 EXIT_OK, EXIT_FAILED, EXIT_NO_ANSWER, EXIT_INTERRUPTED = 0, 1, 2, 130
 EXIT_BAD_INPUT = 2
 """Bad usage or input: one line on stderr (argparse's own code for bad usage)."""
+EXIT_DAMAGED = EXIT_FAILED
+"""A recording damaged before anything a command needs could be read: one line on stderr."""
 ROS_ARGS_FLAG = "--ros-args"
 CHILD_STOP_TIMEOUT_S = 5.0
 T = TypeVar("T")
 
 
 # --- command line ------------------------------------------------------------------------------
+
+
+def input_error(prog: str, error: Exception) -> int:
+    """Print a bag command's :class:`~a1_leg_fk.model.urdf.LegFkError` (or ``OSError``) as one
+    line on stderr; its exit code: :data:`EXIT_DAMAGED` for a damaged recording, else
+    :data:`EXIT_BAD_INPUT`.
+    """
+    from a1_leg_fk.recording.reads import DamagedRecording
+
+    print(f"{prog}: {error}", file=sys.stderr)
+    return EXIT_DAMAGED if isinstance(error, DamagedRecording) else EXIT_BAD_INPUT
 
 
 def our_arguments(argv: Sequence[str]) -> list[str]:

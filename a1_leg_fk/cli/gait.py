@@ -27,7 +27,13 @@ from a1_leg_fk.cli.bag import (
     check_force_options,
     trajectories_from_options,
 )
-from a1_leg_fk.cli.common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
+from a1_leg_fk.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    input_error,
+)
 from a1_leg_fk.gait.analysis import (
     Contacts,
     ContactThresholds,
@@ -38,6 +44,7 @@ from a1_leg_fk.gait.analysis import (
 from a1_leg_fk.gait.force_contacts import with_force_stance
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.reads import DamagedRecording
 
 if TYPE_CHECKING:  # imported when the command runs, as a1-leg-fk bag does
     from a1_leg_fk.recording.outputs import OutputTarget
@@ -151,20 +158,18 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         targets = checked_outputs(options)
         trajectories, source = read_with_contacts(options)
-        if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
-            raise LegFkError(f"{options.input}: no JointState rows with feet")
-        stamps_s = (trajectories.stamps_ns - trajectories.stamps_ns.min()) * 1e-9
-        contacts = detect_contacts(
-            stamps_s, trajectories.world_positions, thresholds, options.unsorted
-        )
-        if source == "force" and trajectories.contacts is not None:
-            contacts = with_force_stance(
-                contacts, stamps_s, trajectories.contacts, options.unsorted
-            )
+        try:
+            contacts = analysed(options, trajectories, source, thresholds)
+        except LegFkError as error:
+            stopped = trajectories.summary.stopped
+            if not stopped:
+                raise
+            raise DamagedRecording(
+                f"{options.input}: stopped early: {stopped}; what was read gives no gait: {error}"
+            ) from None
         report = gait_metrics(contacts)
     except LegFkError as error:
-        print(f"{PROG}: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return input_error(PROG, error)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -180,6 +185,25 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         )
         return EXIT_BAD_INPUT if code == EXIT_BAD_INPUT else EXIT_FAILED
     return code
+
+
+def analysed(
+    options: argparse.Namespace,
+    trajectories: FootTrajectories,
+    source: str,
+    thresholds: ContactThresholds,
+) -> Contacts:
+    """The contacts of the recording's world feet (stance from the forces if ``source`` is
+    ``"force"``); :class:`LegFkError` if there are no rows or no contacts can be told.
+    """
+    if trajectories.world_positions is None or trajectories.stamps_ns.size == 0:
+        raise LegFkError(f"{options.input}: no JointState rows with feet")
+    stamps_s = (trajectories.stamps_ns - trajectories.stamps_ns.min()) * 1e-9
+    unsorted = options.unsorted
+    contacts = detect_contacts(stamps_s, trajectories.world_positions, thresholds, unsorted)
+    if source == "force" and trajectories.contacts is not None:
+        contacts = with_force_stance(contacts, stamps_s, trajectories.contacts, unsorted)
+    return contacts
 
 
 def read_with_contacts(options: argparse.Namespace) -> tuple[FootTrajectories, str]:

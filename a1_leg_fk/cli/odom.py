@@ -19,10 +19,10 @@ import numpy as np
 
 from a1_leg_fk.cli.bag import add_input_arguments, show_progress
 from a1_leg_fk.cli.common import (
-    EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    input_error,
     non_negative,
 )
 from a1_leg_fk.estimation.effort_contacts import CONTACT_SOURCES
@@ -113,8 +113,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         )
         written = _write(track, targets)
     except (LegFkError, OSError) as error:
-        print(f"a1-leg-fk odom: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return input_error("a1-leg-fk odom", error)
     except KeyboardInterrupt:
         print("a1-leg-fk odom: interrupted; no output written", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -3,7 +3,8 @@ joint state. One rule each, shared by the node and the bag tool (no ROS types he
 
 - :func:`imu_reading`: the orientation counts unless ``orientation_covariance[0] == -1`` (the
   message's convention for "no orientation") or it is not a rotation (a zero quaternion); the
-  angular velocity always (unless not finite). An all-zero covariance means "unknown" (REP 145,
+  angular velocity always, unless it is not finite or faster than :data:`MAX_ANGULAR_RATE_RADPS`
+  (a corrupt message: no gyro comes near it). An all-zero covariance means "unknown" (REP 145,
   sensor_msgs): its variances are then left to the odometry's defaults.
 - :class:`ImuBuffer`: a joint state stamped ``t`` takes the latest IMU sample stamped at or before
   ``t``, if it is at most ``timeout_s`` older; else none.
@@ -20,6 +21,9 @@ from a1_leg_fk.estimation.odometry import ImuReading
 NO_ORIENTATION = -1.0
 """``orientation_covariance[0]`` of an IMU without orientation (sensor_msgs/msg/Imu)."""
 DEFAULT_IMU_TIMEOUT_S = 0.1
+MAX_ANGULAR_RATE_RADPS = 1e3
+"""[rad/s] A faster angular velocity is no measurement (a corrupt message), as a NaN is not: MEMS
+gyros saturate near 35 rad/s; and it keeps the odometry's sums of squares far from overflow."""
 BUFFER_SAMPLES = 256
 """IMU samples kept for matching: ~0.25 s at 1 kHz, far more than a joint state's lag."""
 
@@ -60,11 +64,12 @@ def imu_reading(
 ) -> ImuReading | None:
     """The :class:`ImuReading` of an Imu message's fields (quaternion x, y, z, w; 3x3 row-major
     covariances [rad^2], [(rad/s)^2]; angular velocity [rad/s]), or None when its angular velocity
-    is not finite.
+    is not finite or faster than :data:`MAX_ANGULAR_RATE_RADPS` on some axis.
     """
     gyro = (float(angular_velocity[0]), float(angular_velocity[1]), float(angular_velocity[2]))
-    if not math.isfinite(gyro[0] + gyro[1] + gyro[2]):  # a NaN or infinity anywhere
-        return None
+    fastest = MAX_ANGULAR_RATE_RADPS
+    if not (abs(gyro[0]) <= fastest and abs(gyro[1]) <= fastest and abs(gyro[2]) <= fastest):
+        return None  # also NaN
     x, y, z, w = (float(orientation[0]), float(orientation[1]), float(orientation[2]),
                   float(orientation[3]))  # fmt: skip
     usable = has_orientation(float(orientation_covariance[0]), (x, y, z, w))

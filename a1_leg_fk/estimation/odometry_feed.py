@@ -27,6 +27,10 @@ from a1_leg_fk.model.legs import JOINTS_PER_LEG
 
 Foot = tuple[Sequence[float], Sequence[float]]
 """A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
+MAX_BASE_SPEED_MPS = 1e3
+"""[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
+rates or foot velocity are corrupt (no leg comes near it), and the odometry's sums of squares
+stay far from overflow."""
 
 
 class OdometryFeed:
@@ -108,7 +112,9 @@ class OdometryFeed:
         rates: Sequence[float],
         down: Vector,
     ) -> FootMotion | None:
-        """A standing leg's motion, or None when its numbers overflow."""
+        """A standing leg's motion, or None when its numbers overflow or are beyond
+        :data:`MAX_BASE_SPEED_MPS`.
+        """
         first = leg * JOINTS_PER_LEG
         last = first + JOINTS_PER_LEG
         foot, r, depth = feet[leg], points[leg], depths[leg]
@@ -116,4 +122,6 @@ class OdometryFeed:
         e = self.motion.still_base_velocity(
             leg, angles[first:last], rates[first:last], foot[1], down
         )
-        return FootMotion(e, r, depth) if math.isfinite(e[0] + e[1] + e[2]) else None
+        fastest = MAX_BASE_SPEED_MPS
+        usable = abs(e[0]) <= fastest and abs(e[1]) <= fastest and abs(e[2]) <= fastest
+        return FootMotion(e, r, depth) if usable else None  # not for NaN either

@@ -173,7 +173,8 @@ class FootForces:
     ) -> ForceEstimate:
         """Foot forces for (N, 12) angles [rad] and efforts [N m]; ``gravity_base`` (3,) or
         (N, 3) [m/s^2] in the base frame (default :data:`LEVEL_GRAVITY`). Non-finite values
-        make their leg :attr:`ForceEstimate.missing`, never an error.
+        make their leg :attr:`ForceEstimate.missing`, never an error; finite values so large
+        that the force overflows give it as infinite, silently (as :meth:`estimate_floats`).
         """
         q = batch_array(angles, "angles")
         tau = batch_array(efforts, "efforts")
@@ -193,9 +194,10 @@ class FootForces:
             cos, sin = np.cos(q[block]), np.sin(q[block])
             for slot in range(LEGS):
                 joints = slice(slot * JOINTS_PER_LEG, (slot + 1) * JOINTS_PER_LEG)
-                forces[block, slot], singular[block, slot] = self._leg_forces(
-                    slot, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
-                )
+                with np.errstate(over="ignore", invalid="ignore"):
+                    forces[block, slot], singular[block, slot] = self._leg_forces(
+                        slot, cos[:, joints], sin[:, joints], tau[block, joints], gravity[block]
+                    )
         singular &= ~missing
         forces[missing | singular] = math.nan
         return ForceEstimate(forces, missing, singular)

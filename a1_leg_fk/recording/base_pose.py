@@ -1,7 +1,7 @@
 """The base's recorded pose: read from a bag's Odometry / PoseStamped / PoseWithCovarianceStamped
 / TFMessage topic and interpolated at JointState stamps (position linearly, orientation by
 slerp), so that feet in the base frame become feet in the pose's world frame. No ROS install:
-the bag reader is ``rosbags``'s, passed in by :mod:`a1_leg_fk.recording.reader`.
+the bag is read through :class:`~a1_leg_fk.recording.reads.RecordingReads`.
 """
 
 from __future__ import annotations
@@ -16,8 +16,9 @@ import numpy as np
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is read
-    from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
+
+    from a1_leg_fk.recording.reads import RecordingReads
 
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
 POSE_TYPE = "geometry_msgs/msg/PoseStamped"
@@ -41,27 +42,36 @@ class BasePoses:
 
     @classmethod
     def read(
-        cls, reader: AnyReader, connection: Connection, base_frame: str, max_gap_s: float
+        cls, reads: RecordingReads, connection: Connection, base_frame: str, max_gap_s: float
     ) -> BasePoses:
-        """All poses of one topic (deserialized: a pose stream is small next to the joints')."""
+        """All poses of one topic, up to damage (deserialized: a pose stream is small next to
+        the joints'); a pose with a non-finite value or an orientation of zero length is none.
+        :class:`LegFkError` if there is none (:class:`DamagedRecording` if damage came first).
+        """
         stamps, values, frames = [], [], []
-        for _, _, raw in reader.messages(connections=[connection]):
-            message = reader.deserialize(raw, connection.msgtype)
+        for _, message in reads.decoded(connection):
             for stamp, frame, pose in _poses_of(
                 message, connection.msgtype, base_frame.lstrip("/")
             ):
                 stamps.append(stamp)
                 frames.append(frame)
                 values.append(pose)
-        if not stamps:
+        data = np.array(values, dtype=float).reshape(-1, 7)
+        with np.errstate(over="ignore", invalid="ignore"):
+            lengths = np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
+        usable = np.isfinite(data).all(axis=1) & np.isfinite(lengths[:, 0]) & (lengths[:, 0] > 0)
+        if not usable.any():
+            reads.check()
             raise LegFkError(
                 f"--base-pose {connection.topic}: no pose of the base frame '{base_frame}' in it"
             )
-        order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
-        data = np.array(values)[order]
-        quaternions = data[:, 3:] / np.linalg.norm(data[:, 3:], axis=1, keepdims=True)
+        kept = np.array(stamps, dtype=np.int64)[usable]
+        order = np.argsort(kept, kind="stable")
+        data, lengths = data[usable][order], lengths[usable][order]
+        frames = [frame for frame, use in zip(frames, usable) if use]
+        quaternions = data[:, 3:] / lengths
         return cls(
-            np.array(stamps, dtype=np.int64)[order],
+            kept[order],
             data[:, :3],
             quaternions,
             frames[0],

@@ -22,11 +22,10 @@ from a1_leg_fk.recording.joint_state_wire import (
     WireError,
     cdr_layout,
 )
-from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording, one_line
+from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording
 from a1_leg_fk.tracking import FootTracker
 
 if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
-    from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
     from tqdm import tqdm
 
@@ -69,10 +68,11 @@ def iter_foot_blocks(
     """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
     called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
 
-    A truncated or corrupt bag ends the pass early: what was read is yielded, and
-    ``recording.stopped`` says where and why. :class:`LegFkError` at the end of a pass in which
-    no message named a joint of the model's legs (a bag of another robot): then every row
-    (there are none) and output would be empty.
+    A truncated or corrupt bag ends the pass early (:class:`~a1_leg_fk.recording.reads.
+    RecordingReads`): what was read is yielded, and ``recording.stopped`` says where and why.
+    :class:`LegFkError` at the end of a whole pass in which no message named a joint of the
+    model's legs (a bag of another robot): then every row (there are none) and output would be
+    empty.
     """
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
@@ -84,8 +84,9 @@ def iter_foot_blocks(
     bar = _progress_bar(total, progress)
     batch = _Batch(recording, tracker, JointStateDecoder(ros1=recording.ros1))
     read = shown = 0
+    messages = recording.reads.messages(connections, "the bag" if on_message else "")
     try:
-        for connection, bag_time, raw in _guarded(recording, _raw_messages(reader, connections)):
+        for connection, bag_time, raw in messages:
             read += 1
             if on_message is not None:
                 on_message(connection, bag_time, raw)
@@ -98,13 +99,14 @@ def iter_foot_blocks(
                 yield from batch.blocks()
             batch.add(raw, bag_time)
         yield from batch.blocks()
-    except _Corrupt as error:
-        recording.stopped = str(error)
+    except _Corrupt:
+        pass  # recording.reads says where
     finally:
+        messages.close()
         if bar is not None:
             bar.update(read - shown)
             bar.close()
-    if tracker.counts.messages and not batch.leg_joint_named:
+    if tracker.counts.messages and not batch.leg_joint_named and not recording.stopped:
         raise LegFkError(no_leg_joints_problem(recording, batch.first_names))
 
 
@@ -129,34 +131,10 @@ def no_leg_joints_problem(recording: Recording, names: list[str]) -> str:
     )
 
 
-def _raw_messages(
-    reader: AnyReader, connections: list[Connection]
-) -> Iterator[tuple[Connection, int, bytes]]:
-    """(connection, bag time [ns], raw bytes) in bag order; a single bag's reader directly (no
-    merge of several).
-    """
-    if len(reader.readers) == 1:
-        return reader.readers[0].messages(connections=connections)
-    return reader.messages(connections=connections)
-
-
-def _guarded(
-    recording: Recording, messages: Iterator[tuple[Connection, int, bytes]]
-) -> Iterator[tuple[Connection, int, bytes]]:
-    """``messages`` until the storage cannot be read further (truncated, corrupt): then
-    ``recording.stopped`` says where and why, and the iteration ends.
-    """
-    bag_time = None
-    try:
-        for item in messages:
-            bag_time = item[1]
-            yield item
-    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for broken storage)
-        recording.stopped = f"cannot read past bag time {bag_time} ns: {one_line(error)}"
-
-
 class _Corrupt(Exception):
-    """A JointState message that cannot be decoded; the pass stops there."""
+    """A JointState message that cannot be decoded (noted in ``recording.reads``); the pass
+    stops there.
+    """
 
 
 class _Batch:
@@ -171,6 +149,7 @@ class _Batch:
         self.recording, self.tracker, self.decoder = recording, tracker, decoder
         self.raws: list[bytes] = []
         self.bag_times: list[int] = []
+        self.added = 0  # JointState messages added so far
         self.length = -1
         self.leg_joint_named = False  # some message so far named a joint of the model's legs
         self.first_names: list[str] = []  # the first non-empty name list, for the error
@@ -186,6 +165,7 @@ class _Batch:
     def add(self, raw: bytes, bag_time: int) -> None:
         if not self.raws:
             self.length = len(raw)
+        self.added += 1
         self.raws.append(raw)
         self.bag_times.append(bag_time)
 
@@ -229,12 +209,15 @@ class _Batch:
     def _one_by_one(self, raws: list[bytes], bag_times: list[int]) -> Iterator[FootBlock]:
         fields = self.decoder.fields
         pending = _Pending()
-        for raw, bag_time in zip(raws, bag_times):
+        first = self.added - len(raws) + 1  # the number of the batch's first JointState
+        for index, (raw, bag_time) in enumerate(zip(raws, bag_times), first):
             try:
                 stamp, changed, order, positions, velocities, efforts = fields(raw)
             except WireError as error:
                 yield from pending.finish(self)
-                raise _Corrupt(f"JointState at bag time {bag_time} ns: {error}") from None
+                topic = self.recording.joint_states.topic
+                self.recording.reads.undecodable(bag_time, index, topic, str(error))
+                raise _Corrupt from None
             if pending.stamps and (
                 changed
                 or order != pending.order

@@ -4,8 +4,8 @@ in the node, one joint state at a time: the pipeline of
 recording without efforts still gets kinematic contacts). The IMU comes from an
 ``sensor_msgs/msg/Imu`` topic (the nearest sample in time; aligned with the base): gravity's
 direction from its orientation, else the base taken as level; its gyro and accelerometer for the
-legs' dynamics. No ROS install: the bag reader is ``rosbags``'s, passed in by
-:mod:`a1_leg_fk.recording.reader`.
+legs' dynamics. No ROS install: the bag is read through
+:class:`~a1_leg_fk.recording.reads.RecordingReads`.
 """
 
 from __future__ import annotations
@@ -25,10 +25,10 @@ from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is read
-    from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
 
     from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.recording.reads import RecordingReads
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 Vector = tuple[float, float, float]
@@ -53,13 +53,14 @@ class ImuTrack:
     topic: str
 
     @classmethod
-    def read(cls, reader: AnyReader, connection: Connection) -> ImuTrack:
-        """Every message of ``connection``; :class:`LegFkError` if none has an orientation
-        (:func:`~a1_leg_fk.estimation.imu.has_orientation`).
+    def read(cls, reads: RecordingReads, connection: Connection) -> ImuTrack:
+        """Every message of ``connection``, up to damage; :class:`LegFkError` if none has an
+        orientation (:func:`~a1_leg_fk.estimation.imu.has_orientation`;
+        :class:`DamagedRecording` if damage came first).
         """
         stamps, quaternions, gyros, accelerations = [], [], [], []
-        for _, bag_time, raw in reader.messages(connections=[connection]):
-            message: Any = reader.deserialize(raw, connection.msgtype)
+        message: Any
+        for bag_time, message in reads.decoded(connection):
             q = message.orientation
             quaternion = (q.x, q.y, q.z, q.w)
             usable = has_orientation(float(message.orientation_covariance[0]), quaternion)
@@ -72,6 +73,7 @@ class ImuTrack:
             stamps.append(stamp or bag_time)
         rotations = np.array(quaternions, dtype=float).reshape(-1, 4)
         if not np.isfinite(rotations).all(axis=1).any():
+            reads.check()
             raise LegFkError(
                 f"--imu {connection.topic}: no message with an orientation (a rotation quaternion "
                 "with orientation_covariance[0] != -1)"
@@ -265,16 +267,18 @@ class ForcePass:
 
 
 def check_has_efforts(
-    reader: AnyReader, connection: Connection, ros1: bool, needs: str = "--forces"
+    reads: RecordingReads, connection: Connection, ros1: bool, needs: str = "--forces"
 ) -> None:
     """:class:`LegFkError` if the first JointState of ``connection`` has no efforts (``needs``:
-    the option that needs them, for the message).
+    the option that needs them, for the message). Damage before it or in it decides nothing:
+    the pass over the JointStates ends there.
     """
-    for _, _, raw in reader.messages(connections=[connection]):
+    for _, bag_time, raw in reads.messages([connection]):
         try:
             efforts = JointStateDecoder(ros1).fields(raw).efforts
         except WireError as error:
-            raise LegFkError(f"{connection.topic}: {error}") from None
+            reads.undecodable(bag_time, 1, connection.topic, str(error))
+            return
         if not efforts:
             raise MissingEfforts(
                 f"{connection.topic}: its JointState messages carry no efforts (the first one's "

@@ -59,8 +59,7 @@ def _cut_chunk_records(data: BinaryIO, offset: int, size: int) -> tuple[int, int
     if opcode != _CHUNK_OPCODE:
         return 0, 0
     data.read(_CHUNK_HEAD.size)
-    compression_length = struct.unpack("<I", data.read(4))[0]
-    if data.read(compression_length) != b"":  # compressed: not salvaged
+    if struct.unpack("<I", data.read(4))[0]:  # a compression's name: compressed, not salvaged
         return 0, 0
     start = data.tell() + 8  # after the records' byte length
     end = _complete_records(data, start, size)

@@ -22,7 +22,7 @@ from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, Odomet
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import check_has_efforts
-from a1_leg_fk.recording.reader import one_line, pick_topic
+from a1_leg_fk.recording.reader import pick_topic
 from a1_leg_fk.recording.trajectories import (
     BasePoses,
     BlockStats,
@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from rosbags.interfaces import Connection
 
     from a1_leg_fk.estimation.odometry import ImuReading
+    from a1_leg_fk.recording.reads import RecordingReads
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 
@@ -100,10 +101,10 @@ def odometry_track(
         recording.efforts = contacts != KINEMATIC
         if contacts == FORCE:
             check_has_efforts(
-                recording.reader, recording.joint_states, recording.ros1, "--contacts force"
+                recording.reads, recording.joint_states, recording.ros1, "--contacts force"
             )
         imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
-        imu = _imu_samples(recording.reader, imu_connection) if imu_connection else []
+        imu = _imu_samples(recording.reads, imu_connection) if imu_connection else []
         feed = OdometryFeed(
             recording.quadruped, settings, radius_m, use_imu=use_imu, contacts=contacts
         )
@@ -211,24 +212,21 @@ def _imu_connection(
 
 
 def _imu_samples(
-    reader: AnyReader, connection: Connection
+    reads: RecordingReads, connection: Connection
 ) -> list[tuple[int, int, ImuReading | None]]:
-    """(bag time [ns], stamp [ns], reading) of every Imu message, in bag order (the stamp is the
-    bag time where the header's is zero, as for joint states).
+    """(bag time [ns], stamp [ns], reading) of every Imu message up to damage, in bag order (the
+    stamp is the bag time where the header's is zero, as for joint states).
     """
     samples = []
-    try:
-        for _, bag_time, raw in reader.messages(connections=[connection]):
-            message: Any = reader.deserialize(raw, connection.msgtype)
-            stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-            q, w = message.orientation, message.angular_velocity
-            reading = imu_reading(
-                (q.x, q.y, q.z, q.w),
-                message.orientation_covariance,
-                (w.x, w.y, w.z),
-                message.angular_velocity_covariance,
-            )
-            samples.append((bag_time, stamp or bag_time, reading))
-    except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
-        raise LegFkError(f"--imu {connection.topic}: cannot read it: {one_line(error)}") from None
+    message: Any
+    for bag_time, message in reads.decoded(connection):
+        stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        q, w = message.orientation, message.angular_velocity
+        reading = imu_reading(
+            (q.x, q.y, q.z, q.w),
+            message.orientation_covariance,
+            (w.x, w.y, w.z),
+            message.angular_velocity_covariance,
+        )
+        samples.append((bag_time, stamp or bag_time, reading))
     return samples

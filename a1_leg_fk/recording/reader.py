@@ -1,8 +1,9 @@
 """Opening a recording: the bag (a ROS 2 directory, ``.mcap``, ``.db3`` or ROS 1 ``.bag``, a
 truncated MCAP file from a copy of its complete records), the JointState topic, the robot model
 (``--urdf``, else the bag's ``robot_description``, else the embedded A1) and the base pose
-(:mod:`a1_leg_fk.recording.base_pose`). No ROS install: ``rosbags`` is imported when a bag is
-opened.
+(:mod:`a1_leg_fk.recording.base_pose`). Every read of its messages goes through its
+:class:`~a1_leg_fk.recording.reads.RecordingReads` (damage ends the reads, it never raises out of
+the reader). No ROS install: ``rosbags`` is imported when a bag is opened.
 """
 
 from __future__ import annotations
@@ -13,14 +14,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING, Any, TypedDict
+from typing import TYPE_CHECKING, TypedDict
 
 from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER
 from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_S, BasePoses
 from a1_leg_fk.recording.mcap_salvage import salvage
-from a1_leg_fk.recording.typestores import open_reader, require_types
+from a1_leg_fk.recording.reads import RecordingReads
+from a1_leg_fk.recording.typestores import CannotOpen, open_reader, require_types
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.highlevel import AnyReader
@@ -66,14 +68,19 @@ class Recording:
     base_pose: BasePoses | None
     base_pose_topic: str | None
     ros1: bool
+    reads: RecordingReads  # every read of the bag's messages, and the damage found
     types: str = ""  # which message types the bag is read with (recording.typestores)
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
-    stopped: str = ""
     salvage_note: str = ""  # what was read of a truncated MCAP file
     tracker: FootTracker | None = None  # the rules' state and counts of the current pass
     forces: ForcePass | None = None  # foot forces and contacts, when asked for
     force_output: bool = False  # the forces are wanted in the outputs (bag --forces)
     efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
+
+    @property
+    def stopped(self) -> str:
+        """Why reading stopped before the end of the bag (its damage); "" if it did not."""
+        return self.reads.damage
 
 
 def _rosbags() -> ModuleType:
@@ -111,20 +118,16 @@ def open_recording(
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
+    reads = RecordingReads(reader, path)
     try:
         joint_states = pick_topic(
             reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
         )
         if not urdf:
             require_types(reader, path, _description_types(reader), types)
-        try:
-            description, description_topic = (
-                (None, "") if urdf else _recorded_description(reader, joint_states)
-            )
-        except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
-            raise LegFkError(
-                f"{path}: cannot read its robot_description topic: {one_line(error)}"
-            ) from None
+        description, description_topic = (
+            (None, "") if urdf else _recorded_description(reads, joint_states)
+        )
         # an empty recorded description counts as none (as in the node): the embedded A1
         name = f"robot_description topic {description_topic} in {path}"
         robot = load_robot(
@@ -148,20 +151,13 @@ def open_recording(
             require_types(
                 reader, path, {pose_connection.msgtype: f"--base-pose {base_pose}"}, types
             )
-            try:
-                poses = BasePoses.read(
-                    reader, pose_connection, robot.quadruped.base_frame, max_pose_gap_s
-                )
-            except LegFkError:
-                raise
-            except Exception as error:  # noqa: BLE001 (rosbags: a corrupt pose message or storage)
-                raise LegFkError(
-                    f"--base-pose {base_pose}: cannot read it: {one_line(error)}"
-                ) from None
+            poses = BasePoses.read(
+                reads, pose_connection, robot.quadruped.base_frame, max_pose_gap_s
+            )
         force_pass = (
             _force_pass(
-                reader,
-                (path, joint_states, imu),
+                reads,
+                (joint_states, imu),
                 robot.quadruped,
                 forces,
                 (contact_thresholds, force_model, contact_rule),
@@ -178,6 +174,7 @@ def open_recording(
             poses,
             base_pose,
             not reader.is2,
+            reads,
             types,
             salvage_note=salvage_note,
             forces=force_pass,
@@ -189,32 +186,27 @@ def open_recording(
 
 
 def _force_pass(
-    reader: AnyReader,
-    where: tuple[Path, Connection, str | None],
+    reads: RecordingReads,
+    where: tuple[Connection, str | None],
     quadruped: Quadruped,
     needs_efforts: bool,
     settings: tuple[tuple[float | None, float | None], str, str],
 ) -> ForcePass:
-    """The force and contact estimation of a pass over the JointStates of ``where`` (the bag,
-    the connection, the IMU topic or None); :class:`LegFkError` if the JointStates carry no
+    """The force and contact estimation of a pass over the JointStates of ``where`` (their
+    connection, the IMU topic or None); :class:`LegFkError` if the JointStates carry no
     efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
     contact thresholds, the force model and the contact rule.
     """
     from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuTrack, check_has_efforts
 
-    path, joint_states, imu = where
+    joint_states, imu = where
     if needs_efforts:
         needs = "the force estimate (bag --forces, gait --contacts force)"
-        check_has_efforts(reader, joint_states, not reader.is2, needs)
+        check_has_efforts(reads, joint_states, not reads.reader.is2, needs)
     track = None
     if imu:
-        connection = pick_topic(reader, path, imu, (IMU_TYPE,), "--imu", "IMU")
-        try:
-            track = ImuTrack.read(reader, connection)
-        except LegFkError:
-            raise
-        except Exception as error:  # noqa: BLE001 (rosbags: a corrupt message or storage)
-            raise LegFkError(f"--imu {imu}: cannot read it: {one_line(error)}") from None
+        connection = pick_topic(reads.reader, reads.path, imu, (IMU_TYPE,), "--imu", "IMU")
+        track = ImuTrack.read(reads, connection)
     thresholds, force_model, contact_rule = settings
     return ForcePass(quadruped, track, thresholds, force_model, contact_rule)
 
@@ -243,8 +235,8 @@ def _open_reader(path: Path) -> tuple[AnyReader, str, str]:
     try:
         reader, types = open_reader(opened)
         return reader, "", types
-    except Exception as error:  # noqa: BLE001 (rosbags raises several kinds for unreadable files)
-        problem = f"{path}: cannot open as a ROS bag: {one_line(error)}"
+    except CannotOpen as error:
+        problem = f"{path}: cannot open as a ROS bag: {error}"
     mcaps = (
         sorted(opened.glob("*.mcap"))
         if opened.is_dir()
@@ -266,7 +258,7 @@ def _salvaged_reader(mcap: Path) -> tuple[AnyReader, str, str] | None:
     try:
         kept = salvage(mcap, folder / mcap.name)
         reader, types = open_reader(kept.path) if kept is not None else (None, "")
-    except Exception:  # noqa: BLE001 (not even the salvaged part can be read)
+    except CannotOpen:  # not even the salvaged part can be read
         reader = None
     if reader is None or kept is None:
         shutil.rmtree(folder, ignore_errors=True)
@@ -297,12 +289,6 @@ def _storage_file(directory: Path) -> Path:
             f"{', '.join(p.name for p in storage)}"
         )
     return storage[0]
-
-
-def one_line(error: BaseException) -> str:
-    """An error's message on one line (whitespace runs as one space), at most 300 characters."""
-    text = " ".join(str(error).split()) or type(error).__name__
-    return text[:300]
 
 
 def pick_topic(
@@ -346,15 +332,21 @@ def _description_types(reader: AnyReader) -> dict[str, str]:
     return {DESCRIPTION_TYPE: f"robot_description topic {topics[0]}"} if topics else {}
 
 
-def _recorded_description(reader: AnyReader, joint_states: Connection) -> tuple[str | None, str]:
+def _recorded_description(
+    reads: RecordingReads, joint_states: Connection
+) -> tuple[str | None, str]:
     """The latest ``robot_description`` message before the first JointState, and its topic."""
-    connections = _description_connections(reader)
+    connections = _description_connections(reads.reader)
     if not connections:
         return None, ""
     latest, topic = None, ""
-    for connection, _, raw in reader.messages(connections=[*connections, joint_states]):
+    messages = reads.messages([*connections, joint_states])
+    for index, (connection, bag_time, raw) in enumerate(messages, 1):
         if connection is joint_states:
             break
-        message: Any = reader.deserialize(raw, connection.msgtype)  # a std_msgs/msg/String
+        message = reads.deserialize(connection, bag_time, index, raw)  # a std_msgs/msg/String
+        if message is None:
+            break
         latest, topic = message.data, connection.topic
+    messages.close()
     return latest, topic

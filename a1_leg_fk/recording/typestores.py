@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.reads import BoundedPath, one_line
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.highlevel import AnyReader
@@ -34,19 +35,27 @@ distro: the most used ROS 2 release whose rosbag2 stored no definitions."""
 OLD_HEADER, HEADER = "roslib/Header", "std_msgs/Header"
 
 
+class CannotOpen(Exception):
+    """rosbags cannot open the file (not a bag, or damaged where it starts or is indexed)."""
+
+
 def open_reader(path: Path) -> tuple[AnyReader, str]:
     """An open ``AnyReader`` of ``path`` (a ROS 1 ``.bag``, a rosbag2 directory, ``.mcap`` or
     ``.db3`` file) with the types of the rule above, and a line saying which types those are.
-    Raises what rosbags raises for a file it cannot open.
+    Its files are read through :class:`~a1_leg_fk.recording.reads.BoundedPath`. Raises
+    :class:`CannotOpen` with what rosbags raised for a file it cannot open.
     """
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
-    # an empty default lets a bag without definitions open; its types are chosen below
-    reader = AnyReader([path], default_typestore=get_typestore(Stores.EMPTY))
-    if not reader.is2:
-        reader.readers = [_ros1_reader_class()(bag) for bag in reader.paths]
-    reader.open()
+    try:
+        # an empty default lets a bag without definitions open; its types are chosen below
+        reader = AnyReader([BoundedPath(path)], default_typestore=get_typestore(Stores.EMPTY))
+        if not reader.is2:
+            reader.readers = [_ros1_reader_class()(bag) for bag in reader.paths]
+        reader.open()
+    except Exception as error:  # rosbags raises many kinds for what it cannot open
+        raise CannotOpen(one_line(error)) from error
     try:
         return reader, _choose_types(reader, path)
     except BaseException:

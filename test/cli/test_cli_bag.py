@@ -293,7 +293,9 @@ def test_truncated_bag_gives_what_was_read_and_exit_1(
     if kind == "sqlite3":
         with sqlite3.connect(data) as db:  # corrupt the payload of one message in the middle
             db.execute("UPDATE messages SET data = x'0001' WHERE id = 1500")
-        expected_rows, where = 1498, "JointState at bag time"  # ids 1 (/chatter) .. 1499
+        # ids 1 (/chatter) .. 1499 before it: the 1,499th JointState is damaged
+        expected_rows = 1498
+        where = "the recording is damaged: message 1,499 of /joint_states (bag time"
     else:
         data.write_bytes(before[: len(before) // 2])  # the recorder died half way
         expected_rows, where = None, "is truncated or has no readable summary: read its first"

@@ -340,6 +340,26 @@ def test_bad_feet_leave_the_estimate_finite() -> None:
     assert odometry.counts.gaps == 1 and np.isfinite(sample.position).all()
 
 
+def test_absurd_rates_are_no_measurement(quadruped) -> None:
+    """A damaged recording's joint rate of 1e200 rad/s (the fuzz of issue 29 found it): squared
+    in the stance consensus it raised OverflowError; that foot, and such a gyro, are ignored."""
+    angles, rates = [0.0, 0.8, -1.5] * 4, [0.0] * 12
+    feet = quadruped.fk_batch(np.array([angles])).tolist()[0]
+    feed = OdometryFeed(quadruped, use_imu=True)
+    assert imu_reading((0, 0, 0, 1), [0.0] * 9, (0.0, 0.0, 1e200), [0.0] * 9) is None
+    assert imu_reading((0, 0, 0, 1), [0.0] * 9, (0.0, math.nan, 0.0), [0.0] * 9) is None
+    assert imu_reading((0, 0, 0, 1), [0.0] * 9, (0.0, 0.0, 999.0), [0.0] * 9) is not None
+    feed.add_imu(0, imu_reading((0, 0, 0, 1), [0.0] * 9, (0.0, 0.0, 0.0), [0.0] * 9))
+    still = [(foot, (0.0, 0.0, 0.0)) for foot in feet]
+    assert feed.step(1_000_000, still, angles, rates, [1.0] * 4) is not None
+    absurd = list(still)
+    absurd[1] = (feet[1], (1e200, 0.0, 0.0))
+    broken_rates = [1e200 if slot == 0 else 0.0 for slot in range(12)]
+    sample = feed.step(2_000_000, absurd, angles, broken_rates, [1.0] * 4)
+    assert sample is not None and sample.used == (2, 3)
+    assert np.isfinite(sample.linear).all() and np.isfinite(sample.position).all()
+
+
 # --- the IMU rules ---------------------------------------------------------------------------
 
 

@@ -141,7 +141,7 @@ class ContactFilter:
 
     def _clip(self, log_ratio: float) -> float:
         limit = self.model.max_log_ratio
-        return min(max(log_ratio, -limit), limit)
+        return _clip(log_ratio, self.model, limit)
 
 
 def _kinematic(
@@ -183,11 +183,10 @@ def _kinematic(
             others = low - mine
             if others:
                 vx, vy, vz = velocity
-                speed = math.sqrt(
-                    (vx - (sx - mine * vx) / others) ** 2
-                    + (vy - (sy - mine * vy) / others) ** 2
-                    + (vz - (sz - mine * vz) / others) ** 2
-                )
+                dx = vx - (sx - mine * vx) / others
+                dy = vy - (sy - mine * vy) / others
+                dz = vz - (sz - mine * vz) / others
+                speed = math.sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
                 speed_odds = (model.speed_half_mps - speed) / model.speed_scale_mps
                 evidence += _clip(speed_odds, model, cap)
         out.append(evidence)
@@ -195,7 +194,11 @@ def _kinematic(
 
 
 def _clip(log_ratio: float, model: ContactModel, cap: float) -> float:
-    """A kinematic log-likelihood ratio, within ``-max_log_ratio`` and ``cap``."""
+    """A kinematic log-likelihood ratio, within ``-max_log_ratio`` and ``cap``; NaN (from
+    absurd values) is no evidence.
+    """
+    if log_ratio != log_ratio:  # noqa: PLR0124
+        return 0.0
     return min(max(log_ratio, -model.max_log_ratio), cap)
 
 

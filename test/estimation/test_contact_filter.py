@@ -1,0 +1,79 @@
+"""The contact filter's arithmetic by hand: one step of each kind of evidence from even odds, the
+transition model, the asymmetric kinematic evidence, free fall, and absurd inputs (the fuzz of
+damaged recordings found speeds of 1e200 m/s overflowing)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.leg_motion import FootMotion
+
+MODEL = ContactModel.for_robot(weight_n=120.0, leg_length_m=0.4)
+STILL = (0.0, 0.0, 0.0)
+
+
+def sigmoid(odds: float) -> float:
+    return 1.0 / (1.0 + math.exp(-odds))
+
+
+def foot(depth: float, velocity=STILL) -> FootMotion:
+    """A foot whose contact point lies ``depth`` [m] below the base, giving the base velocity
+    ``velocity`` [m/s] if it stood."""
+    return FootMotion(velocity, (0.0, 0.0, -depth), depth)
+
+
+def test_force_evidence_alone_is_a_clipped_logistic() -> None:
+    assert MODEL.force_half_n == pytest.approx(6.0) and MODEL.force_scale_n == pytest.approx(1.8)
+    contacts = ContactFilter(MODEL)
+    forces = [6.0 + 2 * 1.8, 6.0 - 1.8, 100.0, math.nan]  # +2, -1, clipped to +4, none
+    out = contacts.update(0.0, [None] * 4, (STILL, None), forces)
+    assert out == pytest.approx([sigmoid(2.0), sigmoid(-1.0), sigmoid(4.0), 0.5], abs=1e-12)
+
+
+def test_the_transition_model_pulls_towards_even_odds() -> None:
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [1.0, 0.0, 0.9, 0.5]
+    switch = 1.0 - math.exp(-0.01 / MODEL.switch_time_s)
+    out = contacts.update(0.01, [None] * 4, (STILL, None))
+    expected = [1 - switch, switch, 0.9 + switch * (1 - 1.8), 0.5]
+    assert out == pytest.approx(expected, abs=2e-9)
+
+
+def test_kinematics_say_swing_strongly_and_stance_weakly_beside_a_force() -> None:
+    # three feet on the ground, still; FL 5 cm up and moving 1 m/s against the others
+    feet = [foot(0.3), foot(0.25, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
+    contacts = ContactFilter(MODEL)
+    out = contacts.update(0.0, feet, (STILL, None), [MODEL.force_half_n] * 4)  # forces even
+    low_still = 2 * MODEL.max_kinematic_stance  # height and speed, each capped
+    assert out == pytest.approx(
+        [sigmoid(low_still), sigmoid(-2 * MODEL.max_log_ratio), *[sigmoid(low_still)] * 2]
+    )
+    alone = ContactFilter(MODEL).update(0.0, feet, (STILL, None))  # no force: symmetric clip
+    height_odds = MODEL.height_half_m / MODEL.height_scale_m  # 4: at the lowest foot's height
+    speed_odds = MODEL.speed_half_mps / MODEL.speed_scale_mps  # 4: still against the others
+    assert alone[0] == pytest.approx(sigmoid(height_odds + speed_odds))
+
+
+def test_free_fall_lifts_every_foot() -> None:
+    feet = [foot(0.3)] * 4  # all low and still: the kinematics alone would say stance
+    contacts = ContactFilter(MODEL)
+    for _ in range(5):
+        out = contacts.update(0.002, feet, (STILL, (0.0, 0.0, 0.4)))  # |f| = 0.4 m/s^2
+    assert max(out) < 0.05
+    standing = ContactFilter(MODEL)
+    for _ in range(5):
+        out = standing.update(0.002, feet, (STILL, (0.0, 0.0, 9.8)))
+    assert min(out) > 0.95
+
+
+def test_absurd_values_give_probabilities_not_errors() -> None:
+    contacts = ContactFilter(MODEL)
+    feet = [foot(0.3, (1e200, -1e200, 1e300)), foot(0.3, (-1e300, 1e200, 0.0)), foot(math.inf),
+            foot(0.3, (math.nan, 0.0, 0.0))]  # fmt: skip
+    for _ in range(3):
+        out = contacts.update(1e-9, feet, ((1e300, 0.0, 0.0), (1e308, 1e308, 1e308)),
+                              [1e308, -math.inf, math.nan, 5.0])  # fmt: skip
+        assert all(0.0 <= p <= 1.0 for p in out), out

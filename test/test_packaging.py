@@ -65,6 +65,8 @@ SCALAR_DEFAULTS = {
     "verify_tolerance_m": 1e-6,
     "preserialized_output": True,
     "publish_forces": True,
+    "force_model": "dynamic",
+    "contact_rule": "filter",
     "touchdown_force_n": 0.0,
     "liftoff_force_n": 0.0,
 }

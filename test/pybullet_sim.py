@@ -3,7 +3,8 @@
 Independent of the code under test (no a1_leg_fk import): this is the judge. Joints and links
 are found by name in PyBullet's own model. :class:`QuadrupedSim` connects, loads the plane and the
 robot, sets gravity and the time step; each :meth:`QuadrupedSim.step` drives the joints with
-PyBullet's position control and records a :class:`Sample`:
+PyBullet's position control (or :meth:`QuadrupedSim.step_pd` with PD torque motors) and records a
+:class:`Sample`:
 
 - joint angles [rad], velocities [rad/s] and applied motor torques [N m] (``getJointState()[3]``:
   the torque the motor applies to the child link about the joint axis, as a JointState effort);
@@ -21,6 +22,7 @@ which gives a :class:`SimRun`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -93,7 +95,9 @@ class QuadrupedSim:
     The robot is loaded with its root origin at ``spawn_height_m`` [m] above the plane.
     ``damped=False`` sets every link's and joint's damping to zero (PyBullet's default link
     damping, 0.04, stays on the base); ``lateral_friction``, when given, is set on the plane and
-    the feet.
+    the feet. ``inertia_from_file`` loads the links' inertia tensors from the URDF's
+    ``<inertial>`` (``URDF_USE_INERTIA_FROM_FILE``; by default PyBullet computes them from the
+    collision shapes).
     """
 
     def __init__(
@@ -106,6 +110,7 @@ class QuadrupedSim:
         spawn_height_m: float = 1.0,
         damped: bool = False,
         lateral_friction: float | None = None,
+        inertia_from_file: bool = False,
     ) -> None:
         self.client = pybullet.connect(pybullet.DIRECT)
         self.step_s, self.steps = step_s, 0
@@ -115,7 +120,10 @@ class QuadrupedSim:
             pybullet.setTimeStep(step_s, **pb)
             data = pybullet_data.getDataPath()
             self.plane = pybullet.loadURDF(f"{data}/plane.urdf", **pb)
-            self.body = pybullet.loadURDF(str(urdf_path), [0, 0, spawn_height_m], **pb)
+            flags = pybullet.URDF_USE_INERTIA_FROM_FILE if inertia_from_file else 0
+            self.body = pybullet.loadURDF(
+                str(urdf_path), [0, 0, spawn_height_m], flags=flags, **pb
+            )
             infos = [
                 pybullet.getJointInfo(self.body, j, **pb)
                 for j in range(pybullet.getNumJoints(self.body, **pb))
@@ -181,16 +189,20 @@ class QuadrupedSim:
         max_torque_nm: float,
         position_gain: float,
         velocity_gain: float = 1.0,
+        target_rates: Sequence[float] | None = None,
     ) -> Sample:
         """Drive the joints towards ``targets`` [rad] (PyBullet's position control), step, and
-        record.
+        record. ``target_rates`` [rad/s], when given, are the motors' target velocities (default:
+        0, PyBullet's).
         """
         client = self.client
+        rates = {} if target_rates is None else {"targetVelocities": list(target_rates)}
         pybullet.setJointMotorControlArray(
             self.body,
             self.joints,
             pybullet.POSITION_CONTROL,
             targetPositions=list(targets),
+            **rates,
             forces=[max_torque_nm] * len(self.joints),
             positionGains=[position_gain] * len(self.joints),
             velocityGains=[velocity_gain] * len(self.joints),
@@ -199,6 +211,42 @@ class QuadrupedSim:
         pybullet.stepSimulation(physicsClientId=client)
         self.steps += 1
         return self.sample()
+
+    def step_pd(
+        self,
+        targets: Sequence[float],
+        gains: tuple[float, float],
+        max_torque_nm: float,
+        target_rates: Sequence[float] | None = None,
+    ) -> Sample:
+        """Drive the joints with PD torque motors, step, and record.
+
+        From the joint state before the step, τ = clip(Kp (q* - q) + Kd (q̇* - q̇), ±max_torque_nm)
+        [N m], ``gains`` = (Kp [N m/rad], Kd [N m s/rad]), ``targets`` q* [rad], ``target_rates``
+        q̇* [rad/s] (default 0), is applied with ``TORQUE_CONTROL`` over the step (the velocity
+        motors are off) and recorded as the sample's torques (as a JointState effort would).
+        """
+        client = self.client
+        states = pybullet.getJointStates(self.body, self.joints, physicsClientId=client)
+        angles = np.array([state[0] for state in states])
+        rates = np.array([state[1] for state in states])
+        goal_rates = np.zeros(len(self.joints)) if target_rates is None else target_rates
+        kp, kd = gains
+        torques = np.clip(
+            kp * (np.asarray(targets) - angles) + kd * (np.asarray(goal_rates) - rates),
+            -max_torque_nm,
+            max_torque_nm,
+        )
+        pybullet.setJointMotorControlArray(
+            self.body,
+            self.joints,
+            pybullet.TORQUE_CONTROL,
+            forces=torques.tolist(),
+            physicsClientId=client,
+        )
+        pybullet.stepSimulation(physicsClientId=client)
+        self.steps += 1
+        return dataclasses.replace(self.sample(), torques=torques)
 
     def sample(self) -> Sample:
         """The sensor readings now."""

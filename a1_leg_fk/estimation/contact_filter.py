@@ -15,8 +15,9 @@ that no single sample decides alone:
   the distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;
-- *free fall*, from the IMU's specific force ``f`` when there is one: no foot bears load while
-  ``|f|`` is far below gravity; ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
+- *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
+  force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
+  ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
 - optionally a gait-phase prior: a probability of stance from a gait scheduler, its log-odds
   times ``phase_weight``.
 
@@ -56,7 +57,7 @@ class ContactModel:
     fall_half_mps2: float = 0.3 * STANDARD_GRAVITY
     fall_scale_mps2: float = 0.05 * STANDARD_GRAVITY
     max_log_ratio: float = 4.0
-    max_kinematic_stance: float = 1.0
+    max_kinematic_stance: float = 0.5
     phase_weight: float = 1.0
 
     def __post_init__(self) -> None:
@@ -82,7 +83,7 @@ class ContactModel:
 
 SWITCH_TIME_S = 0.1
 """Mean time [s] between state changes in the transition model."""
-FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.05, 0.015
+FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.03, 0.005
 """Normal force at even odds, and per unit of log-odds, as shares of the weight."""
 HEIGHT_HALF_SHARE, HEIGHT_SCALE_SHARE = 0.04, 0.01
 """Height above the lowest foot at even odds, and per unit of log-odds, in leg lengths."""
@@ -130,7 +131,9 @@ class ContactFilter:
         kinematic = _kinematic(model, feet, omega, [common < -1.0 or f for f in forced])
         posterior = []
         for leg, previous in enumerate(self.probabilities):
-            odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + common + kinematic[leg]
+            odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + kinematic[leg]
+            if not forced[leg]:  # free fall stands in for a foot's own force
+                odds += common
             if normal_forces is not None and forced[leg]:
                 odds += self._clip((normal_forces[leg] - model.force_half_n) / model.force_scale_n)
             if phase_prior is not None and math.isfinite(phase_prior[leg]):

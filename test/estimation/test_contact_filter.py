@@ -26,9 +26,9 @@ def foot(depth: float, velocity=STILL) -> FootMotion:
 
 
 def test_force_evidence_alone_is_a_clipped_logistic() -> None:
-    assert MODEL.force_half_n == pytest.approx(6.0) and MODEL.force_scale_n == pytest.approx(1.8)
+    assert MODEL.force_half_n == pytest.approx(3.6) and MODEL.force_scale_n == pytest.approx(0.6)
     contacts = ContactFilter(MODEL)
-    forces = [6.0 + 2 * 1.8, 6.0 - 1.8, 100.0, math.nan]  # +2, -1, clipped to +4, none
+    forces = [3.6 + 2 * 0.6, 3.6 - 0.6, 100.0, math.nan]  # +2, -1, clipped to +4, none
     out = contacts.update(0.0, [None] * 4, (STILL, None), forces)
     assert out == pytest.approx([sigmoid(2.0), sigmoid(-1.0), sigmoid(4.0), 0.5], abs=1e-12)
 

@@ -1,0 +1,86 @@
+"""Foot forces and contacts on a family of PyBullet runs as different from each other as real
+robots are (test/contact_runs.py: trots at three speeds, a turn, a walk, a pronk with flight
+phases, soft toes, the A1 and a Go2-like model, each clean and with sensor noise), judged by
+PyBullet's own contacts (normal force > 0) and normal forces.
+
+The estimator's gains and evidence scales were tuned on :data:`TUNED` only; :data:`HELD_OUT` was
+never looked at while tuning. Both must meet the goals. The table of every run (with the old rule,
+quasi-static forces through fixed thresholds, beside it) is printed (``pytest -s``) and kept in
+docs/forces.md.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from contact_runs import SPECS, ContactRun, contact_runs, with_noise
+from contact_scoring import FORCE, HEADER, KINEMATIC, OLD_RULE, Score, estimate, robot_of, score
+
+from a1_leg_fk.kinematics.foot_forces import FootForces
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
+
+TUNED = ("a1_trot_fast", "a1_pronk", "go2_trot", "a1_walk")
+"""The runs (clean and noisy) the defaults were tuned on."""
+HELD_OUT = tuple(name for name in SPECS if name not in TUNED)
+NOISE_SEED = 7
+
+
+@pytest.fixture(scope="session")
+def family(request: pytest.FixtureRequest) -> dict[str, ContactRun]:
+    """Every run, clean and noisy, simulated once per checkout (pytest's cache folder)."""
+    folder = Path(request.config.cache.mkdir("contact_runs"))
+    clean = contact_runs(folder)
+    return {**clean, **{f"{n}+noise": with_noise(run, NOISE_SEED) for n, run in clean.items()}}
+
+
+@pytest.fixture(scope="session")
+def scores(family: dict[str, ContactRun]) -> dict[tuple[str, str], Score]:
+    """Every run under every evidence; the table printed."""
+    out = {}
+    lines = [HEADER]
+    for name, run in family.items():
+        quadruped = robot_of(run)
+        weight = FootForces(quadruped).total_mass_kg * STANDARD_GRAVITY
+        for evidence in (OLD_RULE, FORCE, KINEMATIC):
+            probabilities, normals = estimate(run, quadruped, evidence)
+            out[name, evidence] = score(run, probabilities, normals, weight)
+            lines.append(out[name, evidence].row(name, evidence))
+    print("\n".join(lines))
+    return out
+
+
+def runs_of(names: tuple[str, ...]) -> list[str]:
+    return [run for name in names for run in (name, f"{name}+noise")]
+
+
+@pytest.mark.parametrize("names", [TUNED, HELD_OUT], ids=["tuned", "held_out"])
+def test_fused_contacts_agree_with_pybullet(scores, names) -> None:
+    for run in runs_of(names):
+        fused = scores[run, FORCE]
+        assert fused.agree_pct >= 98.5, run
+        assert fused.swing_as_stance_pct <= 1.0, run
+        assert fused.touchdown_ms <= 10.0 and fused.liftoff_ms <= 10.0, run
+        assert fused.stance_force_pct <= 8.0, run
+        assert np.abs(fused.duty - fused.true_duty).max() <= 0.03, run
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="kinematic evidence alone reaches 94.2-97.2 %, not the 97 % goal: a foot unloads "
+    "while it still rests on the ground and moves measurably only ~10 ms later (0.8 mm and "
+    "0.19 m/s 2 ms after liftoff on the fast trot), which no height or speed threshold sees",
+)
+@pytest.mark.parametrize("names", [TUNED, HELD_OUT], ids=["tuned", "held_out"])
+def test_kinematic_contacts_agree_with_pybullet(scores, names) -> None:
+    for run in runs_of(names):
+        kinematic = scores[run, KINEMATIC]
+        assert kinematic.agree_pct >= 97.0, run
+        assert np.abs(kinematic.duty - kinematic.true_duty).max() <= 0.03, run
+
+
+def test_the_old_rule_fails_where_the_new_one_holds(scores) -> None:
+    """The quasi-static threshold rule on the same runs: the reason for all of this."""
+    worst = min(scores[run, OLD_RULE].agree_pct for run in runs_of(TUNED + HELD_OUT))
+    assert worst < 95.0

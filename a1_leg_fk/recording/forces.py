@@ -158,12 +158,13 @@ class ForcePass:
         self.thresholds = self.estimator.rule.thresholds
         self.name_to_slot: Mapping[str, int] = quadruped.name_to_slot
         self.imu = imu
-        self.counts = ForceCounts()
+        self.restart()
 
     def restart(self) -> None:
         """A new pass: the estimator's state and the counts anew."""
         self.estimator.reset()
         self.counts = ForceCounts()
+        self._origin_ns: int | None = None
 
     def summary(self, forces: bool) -> str:
         """The summary's lines (joined by newlines): the force counts (with ``forces``), and
@@ -245,7 +246,9 @@ class ForcePass:
         """:meth:`rows` for one joint state, on floats (the node's per-message path): 4 forces
         [N, base frame], 4 normal forces [N] and 4 contact probabilities.
         """
-        step = self.estimator.step(stamp_ns * 1e-9, joints, feet, imu)
+        if self._origin_ns is None:  # seconds since the first stamp: float64 keeps their ns
+            self._origin_ns = stamp_ns
+        step = self.estimator.step((stamp_ns - self._origin_ns) * 1e-9, joints, feet, imu)
         counts = self.counts
         counts.missing += sum(step.missing)
         counts.singular += sum(step.singular)

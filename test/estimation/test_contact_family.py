@@ -11,11 +11,9 @@ docs/forces.md.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
-from contact_runs import SPECS, ContactRun, contact_runs, with_noise
+from contact_runs import SPECS, ContactRun
 from contact_scoring import FORCE, HEADER, KINEMATIC, OLD_RULE, Score, estimate, robot_of, score
 
 from a1_leg_fk.kinematics.foot_forces import FootForces
@@ -24,15 +22,6 @@ from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 TUNED = ("a1_trot_fast", "a1_pronk", "go2_trot", "a1_walk")
 """The runs (clean and noisy) the defaults were tuned on."""
 HELD_OUT = tuple(name for name in SPECS if name not in TUNED)
-NOISE_SEED = 7
-
-
-@pytest.fixture(scope="session")
-def family(request: pytest.FixtureRequest) -> dict[str, ContactRun]:
-    """Every run, clean and noisy, simulated once per checkout (pytest's cache folder)."""
-    folder = Path(request.config.cache.mkdir("contact_runs"))
-    clean = contact_runs(folder)
-    return {**clean, **{f"{n}+noise": with_noise(run, NOISE_SEED) for n, run in clean.items()}}
 
 
 @pytest.fixture(scope="session")

@@ -1,0 +1,115 @@
+"""The contact family through the tools a user runs: each run recorded as a bag (JointState with
+efforts, an Imu with orientation, gyro and accelerometer, the base's pose) and read by
+``a1-leg-fk bag --forces`` (the same contacts as the pipeline the family test scores: plumbing)
+and ``a1-leg-fk gait`` (its duty factors against PyBullet's, with either evidence: the goal is
+0.03). One tuned and one held-out run, each with sensor noise.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
+from contact_runs import ContactRun
+from contact_scoring import FORCE, estimate, robot_of
+
+from a1_leg_fk import cli
+
+RUNS = ("a1_trot_fast+noise", "go2_trot_fast+noise")
+"""A tuned run and a held-out one (test_contact_family.py's sets)."""
+CONTACT_COLUMNS = [f"{leg}_contact" for leg in ("FR", "FL", "RR", "RL")]
+
+
+def stamp_of(run: ContactRun, row: int) -> int:
+    return T0 + round(float(run.stamps_s[row]) * 1e9)
+
+
+def write_run_bag(path: Path, run: ContactRun, efforts: bool = True) -> Path:
+    """The run as a robot would record it: /joint_states, /imu (the IMU's three readings) and
+    /base_pose (the root's pose, for the gait tool's world feet)."""
+    spec = BagSpec()
+    vector, quaternion = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
+    for row in range(len(run.stamps_s)):
+        stamp = stamp_of(run, row)
+        spec.add_joint_state(
+            "/joint_states",
+            stamp + 2,
+            JointStateMsg(
+                stamp,
+                run.joint_names,
+                run.angles[row].tolist(),
+                run.rates[row].tolist(),
+                "",
+                run.torques[row].tolist() if efforts else [],
+            ),
+        )
+        xyzw = run.quaternions[row].tolist()
+        spec.add(
+            "/imu",
+            "sensor_msgs/msg/Imu",
+            stamp + 1,
+            T["sensor_msgs/msg/Imu"](
+                header(stamp, "imu_link"),
+                quaternion(*xyzw),
+                np.zeros(9),
+                vector(*run.gyro[row].tolist()),
+                np.zeros(9),
+                vector(*run.specific_force[row].tolist()),
+                np.zeros(9),
+            ),
+        )
+        spec.add(
+            "/base_pose",
+            "geometry_msgs/msg/PoseStamped",
+            stamp + 3,
+            T["geometry_msgs/msg/PoseStamped"](
+                header(stamp, "world"), pose(run.base_positions[row].tolist(), xyzw)
+            ),
+        )
+    return write_bag(path, spec)
+
+
+@pytest.mark.parametrize("name", RUNS)
+def test_bag_tool_gives_the_pipelines_contacts(family, name, tmp_path: Path) -> None:
+    run = family[name]
+    bag = write_run_bag(tmp_path / "in", run)
+    out = tmp_path / "feet.csv"
+    arguments = ["bag", str(bag), "--topic", "/joint_states", "--imu", "/imu", "--forces"]
+    arguments += ["--urdf", run.urdf_path, "--csv", str(out), "--quiet"]
+    assert cli.main(arguments) == 0
+    rows = list(csv.DictReader(out.open()))
+    ours = np.array([[float(row[c]) for c in CONTACT_COLUMNS] for row in rows])
+    expected, _ = estimate(run, robot_of(run), FORCE)
+    # the bag's stamps are the run's rounded to whole nanoseconds: dt differs by < 1e-9 s
+    np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-7)
+
+
+KINEMATIC_DUTY = pytest.mark.xfail(
+    strict=True,
+    reason="kinematic contacts (the gait tool's, from heights and speeds in the world) come out "
+    "0.04-0.05 above PyBullet's duty factors on the fast trots: a foot unloads before it moves",
+)
+
+
+@pytest.mark.parametrize("name", RUNS)
+@pytest.mark.parametrize("contacts", ["force", pytest.param("kinematic", marks=KINEMATIC_DUTY)])
+def test_gait_tool_duty_factors(family, name, contacts, tmp_path: Path) -> None:
+    run = family[name]
+    bag = write_run_bag(tmp_path / "in", run)
+    report = tmp_path / "gait.json"
+    arguments = ["gait", str(bag), "--topic", "/joint_states", "--base-pose", "/base_pose"]
+    arguments += ["--urdf", run.urdf_path, "--contacts", contacts, "--json", str(report)]
+    arguments += ["--quiet"] + (["--imu", "/imu"] if contacts == "force" else [])
+    assert cli.main(arguments) == 0
+    document = json.loads(report.read_text())
+    assert document["contacts"] == contacts
+    duty = np.array([document["legs"][leg]["duty_factor"] for leg in ("FR", "FL", "RR", "RL")])
+    true_duty = run.contacts[run.gait].mean(axis=0)
+    print(f"{name} {contacts}: duty {duty.round(3)} true {true_duty.round(3)}")
+    assert not any(math.isnan(d) for d in duty)
+    assert np.abs(duty - true_duty).max() <= 0.03

@@ -14,8 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bag_factory import T0, BagSpec, JointStateMsg, T, header, pose, write_bag
-from contact_runs import ContactRun
+from contact_bags import write_run_bag
 from contact_scoring import FORCE, estimate, robot_of
 
 from a1_leg_fk import cli
@@ -23,55 +22,6 @@ from a1_leg_fk import cli
 RUNS = ("a1_trot_fast+noise", "go2_trot_fast+noise")
 """A tuned run and a held-out one (test_contact_family.py's sets)."""
 CONTACT_COLUMNS = [f"{leg}_contact" for leg in ("FR", "FL", "RR", "RL")]
-
-
-def stamp_of(run: ContactRun, row: int) -> int:
-    return T0 + round(float(run.stamps_s[row]) * 1e9)
-
-
-def write_run_bag(path: Path, run: ContactRun, efforts: bool = True) -> Path:
-    """The run as a robot would record it: /joint_states, /imu (the IMU's three readings) and
-    /base_pose (the root's pose, for the gait tool's world feet)."""
-    spec = BagSpec()
-    vector, quaternion = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
-    for row in range(len(run.stamps_s)):
-        stamp = stamp_of(run, row)
-        spec.add_joint_state(
-            "/joint_states",
-            stamp + 2,
-            JointStateMsg(
-                stamp,
-                run.joint_names,
-                run.angles[row].tolist(),
-                run.rates[row].tolist(),
-                "",
-                run.torques[row].tolist() if efforts else [],
-            ),
-        )
-        xyzw = run.quaternions[row].tolist()
-        spec.add(
-            "/imu",
-            "sensor_msgs/msg/Imu",
-            stamp + 1,
-            T["sensor_msgs/msg/Imu"](
-                header(stamp, "imu_link"),
-                quaternion(*xyzw),
-                np.zeros(9),
-                vector(*run.gyro[row].tolist()),
-                np.zeros(9),
-                vector(*run.specific_force[row].tolist()),
-                np.zeros(9),
-            ),
-        )
-        spec.add(
-            "/base_pose",
-            "geometry_msgs/msg/PoseStamped",
-            stamp + 3,
-            T["geometry_msgs/msg/PoseStamped"](
-                header(stamp, "world"), pose(run.base_positions[row].tolist(), xyzw)
-            ),
-        )
-    return write_bag(path, spec)
 
 
 @pytest.mark.parametrize("name", RUNS)

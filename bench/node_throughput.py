@@ -9,7 +9,8 @@ Exit status 0 after the table, whether or not the goals are met (they are printe
 Processes (bench/throughput_roles.py): a load generator (JointState, 12 joints with positions and
 velocities, stamp = send time, header.frame_id = sequence number, paced on perf_counter), the
 node under test (``python -m a1_leg_fk.ros.foot_fk_node``, or the raw-floor baseline: raw
-JointState in, eight pre-serialized messages out, no FK), a receiver of the eight
+JointState in, nine pre-serialized messages out (those of the node: the feet, their velocities,
+foot_contacts), no FK), a receiver of the eight
 output topics (raw CDR, its own wait set; latency uses the DDS reception time, so the receiver's
 Python speed does not enter it) and, in one phase, a ``verify_fk`` caller at 20 Hz.
 
@@ -22,7 +23,7 @@ Scenarios
    times a second.
 3. node ramp: 5 s steps of rising rate, until two steps in a row lose >= 0.1 % of the inputs.
 4. baseline (the raw floor, same executor and QoS) at 1 kHz; at 1 kHz with efforts (the floor
-   then also publishes the five force messages, pre-serialized: what delivering them costs any
+   then also publishes the four force messages, pre-serialized: what delivering them costs any
    node; the split of the node's extra cost between that and its own work is printed); the
    same ramp.
 

@@ -25,11 +25,11 @@ Roles
   on stop it writes every record to the ``.npz`` given as argument. It also takes (and drops)
   ``foot_forces/<leg>`` and ``foot_contacts``, so that the node publishes them to a reader.
 - ``baseline``: the raw floor: same QoS and executor as the node; per JointState (subscribed raw)
-  it reads the stamp from the bytes and publishes the node's eight outputs as pre-serialized
-  messages (the node's own writer, fixed values); no decoding, no rules, no FK. After
-  ``{"op": "phase", "efforts": true}`` it also publishes what the node adds for efforts,
-  ``foot_forces/<leg>`` and ``foot_contacts`` (the node's CDR writers, fixed values), until a
-  phase command without efforts.
+  it reads the stamp from the bytes and publishes the node's nine outputs as pre-serialized
+  messages (the node's own writers, fixed values: the feet, their velocities and
+  ``foot_contacts``, which the node publishes for every JointState); no decoding, no rules, no
+  FK. After ``{"op": "phase", "efforts": true}`` it also publishes what the node adds for
+  efforts, ``foot_forces/<leg>``, until a phase command without efforts.
 - ``verifier``: calls ``verify_fk`` 20 times a second between ``{"op": "go"}`` and
   ``{"op": "stop"}``.
 """
@@ -301,9 +301,9 @@ def receiver(output: str, force_reader: bool = True) -> None:
 
 
 def baseline(executor_name: str) -> None:
-    """The floor: raw JointState in, the stamp read from its bytes, eight pre-serialized messages
-    out (the node's own output writer), and in a phase with efforts the five force messages;
-    no decoding, no rules, no FK."""
+    """The floor: raw JointState in, the stamp read from its bytes, nine pre-serialized messages
+    out (the node's own output writer: the feet, their velocities, foot_contacts), and in a
+    phase with efforts the four foot_forces too; no decoding, no rules, no FK."""
     from a1_leg_fk.recording.bag_writer import (
         contacts_bytes,
         contacts_layout,
@@ -343,7 +343,7 @@ def baseline(executor_name: str) -> None:
         if forces[0]:
             for publisher in force_publishers:
                 publisher.publish(wrench_bytes(head, sec, nanosec, force))
-            contacts_publisher.publish(contacts_bytes(layout, sec, nanosec, probabilities, normal))
+        contacts_publisher.publish(contacts_bytes(layout, sec, nanosec, probabilities, normal))
 
     node.create_subscription(
         JointState, "joint_states", on_joint_state, JOINT_STATES_QOS, raw=True

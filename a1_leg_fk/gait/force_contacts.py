@@ -43,5 +43,5 @@ def with_force_stance(
         contacts,
         stance=stance,
         stances=stances,
-        notes=(*contacts.notes, "stance from the foot forces (contact probability >= 0.5)"),
+        notes=(*contacts.notes, "stance from the contact estimate (probability >= 0.5)"),
     )

@@ -184,9 +184,10 @@ class ForcePass:
                 if np.isfinite(values).all(axis=1).any()
             ]
             motion = f"{', '.join(parts)} of {imu.topic}" if parts else motion
+        forces_used = f" on {estimator.force_model} forces" if self.counts.estimated else ""
         rule = (
-            f"contacts:  the {estimator.contact_rule} rule on {estimator.force_model} forces; "
-            f"the base's motion from {motion}"
+            f"contacts:  the {estimator.contact_rule} rule{forces_used}; the base's motion from "
+            f"{motion}"
         )
         lines = [self.counts.line()] if forces else []
         if estimator.contact_rule == FILTER:

@@ -133,11 +133,13 @@ class ContactEstimator:
         joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
         feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
         imu: ImuSample,
+        phase_prior: Sequence[float] | None = None,
     ) -> ContactStep:
         """One joint state at ``stamp_s`` [s]: ``joints`` the 12 angles [rad], rates [rad/s] and
         efforts [N m] (slot order, NaN where unknown; efforts None: none); ``feet`` per leg its
         position [m] and velocity ``J q_dot`` [m/s], base frame (None: unknown; a NaN velocity
-        gives that foot no speed evidence).
+        gives that foot no speed evidence); ``phase_prior``: a gait scheduler's probability of
+        stance per foot (None: none), evidence for the filter.
         """
         angles, rates, efforts = joints
         gravity = tuple(imu.gravity) if imu.gravity is not None else LEVEL_GRAVITY
@@ -161,6 +163,7 @@ class ContactEstimator:
             motions,
             (imu.angular_velocity or (0.0, 0.0, 0.0), imu.specific_force),
             normals if with_force else None,
+            phase_prior,
         )
         return ContactStep(forces, normals, probabilities, missing, singular)
 

@@ -77,3 +77,11 @@ def test_absurd_values_give_probabilities_not_errors() -> None:
         out = contacts.update(1e-9, feet, ((1e300, 0.0, 0.0), (1e308, 1e308, 1e308)),
                               [1e308, -math.inf, math.nan, 5.0])  # fmt: skip
         assert all(0.0 <= p <= 1.0 for p in out), out
+
+
+def test_a_gait_phase_prior_adds_its_log_odds() -> None:
+    out = ContactFilter(MODEL).update(
+        0.0, [None] * 4, (STILL, None), None, [0.9, 0.1, 0.5, math.nan]
+    )
+    logit = math.log(0.9 / 0.1) * MODEL.phase_weight
+    assert out == pytest.approx([sigmoid(logit), sigmoid(-logit), 0.5, 0.5])

@@ -12,6 +12,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from shared import claim_domain_id
@@ -27,6 +28,8 @@ os.environ["PYTHONUNBUFFERED"] = "1"
 
 BIN = Path(sys.executable).parent
 DEFAULT_WAIT_S = 20.0
+FAMILY_NOISE_SEED = 7
+"""The seed of every contact-family run's noisy twin."""
 
 
 @contextlib.contextmanager
@@ -155,3 +158,16 @@ def ros() -> Iterator[RosProbe]:
     probe = RosProbe()
     yield probe
     probe.close()
+
+
+@pytest.fixture(scope="session")
+def family(request: pytest.FixtureRequest) -> dict[str, Any]:
+    """The contact family (test/contact_runs.py): every run, clean and with sensor noise (seed
+    :data:`FAMILY_NOISE_SEED`), simulated once per checkout (pytest's cache folder) and loaded
+    once per session."""
+    from contact_runs import contact_runs, with_noise
+
+    folder = Path(request.config.cache.mkdir("contact_runs"))
+    clean = contact_runs(folder)
+    noisy = {f"{n}+noise": with_noise(run, FAMILY_NOISE_SEED) for n, run in clean.items()}
+    return {**clean, **noisy}

@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -160,14 +161,19 @@ def ros() -> Iterator[RosProbe]:
     probe.close()
 
 
+def family_folder() -> Path:
+    """Where the contact family's runs are kept between sessions: the system's temporary
+    folder (make test runs pytest without its cache)."""
+    return Path(tempfile.gettempdir()) / "a1_leg_fk-contact-runs"
+
+
 @pytest.fixture(scope="session")
-def family(request: pytest.FixtureRequest) -> dict[str, Any]:
+def family() -> dict[str, Any]:
     """The contact family (test/contact_runs.py): every run, clean and with sensor noise (seed
-    :data:`FAMILY_NOISE_SEED`), simulated once per checkout (pytest's cache folder) and loaded
-    once per session."""
+    :data:`FAMILY_NOISE_SEED`), simulated once per machine (:func:`family_folder`; the files are
+    named after the simulation's sources) and loaded once per session."""
     from contact_runs import contact_runs, with_noise
 
-    folder = Path(request.config.cache.mkdir("contact_runs"))
-    clean = contact_runs(folder)
+    clean = contact_runs(family_folder())
     noisy = {f"{n}+noise": with_noise(run, FAMILY_NOISE_SEED) for n, run in clean.items()}
     return {**clean, **noisy}

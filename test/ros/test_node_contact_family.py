@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import FAMILY_NOISE_SEED
+from conftest import FAMILY_NOISE_SEED, family_folder
 from contact_bags import stamp_of, write_run_bag
 from contact_runs import ContactRun, contact_runs, with_noise
 from node_harness import SensorStream, node_command
@@ -28,9 +28,8 @@ SECONDS = 3.0
 
 
 @pytest.fixture(scope="module")
-def run(request: pytest.FixtureRequest) -> ContactRun:
-    folder = Path(request.config.cache.mkdir("contact_runs"))
-    return with_noise(contact_runs(folder, (RUN,))[RUN], FAMILY_NOISE_SEED)
+def run() -> ContactRun:
+    return with_noise(contact_runs(family_folder(), (RUN,))[RUN], FAMILY_NOISE_SEED)
 
 
 def rows_of(run: ContactRun) -> int:

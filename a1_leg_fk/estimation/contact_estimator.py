@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
-from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds
+from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.momentum_observer import MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
@@ -146,7 +146,7 @@ class ContactEstimator:
         norm = math.sqrt(sum(g * g for g in gravity))
         down: Vector = (gravity[0] / norm, gravity[1] / norm, gravity[2] / norm)
         forces, missing, singular = self._forces(stamp_s, joints, gravity, imu)
-        normals = [-(f[0] * down[0] + f[1] * down[1] + f[2] * down[2]) for f in forces]
+        normals = [normal_force(force, down) for force in forces]
         if self.contact_rule == THRESHOLD:
             probabilities = self.rule.update(normals) if efforts is not None else [math.nan] * LEGS
             return ContactStep(forces, normals, probabilities, missing, singular)

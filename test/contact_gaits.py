@@ -354,12 +354,38 @@ class Motors:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """How one run is made: the robot ("a1" or "go2"), its gait and motors; ``soft``: soft toes."""
+    """How one run is made: the robot ("a1" or "go2"), its gait and motors; ``soft``: soft toes;
+    ``gait_s``: how long the gait lasts [s]; ``slips``: every :data:`SLIP_PERIOD_S` the ground
+    turns to ice for :data:`SLIP_S` while the trunk is pushed sideways (:class:`Slips`).
+    """
 
     robot: str
     gait: Gait
     motors: Motors
     soft: bool = False
+    gait_s: float = 10.5
+    slips: Slips | None = None
+
+
+@dataclass(frozen=True)
+class Slips:
+    """Ice patches: from ``first_s`` [s] on, every ``period_s`` for ``duration_s`` the plane's
+    friction drops to ``friction`` (friction anchors off) while a sideways force of
+    ``push_g`` times the robot's weight, alternating left and right, pushes the trunk.
+    """
+
+    first_s: float = 2.0
+    period_s: float = 1.9
+    duration_s: float = 0.12
+    friction: float = 0.05
+    push_g: float = 0.35
+
+    def active(self, t: float) -> int:
+        """0 outside a patch at ``t`` [s], else the push's side (+1 left, -1 right)."""
+        if t < self.first_s:
+            return 0
+        cycle, phase = divmod(t - self.first_s, self.period_s)
+        return (1 if int(cycle) % 2 == 0 else -1) if phase < self.duration_s else 0
 
 
 TROT = (0.0, 0.5, 0.5, 0.0)
@@ -398,3 +424,26 @@ SPECS = {
 }
 """The family, by name: trots (slow, fast, turning, soft toes), walks and a pronk; the duty is
 the commanded one (the true one: ``python test/contact_runs.py OUT_DIR``)."""
+A1_FLYING_TROT = replace(A1_TROT, period_s=0.35, duty=0.4, speed_mps=0.4, thrust=0.5)
+"""A trot whose diagonal pairs both leave the ground between strides (~10 % of the time)."""
+A1_LONG_WALK = replace(A1_WALK, period_s=1.2, speed_mps=0.25)
+LONG_SPECS = {
+    "a1_trot_long": RunSpec("a1", A1_TROT, A1, gait_s=66.0),
+    "a1_trot_fast_long": RunSpec("a1", SPECS["a1_trot_fast"].gait, A1, gait_s=60.0),
+    "a1_turn_long": RunSpec("a1", SPECS["a1_trot_turn"].gait, A1, gait_s=86.0),
+    "a1_walk_long": RunSpec("a1", A1_LONG_WALK, A1, gait_s=82.0),
+    "a1_flying_trot": RunSpec("a1", A1_FLYING_TROT, A1, gait_s=62.0),
+    "a1_flying_trot_short": RunSpec(
+        "a1",
+        replace(A1_TROT, period_s=0.3, duty=0.42, speed_mps=0.45, thrust=0.4),
+        A1,
+        gait_s=50.0,
+    ),
+    "a1_trot_slips": RunSpec("a1", A1_TROT, A1, gait_s=66.0, slips=Slips()),
+    "go2_trot_long": RunSpec("go2", GO2_TROT, GO2, gait_s=64.0),
+    "go2_trot_slips": RunSpec(
+        "go2", GO2_TROT, GO2, gait_s=62.0, slips=Slips(1.5, 2.3, 0.1, 0.08, 0.4)
+    ),
+}
+"""The odometry's family: runs of at least 60 s and 20 m (trots straight, fast and turning, a
+walk, a flying trot, trots across ice patches with sideways pushes, the Go2-like robot)."""

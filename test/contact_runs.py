@@ -2,7 +2,7 @@
 turning, walking, pronking, on rigid and on soft ground, with every sensor a robot has.
 
 Independent of the code under test (no a1_leg_fk import): this is the judge. Each run settles
-for :data:`SETTLE_S`, then walks a gait of :mod:`contact_gaits` for :data:`GAIT_S`, at a 500 Hz
+for :data:`SETTLE_S`, then walks a gait of :mod:`contact_gaits` for its ``gait_s``, at a 500 Hz
 physics step with a sample after every step (:class:`ContactRun`). The dynamics are those the
 estimator models: no link or joint damping (the base's too), no joint friction, every link with
 an ``<inertial>`` whose inertia tensor PyBullet uses (``URDF_USE_INERTIA_FROM_FILE``), and PD
@@ -34,10 +34,12 @@ from contact_gaits import (
     GO2_FEET,
     GO2_JOINTS,
     GO2_LEGS,
+    LONG_SPECS,
     SPECS,
     Legs,
     Pose,
     RunSpec,
+    Slips,
     Targets,
     gait_targets,
     go2_urdf,
@@ -46,14 +48,16 @@ from pybullet_sim import A1_FEET, A1_JOINTS, A1_URDF, GRAVITY, STEP_S, Quadruped
 
 SETTLE_S = 0.5
 """Standing still before the gait [s]."""
-GAIT_S = 10.5
-"""The gait's duration [s]."""
+PLANE_FRICTION = 1.0
+"""PyBullet's plane.urdf lateral friction (restored after an ice patch)."""
 SOFT_TOES = {"contactStiffness": 3.0e4, "contactDamping": 3.0e2}
 """[N/m], [N s/m]: the soft feet of ``a1_trot_soft`` (PyBullet's default contact is rigid)."""
 UP = np.array([0.0, 0.0, 1.0])
 """World up."""
 BLIP_S = 0.02
 """[s]: a shorter swing is a blip (a foot bouncing for a step or two at touchdown), not a step."""
+ALL_SPECS = {**SPECS, **LONG_SPECS}
+"""Every run this module makes: the contact family and the odometry's long runs."""
 SOURCES = ("contact_runs.py", "contact_gaits.py", "pybullet_sim.py", "exported_urdf.py")
 """The files whose text names the cache (changed code regenerates)."""
 
@@ -141,7 +145,10 @@ def simulate_run(name: str, spec: RunSpec, urdf_path: Path) -> ContactRun:
         velocity = np.zeros(3)
         slot = {link: index for index, link in enumerate(sim.feet)}
         pose: Pose | None = None
-        for _ in range(round((SETTLE_S + GAIT_S) / STEP_S)):
+        slipping = 0
+        for _ in range(round((SETTLE_S + spec.gait_s) / STEP_S)):
+            if spec.slips is not None:
+                slipping = _slip(sim, spec.slips, slipping, mass * GRAVITY)
             goal, goal_rates = targets_and_rates(targets, sim.time_s + STEP_S, pose)
             motors = spec.motors
             sample = sim.step_pd(goal, (motors.kp, motors.kd), motors.max_torque_nm, goal_rates)
@@ -182,6 +189,24 @@ def simulate_run(name: str, spec: RunSpec, urdf_path: Path) -> ContactRun:
         simulate_s=time.perf_counter() - started,
         **{key: np.array(values) for key, values in rows.items()},
     )
+
+
+def _slip(sim: QuadrupedSim, slips: Slips, was: int, weight_n: float) -> int:
+    """Ice and a push for the coming step when ``slips`` says so (friction restored after)."""
+    pb = {"physicsClientId": sim.client}
+    side = slips.active(sim.time_s - SETTLE_S)
+    if side != was:
+        friction = slips.friction if side else PLANE_FRICTION
+        pybullet.changeDynamics(
+            sim.plane, -1, lateralFriction=friction, frictionAnchor=int(not side), **pb
+        )
+    if side:
+        yaw = pybullet.getEulerFromQuaternion(
+            pybullet.getBasePositionAndOrientation(sim.body, **pb)[1]
+        )[2]
+        push = side * slips.push_g * weight_n
+        sim.push([-math.sin(yaw) * push, math.cos(yaw) * push, 0.0])
+    return side
 
 
 def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -273,7 +298,7 @@ _LOADED: dict[tuple[Path, str], dict[str, ContactRun]] = {}
 
 
 def contact_runs(cache_dir: Path, names: tuple[str, ...] = tuple(SPECS)) -> dict[str, ContactRun]:
-    """The clean runs ``names`` (default: all of :data:`SPECS`), by name.
+    """The clean runs ``names`` (default: all of :data:`SPECS`; any of :data:`ALL_SPECS`), by name.
 
     Each is read from ``cache_dir/NAME-HASH.npz`` (HASH: :func:`source_hash`), or simulated and
     saved there; the Go2-like description is written there too. A lock file in ``cache_dir``
@@ -296,7 +321,7 @@ def contact_runs(cache_dir: Path, names: tuple[str, ...] = tuple(SPECS)) -> dict
             for name in missing:
                 path = cache_dir / f"{name}-{digest}.npz"
                 if not path.exists():
-                    spec = SPECS[name]
+                    spec = ALL_SPECS[name]
                     urdf = A1_URDF if spec.robot == "a1" else go2_path
                     _save(simulate_run(name, spec, urdf), path)
                 run = _load(path)  # the Go2-like file in this folder, wherever it was written

@@ -19,8 +19,11 @@ def stamp_of(run: SimRun, row: int) -> int:
     return T0 + round(run.stamps_s[row] * 1e9)
 
 
-def imu_message(run: SimRun, row: int, orientation: bool = True):
-    """sensor_msgs/msg/Imu of a sample: the root's orientation (or none) and gyro."""
+def imu_message(run: SimRun, row: int, orientation: bool = True, force: np.ndarray | None = None):
+    """sensor_msgs/msg/Imu of a sample: the root's orientation (or none), gyro and specific force
+    (``force``: the run's :attr:`SimRun.specific_force` row, computed once by the caller; None:
+    computed here)."""
+    force = run.specific_force[row] if force is None else force
     x, y, z, w = run.base_quaternions[row] if orientation else (0.0, 0.0, 0.0, 1.0)
     return T["sensor_msgs/msg/Imu"](
         header(stamp_of(run, row), "imu_link"),
@@ -28,7 +31,7 @@ def imu_message(run: SimRun, row: int, orientation: bool = True):
         UNKNOWN if orientation else NO_ORIENTATION,
         T["geometry_msgs/msg/Vector3"](*run.gyro[row]),
         UNKNOWN,
-        T["geometry_msgs/msg/Vector3"](0.0, 0.0, 9.81),
+        T["geometry_msgs/msg/Vector3"](*force),
         UNKNOWN,
     )
 
@@ -56,10 +59,16 @@ def write_sim_bag(
     joint_states (positions, velocities, and with ``efforts`` the motor torques), imu, truth
     (PoseStamped of the URDF root in the world)."""
     spec = BagSpec()
+    forces = run.specific_force
     for row in range(len(run.stamps_s)):
         stamp = stamp_of(run, row)
         if imu:  # one ns before the joint state: a replay delivers it first
-            spec.add(IMU_TOPIC, "sensor_msgs/msg/Imu", stamp - 1, imu_message(run, row))
+            spec.add(
+                IMU_TOPIC,
+                "sensor_msgs/msg/Imu",
+                stamp - 1,
+                imu_message(run, row, force=forces[row]),
+            )
         spec.add_joint_state(JOINT_TOPIC, stamp, joint_state_msg(run, row, efforts))
         if truth:
             spec.add(

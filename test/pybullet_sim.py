@@ -410,6 +410,19 @@ class SimRun:
         return rotation_matrices(self.base_quaternions)
 
     @property
+    def specific_force(self) -> np.ndarray:
+        """(N, 3) what an accelerometer at the root origin reads [m/s^2], root frame: Rᵀ (a - g),
+        ``a`` the backward difference of the root origin's velocity (zero before the first).
+        """
+        velocities = np.vstack([np.zeros((1, 3)), self.base_velocities])
+        steps = np.diff(np.concatenate([[0.0], self.stamps_s]))
+        acceleration = np.diff(velocities, axis=0) / steps[:, None]
+        result: np.ndarray = np.einsum(
+            "nji,nj->ni", self.rotations, acceleration + np.array([0.0, 0.0, GRAVITY])
+        )
+        return result
+
+    @property
     def body_velocities(self) -> np.ndarray:
         """(N, 3) the root origin's velocity [m/s] in the root frame."""
         return np.einsum("nji,nj->ni", self.rotations, self.base_velocities)

@@ -25,14 +25,16 @@ from a1_leg_fk.cli.common import (
     input_error,
     non_negative,
 )
-from a1_leg_fk.estimation.effort_contacts import CONTACT_SOURCES
+from a1_leg_fk.estimation.filter_model import FLAT, GROUND_MODELS
+from a1_leg_fk.estimation.odometry_feed import CONTACT_SOURCES
+from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # the bag side is imported when the command runs
     from a1_leg_fk.recording.odometry import OdometryTrack
     from a1_leg_fk.recording.outputs import OutputTarget
 
-CSV_HEADER = "stamp_ns,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz\n"
+CSV_HEADER = "stamp_ns,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,cov_vx,cov_vy,cov_vz\n"
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -54,9 +56,16 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--contacts",
         choices=CONTACT_SOURCES,
         default="auto",
-        help="stance from the joint efforts' foot forces (force), from the feet's contact points "
-        "along gravity (kinematic), or force for each joint state whose efforts are all finite "
-        "(auto, the default)",
+        help="the contacts' evidence: the joint efforts' foot forces with the feet's heights and "
+        "speeds where a joint state has efforts (auto, the default), the same with no foot "
+        "standing without efforts (force), or the feet's heights and speeds alone (kinematic)",
+    )
+    odom.add_argument(
+        "--ground",
+        choices=GROUND_MODELS,
+        default=FLAT,
+        help="flat (default): the stance feet's heights anchor the height; none: they do not "
+        "(stairs, slopes)",
     )
     odom.add_argument(
         "--truth",
@@ -105,6 +114,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             base_pose=options.truth,
             radius_m=options.foot_radius,
             contacts=options.contacts,
+            ground=options.ground,
             progress=show_progress(options),
             topic=options.topic,
             urdf=options.urdf,
@@ -139,7 +149,15 @@ def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]
         for target in targets.values():
             target.prepare()
         if "--csv" in targets:
-            floats = np.hstack([track.positions, track.orientations, track.linear, track.angular])
+            floats = np.hstack(
+                [
+                    track.positions,
+                    track.orientations,
+                    track.linear,
+                    track.angular,
+                    track.twist_variances[:, :3],
+                ]
+            )
             with open(targets["--csv"].temporary, "wb") as file:
                 file.write(CSV_HEADER.encode())
                 file.write(format_rows(track.stamps_ns[:, None], floats))
@@ -156,7 +174,6 @@ def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]
 
 def summary_lines(track: OdometryTrack) -> list[str]:
     """The human summary of an odometry track, one fact per line."""
-    from a1_leg_fk.model.legs import LEG_NAMES
     from a1_leg_fk.recording.odometry_truth import compare_with_truth
 
     summary, counts = track.summary, track.counts
@@ -167,24 +184,27 @@ def summary_lines(track: OdometryTrack) -> list[str]:
         if track.imu_topic
         else "none (legs alone: planar pose, yaw from the feet)"
     )
-    slips = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.slips))
-    radii = sorted(set(track.radii))
     final = (
         f"; final position {np.round(track.positions[-1], 3).tolist()} m in odom"
         if len(track.stamps_ns)
         else ""
     )
-    contacts = track.contact_counts.line(track.contacts) + (
+    contacts = f"{track.contacts} ({track.contact_counts.line()})" + (
         f" (no foot forces for this robot: {track.contacts_note})" if track.contacts_note else ""
     )
+    radii = sorted(set(track.radii))
+    lines += [f"imu:       {imu}", f"contacts:  {contacts}"]
+    if track.filtered:
+        lines.append(_filter_line(track))
+    if counts.samples:
+        slips = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.slips))
+        lines.append(
+            f"legs alone: {counts.samples} rows (no accelerometer); samples without a stance "
+            f"foot {counts.no_stance}; feet dropped as slipping: {slips}"
+        )
     lines += [
-        f"imu:       {imu}",
-        f"contacts:  {contacts}",
-        (
-            f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m; samples without"
-            f" a stance foot {counts.no_stance}; feet dropped as slipping: {slips}"
-        ),
-        f"distance:  {counts.distance_m:.3f} m travelled{final}",
+        f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m",
+        f"distance:  {_distance(track.positions):.3f} m travelled{final}",
     ]
     if track.truth is not None:
         comparison = compare_with_truth(
@@ -200,3 +220,24 @@ def summary_lines(track: OdometryTrack) -> list[str]:
             + (comparison.line() if comparison else "fewer than two rows with a pose")
         )
     return lines
+
+
+def _filter_line(track: OdometryTrack) -> str:
+    """The state filter's line of the summary: rows, the gate's feet, NIS, biases."""
+    counts = track.filter_counts
+    used = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.used))
+    rejected = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.rejected))
+    gyro, accel = (" ".join(f"{value:+.4f}" for value in bias) for bias in track.biases)
+    return (
+        f"filter:    {track.filtered} rows (IMU-propagated ESKF); feet used {used}; rejected by "
+        f"the gate {rejected}; gate resets {counts.gate_resets}; mean NIS "
+        f"{counts.mean_nis:.2f}; gyro bias {gyro} rad/s; accelerometer bias {accel} m/s^2; "
+        f"feet noise scale {track.noise_scale:.3f}"
+    )
+
+
+def _distance(positions: np.ndarray) -> float:
+    """The path length [m] of (N, 3) positions."""
+    return (
+        float(np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()) if len(positions) else 0.0
+    )

@@ -24,6 +24,8 @@ DEFAULT_IMU_TIMEOUT_S = 0.1
 MAX_ANGULAR_RATE_RADPS = 1e3
 """[rad/s] A faster angular velocity is no measurement (a corrupt message), as a NaN is not: MEMS
 gyros saturate near 35 rad/s; and it keeps the odometry's sums of squares far from overflow."""
+MAX_SPECIFIC_FORCE_MPS2 = 1e3
+"""[m/s^2] A larger specific force is no measurement (MEMS accelerometers saturate near 160)."""
 BUFFER_SAMPLES = 256
 """IMU samples kept for matching: ~0.25 s at 1 kHz, far more than a joint state's lag."""
 
@@ -61,10 +63,13 @@ def imu_reading(
     orientation_covariance: Sequence[float],
     angular_velocity: Sequence[float],
     angular_velocity_covariance: Sequence[float],
+    linear_acceleration: Sequence[float] = (0.0, 0.0, 0.0),
+    linear_acceleration_covariance: Sequence[float] = (0.0,) * 9,
 ) -> ImuReading | None:
     """The :class:`ImuReading` of an Imu message's fields (quaternion x, y, z, w; 3x3 row-major
-    covariances [rad^2], [(rad/s)^2]; angular velocity [rad/s]), or None when its angular velocity
-    is not finite or faster than :data:`MAX_ANGULAR_RATE_RADPS` on some axis.
+    covariances [rad^2], [(rad/s)^2], [(m/s^2)^2]; angular velocity [rad/s]; linear acceleration
+    [m/s^2], the specific force: :func:`measured_vector`'s rule, all zero is none), or None when
+    its angular velocity is not finite or faster than :data:`MAX_ANGULAR_RATE_RADPS` on some axis.
     """
     gyro = (float(angular_velocity[0]), float(angular_velocity[1]), float(angular_velocity[2]))
     fastest = MAX_ANGULAR_RATE_RADPS
@@ -73,11 +78,17 @@ def imu_reading(
     x, y, z, w = (float(orientation[0]), float(orientation[1]), float(orientation[2]),
                   float(orientation[3]))  # fmt: skip
     usable = has_orientation(float(orientation_covariance[0]), (x, y, z, w))
+    force = measured_vector(
+        linear_acceleration, float(linear_acceleration_covariance[0]), zero_is_none=True
+    )
+    if force is not None and not max(map(abs, force)) <= MAX_SPECIFIC_FORCE_MPS2:
+        force = None
     return ImuReading(
         (x, y, z, w) if usable else None,
         gyro,
         _diagonal(orientation_covariance) if usable else None,
         _diagonal(angular_velocity_covariance),
+        force,
     )
 
 

@@ -24,11 +24,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import NamedTuple
 
 from a1_leg_fk.kinematics.compiled_leg import CompiledLeg
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import LEG_NAMES, foot_sphere
+from a1_leg_fk.model.urdf import Joint
 
 LEGS = len(LEG_NAMES)
 CENTRED_SPHERE_M = 1e-9
@@ -50,15 +52,34 @@ class FootMotion(NamedTuple):
 
 def foot_radii(quadruped: Quadruped) -> tuple[float, ...]:
     """Each foot's rolling radius [m]: the radius of the foot link's largest ``<collision>``
-    sphere (:func:`~a1_leg_fk.model.legs.foot_sphere`, the one the foot forces use) when it is
-    centred on the link's origin, else 0 (a point foot).
+    sphere (:func:`~a1_leg_fk.model.legs.foot_sphere`, the one the foot forces use), else 0 (a
+    point foot). A sphere off the link's origin (the Go2's sits 2 mm behind it) is followed by
+    :class:`LegMotion` exactly.
     """
     radii = []
     for leg in quadruped.legs:
         sphere = foot_sphere(quadruped.model, leg.chain.foot_link)
-        centred = sphere is not None and max(map(abs, sphere.center)) <= CENTRED_SPHERE_M
-        radii.append(sphere.radius if sphere is not None and centred else 0.0)
+        radii.append(sphere.radius if sphere is not None else 0.0)
     return tuple(radii)
+
+
+def sphere_centre_legs(quadruped: Quadruped) -> tuple[CompiledLeg | None, ...]:
+    """Per leg, the FK of its foot sphere's centre when that lies off the foot link's origin
+    (more than :data:`CENTRED_SPHERE_M`): the leg's chain with one more fixed joint, to the
+    centre; None where the sphere is centred or there is none.
+    """
+    legs: list[CompiledLeg | None] = []
+    for leg in quadruped.legs:
+        chain = leg.chain
+        sphere = foot_sphere(quadruped.model, chain.foot_link)
+        if sphere is None or max(map(abs, sphere.center)) <= CENTRED_SPHERE_M:
+            legs.append(None)
+            continue
+        centre = Joint(f"{chain.foot_link}_sphere", "fixed", chain.foot_link,
+                       f"{chain.foot_link}_sphere", sphere.center, (0.0, 0.0, 0.0),
+                       (1.0, 0.0, 0.0), None, None)  # fmt: skip
+        legs.append(CompiledLeg(replace(chain, joints=(*chain.joints, centre))))
+    return tuple(legs)
 
 
 class _CalfRate:
@@ -91,6 +112,7 @@ class LegMotion:
 
     def __init__(self, quadruped: Quadruped, radii: Sequence[float] | float | None = None) -> None:
         self._calves = tuple(_CalfRate(leg) for leg in quadruped.legs)
+        self._centres = sphere_centre_legs(quadruped)
         if radii is None:
             radii = foot_radii(quadruped)
         elif isinstance(radii, (int, float)):
@@ -108,8 +130,13 @@ class LegMotion:
     ) -> FootMotion:
         """Leg ``leg``'s foot: its three ``angles`` [rad] and ``rates`` [rad/s], its ``position``
         [m] and ``velocity`` [m/s] (``J q_dot``) in the base frame, gravity's unit direction
-        ``down`` in the base frame.
+        ``down`` in the base frame. A foot sphere off the foot's origin: its centre's own.
         """
+        centre = self._centres[leg]
+        if centre is not None:
+            q0, q1, q2 = angles[0], angles[1], angles[2]
+            moving = centre.position_velocity(q0, q1, q2, rates[0], rates[1], rates[2])
+            position, velocity = moving[:3], moving[3:]
         r, depth = self.contact(leg, position, down)
         return FootMotion(self.still_base_velocity(leg, angles, rates, velocity, down), r, depth)
 

@@ -85,14 +85,16 @@ class OdometrySettings:
 
 class ImuReading(NamedTuple):
     """One IMU sample: ``orientation`` (x, y, z, w) of the base in the world (None: the IMU has
-    none, ``orientation_covariance[0] == -1``), ``gyro`` [rad/s] in the base frame, and the
-    diagonals of their covariances (None where the message leaves them unknown, all zero).
+    none, ``orientation_covariance[0] == -1``), ``gyro`` [rad/s] in the base frame, the
+    diagonals of their covariances (None where the message leaves them unknown, all zero), and
+    the ``specific_force`` [m/s^2] in the base frame (None: no accelerometer).
     """
 
     orientation: tuple[float, float, float, float] | None
     gyro: tuple[float, float, float]
     orientation_variance: tuple[float, float, float] | None = None
     gyro_variance: tuple[float, float, float] | None = None
+    specific_force: tuple[float, float, float] | None = None
 
 
 class OdometrySample(NamedTuple):

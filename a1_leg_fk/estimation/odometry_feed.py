@@ -1,10 +1,19 @@
 """Joint states and IMU samples in, odometry samples out: the one pipeline of the node and the bag
-tool (:class:`OdometryFeed`). Per joint state: the IMU sample that goes with it
-(:class:`~a1_leg_fk.estimation.imu.ImuBuffer`), gravity's direction from its orientation, each
-foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`), the stance's source (foot
-forces from the joint efforts, or kinematic: :class:`~a1_leg_fk.estimation.effort_contacts.
-EffortContacts`), then one :meth:`~a1_leg_fk.estimation.odometry.LegOdometry.step`. Plain floats
-throughout.
+tool (:class:`OdometryFeed`).
+
+- Every IMU sample with an accelerometer propagates the state filter
+  (:class:`~a1_leg_fk.estimation.state_filter.StateFilter`); every IMU sample is kept to pair with
+  the joint states (:class:`~a1_leg_fk.estimation.imu.ImuBuffer`).
+- Per joint state: the feet's contact probabilities (:class:`~a1_leg_fk.estimation.
+  contact_estimator.ContactEstimator`: the efforts' dynamic foot forces fused with the feet's
+  heights and speeds, or the kinematic evidence alone, see :data:`CONTACT_SOURCES`); each
+  standing foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`) and Jacobian; then
+  the filter's update, gated per foot.
+- Without an IMU sample with an accelerometer paired with the joint state (no IMU, ``use_imu``
+  false, or an IMU without one), the legs alone: the averaging estimate of
+  :class:`~a1_leg_fk.estimation.odometry.LegOdometry`, as before the filter.
+
+Plain floats on the per-foot path; the filter's 15 x 15 algebra in numpy.
 """
 
 from __future__ import annotations
@@ -12,7 +21,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from a1_leg_fk.estimation.effort_contacts import AUTO, EffortContacts
+from a1_leg_fk.estimation.contact_estimator import ContactEstimator, EvidenceCounts, ImuSample
+from a1_leg_fk.estimation.filter_model import FLAT, MIN_PROBABILITY, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
@@ -21,23 +31,32 @@ from a1_leg_fk.estimation.odometry import (
     OdometrySample,
     OdometrySettings,
 )
-from a1_leg_fk.kinematics.frames import Vector, down_direction
+from a1_leg_fk.estimation.stance import kinematic_stance
+from a1_leg_fk.estimation.state_filter import StateFilter
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Vector, down_direction
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import JOINTS_PER_LEG
+from a1_leg_fk.model.urdf import LegFkError
 
 Foot = tuple[Sequence[float], Sequence[float]]
 """A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
 MAX_BASE_SPEED_MPS = 1e3
 """[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
-rates or foot velocity are corrupt (no leg comes near it), and the odometry's sums of squares
-stay far from overflow."""
+rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from
+overflow."""
+AUTO, FORCE, KINEMATIC = "auto", "force", "kinematic"
+CONTACT_SOURCES = (AUTO, FORCE, KINEMATIC)
+"""Where the contacts' evidence comes from (the node's ``contacts`` parameter, ``a1-leg-fk odom
+--contacts``): ``auto`` (default) the efforts' foot forces where the joint state has efforts,
+with the feet's kinematics; ``force`` the same, and a joint state without efforts has no foot
+standing; ``kinematic`` the kinematics alone (efforts ignored)."""
 
 
 class OdometryFeed:
-    """Leg odometry for one robot. ``radii``: the feet's rolling radii [m] (default: the URDF's
-    collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``: the
-    stance's source, ``auto``, ``force`` or ``kinematic`` (:mod:`~a1_leg_fk.estimation.
-    effort_contacts`), with the contact rule's ``thresholds`` [N] (None: the defaults).
+    """The base's state for one robot. ``radii``: the feet's rolling radii [m] (default: the
+    URDF's collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``
+    one of :data:`CONTACT_SOURCES`; ``ground``: ``flat`` (the stance feet anchor the height) or
+    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`).
     """
 
     def __init__(
@@ -48,19 +67,45 @@ class OdometryFeed:
         imu_timeout_s: float = DEFAULT_IMU_TIMEOUT_S,
         use_imu: bool = True,
         contacts: str = AUTO,
-        thresholds: tuple[float | None, float | None] = (None, None),
+        filter_settings: FilterSettings | None = None,
+        ground: str = FLAT,
     ) -> None:
+        if contacts not in CONTACT_SOURCES:
+            raise LegFkError(f"contacts must be one of {', '.join(CONTACT_SOURCES)}: {contacts!r}")
+        self.source = contacts
         self.motion = LegMotion(quadruped, radii)
-        self.contacts = EffortContacts(quadruped, contacts, thresholds)
+        self.note = ""
+        """Why there are no foot forces for this robot ("" when there are)."""
+        self.contacts: ContactEstimator | None = None
+        try:
+            self.contacts = ContactEstimator(quadruped)
+        except LegFkError as error:  # a URDF without masses: the kinematic stance
+            self.note = str(error)
         self.odometry = LegOdometry(settings)
+        self.filter = StateFilter(filter_settings, ground)
         self.imu = ImuBuffer(imu_timeout_s)
         self.use_imu = use_imu
         self.samples_with_imu = 0
+        self.samples_filtered = 0
+        self.distance_m = 0.0
+        """The path length of the estimate's positions [m]."""
+        self._jacobians = tuple(leg.jacobian_from_trig for leg in quadruped.legs)
+        self._first_stamp_ns: int | None = None
+        self._position: tuple[float, float, float] | None = None
+
+    @property
+    def counts(self) -> EvidenceCounts:
+        """The joint states whose contacts had force evidence, and kinematic evidence alone."""
+        return self.contacts.counts if self.contacts is not None else EvidenceCounts()
 
     def add_imu(self, stamp_ns: int, reading: ImuReading | None) -> None:
-        """One IMU sample (None: unusable, ignored)."""
-        if reading is not None and self.use_imu:
-            self.imu.add(stamp_ns, reading)
+        """One IMU sample (None: unusable, ignored); with an accelerometer it moves the filter."""
+        if reading is None or not self.use_imu:
+            return
+        self.imu.add(stamp_ns, reading)
+        if reading.specific_force is not None:
+            self.filter.propagate(stamp_ns, reading.gyro, reading.specific_force,
+                                  reading.orientation)  # fmt: skip
 
     def step(
         self,
@@ -73,10 +118,8 @@ class OdometryFeed:
     ) -> OdometrySample | None:
         """The estimate after one joint state: per leg its foot (None: not in this joint state, or
         without velocity), the 12 merged ``angles`` [rad], ``rates`` [rad/s] and ``efforts``
-        [N m] (None: none) in slot order; ``contacts`` (4) probabilities from elsewhere, else the
-        stance comes from :attr:`contacts` (the efforts' foot forces, or kinematic). None, and
-        nothing changes, when no leg has a foot (a joint state without velocities says nothing
-        about motion).
+        [N m] (None: none) in slot order; ``contacts`` (4) probabilities from elsewhere, else
+        the contact estimate's. None, and nothing changes, when no leg has a foot.
         """
         if all(foot is None for foot in feet):
             return None
@@ -84,44 +127,119 @@ class OdometryFeed:
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
         if contacts is None:
-            contacts = self.contacts.probabilities(angles, efforts, down)
-        depths: list[float | None] = [None] * len(feet)
-        points: list[Vector | None] = [None] * len(feet)
-        motion = self.motion
-        for leg, foot in enumerate(feet):
-            if foot is not None:
-                r, depth = motion.contact(leg, foot[0], down)
-                if math.isfinite(depth):
-                    points[leg], depths[leg] = r, depth
-        odometry = self.odometry
-        weights = odometry.stance(depths, contacts)
-        motions: list[FootMotion | None] = [None] * len(feet)
-        for leg in list(weights):
-            motions[leg] = self._motion(leg, feet, points, depths, angles, rates, down)
-            if motions[leg] is None:
-                del weights[leg]
-        return odometry.estimate(stamp_ns, motions, weights, imu)
+            contacts = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
+        if imu is None or imu.specific_force is None or not self.filter.started:
+            sample = self._legs_alone(stamp_ns, feet, angles, rates, contacts, imu, down)
+        else:  # an accelerometer: the state filter
+            self.samples_filtered += 1
+            sample = self._filtered(stamp_ns, feet, angles, rates, contacts, imu, down)
+        position = sample.position
+        if self._position is not None:
+            last = self._position
+            self.distance_m += math.dist(position, last)
+        self._position = position
+        return sample
 
-    def _motion(
+    def _filtered(
+        self,
+        stamp_ns: int,
+        feet: Sequence[Foot | None],
+        angles: Sequence[float],
+        rates: Sequence[float],
+        contacts: Sequence[float] | None,
+        imu: ImuReading,
+        down: Vector,
+    ) -> OdometrySample:
+        """The state filter's estimate after its update with this joint state's feet."""
+        legs: list[LegMeasurement | None] = [None] * len(feet)
+        for leg, foot in enumerate(feet):
+            if contacts is not None and foot is not None and contacts[leg] >= MIN_PROBABILITY:
+                legs[leg] = self._measurement(leg, foot, angles, rates, down, contacts[leg])
+        used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
+        stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
+        return self.filter.sample(stamp_ns, stance, used)
+
+    def _contacts(
+        self,
+        stamp_ns: int,
+        feet: Sequence[Foot | None],
+        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
+        imu: ImuReading | None,
+        down: Vector,
+    ) -> list[float] | None:
+        """The contact estimate's probabilities (None: kinematic stance, a URDF without masses)."""
+        if self.contacts is None:
+            return None
+        angles, rates, efforts = joints
+        if self.source == KINEMATIC:
+            efforts = None
+        elif self.source == FORCE and efforts is None:
+            return [0.0] * len(feet)
+        if self._first_stamp_ns is None:
+            self._first_stamp_ns = stamp_ns
+        gravity = (down[0] * STANDARD_GRAVITY, down[1] * STANDARD_GRAVITY,
+                   down[2] * STANDARD_GRAVITY)  # fmt: skip
+        sample = ImuSample(
+            gravity if imu is not None and imu.orientation is not None else None,
+            None if imu is None else imu.gyro,
+            None if imu is None else imu.specific_force,
+        )
+        stamp_s = (stamp_ns - self._first_stamp_ns) / 1e9
+        return self.contacts.step(stamp_s, (angles, rates, efforts), feet, sample).probabilities
+
+    def _measurement(
         self,
         leg: int,
-        feet: Sequence[Foot | None],
-        points: Sequence[Vector | None],
-        depths: Sequence[float | None],
+        foot: Foot,
         angles: Sequence[float],
         rates: Sequence[float],
         down: Vector,
-    ) -> FootMotion | None:
-        """A standing leg's motion, or None when its numbers overflow or are beyond
-        :data:`MAX_BASE_SPEED_MPS`.
-        """
-        first = leg * JOINTS_PER_LEG
-        last = first + JOINTS_PER_LEG
-        foot, r, depth = feet[leg], points[leg], depths[leg]
-        assert foot is not None and r is not None and depth is not None  # it stands
-        e = self.motion.still_base_velocity(
-            leg, angles[first:last], rates[first:last], foot[1], down
+        probability: float,
+    ) -> LegMeasurement | None:
+        """A standing foot's measurement: its motion and ``J Jᵀ``; None when unusable."""
+        joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
+        q = angles[joints]
+        motion = self.motion.foot(leg, q, rates[joints], foot[0], foot[1], down)
+        if not all(abs(value) <= MAX_BASE_SPEED_MPS for value in motion.e):  # also NaN
+            return None
+        c = self._jacobians[leg](math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1]),
+                                 math.cos(q[2]), math.sin(q[2]))  # fmt: skip
+        jjt = tuple(
+            c[row] * c[column] + c[3 + row] * c[3 + column] + c[6 + row] * c[6 + column]
+            for row in range(3)
+            for column in range(3)
         )
-        fastest = MAX_BASE_SPEED_MPS
-        usable = abs(e[0]) <= fastest and abs(e[1]) <= fastest and abs(e[2]) <= fastest
-        return FootMotion(e, r, depth) if usable else None  # not for NaN either
+        return LegMeasurement(motion, probability, jjt)
+
+    def _legs_alone(
+        self,
+        stamp_ns: int,
+        feet: Sequence[Foot | None],
+        angles: Sequence[float],
+        rates: Sequence[float],
+        contacts: Sequence[float] | None,
+        imu: ImuReading | None,
+        down: Vector,
+    ) -> OdometrySample:
+        """The averaging estimate of the standing feet (no accelerometer to propagate with)."""
+        odometry = self.odometry
+        depths: list[float | None] = [None] * len(feet)
+        motions: list[FootMotion | None] = [None] * len(feet)
+        for leg, foot in enumerate(feet):
+            if foot is not None:
+                depth = self.motion.contact(leg, foot[0], down)[1]
+                depths[leg] = depth if math.isfinite(depth) else None
+        if contacts is None:
+            weights = kinematic_stance(depths, odometry.settings.stance_band_m)
+        else:
+            weights = odometry.stance(depths, contacts)
+        for leg in list(weights):
+            foot = feet[leg]
+            joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
+            assert foot is not None
+            motion = self.motion.foot(leg, angles[joints], rates[joints], foot[0], foot[1], down)
+            if all(abs(value) <= MAX_BASE_SPEED_MPS for value in motion.e):
+                motions[leg] = motion
+            else:
+                del weights[leg]
+        return odometry.estimate(stamp_ns, motions, weights, imu)

@@ -3,7 +3,8 @@ pipeline (:class:`~a1_leg_fk.estimation.odometry_feed.OdometryFeed`), in bag ord
 would have received them. No ROS install: the bag is read with ``rosbags``
 (:mod:`a1_leg_fk.recording.reader`), JointState messages by the same rules and blocks as
 ``a1-leg-fk bag`` (:mod:`a1_leg_fk.recording.blocks`); the stance from the merged joint efforts'
-foot forces or kinematic, as the node decides it (:mod:`a1_leg_fk.estimation.effort_contacts`).
+contacts from the merged joint efforts' foot forces and the feet's kinematics, or the kinematics
+alone, as the node decides it (:data:`~a1_leg_fk.estimation.odometry_feed.CONTACT_SOURCES`).
 """
 
 from __future__ import annotations
@@ -16,10 +17,11 @@ from typing import TYPE_CHECKING, Any, Unpack
 
 import numpy as np
 
-from a1_leg_fk.estimation.effort_contacts import AUTO, FORCE, KINEMATIC, ContactCounts
+from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
+from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.imu import imu_reading
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
-from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import check_has_efforts
 from a1_leg_fk.recording.reader import pick_topic
@@ -50,9 +52,12 @@ class OdometryTrack:
     pose in odom: ``positions`` (N, 3) [m], ``orientations`` (N, 4) x, y, z, w; twist in the base
     frame: ``linear`` (N, 3) [m/s], ``angular`` (N, 3) [rad/s]; covariance diagonals
     ``pose_variances`` and ``twist_variances`` (N, 6); ``stance`` and ``used`` (N, 4) bool.
-    ``truth``: the base's recorded pose (``--truth``), else None. ``contacts``: the stance's
-    source asked for (auto, force, kinematic), ``contact_counts`` the samples of each,
-    ``contacts_note`` why there are no foot forces for this robot ("" when there are).
+    ``truth``: the base's recorded pose (``--truth``), else None. ``contacts``: the contacts'
+    source asked for (auto, force, kinematic), ``contact_counts`` the samples with each
+    evidence, ``contacts_note`` why there are no foot forces for this robot ("" when there are).
+    ``filtered``: the rows the state filter gave (the others: the legs alone, without an
+    accelerometer), ``filter_counts``, its final biases (gyro [rad/s], accelerometer [m/s^2])
+    and the feet's noise scale.
     """
 
     stamps_ns: np.ndarray
@@ -72,8 +77,12 @@ class OdometryTrack:
     radii: tuple[float, ...]
     counts: OdometryCounts
     contacts: str
-    contact_counts: ContactCounts
+    contact_counts: EvidenceCounts
     contacts_note: str
+    filtered: int
+    filter_counts: FilterCounts
+    biases: tuple[tuple[float, ...], tuple[float, ...]]
+    noise_scale: float
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
@@ -87,13 +96,16 @@ def odometry_track(
     radius_m: float | None = None,
     settings: OdometrySettings | None = None,
     contacts: str = AUTO,
+    filter_settings: FilterSettings | None = None,
+    ground: str = FLAT,
     progress: bool = False,
     **choices: Unpack[RecordingChoices],
 ) -> OdometryTrack:
     """The leg odometry of a bag. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
     one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
-    ``contacts``: the stance's source (``auto``, ``force``: a bag without efforts is bad input,
-    ``kinematic``); ``choices`` as :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
+    ``contacts``: the contacts' source (``auto``, ``force``: a bag without efforts is bad input,
+    ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``choices`` as
+    :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
     whose ``base_pose`` is the truth to compare with. :class:`LegFkError` for bad input.
     """
     recording = open_recording(path, **choices)
@@ -106,10 +118,16 @@ def odometry_track(
         imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
         imu = _imu_samples(recording.reads, imu_connection) if imu_connection else []
         feed = OdometryFeed(
-            recording.quadruped, settings, radius_m, use_imu=use_imu, contacts=contacts
+            recording.quadruped,
+            settings,
+            radius_m,
+            use_imu=use_imu,
+            contacts=contacts,
+            filter_settings=filter_settings,
+            ground=ground,
         )
-        if contacts == FORCE and feed.contacts.note:
-            raise LegFkError(f"--contacts force: {feed.contacts.note}")
+        if contacts == FORCE and feed.note:
+            raise LegFkError(f"--contacts force: {feed.note}")
         stats, samples, next_imu = BlockStats(), [], 0
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
@@ -183,9 +201,13 @@ def _track(
         rows_with_imu=feed.samples_with_imu,
         radii=feed.motion.radii,
         counts=feed.odometry.counts,
-        contacts=feed.contacts.source,
-        contact_counts=feed.contacts.counts,
-        contacts_note=feed.contacts.note,
+        contacts=feed.source,
+        contact_counts=feed.counts,
+        contacts_note=feed.note,
+        filtered=feed.samples_filtered,
+        filter_counts=feed.filter.counts,
+        biases=(tuple(feed.filter.gyro_bias.tolist()), tuple(feed.filter.accel_bias.tolist())),
+        noise_scale=feed.filter.noise_scale,
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,
@@ -221,12 +243,14 @@ def _imu_samples(
     message: Any
     for bag_time, message in reads.decoded(connection):
         stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-        q, w = message.orientation, message.angular_velocity
+        q, w, a = message.orientation, message.angular_velocity, message.linear_acceleration
         reading = imu_reading(
             (q.x, q.y, q.z, q.w),
             message.orientation_covariance,
             (w.x, w.y, w.z),
             message.angular_velocity_covariance,
+            (a.x, a.y, a.z),
+            message.linear_acceleration_covariance,
         )
         samples.append((bag_time, stamp or bag_time, reading))
     return samples

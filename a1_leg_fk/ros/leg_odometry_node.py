@@ -7,9 +7,11 @@ accepted joint state with velocities gives one ``leg_odometry`` message, stamped
 state's stamp: pose in ``odom_frame``, twist in the base frame (``child_frame_id``). An IMU sample
 is paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`).
 
-Contacts (parameter ``contacts``): from the foot forces of the JointState's efforts when they are
-all finite, else kinematic (``auto``); or always one of them (``force``, ``kinematic``). The rule
-is :mod:`a1_leg_fk.estimation.effort_contacts`'s, inside the feed, as in ``a1-leg-fk odom``.
+The estimate is the state filter's (:mod:`a1_leg_fk.estimation.state_filter`: IMU-propagated,
+gated leg velocities) while IMU samples carry an accelerometer, else the legs alone. Contacts
+(parameter ``contacts``): the contact filter's probabilities from the efforts' foot forces and the
+feet's kinematics (``auto``, ``force``) or the kinematics alone (``kinematic``), as in ``a1-leg-fk
+odom`` (:data:`~a1_leg_fk.estimation.odometry_feed.CONTACT_SOURCES`).
 """
 
 from __future__ import annotations
@@ -27,10 +29,16 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu, JointState
 
-from a1_leg_fk.estimation.effort_contacts import AUTO, CONTACT_SOURCES, KINEMATIC
+from a1_leg_fk.estimation.filter_model import FLAT, GROUND_MODELS
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
-from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
+from a1_leg_fk.estimation.odometry_feed import (
+    AUTO,
+    CONTACT_SOURCES,
+    KINEMATIC,
+    Foot,
+    OdometryFeed,
+)
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -67,9 +75,17 @@ PARAMETERS = (
         "contacts",
         AUTO,
         ParameterType.PARAMETER_STRING,
-        "Where the stance comes from: auto (the foot forces of the joint efforts when a joint "
-        "state's are all finite, else kinematic), force (the foot forces always) or kinematic "
-        "(the lowest feet along gravity)",
+        "The contacts' evidence: auto (the joint efforts' foot forces where a joint state has "
+        "efforts, with the feet's heights and speeds), force (the same; a joint state without "
+        "efforts has no foot standing) or kinematic (the feet's heights and speeds alone)",
+        read_only=True,
+    ),
+    ParameterSpec(
+        "ground",
+        FLAT,
+        ParameterType.PARAMETER_STRING,
+        "flat: the stance feet's heights anchor the height (flat ground); none: they do not "
+        "(stairs, slopes)",
         read_only=True,
     ),
     ParameterSpec(
@@ -132,6 +148,11 @@ class LegOdometryNode(Node):
             raise LegFkError(
                 f"parameter contacts must be {', '.join(CONTACT_SOURCES)}: {self._contacts!r}"
             )
+        self._ground = str(self.get_parameter("ground").value)
+        if self._ground not in GROUND_MODELS:
+            raise LegFkError(
+                f"parameter ground must be {', '.join(GROUND_MODELS)}: {self._ground!r}"
+            )
         self._start(self._robot.config)
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
@@ -177,9 +198,10 @@ class LegOdometryNode(Node):
             self._setting("imu_timeout_s"),
             use_imu=bool(self._setting("use_imu")),
             contacts=self._contacts,
+            ground=self._ground,
         )
-        if self._feed.contacts.note and self._contacts != KINEMATIC:
-            self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.contacts.note}")
+        if self._feed.note and self._contacts != KINEMATIC:
+            self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
         self._no_stance_before = 0
         self._apply_frames()
 
@@ -191,8 +213,8 @@ class LegOdometryNode(Node):
         if fields is None:
             msg = deserialize_message(raw, Imu)
             fields = imu_message_fields(msg)
-        stamp, orientation, orientation_covariance, gyro, gyro_covariance, *_ = fields
-        reading = imu_reading(orientation, orientation_covariance, gyro, gyro_covariance)
+        reading = imu_reading(*fields[1:])
+        stamp = fields[0]
         if reading is None:
             self._warnings.warn(
                 "imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite"
@@ -312,8 +334,16 @@ class LegOdometryNode(Node):
                 samples_with_imu=self._feed.samples_with_imu,
                 without_velocities=self._without_velocities,
                 contacts=self._contacts,
-                contact_counts=self._feed.contacts.counts,
-                contacts_note=self._feed.contacts.note,
+                contact_counts=self._feed.counts,
+                contacts_note=self._feed.note,
+                filtered=self._feed.samples_filtered,
+                filter=self._feed.filter.counts,
+                biases=(
+                    tuple(self._feed.filter.gyro_bias.tolist()),
+                    tuple(self._feed.filter.accel_bias.tolist()),
+                ),
+                noise_scale=self._feed.filter.noise_scale,
+                distance_m=self._feed.distance_m,
                 model=self._config.source,
                 description_topic=robot.topic_name,
                 description_status=robot.topic_status,

@@ -1,16 +1,18 @@
 """The ``/diagnostics`` status of ``leg_odometry_node``, as a pure function (no ROS imports).
 
 Joint states are judged as ``foot_fk_node`` judges them (:mod:`a1_leg_fk.ros.diagnostics`); the
-odometry adds its own counts: samples, samples without a stance foot, feet dropped as slipping,
-stamp gaps, the IMU's state, where the stance came from (foot forces or kinematic) and the
-distance travelled.
+odometry adds its own counts: samples (of the state filter, and of the legs alone without an
+accelerometer), the feet the filter's gate used and rejected, its gate resets, mean NIS, bias
+estimates and the feet's noise scale; samples without a stance foot and feet dropped as slipping
+(the legs alone); stamp gaps, the IMU's state, the contacts' evidence and the distance travelled.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from a1_leg_fk.estimation.effort_contacts import ContactCounts
+from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
+from a1_leg_fk.estimation.filter_model import FilterCounts
 from a1_leg_fk.estimation.odometry import OdometryCounts
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.ros.diagnostics import OK, WARN, rejected_messages, robot_description_status
@@ -36,8 +38,13 @@ class OdometryReport:
     description_status: str
     description_rejected: bool
     contacts: str  # the contacts parameter: auto, force or kinematic
-    contact_counts: ContactCounts
+    contact_counts: EvidenceCounts
     contacts_note: str  # why there are no foot forces ("" when there are)
+    filtered: int  # samples the state filter gave
+    filter: FilterCounts
+    biases: tuple[tuple[float, ...], tuple[float, ...]]  # gyro [rad/s], accelerometer [m/s^2]
+    noise_scale: float
+    distance_m: float
 
 
 def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, object]]:
@@ -50,7 +57,7 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
     level, summary = OK, "odometry published"
     if not tracker.messages:
         level, summary = WARN, "no joint_states received yet"
-    elif report.without_velocities and not odometry.samples:
+    elif report.without_velocities and not (odometry.samples or report.filtered):
         level, summary = WARN, "joint_states carry no velocities: no odometry"
     elif report.rejected_in_period:
         level, summary = WARN, "some joint_states rejected"
@@ -75,15 +82,25 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "input_rate_hz": f"{report.received_in_period / report.period_s:.1f}",
         "imu_topic": report.imu_topic,
         "imu_received": report.imu_received,
-        "samples": odometry.samples,
+        "samples": odometry.samples + report.filtered,
         "samples_with_imu": report.samples_with_imu,
+        "samples_filtered": report.filtered,
+        "samples_legs_alone": odometry.samples,
         "samples_without_stance": odometry.no_stance,
         "contacts": report.contacts,
-        "samples_with_force_contacts": report.contact_counts.force,
-        "samples_with_kinematic_stance": report.contact_counts.kinematic,
+        "samples_with_force_evidence": report.contact_counts.force,
+        "samples_with_kinematic_evidence_only": report.contact_counts.kinematic,
+        **{f"feet_used_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.used)},
+        **{f"feet_rejected_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.rejected)},
+        "gate_resets": report.filter.gate_resets,
+        "zero_velocity_updates": report.filter.still,
+        "mean_nis": f"{report.filter.mean_nis:.3f}",
+        "gyro_bias_radps": " ".join(f"{value:.5f}" for value in report.biases[0]),
+        "accel_bias_mps2": " ".join(f"{value:.4f}" for value in report.biases[1]),
+        "feet_noise_scale": f"{report.noise_scale:.4f}",
         **{f"slips_{leg}": n for leg, n in zip(LEG_NAMES, odometry.slips)},
-        "stamp_gaps": odometry.gaps,
-        "distance_m": f"{odometry.distance_m:.3f}",
+        "stamp_gaps": odometry.gaps + report.filter.gaps,
+        "distance_m": f"{report.distance_m:.3f}",
         **description,
     }
     if report.contacts_note:

@@ -42,20 +42,32 @@ def walk():
     return simulate(walking_targets(), SIM_S)
 
 
-def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None, efforts=False):
+def odometry_of(
+    run, quadruped, *, imu=True, contacts=False, radius=None, efforts=False, accelerometer=True
+):
     """Run the feed over a simulated run; (velocities (N, 3), positions (N, 3), counts).
     ``contacts``: PyBullet's normal forces through the contact hook; ``efforts``: the motor
-    torques as the joint states' efforts (the feed's own force contacts)."""
+    torques as the joint states' efforts (the feed's own force contacts); ``accelerometer``
+    false: an IMU without one (the legs alone, averaged)."""
     feed = OdometryFeed(quadruped, radii=radius, use_imu=imu)
     feet = quadruped.fk_batch(run.angles).tolist()
     velocities = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
     angles, rates = run.angles.tolist(), run.rates.tolist()
     torques = run.torques.tolist() if efforts else [None] * len(angles)
     standing = (run.contact_forces[:, :, 2] > CONTACT_FORCE_N).astype(float).tolist()
+    forces = run.specific_force.tolist() if accelerometer else [None] * len(angles)
     samples = []
     for row, seconds in enumerate(run.stamps_s):
         stamp = round(seconds * 1e9)
-        feed.add_imu(stamp, ImuReading(tuple(run.base_quaternions[row]), tuple(run.gyro[row])))
+        force = forces[row]
+        feed.add_imu(
+            stamp,
+            ImuReading(
+                tuple(run.base_quaternions[row]),
+                tuple(run.gyro[row]),
+                specific_force=None if force is None else tuple(force),
+            ),
+        )
         sample = feed.step(
             stamp,
             list(zip(feet[row], velocities[row])),
@@ -68,7 +80,7 @@ def odometry_of(run, quadruped, *, imu=True, contacts=False, radius=None, effort
         samples.append(sample)
     linear = np.array([s.linear for s in samples])
     position = np.array([s.position for s in samples])
-    assert feed.contacts.counts.force == (len(samples) if efforts and not contacts else 0)
+    assert feed.counts.force == (len(samples) if efforts and not contacts else 0)
     return linear, position, feed.odometry.counts, samples
 
 
@@ -108,6 +120,10 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
     results = {}
     cases: dict[str, dict[str, Any]] = {
         "efforts' force contacts + IMU": {"efforts": True},
+        "efforts' force contacts + IMU without accelerometer": {
+            "efforts": True,
+            "accelerometer": False,
+        },
         "efforts' force contacts, no IMU": {"efforts": True, "imu": False},
         "force contacts + IMU": {"contacts": True},
         "force contacts + IMU, feet as points": {"contacts": True, "radius": 0.0},
@@ -223,13 +239,13 @@ LEG = """
   <origin xyz="0 0 -0.2"/><axis xyz="0 1 0"/><limit lower="-2.7" upper="-0.9"/></joint>
 <link name="{p}_calf"/>
 <joint name="{p}_foot_fixed" type="fixed"><parent link="{p}_calf"/><child link="{p}_foot"/>
-  <origin xyz="0 0 -0.2"/></joint>
+  <origin xyz="{foot}" rpy="{rpy}"/></joint>
 <link name="{p}_foot">{collision}</link>"""
 
 
-def robot(collision: str) -> Quadruped:
+def robot(collision: str, foot: str = "0 0 -0.2", rpy: str = "0 0 0") -> Quadruped:
     legs = "".join(
-        LEG.format(p=p, x=x, y=y, collision=collision)
+        LEG.format(p=p, x=x, y=y, collision=collision, foot=foot, rpy=rpy)
         for p, x, y in (("FR", 0.2, -0.1), ("FL", 0.2, 0.1), ("RR", -0.2, -0.1), ("RL", -0.2, 0.1))
     )
     return Quadruped(parse_urdf(URDF.format(legs=legs)))
@@ -243,10 +259,44 @@ def test_foot_radius_comes_from_the_collision_sphere(quadruped) -> None:
         '<collision><origin xyz="0 0 0.01"/><geometry><sphere radius="0.02"/></geometry>'
         "</collision>"
     )
-    assert foot_radii(robot(offset)) == (0.0,) * 4  # not centred on the foot frame: a point foot
+    assert foot_radii(robot(offset)) == (0.02,) * 4  # off the foot's origin: followed exactly
     assert foot_radii(robot("")) == (0.0,) * 4
     with pytest.raises(LegFkError, match="radius"):
         robot('<collision><geometry><sphere radius="-1"/></geometry></collision>')
+
+
+def test_a_sphere_off_the_foot_origin_rolls_about_its_centre() -> None:
+    """A foot frame turned and moved away from its sphere's centre (as the Go2's, 2 mm) gives the
+    same contact point and base velocity as a robot whose foot frame is that centre."""
+    sphere = '<geometry><sphere radius="0.02"/></geometry>'
+    offset = robot(
+        f'<collision><origin xyz="0.01 -0.004 0.015"/>{sphere}</collision>',
+        "0 0 -0.2",
+        "0.3 0 0.4",
+    )
+    shift = np.array([0.01, -0.004, 0.015])
+    turn = pybullet.getMatrixFromQuaternion(pybullet.getQuaternionFromEuler([0.3, 0.0, 0.4]))
+    centre = np.array([0.0, 0.0, -0.2]) + np.array(turn).reshape(3, 3) @ shift
+    centred = robot(f"<collision>{sphere}</collision>", " ".join(map(str, centre)))
+    rng = np.random.default_rng(3)
+    down = tuple(np.array([0.1, -0.2, -1.0]) / np.linalg.norm([0.1, -0.2, -1.0]))
+    for quadruped in (offset, centred):
+        assert foot_radii(quadruped) == (0.02,) * 4
+    angles, rates = rng.uniform(-0.8, 0.8, 12), rng.uniform(-3, 3, 12)
+    angles[2::3] = -1.5
+    results = []
+    for quadruped in (offset, centred):
+        motion = LegMotion(quadruped)
+        feet = quadruped.fk_batch(angles[None])[0]
+        velocities = quadruped.foot_velocities_batch(angles[None], rates[None])[0]
+        legs = []
+        for leg in range(4):
+            joints = slice(3 * leg, 3 * leg + 3)
+            foot = motion.foot(leg, angles[joints].tolist(), rates[joints].tolist(),
+                               feet[leg].tolist(), velocities[leg].tolist(), down)  # fmt: skip
+            legs.append(np.concatenate([foot.e, foot.r, [foot.depth]]))
+        results.append(np.array(legs))
+    assert np.abs(results[0] - results[1]).max() < 1e-12
 
 
 # --- stance logic on synthetic feet ---------------------------------------------------------

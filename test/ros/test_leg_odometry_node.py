@@ -81,8 +81,15 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
     assert status["samples_without_stance"] == str(track.counts.no_stance)
     assert [status[f"slips_{leg}"] for leg in LEGS] == [str(n) for n in track.counts.slips]
     assert status["contacts"] == "auto"
-    assert status["samples_with_force_contacts"] == str(force_samples)
-    assert status["samples_with_kinematic_stance"] == str(samples - force_samples)
+    assert status["samples_with_force_evidence"] == str(force_samples)
+    assert status["samples_with_kinematic_evidence_only"] == str(samples - force_samples)
+    assert status["samples_filtered"] == str(track.filtered) == str(samples)
+    counts = track.filter_counts
+    assert [status[f"feet_used_{leg}"] for leg in LEGS] == [str(n) for n in counts.used]
+    assert [status[f"feet_rejected_{leg}"] for leg in LEGS] == [str(n) for n in counts.rejected]
+    assert status["gate_resets"] == str(counts.gate_resets)
+    assert status["mean_nis"] == f"{counts.mean_nis:.3f}"
+    assert status["accel_bias_mps2"] == " ".join(f"{v:.4f}" for v in track.biases[1])
     assert processes.interrupt(node) == 0
     stamps = np.array(
         [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in received]
@@ -145,7 +152,7 @@ def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
     assert processes.interrupt(node) == 0
 
 
-def test_a_bad_contacts_value_names_the_parameter(ros) -> None:
+def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
     from rclpy.parameter import Parameter
 
     from a1_leg_fk.model.urdf import LegFkError
@@ -155,10 +162,14 @@ def test_a_bad_contacts_value_names_the_parameter(ros) -> None:
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("contacts", value="x")]
         )
+    with pytest.raises(LegFkError, match="parameter ground must be flat, none: 'stairs'"):
+        LegOdometryNode(
+            context=ros.context, parameter_overrides=[Parameter("ground", value="stairs")]
+        )
     node = LegOdometryNode(
         context=ros.context, parameter_overrides=[Parameter("contacts", value="kinematic")]
     )
     try:
-        assert node._feed.contacts.source == "kinematic" and node._feed.contacts.model is None
+        assert node._feed.source == "kinematic" and node._feed.filter.ground == "flat"
     finally:
         node.destroy_node()

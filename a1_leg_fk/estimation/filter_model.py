@@ -1,0 +1,152 @@
+"""The state filter's model: its settings (noise densities, the gate, the feet's noise
+adaptation), its counts, and one standing foot's velocity measurement with its noise
+(:func:`foot_noise`). The filter itself: :mod:`a1_leg_fk.estimation.state_filter`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from a1_leg_fk.estimation.leg_motion import FootMotion
+
+LEGS = 4
+STATE = 15
+FLAT, NO_GROUND = "flat", "none"
+GROUND_MODELS = (FLAT, NO_GROUND)
+"""``flat``: the stance feet's heights anchor z; ``none``: they do not (stairs, slopes)."""
+MIN_PROBABILITY = 0.5
+"""A foot whose contact probability is below this gives no measurement."""
+
+
+@dataclass(frozen=True)
+class FilterSettings:
+    """The filter's noise model and rules; units in the names (densities per √Hz)."""
+
+    gyro_noise: float = 5e-4
+    """The gyro's white noise density [rad/s/√Hz]."""
+    accel_noise: float = 0.05
+    """The accelerometer's white noise density [m/s²/√Hz] (the base's vibration included)."""
+    gyro_bias_walk: float = 1e-4
+    """The gyro bias' random walk [rad/s²/√Hz]."""
+    accel_bias_walk: float = 2e-3
+    """The accelerometer bias' random walk [m/s³/√Hz]."""
+    joint_rate_noise_radps: float = 0.05
+    """The joint rates' standard deviation [rad/s], through each foot's Jacobian."""
+    foot_noise_mps: float = 0.007
+    """A standing foot's own horizontal velocity error [m/s]: rolling, slip."""
+    foot_vertical_noise_mps: float = 0.02
+    """A standing foot's own vertical velocity error [m/s]: impacts, the ground's compliance."""
+    orientation_noise_rad: float = 0.01
+    """The IMU orientation's standard deviation [rad] when its message gives none."""
+    height_noise_m: float = 0.01
+    """A stance foot's height above the flat ground [m]."""
+    gyro_sample_noise_radps: float = 0.01
+    """One gyro sample's standard deviation [rad/s] (in a foot's ``ω x r``)."""
+    still_speed_mps: float = 0.02
+    """Every foot in stance and no foot's velocity above this: standing still."""
+    still_noise_mps: float = 0.005
+    """The zero-velocity update's standard deviation [m/s]."""
+    gate_chi2: float = 16.27
+    """χ² (3 dof) a foot's velocity innovation must stay below: 99.9 %."""
+    max_rejected_s: float = 0.25
+    """After this long with every stance foot rejected, the feet are believed again [s], the
+    velocity's covariance widened by their mean innovation."""
+    noise_adapt_s: float = 5.0
+    """The time constant [s] of the feet's horizontal noise scale, matched to their mean NIS
+    (0: fixed)."""
+    min_noise_scale: float = 0.005
+    """The feet's horizontal noise variance is scaled by no less than this (nor more than 1)."""
+    initial_velocity_mps: float = 0.5
+    initial_gyro_bias_radps: float = 0.02
+    initial_accel_bias_mps2: float = 0.2
+    max_step_s: float = 0.1
+    """IMU samples further apart are not integrated across (a gap: the covariance grows)."""
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(f"filter setting {name} must be a finite number >= 0: {value}")
+
+
+@dataclass(frozen=True)
+class LegMeasurement:
+    """One standing foot at a joint state: its :class:`FootMotion` (base frame), its contact
+    probability and ``JJt`` (its Jacobian times its transpose, row-major 3 x 3, m²/rad²).
+    """
+
+    motion: FootMotion
+    probability: float
+    jjt: tuple[float, ...]
+
+
+@dataclass
+class FilterCounts:
+    """Updates, per-leg measurements used and rejected by the gate, gate resets (every foot
+    rejected too long), zero-velocity updates, IMU gaps, and the running sum of the normalised
+    innovation squared (NIS) of the accepted feet with its count.
+    """
+
+    updates: int = 0
+    used: list[int] = field(default_factory=lambda: [0] * LEGS)
+    rejected: list[int] = field(default_factory=lambda: [0] * LEGS)
+    gate_resets: int = 0
+    still: int = 0
+    gaps: int = 0
+    nis_sum: float = 0.0
+    nis_count: int = 0
+
+    @property
+    def mean_nis(self) -> float:
+        """The accepted feet's mean NIS (3 when the noise model is right), NaN before any."""
+        return self.nis_sum / self.nis_count if self.nis_count else math.nan
+
+
+def foot_noise(
+    measurement: LegMeasurement, fixed: tuple[float, float, tuple[float, ...]]
+) -> tuple[tuple[float, float, float], ...]:
+    """A foot's velocity noise (3 x 3, [m²/s²]): ``s_dq² J Jᵀ + s_w² [r]x[r]xᵀ`` plus the foot's
+    own (``fixed``: s_dq², s_w², its 3 x 3 row-major), over its contact probability.
+    """
+    rate2, gyro2, own = fixed
+    rx, ry, rz = measurement.motion.r
+    r2, scale = rx * rx + ry * ry + rz * rz, 1.0 / measurement.probability
+    j = measurement.jjt
+    xy, xz, yz = gyro2 * rx * ry, gyro2 * rx * rz, gyro2 * ry * rz
+    return (
+        (scale * (rate2 * j[0] + gyro2 * (r2 - rx * rx) + own[0]),
+         scale * (rate2 * j[1] - xy + own[1]), scale * (rate2 * j[2] - xz + own[2])),
+        (scale * (rate2 * j[3] - xy + own[3]),
+         scale * (rate2 * j[4] + gyro2 * (r2 - ry * ry) + own[4]),
+         scale * (rate2 * j[5] - yz + own[5])),
+        (scale * (rate2 * j[6] - xz + own[6]), scale * (rate2 * j[7] - yz + own[7]),
+         scale * (rate2 * j[8] + gyro2 * (r2 - rz * rz) + own[8])),
+    )  # fmt: skip
+
+
+def block_diagonal(blocks: Sequence[np.ndarray]) -> np.ndarray:
+    """The block-diagonal matrix of square ``blocks`` (a sequence or a (K, n, n) array)."""
+    size = sum(block.shape[0] for block in blocks)
+    result = np.zeros((size, size))
+    start = 0
+    for block in blocks:
+        end = start + block.shape[0]
+        result[start:end, start:end] = block
+        start = end
+    return result
+
+
+def standing_still(legs: Sequence[LegMeasurement | None], fastest_mps: float) -> bool:
+    """Every foot standing (probability at least :data:`MIN_PROBABILITY`), none saying the base
+    moves faster than ``fastest_mps`` on an axis: a zero-velocity update's condition.
+    """
+    for measurement in legs:
+        if measurement is None or not measurement.probability >= MIN_PROBABILITY:
+            return False
+        ex, ey, ez = measurement.motion.e
+        if not max(abs(ex), abs(ey), abs(ez)) <= fastest_mps:
+            return False
+    return True

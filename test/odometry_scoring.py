@@ -1,0 +1,128 @@
+"""The state estimate of a simulated run (:class:`contact_runs.ContactRun`) through the odometry
+feed, and its errors against the run's truth (the URDF root's motion in PyBullet)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from contact_runs import ContactRun
+from pybullet_sim import rotation_matrices
+
+from a1_leg_fk.estimation.odometry import ImuReading
+from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.kinematics.quadruped import Quadruped
+
+WINDOW_S = 0.1
+"""The burst test's window [s]."""
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """The feed's output over a run (N samples): body-frame velocity [m/s] and its variances,
+    world position [m], the legs used (N, 4) bool, and the feed's counts."""
+
+    velocity: np.ndarray
+    velocity_variance: np.ndarray
+    position: np.ndarray
+    used: np.ndarray
+    feed: OdometryFeed
+
+
+def estimate(
+    run: ContactRun, efforts: bool, quadruped: Quadruped | None = None, **options
+) -> Estimate:
+    """Feed every sample of ``run`` (IMU first, then the joint state) to a new feed."""
+    quadruped = quadruped or Quadruped.from_urdf(run.urdf_path)
+    feed = OdometryFeed(quadruped, contacts="auto" if efforts else "kinematic", **options)
+    feet = quadruped.fk_batch(run.angles).tolist()
+    speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
+    angles, rates, torques = run.angles.tolist(), run.rates.tolist(), run.torques.tolist()
+    quaternions, gyro = run.quaternions.tolist(), run.gyro.tolist()
+    forces = run.specific_force.tolist()
+    velocity, variance, position, used = [], [], [], []
+    for row, seconds in enumerate(run.stamps_s.tolist()):
+        stamp = round(seconds * 1e9)
+        feed.add_imu(stamp, ImuReading(tuple(quaternions[row]), tuple(gyro[row]), None, None,
+                                       tuple(forces[row])))  # fmt: skip
+        sample = feed.step(
+            stamp,
+            list(zip(feet[row], speeds[row])),
+            angles[row],
+            rates[row],
+            efforts=torques[row] if efforts else None,
+        )
+        assert sample is not None
+        velocity.append(sample.linear)
+        variance.append(sample.twist_variance[:3])
+        position.append(sample.position)
+        mask = [False] * 4
+        for leg in sample.used:
+            mask[leg] = True
+        used.append(mask)
+    return Estimate(
+        np.array(velocity), np.array(variance), np.array(position), np.array(used), feed
+    )
+
+
+@dataclass(frozen=True)
+class Errors:
+    """An estimate's errors over the gait: velocity RMSE [m/s] (3D, base frame), the worst 0.1 s
+    window's mean error norm [m/s], horizontal and vertical drift [% of the distance], the
+    distance [m], the share of samples whose error lies within 3 sigma on every axis, and the
+    largest
+    ratio of the reported sigma to the actual RMS error (per axis)."""
+
+    rmse: float
+    worst_window: float
+    horizontal_pct: float
+    vertical_pct: float
+    distance_m: float
+    within_3sigma: float
+    sigma_ratio: float
+
+    def row(self, name: str) -> str:
+        return (
+            f"{name:<34} {self.rmse:7.4f} {self.worst_window:7.3f} {self.horizontal_pct:6.2f} "
+            f"{self.vertical_pct:6.2f} {self.distance_m:6.1f} {self.within_3sigma:6.3f} "
+            f"{self.sigma_ratio:6.2f}"
+        )
+
+
+HEADER = (
+    f"{'run':<34} {'rmse':>7} {'burst':>7} {'hor%':>6} {'ver%':>6} {'dist':>6} {'in3s':>6} "
+    f"{'s/err':>6}"
+)
+
+
+def errors(truth: ContactRun, result: Estimate) -> Errors:
+    """``result``'s errors against the clean run ``truth`` (its root motion), over the gait."""
+    gait = truth.gait
+    rotations = rotation_matrices(truth.quaternions)
+    true_body = np.einsum("nji,nj->ni", rotations, truth.base_velocities)
+    error = (result.velocity - true_body)[gait]
+    rmse = float(np.sqrt((error**2).sum(axis=1).mean()))
+    window = max(1, round(WINDOW_S / float(np.median(np.diff(truth.stamps_s)))))
+    norms = np.linalg.norm(error, axis=1)
+    kernel = np.ones(window) / window
+    means = np.convolve(norms, kernel, mode="valid") if len(norms) >= window else norms
+    first = int(np.argmax(gait))
+    moved = truth.base_positions[-1] - truth.base_positions[first]
+    estimated = result.position[-1] - result.position[first]
+    path = np.diff(truth.base_positions[gait], axis=0)
+    distance = float(np.linalg.norm(path[:, :2], axis=1).sum())
+    drift = estimated - moved
+    sigma = np.sqrt(result.velocity_variance[gait])
+    inside = (np.abs(error) <= 3.0 * sigma).all(axis=1)
+    actual = np.sqrt((error**2).mean(axis=0))
+    ratio = float((sigma.mean(axis=0) / actual).max())
+    return Errors(
+        rmse,
+        float(means.max()),
+        100.0 * float(math.hypot(drift[0], drift[1])) / distance,
+        100.0 * abs(float(drift[2])) / distance,
+        distance,
+        float(inside.mean()),
+        ratio,
+    )

@@ -8,16 +8,29 @@ trunk's centre of mass), then the 12 joint angles [rad] in the order FR, FL, RR,
 calf (pybullet_data's a1.urdf), then toe positions and velocities (not used: the clips'
 velocities disagree with their own angles' differences). Joint rates and the true base velocity
 are central differences; the gyro comes from the clip's orientations; the base is converted to
-the URDF root's origin. Prints, per clip, with the clip's orientation as the IMU and without an
-IMU: the body-velocity RMSE [m/s] and the final position error as % of the distance.
+the URDF root's origin. Three modes per clip:
+
+- ``legs + orientation``: the clip's orientation and gyro as the IMU, no accelerometer, so the
+  legs-alone averaging estimator;
+- ``legs, no IMU``: no IMU at all (planar);
+- ``filter (full IMU)``: a synthetic full IMU, the orientation, the gyro and the root origin's
+  acceleration as specific force ``Rᵀ(a - g)``, so the state filter. ``a`` at frame k is the mean
+  over the step the filter holds the sample for, ``(v_k - v_(k-1)) / dt`` of the true velocity
+  (central differences of the root positions).
+
+Prints one table per clip: the body-velocity RMSE [m/s], the final position error as % of the
+distance (3-D, and horizontal), and for the filter the share of samples whose velocity error is
+within 3 sigma on every axis (``twist_variance[:3]``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pybullet
@@ -58,56 +71,107 @@ def matrices(q: np.ndarray) -> np.ndarray:
     )
 
 
-def evaluate(path: Path, quadruped: Quadruped) -> None:
+GRAVITY = np.array([0.0, 0.0, -9.80665])
+"""[m/s²] in the world."""
+MODES = ("legs + orientation", "legs, no IMU", "filter (full IMU)")
+
+
+class Clip(NamedTuple):
+    """A clip's joint states and truth, per frame: ``dt`` [s], root ``position`` (world) and
+    ``quaternion`` (x, y, z, w), ``angles`` and ``rates``, the true body velocity ``truth``, the
+    ``gyro`` and the ``specific_force`` (base frame).
+    """
+
+    dt: float
+    position: np.ndarray
+    quaternion: np.ndarray
+    angles: np.ndarray
+    rates: np.ndarray
+    truth: np.ndarray
+    gyro: np.ndarray
+    specific_force: np.ndarray
+
+
+class Result(NamedTuple):
+    """One mode's scores: velocity RMSE [m/s], final position error [% of the distance] in 3-D
+    and horizontally, and the share of samples within 3 sigma (NaN: no covariance used)."""
+
+    rmse: float
+    drift_pct: float
+    horizontal_pct: float
+    within_3sigma: float
+
+
+def load(path: Path) -> Clip:
+    """The clip's frames, converted to the URDF root, with their central differences."""
     clip = json.loads(path.read_text())
     dt, frames = float(clip["FrameDuration"]), np.array(clip["Frames"], dtype=float)
     position, quaternion = root_poses(frames[:, 0:3], frames[:, 3:7])
     angles = frames[:, 7:19]
-    rates = np.gradient(angles, dt, axis=0)
     rotation = matrices(quaternion)
-    truth = np.einsum("nji,nj->ni", rotation, np.gradient(position, dt, axis=0))
+    velocity = np.gradient(position, dt, axis=0)
     spin = np.einsum("nji,njk->nik", rotation, np.gradient(rotation, dt, axis=0))
-    gyro = (
-        np.stack(
-            [
-                spin[:, 2, 1] - spin[:, 1, 2],
-                spin[:, 0, 2] - spin[:, 2, 0],
-                spin[:, 1, 0] - spin[:, 0, 1],
-            ],
-            1,
+    gyro = np.stack([spin[:, 2, 1] - spin[:, 1, 2], spin[:, 0, 2] - spin[:, 2, 0],
+                     spin[:, 1, 0] - spin[:, 0, 1]], 1) / 2  # fmt: skip
+    acceleration = np.diff(velocity, axis=0, prepend=velocity[:1]) / dt
+    force = np.einsum("nji,nj->ni", rotation, acceleration - GRAVITY)
+    truth = np.einsum("nji,nj->ni", rotation, velocity)
+    rates = np.gradient(angles, dt, axis=0)
+    return Clip(dt, position, quaternion, angles, rates, truth, gyro, force)
+
+
+def run(clip: Clip, quadruped: Quadruped, mode: str) -> Result:
+    """Feed the clip through :class:`OdometryFeed` in one of :data:`MODES`."""
+    feed = OdometryFeed(quadruped, use_imu=mode != MODES[1])
+    feet = quadruped.fk_batch(clip.angles).tolist()
+    foot_velocities = quadruped.foot_velocities_batch(clip.angles, clip.rates).tolist()
+    linear, odom, variance = [], [], []
+    for row in range(len(clip.angles)):
+        stamp = round(row * clip.dt * 1e9)
+        force = tuple(clip.specific_force[row]) if mode == MODES[2] else None
+        feed.add_imu(stamp, ImuReading(tuple(clip.quaternion[row]), tuple(clip.gyro[row]),
+                                       specific_force=force))  # fmt: skip
+        sample = feed.step(
+            stamp,
+            list(zip(feet[row], foot_velocities[row])),
+            clip.angles[row].tolist(),
+            clip.rates[row].tolist(),
         )
-        / 2
-    )
-    feet = quadruped.fk_batch(angles).tolist()
-    foot_velocities = quadruped.foot_velocities_batch(angles, rates).tolist()
-    for use_imu in (True, False):
-        feed = OdometryFeed(quadruped, use_imu=use_imu)
-        linear, odom = [], []
-        for row in range(len(frames)):
-            stamp = round(row * dt * 1e9)
-            feed.add_imu(stamp, ImuReading(tuple(quaternion[row]), tuple(gyro[row])))
-            sample = feed.step(
-                stamp,
-                list(zip(feet[row], foot_velocities[row])),
-                angles[row].tolist(),
-                rates[row].tolist(),
-            )
-            assert sample is not None
-            linear.append(sample.linear)
-            odom.append(sample.position)
-        inner = slice(1, -1)  # central differences only
-        error = np.array(linear)[inner] - truth[inner]
-        rmse = float(np.sqrt(np.mean(np.sum(error**2, axis=1))))
-        axes = slice(0, 3) if use_imu else slice(0, 2)
-        moved = position[-1] - position[0]
-        distance = np.linalg.norm(np.diff(position[:, axes], axis=0), axis=1).sum()
-        drift = float(np.linalg.norm(np.array(odom)[-1, axes] - moved[axes]))
-        print(
-            f"{path.name}: {len(frames)} frames ({(len(frames) - 1) * dt:.2f} s), "
-            f"{'IMU (the clip orientation)' if use_imu else 'no IMU (planar)':<26} velocity RMSE "
-            f"{rmse:.4f} m/s, final position error {drift * 1e3:.1f} mm = "
-            f"{100 * drift / distance:.2f} % of {distance:.3f} m"
-        )
+        assert sample is not None
+        linear.append(sample.linear)
+        odom.append(sample.position)
+        variance.append(sample.twist_variance[:3])
+    inner = slice(1, -1)  # central differences only
+    error = np.array(linear)[inner] - clip.truth[inner]
+    rmse = float(np.sqrt(np.mean(np.sum(error**2, axis=1))))
+    within = np.all(np.abs(error) <= 3 * np.sqrt(np.array(variance)[inner]), axis=1)
+    moved, steps = clip.position[-1] - clip.position[0], np.diff(clip.position, axis=0)
+    percents = []
+    for axes in (slice(0, 3), slice(0, 2)):
+        distance = np.linalg.norm(steps[:, axes], axis=1).sum()
+        drift = np.linalg.norm(np.array(odom)[-1, axes] - moved[axes])
+        percents.append(float(100 * drift / distance))
+    if mode == MODES[1]:
+        percents[0] = math.nan  # planar: no height
+    share = float(within.mean()) if mode == MODES[2] else math.nan
+    return Result(rmse, percents[0], percents[1], share)
+
+
+def evaluate(path: Path, quadruped: Quadruped) -> None:
+    """Print the clip's size and one row per mode."""
+    clip = load(path)
+    frames = len(clip.angles)
+    distance = np.linalg.norm(np.diff(clip.position[:, :2], axis=0), axis=1).sum()
+    seconds = (frames - 1) * clip.dt
+    print(f"\n{path.name}: {frames} frames at {1 / clip.dt:.1f} Hz, {seconds:.2f} s, "
+          f"{distance:.3f} m horizontal")  # fmt: skip
+    print(f"  {'mode':<20} {'vel RMSE m/s':>12} {'pos err %':>9} {'horiz %':>8} {'in 3sd':>7}")
+    for mode in MODES:
+        result = run(clip, quadruped, mode)
+        share = "-" if math.isnan(result.within_3sigma) else f"{result.within_3sigma:.1%}"
+        drift = "-" if math.isnan(result.drift_pct) else f"{result.drift_pct:.2f}"
+        print(f"  {mode:<20} {result.rmse:>12.4f} {drift:>9} "
+              f"{result.horizontal_pct:>8.2f} {share:>7}")  # fmt: skip
 
 
 def main() -> int:

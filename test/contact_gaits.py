@@ -433,11 +433,11 @@ LONG_SPECS = {
     "a1_turn_long": RunSpec("a1", SPECS["a1_trot_turn"].gait, A1, gait_s=86.0),
     "a1_walk_long": RunSpec("a1", A1_LONG_WALK, A1, gait_s=82.0),
     "a1_flying_trot": RunSpec("a1", A1_FLYING_TROT, A1, gait_s=62.0),
-    "a1_flying_trot_short": RunSpec(
+    "a1_flying_trot_fast": RunSpec(
         "a1",
         replace(A1_TROT, period_s=0.3, duty=0.42, speed_mps=0.45, thrust=0.4),
         A1,
-        gait_s=50.0,
+        gait_s=60.0,
     ),
     "a1_trot_slips": RunSpec("a1", A1_TROT, A1, gait_s=66.0, slips=Slips()),
     "go2_trot_long": RunSpec("go2", GO2_TROT, GO2, gait_s=64.0),

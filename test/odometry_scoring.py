@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from contact_runs import ContactRun
@@ -27,25 +28,37 @@ class Estimate:
     velocity_variance: np.ndarray
     position: np.ndarray
     used: np.ndarray
-    feed: OdometryFeed
+    feed: OdometryFeed | None
 
 
 def estimate(
-    run: ContactRun, efforts: bool, quadruped: Quadruped | None = None, **options
+    run: ContactRun,
+    efforts: bool,
+    quadruped: Quadruped | None = None,
+    accelerometer: bool = True,
+    **options: Any,
 ) -> Estimate:
-    """Feed every sample of ``run`` (IMU first, then the joint state) to a new feed."""
+    """Feed every sample of ``run`` (IMU first, then the joint state) to a new feed
+    (``options``: its keywords); ``accelerometer`` false: the IMU has none (the legs alone)."""
     quadruped = quadruped or Quadruped.from_urdf(run.urdf_path)
     feed = OdometryFeed(quadruped, contacts="auto" if efforts else "kinematic", **options)
     feet = quadruped.fk_batch(run.angles).tolist()
     speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
     angles, rates, torques = run.angles.tolist(), run.rates.tolist(), run.torques.tolist()
     quaternions, gyro = run.quaternions.tolist(), run.gyro.tolist()
-    forces = run.specific_force.tolist()
+    forces = run.specific_force.tolist() if accelerometer else [None] * len(angles)
     velocity, variance, position, used = [], [], [], []
     for row, seconds in enumerate(run.stamps_s.tolist()):
         stamp = round(seconds * 1e9)
-        feed.add_imu(stamp, ImuReading(tuple(quaternions[row]), tuple(gyro[row]), None, None,
-                                       tuple(forces[row])))  # fmt: skip
+        force = forces[row]
+        feed.add_imu(
+            stamp,
+            ImuReading(
+                tuple(quaternions[row]),
+                tuple(gyro[row]),
+                specific_force=None if force is None else tuple(force),
+            ),
+        )
         sample = feed.step(
             stamp,
             list(zip(feet[row], speeds[row])),
@@ -71,8 +84,7 @@ class Errors:
     """An estimate's errors over the gait: velocity RMSE [m/s] (3D, base frame), the worst 0.1 s
     window's mean error norm [m/s], horizontal and vertical drift [% of the distance], the
     distance [m], the share of samples whose error lies within 3 sigma on every axis, and the
-    largest
-    ratio of the reported sigma to the actual RMS error (per axis)."""
+    largest ratio of the reported sigma to the actual RMS error (per axis)."""
 
     rmse: float
     worst_window: float
@@ -126,3 +138,25 @@ def errors(truth: ContactRun, result: Estimate) -> Errors:
         float(inside.mean()),
         ratio,
     )
+
+
+def stance_slides(run: ContactRun, quadruped: Quadruped) -> np.ndarray:
+    """How far [m] each foot's frame moved horizontally over each complete stance of the gait
+    (PyBullet's contacts; the feet by the URDF's FK at the true root pose): rolling moves a
+    sphere's centre a few millimetres, a slip centimetres."""
+    feet = quadruped.fk_batch(run.angles)
+    world = run.base_positions[:, None, :] + np.einsum(
+        "nij,nfj->nfi", rotation_matrices(run.quaternions), feet
+    )
+    contacts = run.contacts & run.gait[:, None]
+    slides = []
+    for foot in range(contacts.shape[1]):
+        down = contacts[:, foot]
+        starts = np.flatnonzero(~down[:-1] & down[1:]) + 1
+        ends = np.flatnonzero(down[:-1] & ~down[1:]) + 1
+        for start in starts:
+            later = ends[ends > start]
+            if len(later):
+                moved = world[later[0] - 1, foot, :2] - world[start, foot, :2]
+                slides.append(float(np.linalg.norm(moved)))
+    return np.array(slides)

@@ -150,3 +150,36 @@ def standing_still(legs: Sequence[LegMeasurement | None], fastest_mps: float) ->
         if not max(abs(ex), abs(ey), abs(ez)) <= fastest_mps:
             return False
     return True
+
+
+def normalised_squares(
+    innovations: list[list[list[float]]],
+    residuals: list[tuple[float, float, float]],
+    up: list[float],
+) -> tuple[list[float], list[float]]:
+    """Per foot, the NIS ``rᵀ S⁻¹ r`` of its residual ``r`` with its innovation covariance ``S``
+    (3 x 3, symmetric; by cofactors, in floats: numpy's per-call cost is larger), and the square
+    of its part along ``up``, ``(u·r)² / (uᵀ S u)``.
+    """
+    squares, vertical = [], []
+    ux, uy, uz = up
+    for (row0, row1, row2), (x, y, z) in zip(innovations, residuals):
+        a, b, c = row0
+        _, d, e = row1
+        f = row2[2]
+        ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
+        determinant = a * ca + b * cb + c * cc
+        cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b
+        quadratic = (
+            ca * x * x + cd * y * y + cf * z * z + 2.0 * (cb * x * y + cc * x * z + ce * y * z)
+        )
+        squares.append(quadratic / determinant)
+        along = ux * x + uy * y + uz * z
+        spread = (
+            a * ux * ux
+            + d * uy * uy
+            + f * uz * uz
+            + 2.0 * (b * ux * uy + c * ux * uz + e * uy * uz)
+        )
+        vertical.append(along * along / spread)
+    return squares, vertical

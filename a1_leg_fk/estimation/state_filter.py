@@ -46,6 +46,7 @@ from a1_leg_fk.estimation.filter_model import (
     LegMeasurement,
     block_diagonal,
     foot_noise,
+    normalised_squares,
     standing_still,
 )
 from a1_leg_fk.estimation.odometry import OdometrySample
@@ -56,6 +57,8 @@ GRAVITY = np.array([0.0, 0.0, -STANDARD_GRAVITY])
 """[m/s²] in the world (odom) frame."""
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
 Z = POSITION.start + 2
+ORIENTATION_ROWS = np.eye(3, STATE)
+"""The IMU's orientation observes dθ directly."""
 
 
 class StateFilter:
@@ -81,6 +84,7 @@ class StateFilter:
         self._imu_stamp_ns = 0
         self._gyro: Vector = (0.0, 0.0, 0.0)
         self._rejected_since_ns: int | None = None
+        self._orientation_noise = np.eye(3) * self.settings.orientation_noise_rad**2
         self._legs_stamp_ns: int | None = None
         self.noise_scale = 1.0
         """The feet's horizontal noise variance over the model's
@@ -190,11 +194,9 @@ class StateFilter:
         self, orientation: Quaternion, variance: Vector | None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The IMU's orientation observes dθ directly: ``Log(R̂ᵀ R_m)``."""
-        row = np.zeros((3, STATE))
-        row[:, THETA] = np.eye(3)
-        default = self.settings.orientation_noise_rad**2
         residual = log_so3(self.rotation.T @ matrix_of(orientation))
-        return row, residual, np.diag(variance if variance is not None else (default,) * 3)
+        noise = self._orientation_noise if variance is None else np.diag(variance)
+        return ORIENTATION_ROWS, residual, noise
 
     def _legs(
         self,
@@ -241,27 +243,17 @@ class StateFilter:
         rows = np.repeat(base[None], len(candidates), axis=0)
         rows[:, :, GYRO_BIAS] = levers
         up = self.rotation[2]  # world up in the base frame
-        vertical = np.outer(up, up)
         h = math.sqrt(self.noise_scale)
-        shape = h * np.eye(3) + (1.0 - h) * vertical
+        shape = h * np.eye(3) + (1.0 - h) * np.outer(up, up)
         residual, noise = np.array(residuals), shape @ np.array(noises) @ shape
         innovation = rows @ self.covariance @ rows.transpose(0, 2, 1) + noise
-        nis = np.einsum(
-            "ki,ki->k", residual, np.linalg.solve(innovation, residual[..., None])[..., 0]
-        )
-        along = residual @ up
-        nis_vertical = along * along / (innovation @ up @ up)
-        accepted = self._gate(stamp_ns, candidates, nis.tolist(), nis_vertical.tolist())
+        nis, along = normalised_squares(innovation.tolist(), residuals, up.tolist())
+        accepted, reset = self._gate(stamp_ns, candidates, nis, along)
         if not accepted:
             return [], None
-        if (
-            len(accepted) == len(candidates)
-            and self.counts.gate_resets
-            and (self._rejected_since_ns is None and max(nis.tolist()) > s.gate_chi2)
-        ):  # the gate was reset: widen the velocity by the feet's mean disagreement
-            self.covariance[VELOCITY, VELOCITY] += float(
-                (residual**2).sum(axis=1).mean()
-            ) * np.eye(3)
+        if reset:  # the filter had lost its way: widen the velocity by the feet's disagreement
+            spread = float((residual**2).sum(axis=1).mean())
+            self.covariance[VELOCITY, VELOCITY] += spread * np.eye(3)
         keep = [candidates.index(leg) for leg in accepted]
         return accepted, (
             rows[keep].reshape(-1, STATE),
@@ -271,20 +263,22 @@ class StateFilter:
 
     def _gate(
         self, stamp_ns: int, candidates: list[int], nis: list[float], vertical: list[float]
-    ) -> list[int]:
-        """The candidate legs whose NIS passes the gate (all of them when every foot has failed
-        for :data:`FilterSettings.max_rejected_s`); counts kept, the horizontal noise scale
-        matched to the accepted feet's NIS (``vertical``: its part along world up, 1 dof).
+    ) -> tuple[list[int], bool]:
+        """The candidate legs whose NIS passes the gate, and whether the gate was reset (every
+        foot failed for :data:`FilterSettings.max_rejected_s`: all taken); counts kept, the
+        horizontal noise scale matched to the accepted feet's NIS (``vertical``: its part along
+        world up, 1 dof).
         """
         s, counts = self.settings, self.counts
         accepted = [leg for leg, value in zip(candidates, nis) if value <= s.gate_chi2]
+        reset = False
         if accepted:
             self._rejected_since_ns = None
         else:
             if self._rejected_since_ns is None:
                 self._rejected_since_ns = stamp_ns
             if (stamp_ns - self._rejected_since_ns) / 1e9 >= s.max_rejected_s:
-                accepted, self._rejected_since_ns = list(candidates), None
+                accepted, self._rejected_since_ns, reset = list(candidates), None, True
                 counts.gate_resets += 1
         total = up = 0.0
         for leg, value, along in zip(candidates, nis, vertical):
@@ -298,7 +292,7 @@ class StateFilter:
             counts.nis_sum += total
             counts.nis_count += len(accepted)
             self._adapt(stamp_ns, max(total - up, 0.0) / (2.0 * len(accepted)))
-        return accepted
+        return accepted, reset
 
     def _adapt(self, stamp_ns: int, ratio: float) -> None:
         """Move the feet's horizontal noise scale towards consistency: ``ratio`` is the accepted
@@ -365,13 +359,9 @@ class StateFilter:
         rotation, covariance = self.rotation, self.covariance
         rotation_t = rotation.T
         local = rotation_t @ self.velocity
-        theta_v = covariance[THETA, VELOCITY]
-        twist = (
-            np.einsum("ij,jk,ik->i", skew(local), covariance[THETA, THETA], skew(local))
-            + 2.0 * np.einsum("ij,jk,ik->i", skew(local), theta_v, rotation_t)
-            + np.einsum("ij,jk,ik->i", rotation_t, covariance[VELOCITY, VELOCITY], rotation_t)
-        )
-        attitude = np.einsum("ij,jk,ik->i", rotation, covariance[THETA, THETA], rotation)
+        row = np.hstack((skew(local), rotation_t))  # d(Rᵀ v) / d(dθ, dv)
+        twist = ((row @ covariance[:6, :6]) * row).sum(axis=1)
+        attitude = ((rotation @ covariance[THETA, THETA]) * rotation).sum(axis=1)
         diagonal = covariance.diagonal()
         gyro_noise = self.settings.gyro_sample_noise_radps**2
         wx, wy, wz = self._gyro

@@ -1,0 +1,89 @@
+"""Per-sample cost of the odometry's state filter (plain floats and 15 x 15 numpy), against the
+contact estimate and one FK measured in the same run.
+
+Run: ``.venv/bin/python bench/state_filter_speed.py`` (about 15 s). One A1 trot sample (two feet
+in stance, the IMU's orientation, gyro and accelerometer) again and again, the stamp advancing
+1 ms each call, median of interleaved runs:
+
+- ``StateFilter step``: one IMU propagation, one update with two stance feet and the IMU's
+  orientation, and the output sample: the filter's own work per joint state (goal <= 60 us);
+- its parts: ``propagate``, ``update``, ``sample``;
+- ``OdometryFeed.step``: the whole per-joint-state work of ``leg_odometry_node`` without ROS (the
+  contact estimate with efforts, the feet's motion and Jacobians, the filter);
+- the baselines: ``ContactEstimator.step`` and ``Quadruped.fk``.
+"""
+
+from __future__ import annotations
+
+from common import machine, median_seconds_per_call
+
+from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
+from a1_leg_fk.estimation.filter_model import LegMeasurement
+from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.estimation.odometry import ImuReading
+from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.estimation.state_filter import StateFilter
+from a1_leg_fk.kinematics.quadruped import Quadruped
+
+ANGLES = [0.05, 0.8, -1.5, -0.05, 0.95, -1.75, 0.05, 0.9, -1.6, -0.05, 0.75, -1.45]  # rad
+RATES = [0.5, -3.0, 4.0, -0.4, 6.0, -9.0, 0.3, 5.0, -8.0, -0.6, -2.5, 3.5]  # rad/s
+EFFORTS = [1.1, -2.9, 2.4, -1.0, -0.3, 0.6, -1.9, 0.2, 0.4, 1.7, 2.8, 5.2]  # N m
+ORIENTATION = (0.0153, -0.0102, 0.0, 0.99983)
+GYRO, FORCE = (0.1, -0.2, 0.3), (-0.3, 0.2, 9.9)
+STEP_NS = 1_000_000
+JJT = (0.05, 0.0, 0.01, 0.0, 0.06, 0.0, 0.01, 0.0, 0.04)  # m^2/rad^2
+
+
+def main() -> None:
+    print(machine())
+    a1 = Quadruped.from_urdf()
+    feet, velocities = a1.fk(ANGLES), a1.foot_velocities(ANGLES, RATES)
+    legs = [(feet[leg].tolist(), velocities[leg].tolist()) for leg in range(4)]
+    state, feed, contacts = StateFilter(), OdometryFeed(a1), ContactEstimator(a1)
+    clock = {"filter": 0, "propagate": 0, "update": 0, "feed": 0, "contacts": 0}
+    stance = [
+        LegMeasurement(FootMotion((0.3, 0.0, 0.0), (0.18, -0.13, -0.3), 0.3), 0.99, JJT),
+        None,
+        None,
+        LegMeasurement(FootMotion((0.3, 0.0, 0.0), (-0.18, 0.13, -0.3), 0.3), 0.99, JJT),
+    ]
+    state.propagate(0, GYRO, FORCE, ORIENTATION)
+    imu = ImuReading(ORIENTATION, GYRO, specific_force=FORCE)
+    sample = ImuSample((0.3, -0.2, -9.79), GYRO, FORCE)
+
+    def tick(name: str) -> int:
+        clock[name] += STEP_NS
+        return clock[name]
+
+    def step() -> None:
+        stamp = tick("filter")
+        state.propagate(stamp, GYRO, FORCE)
+        state.update(stamp, stance, ORIENTATION)
+        state.sample(stamp, (0, 3), (0, 3))
+
+    def fed() -> None:
+        stamp = tick("feed")
+        feed.add_imu(stamp, imu)
+        feed.step(stamp, legs, ANGLES, RATES, efforts=EFFORTS)
+
+    runs = median_seconds_per_call(
+        {
+            "StateFilter step": step,
+            "StateFilter.propagate": lambda: state.propagate(tick("filter"), GYRO, FORCE),
+            "StateFilter.update": lambda: state.update(tick("filter"), stance, ORIENTATION),
+            "StateFilter.sample": lambda: state.sample(0, (0, 3), (0, 3)),
+            "OdometryFeed.step (with efforts)": fed,
+            "ContactEstimator.step": lambda: contacts.step(
+                tick("contacts") / 1e9, (ANGLES, RATES, EFFORTS), legs, sample
+            ),
+            "Quadruped.fk": lambda: a1.fk(ANGLES),
+        }
+    )
+    fk = runs["Quadruped.fk"]
+    print(f"\n  {'one sample':<36} {'us':>8} {'x fk':>6}")
+    for name, seconds in runs.items():
+        print(f"  {name:<36} {seconds * 1e6:8.1f} {seconds / fk:6.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -11,7 +11,8 @@ node under test answers (``foot_positions/FR`` or ``leg_odometry``). The node's 
 (utime + stime) from /proc over the measured window. Each node runs twice, alternately
 (foot_fk_node, leg_odometry_node, foot_fk_node, leg_odometry_node), on a ROS domain of its own
 (``--domain``, else 1 + pid % 100), LOCALHOST discovery. The goal (issue 27): leg_odometry_node's
-CPU <= 1.5 x foot_fk_node's (with efforts: both estimate the foot forces and contacts). Exit 0 after the table, whether or not the goal is met.
+CPU <= 1.5 x foot_fk_node's (with efforts: both estimate the foot forces and contacts). Exit 0
+after the table, whether or not the goal is met.
 
 ``--role generator`` is the generator itself (started by this script).
 """

@@ -3,7 +3,7 @@ recorded base pose). No ROS install: bags are read with ``rosbags`` (imported la
 
 The JointState rules are :class:`~a1_leg_fk.tracking.FootTracker`'s, as in the node; the model
 comes from :func:`~a1_leg_fk.kinematics.robot_config.load_robot`, as in the node. JointState
-messages are read from their serialized bytes (:mod:`a1_leg_fk.recording.joint_state_wire`), not
+messages are read from their serialized bytes (:mod:`a1_leg_fk.wire.joint_state`), not
 deserialized into Python objects, and processed in blocks of
 :data:`~a1_leg_fk.recording.blocks.BLOCK_MESSAGES` with numpy. Results stream out block by block
 (:func:`iter_foot_blocks`), so writers need memory independent of the bag's length;
@@ -26,9 +26,15 @@ from typing import TYPE_CHECKING, Unpack, cast
 
 import numpy as np
 
+from a1_leg_fk.estimation.sensor_contacts import (
+    DEFAULT_SENSOR_THRESHOLD_COUNTS,
+    SensorAgreement,
+)
 from a1_leg_fk.recording.base_pose import DEFAULT_MAX_POSE_GAP_S, BasePoses
 from a1_leg_fk.recording.blocks import LEGS, FootBlock, iter_foot_blocks
+from a1_leg_fk.recording.lowstate import STAMP_NOTE
 from a1_leg_fk.recording.reader import (
+    JOINT_STATE_TYPE,
     Recording,
     RecordingChoices,
     close_recording,
@@ -60,6 +66,9 @@ class RecordingSummary:
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
     types: str = ""  # which message types the bag was read with (recording.typestores)
     forces: str = ""  # with forces or contacts: what the estimate gave (ForcePass.summary)
+    input_type: str = JOINT_STATE_TYPE  # the message type of ``topic``
+    stamps: str = ""  # where the stamps came from, when not the messages' headers
+    sensors: str = ""  # a LowState's foot sensors against the contact estimate (SensorAgreement)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -83,7 +92,7 @@ class RecordingSummary:
         lines = [
             f"file:      {self.path}",
             f"model:     {self.model}",
-            f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
+            f"topic:     {self.topic} ({self.input_type})",
             f"types:     {self.types}",
             (
                 f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
@@ -105,8 +114,12 @@ class RecordingSummary:
                 f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a "
                 "pose (outside its time range or in a gap)"
             )
+        if self.stamps:
+            lines.insert(4, f"stamps:    {self.stamps}")
         if self.forces:
             lines.extend(self.forces.split("\n"))
+        if self.sensors:
+            lines.append(self.sensors)
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -150,10 +163,17 @@ class BlockStats:
         self.first: int | None = None
         self.last: int | None = None
         self.started = time.perf_counter()
+        self.sensors: SensorAgreement | None = None  # set by the first block with both
 
-    def add(self, block: FootBlock) -> None:
+    def add(self, block: FootBlock, threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS) -> None:
+        """Count the block's rows (``threshold`` [counts]: a foot sensor's, when the rows have
+        both sensor counts and contact estimates).
+        """
         if not len(block.stamps_ns):
             return
+        if block.sensor is not None and block.contacts is not None:
+            self.sensors = self.sensors or SensorAgreement(threshold)
+            self.sensors.add(block.contacts, block.sensor)
         self.rows += len(block.stamps_ns)
         if block.world_positions is not None:
             self.rows_without_pose += int(np.isnan(block.world_positions).all(axis=(1, 2)).sum())
@@ -181,6 +201,9 @@ class BlockStats:
             "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
             recording.types,
             recording.forces.summary(recording.force_output) if recording.forces else "",
+            recording.joint_states.msgtype,
+            STAMP_NOTE if recording.lowstate is not None else "",
+            self.sensors.line() if self.sensors is not None and recording.force_output else "",
         )
 
 

@@ -10,7 +10,7 @@ message is :mod:`a1_leg_fk.ros.foot_output`'s. All topic and service names are r
 latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z.
 
 The joint states are subscribed raw (serialized) and read by the bag tools' decoder
-(:mod:`a1_leg_fk.recording.joint_state_wire`): no message object is built per JointState.
+(:mod:`a1_leg_fk.wire.joint_state`): no message object is built per JointState.
 """
 
 from __future__ import annotations
@@ -36,7 +36,6 @@ from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import ForcePass
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
@@ -47,6 +46,7 @@ from a1_leg_fk.ros.odometry_wire import imu_fields, imu_message_fields, imu_samp
 from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
+from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0

@@ -34,7 +34,6 @@ from a1_leg_fk.estimation.odometry_feed import Foot, OdometryFeed
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
@@ -42,6 +41,7 @@ from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
+from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "leg_odometry"
 DIAGNOSTICS_PERIOD_S = 1.0

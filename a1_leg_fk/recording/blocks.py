@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -18,6 +17,8 @@ import numpy as np
 from a1_leg_fk.kinematics.batch_velocities import velocities_of
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.foot_block import FootBlock
+from a1_leg_fk.recording.lowstate import no_finite_motors
 from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording
 from a1_leg_fk.tracking import FootTracker
 from a1_leg_fk.wire.joint_state import (
@@ -30,37 +31,11 @@ if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
     from rosbags.interfaces import Connection
     from tqdm import tqdm
 
-    from a1_leg_fk.recording.lowstate import LowStateInput, no_finite_motors
+    from a1_leg_fk.recording.lowstate import LowStateInput
     from a1_leg_fk.wire.lowstate import LowStateRows
 
 BLOCK_MESSAGES = 4096
 LEGS = len(LEG_NAMES)
-
-
-@dataclass(frozen=True)
-class FootBlock:
-    """Rows of consecutive accepted messages: like
-    :class:`~a1_leg_fk.recording.trajectories.FootTrajectories` (stamps [ns], feet [m] and foot
-    velocities [m/s] in the base frame, world feet [m]), velocities always an array (NaN where the
-    message gives none); with ``recording.forces``, ``forces`` (N, 4, 3) [N, base frame],
-    ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts`` (N, 4) probabilities (NaN
-    where none); with ``recording.efforts``, ``efforts`` (N, 12) [N m], the merged joint efforts
-    after each message in slot order (NaN where unknown); from a LowState, ``sensor``: its foot
-    sensors' raw counts (FR, FL, RR, RL).
-    """
-
-    stamps_ns: np.ndarray
-    bag_times_ns: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    world_positions: np.ndarray | None
-    angles: np.ndarray  # (N, 12) [rad]: the merged state after each message, NaN where unknown
-    rates: np.ndarray  # (N, 12) [rad/s]: the message's rates where a foot velocity came of them
-    forces: np.ndarray | None = None
-    normal_forces: np.ndarray | None = None
-    contacts: np.ndarray | None = None
-    efforts: np.ndarray | None = None
-    sensor: np.ndarray | None = None  # (N, 4) a LowState's foot sensors [raw counts]
 
 
 def iter_foot_blocks(
@@ -266,11 +241,14 @@ class _LowStateBatch(_Batch):
             self.seen(lowstate.names)
             times = np.array(bag_times[: len(rows.tick)], dtype=np.int64)
             wanted = self.recording.forces is not None or self.recording.efforts
-            arrays = (times, times, rows.positions, rows.velocities)
-            efforts = rows.efforts if wanted else None
-            for block in _finish(
-                self.recording, self.tracker, lowstate.names, *arrays, efforts, rows
-            ):
+            arrays = (
+                times,
+                times,
+                rows.positions,
+                rows.velocities,
+                rows.efforts if wanted else None,
+            )
+            for block in _finish(self.recording, self.tracker, lowstate.names, *arrays, rows):
                 self.rows_out += len(block.stamps_ns)
                 yield block
         if bad:

@@ -194,7 +194,7 @@ def convert(
         for block in iter_foot_blocks(
             recording, progress=progress, on_message=copier.copy if copier else None
         ):
-            stats.add(block, recording.sensor_threshold)
+            stats.add(block, recording)
             for writer in writers:
                 writer.write(block)
             if outputs.plot is not None:

@@ -24,6 +24,7 @@ from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_
 from a1_leg_fk.recording.lowstate import LOWSTATE_TYPES, LowStateInput, refuse_humanoid
 from a1_leg_fk.recording.mcap_salvage import salvage
 from a1_leg_fk.recording.reads import RecordingReads
+from a1_leg_fk.recording.sport_feet import SportFeet
 from a1_leg_fk.recording.typestores import CannotOpen, open_reader, require_types
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
@@ -81,6 +82,7 @@ class Recording:
     efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
     lowstate: LowStateInput | None = None  # the joint states are a Unitree LowState's motors
     sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS  # [counts] a LowState foot sensor's
+    sport: SportFeet | None = None  # a LowState robot's own feet (SportModeState), if recorded
 
     @property
     def stopped(self) -> str:
@@ -193,6 +195,7 @@ def open_recording(
             force_output=forces,
             lowstate=lowstate,
             sensor_threshold=sensor_threshold,
+            sport=SportFeet.read(reads) if lowstate is not None else None,
         )
     except BaseException:
         _close_reader(reader)

@@ -26,10 +26,7 @@ from typing import TYPE_CHECKING, Unpack, cast
 
 import numpy as np
 
-from a1_leg_fk.estimation.sensor_contacts import (
-    DEFAULT_SENSOR_THRESHOLD_COUNTS,
-    SensorAgreement,
-)
+from a1_leg_fk.estimation.sensor_contacts import SensorAgreement
 from a1_leg_fk.recording.base_pose import DEFAULT_MAX_POSE_GAP_S, BasePoses
 from a1_leg_fk.recording.blocks import LEGS, FootBlock, iter_foot_blocks
 from a1_leg_fk.recording.lowstate import STAMP_NOTE
@@ -69,6 +66,7 @@ class RecordingSummary:
     input_type: str = JOINT_STATE_TYPE  # the message type of ``topic``
     stamps: str = ""  # where the stamps came from, when not the messages' headers
     sensors: str = ""  # a LowState's foot sensors against the contact estimate (SensorAgreement)
+    unitree: str = ""  # our feet against a recorded SportModeState's (SportFeet.line)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -118,8 +116,7 @@ class RecordingSummary:
             lines.insert(4, f"stamps:    {self.stamps}")
         if self.forces:
             lines.extend(self.forces.split("\n"))
-        if self.sensors:
-            lines.append(self.sensors)
+        lines.extend(line for line in (self.sensors, self.unitree) if line)
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -152,6 +149,7 @@ class FootTrajectories:
     forces: np.ndarray | None = None  # (N, 4, 3) [N], base frame, NaN where none; with forces
     normal_forces: np.ndarray | None = None  # (N, 4) [N] along minus gravity, NaN where none
     contacts: np.ndarray | None = None  # (N, 4) contact probabilities, NaN where none
+    sensor: np.ndarray | None = None  # (N, 4) a LowState's foot sensors [raw counts]
 
 
 class BlockStats:
@@ -165,14 +163,16 @@ class BlockStats:
         self.started = time.perf_counter()
         self.sensors: SensorAgreement | None = None  # set by the first block with both
 
-    def add(self, block: FootBlock, threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS) -> None:
-        """Count the block's rows (``threshold`` [counts]: a foot sensor's, when the rows have
-        both sensor counts and contact estimates).
+    def add(self, block: FootBlock, recording: Recording | None = None) -> None:
+        """Count the block's rows; with ``recording``, compare them with its foot sensors (a
+        LowState's, when the rows have contact estimates) and its SportModeState feet.
         """
         if not len(block.stamps_ns):
             return
-        if block.sensor is not None and block.contacts is not None:
-            self.sensors = self.sensors or SensorAgreement(threshold)
+        if recording is not None and recording.sport is not None:
+            recording.sport.compare(block.stamps_ns, block.positions)
+        if recording is not None and block.sensor is not None and block.contacts is not None:
+            self.sensors = self.sensors or SensorAgreement(recording.sensor_threshold)
             self.sensors.add(block.contacts, block.sensor)
         self.rows += len(block.stamps_ns)
         if block.world_positions is not None:
@@ -204,6 +204,7 @@ class BlockStats:
             recording.joint_states.msgtype,
             STAMP_NOTE if recording.lowstate is not None else "",
             self.sensors.line() if self.sensors is not None and recording.force_output else "",
+            recording.sport.line() if recording.sport is not None else "",
         )
 
 
@@ -236,7 +237,7 @@ def read_foot_trajectories(
         stats = BlockStats()
         blocks = []
         for block in iter_foot_blocks(recording, progress=progress):
-            stats.add(block)
+            stats.add(block, recording)
             blocks.append(block)
         summary = stats.summary(recording)
     finally:
@@ -266,6 +267,7 @@ def collected(
         forces=joined("forces", (LEGS, 3)) if recording.forces is not None else None,
         normal_forces=joined("normal_forces", (LEGS,)) if recording.forces is not None else None,
         contacts=joined("contacts", (LEGS,)) if recording.forces is not None else None,
+        sensor=joined("sensor", (LEGS,)) if recording.lowstate is not None else None,
     )
 
 

@@ -28,7 +28,8 @@ import numpy as np
 
 from a1_leg_fk.estimation.sensor_contacts import SensorAgreement
 from a1_leg_fk.recording.base_pose import DEFAULT_MAX_POSE_GAP_S, BasePoses
-from a1_leg_fk.recording.blocks import LEGS, FootBlock, iter_foot_blocks
+from a1_leg_fk.recording.blocks import LEGS, iter_foot_blocks
+from a1_leg_fk.recording.foot_block import FootBlock
 from a1_leg_fk.recording.lowstate import STAMP_NOTE
 from a1_leg_fk.recording.reader import (
     JOINT_STATE_TYPE,

@@ -42,10 +42,11 @@ from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.markers import foot_markers
-from a1_leg_fk.ros.odometry_wire import imu_fields, imu_message_fields, imu_sample
+from a1_leg_fk.ros.odometry_wire import imu_message_fields, imu_sample
 from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
+from a1_leg_fk.wire.imu import imu_fields
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "a1_leg_fk"

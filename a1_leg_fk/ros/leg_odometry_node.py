@@ -38,9 +38,10 @@ from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
+from a1_leg_fk.wire.imu import imu_fields
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "leg_odometry"

@@ -57,6 +57,7 @@ SCALAR_DEFAULTS = {
     "urdf_file": "",
     "robot_description_topic": "robot_description",
     "base_frame": "",
+    "input": "joint_states",
     "publish_velocities": True,
     "publish_markers": True,
     "marker_rate_hz": 30.0,

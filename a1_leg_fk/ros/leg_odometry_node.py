@@ -37,11 +37,12 @@ from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.joint_input import INPUT_PARAMETER, LOWSTATE_TOPIC, MissingMessages, joint_input
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
-from a1_leg_fk.wire.imu import imu_fields
+from a1_leg_fk.wire.imu import ImuFields, imu_fields
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "leg_odometry"
@@ -53,6 +54,7 @@ RANGE_MPS = (0.001, 100.0)
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
+    INPUT_PARAMETER,
     ParameterSpec(
         "odom_frame", "odom", ParameterType.PARAMETER_STRING, "header.frame_id of leg_odometry"
     ),
@@ -125,7 +127,7 @@ class LegOdometryNode(Node):
         self._period = PeriodCounter()
         self._no_stance_before = 0
         self._without_velocities = 0
-        self._decoder = JointStateDecoder()
+        message, topic, self._decoder = joint_input(self)
         self._msg = Odometry()
         self._values = [0.0] * SerializedOdometry.DOUBLES
         self._contacts = str(self.get_parameter("contacts").value)
@@ -137,15 +139,15 @@ class LegOdometryNode(Node):
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self.create_subscription(
-            JointState,
-            "joint_states",
+            message,
+            topic,
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             raw=True,
         )
         self._imu_topic = self.resolve_topic_name("imu")
-        if bool(self._setting("use_imu")):
+        if bool(self._setting("use_imu")) and topic != LOWSTATE_TOPIC:  # a LowState has its IMU
             self.create_subscription(
                 Imu,
                 "imu",
@@ -157,7 +159,7 @@ class LegOdometryNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
-            f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
+            f"leg odometry of {self._config.source} from {self.resolve_topic_name(topic)}"
             + (f" and {self._imu_topic}" if bool(self._setting("use_imu")) else " (legs alone)")
             + f" to {self.resolve_topic_name('leg_odometry')}"
             + f" in frame '{self._msg.header.frame_id}'"
@@ -192,6 +194,10 @@ class LegOdometryNode(Node):
         if fields is None:
             msg = deserialize_message(raw, Imu)
             fields = imu_message_fields(msg)
+        self._on_imu_fields(fields)
+
+    def _on_imu_fields(self, fields: ImuFields) -> None:
+        """One Imu's fields (an Imu message's, or a LowState's own) into the odometry."""
         stamp, orientation, orientation_covariance, gyro, gyro_covariance, *_ = fields
         reading = imu_reading(orientation, orientation_covariance, gyro, gyro_covariance)
         if reading is None:
@@ -213,7 +219,12 @@ class LegOdometryNode(Node):
             positions = doubles(position_bytes, order)
             velocities = doubles(velocity_bytes, order)
             efforts = doubles(effort_bytes, order)
-        except WireError:
+            if self._decoder.imu is not None:  # a LowState's own IMU, stamped as its motors
+                self._on_imu_fields(self._decoder.imu)
+        except WireError as error:
+            if not isinstance(self._decoder, JointStateDecoder):
+                self._warnings.warn("malformed", f"ignoring a lowstate message: {error}")
+                return
             msg = deserialize_message(raw, JointState)
             stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
             names, positions, velocities, efforts = (
@@ -362,7 +373,7 @@ class LegOdometryNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args)
+    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args, (MissingMessages,))
 
 
 if __name__ == "__main__":

@@ -17,11 +17,13 @@ A batch of messages of one length is decoded with numpy views at the layout's of
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.wire.imu import ImuFields
+from a1_leg_fk.wire.joint_state import WireError, WireFields
 from a1_leg_fk.wire.layout import CDR_HEADER, Layout, definitions_in, layout_of, normalized
 from a1_leg_fk.wire.unitree_types import (
     DEFINITIONS,
@@ -185,6 +187,42 @@ def _empty() -> LowStateRows:
 def _concatenate(parts: Sequence[LowStateRows]) -> LowStateRows:
     names = LowStateRows.__dataclass_fields__
     return LowStateRows(*(np.concatenate([getattr(p, name) for p in parts]) for name in names))
+
+
+class LowStateJointStates:
+    """A live LowState stream read as a JointState decoder reads a JointState stream (for the
+    nodes' raw subscriptions): :meth:`fields` gives the motors as :class:`WireFields` (named
+    :data:`MOTOR_NAMES`, stamped ``clock()`` [ns]: the receive time, the message has no header),
+    :attr:`imu` the IMU inside the same message as an Imu's fields (no covariances: "unknown").
+    """
+
+    def __init__(self, msgtype: str, clock: Callable[[], int]) -> None:
+        self._decoder = LowStateDecoder(layout_for(msgtype, None, KINDS[msgtype].ros1))
+        self._clock = clock
+        self.names = list(MOTOR_NAMES)
+        self.imu: ImuFields | None = None
+        self._first = True
+
+    def fields(self, raw: bytes | memoryview) -> WireFields:
+        """One message's motors; :class:`WireError` if it is not a whole LowState."""
+        rows, problem = self._decoder.rows([bytes(raw)])
+        if problem is not None:
+            raise WireError(f"malformed {self._decoder.layout.msgtype}: {problem[1]}")
+        stamp = self._clock()
+        unknown = (0.0,) * 9
+        self.imu = (
+            stamp,
+            tuple(rows.orientations[0].tolist()),
+            unknown,
+            tuple(rows.gyro[0].tolist()),
+            unknown,
+            tuple(rows.accelerometer[0].tolist()),
+            unknown,
+        )
+        changed, self._first = self._first, False
+        order = "<" if np.little_endian else ">"
+        values = (rows.positions[0], rows.velocities[0], rows.efforts[0])
+        return WireFields(stamp, changed, order, *(array.tobytes() for array in values))
 
 
 class SportModeFeet:

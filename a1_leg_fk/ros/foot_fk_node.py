@@ -62,10 +62,10 @@ class FootFkNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
+        message, topic, self._decoder = joint_input(self)  # before any output: a usage error
         self._robot = RobotSource(self, self._on_robot)
         self._model = self._robot.config
         self._tracker = FootTracker(self._model.quadruped)
-        message, topic, self._decoder = joint_input(self)
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
         self._last_verify = "not called"

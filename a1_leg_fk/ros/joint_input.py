@@ -18,7 +18,6 @@ from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
-from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros.robot_source import ParameterSpec
 from a1_leg_fk.wire.joint_state import JointStateDecoder
 from a1_leg_fk.wire.lowstate import KINDS, LowStateJointStates
@@ -43,8 +42,10 @@ BUILD_HINT = (
 )
 
 
-class MissingMessages(LegFkError):
-    """``input: unitree_lowstate`` without Unitree's message package: one line, exit 2."""
+class MissingMessages(Exception):
+    """``input: unitree_lowstate`` without Unitree's message package, or an unknown ``input``: a
+    usage error (one line, exit 2).
+    """
 
 
 def lowstate_class() -> tuple[type, str]:

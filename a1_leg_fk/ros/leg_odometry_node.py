@@ -122,12 +122,12 @@ class LegOdometryNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
+        message, topic, self._decoder = joint_input(self)  # before any output: a usage error
         self._robot = RobotSource(self, self._on_robot)
         self._warnings = ros_glue.WarnThrottle(self)
         self._period = PeriodCounter()
         self._no_stance_before = 0
         self._without_velocities = 0
-        message, topic, self._decoder = joint_input(self)
         self._msg = Odometry()
         self._values = [0.0] * SerializedOdometry.DOUBLES
         self._contacts = str(self.get_parameter("contacts").value)

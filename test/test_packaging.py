@@ -39,6 +39,10 @@ EXEC_DEPENDS = {
     "diagnostic_msgs",
     "visualization_msgs",
     "ament_index_python",
+    "launch",
+    "launch_ros",
+    "robot_state_publisher",
+    "rviz2",
     "python3-numpy",
     "python3-pybullet-pip",
 }
@@ -77,7 +81,7 @@ ROS_OWN_PARAMETERS = {"use_sim_time", "start_type_description_service"}
 
 # The copy colcon builds: the package's own files only, so no other package can be picked up.
 PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg")
-PACKAGE_FOLDERS = ("resource", "config", "a1_leg_fk")
+PACKAGE_FOLDERS = ("resource", "config", "launch", "rviz", "a1_leg_fk")
 
 FOOT_TOLERANCE_M = 1e-4
 FOOT_WAIT_S = 30.0
@@ -256,6 +260,16 @@ def test_colcon_install_has_what_ros2_run_needs(colcon_install: ColconInstall, m
     assert (prefix / "share" / PACKAGE / "package.xml").is_file()
     installed_params = prefix / "share" / PACKAGE / "config" / "params.yaml"
     assert installed_params.read_text() == (REPO / "config" / "params.yaml").read_text()
+    # what `ros2 launch a1_leg_fk feet.launch.py` finds in the package's share folder
+    shared = [
+        Path("launch") / "feet.launch.py",
+        Path("rviz") / "feet.rviz",
+        *(path.relative_to(REPO) for path in sorted((REPO / "config" / "robots").glob("*.yaml"))),
+    ]
+    assert len(shared) == 7
+    for relative in shared:
+        installed = prefix / "share" / PACKAGE / relative
+        assert installed.read_bytes() == (REPO / relative).read_bytes(), relative
 
     # `ros2 run a1_leg_fk foot_fk_node`: get_package_prefix, then <prefix>/lib/<package>/<name>.
     from ament_index_python.packages import get_package_prefix, get_package_share_directory

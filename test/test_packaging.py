@@ -80,8 +80,8 @@ STRING_ARRAYS = ("foot_links", "joint_aliases")
 ROS_OWN_PARAMETERS = {"use_sim_time", "start_type_description_service"}
 
 # The copy colcon builds: the package's own files only, so no other package can be picked up.
-PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg")
-PACKAGE_FOLDERS = ("resource", "config", "launch", "rviz", "a1_leg_fk")
+PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "README.md", "CONTRIBUTING.md", "LICENSE")
+PACKAGE_FOLDERS = ("resource", "config", "launch", "rviz", "docs", "a1_leg_fk", "test")
 
 FOOT_TOLERANCE_M = 1e-4
 FOOT_WAIT_S = 30.0
@@ -211,7 +211,7 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> ColconInstall:
         shutil.copytree(
             REPO / name,
             source / name,
-            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info"),
+            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info", "golden_cache"),
         )
     colcon = BIN / "colcon"
     assert colcon.exists(), f"{colcon} is not installed: run `make venv`"
@@ -292,6 +292,35 @@ def test_colcon_install_has_what_ros2_run_needs(colcon_install: ColconInstall, m
         check=True,
     )
     assert Path(result.stdout.strip()).is_relative_to(colcon_install.site_packages), result.stdout
+
+
+@pytest.mark.slow
+def test_colcon_test_runs_the_package_tests(colcon_install: ColconInstall):
+    """`colcon test --packages-select a1_leg_fk`, as a ROS user runs it (ament_python: pytest
+    over the package's test/), on a fast part of the suite: the layout rules and the launch
+    file's static checks; `colcon test-result` counts them, none failing."""
+    environment = {**os.environ, "COLCON_HOME": str(colcon_install.workspace / "colcon_home")}
+    environment["PATH"] = f"{BIN}{os.pathsep}{environment.get('PATH', '')}"
+    common = ["--log-base", str(colcon_install.workspace / "log")]
+    selection = "test_layout.py or (test_launch.py and not running)"
+    tested = subprocess.run(
+        [str(BIN / "colcon"), *common, "test", "--packages-select", PACKAGE,
+         "--build-base", str(colcon_install.workspace / "build"),
+         "--install-base", str(colcon_install.workspace / "install"),
+         "--pytest-args", "-p", "no:cacheprovider", "-k", selection],
+        cwd=colcon_install.workspace, env=environment, capture_output=True, text=True,
+        timeout=600, check=False,
+    )  # fmt: skip
+    assert tested.returncode == 0, f"{tested.stdout}\n{tested.stderr}"
+    result = subprocess.run(
+        [str(BIN / "colcon"), "test-result", "--test-result-base",
+         str(colcon_install.workspace / "build")],
+        cwd=colcon_install.workspace, env=environment, capture_output=True, text=True,
+        timeout=120, check=False,
+    )  # fmt: skip
+    summary = re.search(r"Summary: (\d+) tests, (\d+) errors, (\d+) failures", result.stdout)
+    assert result.returncode == 0 and summary, result.stdout + result.stderr
+    assert int(summary.group(1)) > 100 and summary.group(2, 3) == ("0", "0"), summary.group(0)
 
 
 def _installed_node() -> str:

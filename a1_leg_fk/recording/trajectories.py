@@ -221,9 +221,11 @@ def read_foot_trajectories(
     ``path``: a ROS 2 bag directory, a ``.mcap`` file or a ROS 1 ``.bag``. ``progress``: a
     progress bar on stderr (with tqdm). ``choices``, keyword arguments as
     :func:`open_recording`'s (:class:`RecordingChoices`): ``topic``: the JointState topic
-    (needed when there are several). Model: ``urdf`` (a path), else the bag's
-    ``robot_description`` topic (the latest message before the first JointState), else the
-    embedded A1; ``foot_links``/``joint_aliases`` as the node's parameters (``"KEY=value"``).
+    (needed when there are several), or a Unitree LowState topic (read when the bag has no
+    JointState: its motors, IMU and foot sensors, ``sensor``; stamps: bag times). Model:
+    ``urdf`` (a path), else the bag's ``robot_description`` topic (the latest message before the
+    first JointState), else the embedded A1; ``foot_links``/``joint_aliases`` as the node's
+    parameters (``"KEY=value"``).
     ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
     gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
     stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s], default

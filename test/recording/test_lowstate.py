@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from bag_factory import TYPESTORE, BagSpec, T, header, pose, write_bag
+from bag_factory import TYPESTORE, BagSpec, JointStateMsg, T, header, pose, write_bag
 from conftest import family_folder
 from contact_bags import stamp_of
 from contact_runs import ContactRun, contact_runs
@@ -230,3 +230,21 @@ def test_sportmodestate_feet_are_compared(run: ContactRun, tmp_path: Path):
     lines = read_foot_trajectories(write_bag(tmp_path / "sport", spec)).summary.lines()
     line = next(line for line in lines if line.startswith("unitree:"))
     assert "median distance FR 12.0, FL 0.0, RR 0.0, RL 0.0 mm; they match" in line
+
+
+def test_topic_chooses_between_joint_states_and_lowstate(run: ContactRun, tmp_path: Path):
+    """A bag with both: JointState unless --topic names the LowState."""
+    register_unitree_types()
+    spec = BagSpec()
+    for row in range(10):
+        stamp = stamp_of(run, row)
+        spec.add("/lowstate", GO_LOW_STATE, stamp, _message(run, row, GO_LOW_STATE))
+        spec.add_joint_state(
+            "/joint_states",
+            stamp,
+            JointStateMsg(stamp, list(run.joint_names), [0.0, 0.8, -1.5] * 4),
+        )
+    bag = write_bag(tmp_path / "both", spec)
+    assert read_foot_trajectories(bag).summary.input_type == "sensor_msgs/msg/JointState"
+    chosen = read_foot_trajectories(bag, topic="/lowstate")
+    assert chosen.summary.input_type == GO_LOW_STATE and chosen.summary.rows == 10

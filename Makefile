@@ -27,7 +27,7 @@ BIN := $(VENV)/bin
 PYTHON_NEEDED := 3.11
 # The requirements stamp is named after a hash of both requirements files: a changed file gives a
 # new name, so the install runs again; unchanged files find their stamp and skip it.
-REQUIREMENTS := requirements.txt requirements-test.txt
+REQUIREMENTS := requirements.txt requirements-test.txt requirements-msgs.txt
 REQUIREMENTS_HASH := $(shell cat $(REQUIREMENTS) 2>/dev/null | sha256sum | cut -c1-16)
 REQUIREMENTS_STAMP := $(VENV)/.requirements-$(REQUIREMENTS_HASH).stamp
 PACKAGE_STAMP := $(VENV)/.a1_leg_fk-editable.stamp

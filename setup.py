@@ -25,6 +25,9 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/config", sorted(glob("config/*.yaml"))),
+        ("share/" + package_name + "/config/robots", sorted(glob("config/robots/*.yaml"))),
+        ("share/" + package_name + "/launch", sorted(glob("launch/*.launch.py"))),
+        ("share/" + package_name + "/rviz", sorted(glob("rviz/*.rviz"))),
     ],
     # Only setuptools: rclpy and the message packages come from the ROS install (apt, rosdep) or
     # from requirements.txt (PyPI wheels); an apt Jazzy install has no pip metadata for them.

@@ -16,7 +16,7 @@ MAX_LINES = 400
 
 # Lowest first; a module may import its own layer and the ones before it.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("a1_leg_fk.stop_signals", "a1_leg_fk.model"),
+    ("a1_leg_fk.stop_signals", "a1_leg_fk.model", "a1_leg_fk.wire"),
     ("a1_leg_fk.kinematics",),
     ("a1_leg_fk.estimation", "a1_leg_fk.tracking"),
     (

@@ -39,6 +39,10 @@ EXEC_DEPENDS = {
     "diagnostic_msgs",
     "visualization_msgs",
     "ament_index_python",
+    "launch",
+    "launch_ros",
+    "robot_state_publisher",
+    "rviz2",
     "python3-numpy",
     "python3-pybullet-pip",
 }
@@ -57,6 +61,7 @@ SCALAR_DEFAULTS = {
     "urdf_file": "",
     "robot_description_topic": "robot_description",
     "base_frame": "",
+    "input": "joint_states",
     "publish_velocities": True,
     "publish_markers": True,
     "marker_rate_hz": 30.0,
@@ -75,8 +80,8 @@ STRING_ARRAYS = ("foot_links", "joint_aliases")
 ROS_OWN_PARAMETERS = {"use_sim_time", "start_type_description_service"}
 
 # The copy colcon builds: the package's own files only, so no other package can be picked up.
-PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg")
-PACKAGE_FOLDERS = ("resource", "config", "a1_leg_fk")
+PACKAGE_FILES = ("package.xml", "setup.py", "setup.cfg", "README.md", "CONTRIBUTING.md", "LICENSE")
+PACKAGE_FOLDERS = ("resource", "config", "launch", "rviz", "docs", "a1_leg_fk", "test")
 
 FOOT_TOLERANCE_M = 1e-4
 FOOT_WAIT_S = 30.0
@@ -206,7 +211,7 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> ColconInstall:
         shutil.copytree(
             REPO / name,
             source / name,
-            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info"),
+            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.egg-info", "golden_cache"),
         )
     colcon = BIN / "colcon"
     assert colcon.exists(), f"{colcon} is not installed: run `make venv`"
@@ -255,6 +260,16 @@ def test_colcon_install_has_what_ros2_run_needs(colcon_install: ColconInstall, m
     assert (prefix / "share" / PACKAGE / "package.xml").is_file()
     installed_params = prefix / "share" / PACKAGE / "config" / "params.yaml"
     assert installed_params.read_text() == (REPO / "config" / "params.yaml").read_text()
+    # what `ros2 launch a1_leg_fk feet.launch.py` finds in the package's share folder
+    shared = [
+        Path("launch") / "feet.launch.py",
+        Path("rviz") / "feet.rviz",
+        *(path.relative_to(REPO) for path in sorted((REPO / "config" / "robots").glob("*.yaml"))),
+    ]
+    assert len(shared) == 7
+    for relative in shared:
+        installed = prefix / "share" / PACKAGE / relative
+        assert installed.read_bytes() == (REPO / relative).read_bytes(), relative
 
     # `ros2 run a1_leg_fk foot_fk_node`: get_package_prefix, then <prefix>/lib/<package>/<name>.
     from ament_index_python.packages import get_package_prefix, get_package_share_directory
@@ -277,6 +292,35 @@ def test_colcon_install_has_what_ros2_run_needs(colcon_install: ColconInstall, m
         check=True,
     )
     assert Path(result.stdout.strip()).is_relative_to(colcon_install.site_packages), result.stdout
+
+
+@pytest.mark.slow
+def test_colcon_test_runs_the_package_tests(colcon_install: ColconInstall):
+    """`colcon test --packages-select a1_leg_fk`, as a ROS user runs it (ament_python: pytest
+    over the package's test/), on a fast part of the suite: the layout rules and the launch
+    file's static checks; `colcon test-result` counts them, none failing."""
+    environment = {**os.environ, "COLCON_HOME": str(colcon_install.workspace / "colcon_home")}
+    environment["PATH"] = f"{BIN}{os.pathsep}{environment.get('PATH', '')}"
+    common = ["--log-base", str(colcon_install.workspace / "log")]
+    selection = "test_layout.py or (test_launch.py and not running)"
+    tested = subprocess.run(
+        [str(BIN / "colcon"), *common, "test", "--packages-select", PACKAGE,
+         "--build-base", str(colcon_install.workspace / "build"),
+         "--install-base", str(colcon_install.workspace / "install"),
+         "--pytest-args", "-p", "no:cacheprovider", "-k", selection],
+        cwd=colcon_install.workspace, env=environment, capture_output=True, text=True,
+        timeout=600, check=False,
+    )  # fmt: skip
+    assert tested.returncode == 0, f"{tested.stdout}\n{tested.stderr}"
+    result = subprocess.run(
+        [str(BIN / "colcon"), "test-result", "--test-result-base",
+         str(colcon_install.workspace / "build")],
+        cwd=colcon_install.workspace, env=environment, capture_output=True, text=True,
+        timeout=120, check=False,
+    )  # fmt: skip
+    summary = re.search(r"Summary: (\d+) tests, (\d+) errors, (\d+) failures", result.stdout)
+    assert result.returncode == 0 and summary, result.stdout + result.stderr
+    assert int(summary.group(1)) > 100 and summary.group(2, 3) == ("0", "0"), summary.group(0)
 
 
 def _installed_node() -> str:

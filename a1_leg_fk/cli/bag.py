@@ -27,6 +27,7 @@ from a1_leg_fk.estimation.contact_estimator import (
     FORCE_MODELS,
     THRESHOLD,
 )
+from a1_leg_fk.estimation.sensor_contacts import DEFAULT_SENSOR_THRESHOLD_COUNTS
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.trajectories import (
     DEFAULT_MAX_POSE_GAP_S,
@@ -87,6 +88,14 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         help="--contact-rule threshold: a foot lifts off below this normal force [N] (default: 4 "
         "%% of the weight)",
     )
+    parser.add_argument(
+        "--sensor-threshold",
+        type=non_negative,
+        default=DEFAULT_SENSOR_THRESHOLD_COUNTS,
+        metavar="COUNTS",
+        help="a Unitree LowState's foot sensor above this raw count is in contact (default "
+        f"{DEFAULT_SENSOR_THRESHOLD_COUNTS:g}, as a controller run on real A1s takes it)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -98,7 +107,10 @@ def add_input_arguments(parser: argparse.ArgumentParser) -> None:
         help="a ROS 2 bag directory (sqlite3 or MCAP), a .mcap file or a ROS 1 .bag",
     )
     parser.add_argument(
-        "--topic", help="the sensor_msgs/msg/JointState topic (needed when the bag has several)"
+        "--topic",
+        help="the sensor_msgs/msg/JointState topic (needed when the bag has several), or a "
+        "Unitree LowState topic (unitree_go/msg/LowState, unitree_legged_msgs/LowState: read "
+        "without --topic when the bag has no JointState)",
     )
     parser.add_argument(
         "--urdf",
@@ -141,6 +153,7 @@ def recording_options(
         "contact_thresholds": (options.touchdown_force, options.liftoff_force),
         "force_model": options.force_model,
         "contact_rule": options.contact_rule,
+        "sensor_threshold": getattr(options, "sensor_threshold", DEFAULT_SENSOR_THRESHOLD_COUNTS),
     }
 
 

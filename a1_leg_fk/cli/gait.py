@@ -12,7 +12,6 @@ input or output (one line on stderr); 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 from collections.abc import Sequence
@@ -34,6 +33,7 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     input_error,
 )
+from a1_leg_fk.estimation.sensor_contacts import sensor_contacts
 from a1_leg_fk.gait.analysis import (
     Contacts,
     ContactThresholds,
@@ -41,6 +41,7 @@ from a1_leg_fk.gait.analysis import (
     detect_contacts,
     gait_metrics,
 )
+from a1_leg_fk.gait.contacts_csv import write_contacts_csv
 from a1_leg_fk.gait.force_contacts import with_force_stance
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -105,10 +106,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     gait.add_argument("--force", action="store_true", help="replace outputs that exist")
     gait.add_argument(
         "--contacts",
-        choices=("auto", "force", "kinematic"),
+        choices=("auto", "force", "kinematic", "sensor"),
         default="auto",
         help="stance from the joint efforts' foot forces (force), from the feet's height and "
-        "speed (kinematic), or force when every leg has efforts (auto, the default)",
+        "speed (kinematic), from a Unitree LowState's foot sensors (sensor: count above "
+        "--sensor-threshold), or force when every leg has efforts (auto, the default)",
     )
     gait.add_argument(
         "--unsorted",
@@ -153,7 +155,8 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             },
             adaptive=not options.fixed_thresholds,
         )
-        check_force_options(options, options.contacts != "kinematic", "--contacts force|auto")
+        estimated = options.contacts in ("auto", "force")
+        check_force_options(options, estimated, "--contacts force|auto")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         targets = checked_outputs(options)
@@ -203,18 +206,30 @@ def analysed(
     contacts = detect_contacts(stamps_s, trajectories.world_positions, thresholds, unsorted)
     if source == "force" and trajectories.contacts is not None:
         contacts = with_force_stance(contacts, stamps_s, trajectories.contacts, unsorted)
+    if source == "sensor" and trajectories.sensor is not None:
+        threshold = options.sensor_threshold
+        stance = sensor_contacts(trajectories.sensor, threshold).astype(float)
+        note = f"stance from the foot sensors (count > {threshold:g})"
+        contacts = with_force_stance(contacts, stamps_s, stance, unsorted, note)
     return contacts
 
 
 def read_with_contacts(options: argparse.Namespace) -> tuple[FootTrajectories, str]:
     """The recording's feet (with forces unless ``--contacts kinematic``) and where the stance
-    comes from: ``"force"`` or ``"kinematic"``. ``--contacts auto`` takes the forces when every
-    leg has some; ``--contacts force`` without them is a :class:`LegFkError`.
+    comes from: ``"force"``, ``"kinematic"`` or ``"sensor"`` (a LowState's foot sensors; a
+    recording without them is a :class:`LegFkError`). ``--contacts auto`` takes the forces when
+    every leg has some; ``--contacts force`` without them is a :class:`LegFkError`.
     """
     from a1_leg_fk.recording.forces import MissingEfforts
 
-    if options.contacts == "kinematic":
-        return trajectories_from_options(options), "kinematic"
+    if options.contacts in ("kinematic", "sensor"):
+        trajectories = trajectories_from_options(options)
+        if options.contacts == "sensor" and trajectories.sensor is None:
+            raise LegFkError(
+                "--contacts sensor needs a Unitree LowState topic (its foot sensors); "
+                f"{trajectories.summary.topic} is {trajectories.summary.input_type}"
+            )
+        return trajectories, options.contacts
     try:
         trajectories = trajectories_from_options(options, forces=True)
     except MissingEfforts:
@@ -362,32 +377,3 @@ def _write_output(
         write_contacts_csv(contacts, path)
     else:
         plot_gait_diagram(contacts, report, path, title=Path(options.input).name)
-
-
-def write_contacts_csv(contacts: Contacts, path: Path) -> None:
-    """One row per sample: ``time_s``, ``<leg>_stance`` (0/1), ``<leg>_height_m``,
-    ``<leg>_speed_mps`` (empty where unknown).
-    """
-    header = [
-        "time_s",
-        *(f"{leg}_stance" for leg in LEG_NAMES),
-        *(f"{leg}_height_m" for leg in LEG_NAMES),
-        *(f"{leg}_speed_mps" for leg in LEG_NAMES),
-    ]
-    with path.open("w", newline="") as stream:
-        writer = csv.writer(stream)
-        writer.writerow(header)
-        for row in range(contacts.times_s.size):
-            stance = [
-                int(value) if known else ""
-                for value, known in zip(contacts.stance[row], contacts.valid[row])
-            ]
-            numbers = [
-                _csv_value(value)
-                for value in (*contacts.heights_m[row], *contacts.speeds_mps[row])
-            ]
-            writer.writerow([f"{contacts.times_s[row]:.9f}", *stance, *numbers])
-
-
-def _csv_value(value: float) -> str:
-    return "" if np.isnan(value) else repr(float(value))

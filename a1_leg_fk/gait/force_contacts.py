@@ -19,12 +19,17 @@ from a1_leg_fk.gait.contacts import (
 
 
 def with_force_stance(
-    contacts: Contacts, stamps_s: np.ndarray, probabilities: np.ndarray, unsorted: str = "sort"
+    contacts: Contacts,
+    stamps_s: np.ndarray,
+    probabilities: np.ndarray,
+    unsorted: str = "sort",
+    note: str = "stance from the contact estimate (probability >= 0.5)",
 ) -> Contacts:
     """``contacts`` (from :func:`~a1_leg_fk.gait.contacts.detect_contacts` on the same stamps
     [s]) with the stance of (N, 4) contact probabilities (NaN: no estimate, counted as swing),
     rows sorted and de-duplicated as ``contacts``' were; phases shorter than the thresholds'
-    ``min_phase_s`` merged into their neighbours, as for the kinematic stance.
+    ``min_phase_s`` merged into their neighbours, as for the kinematic stance; ``note`` says
+    where the stance came from.
     """
     known = np.nan_to_num(probabilities, nan=-1.0)  # finite, so that prepare keeps every row
     _, packed, _ = prepare(stamps_s, np.repeat(known[..., None], 3, axis=2), unsorted)
@@ -43,5 +48,5 @@ def with_force_stance(
         contacts,
         stance=stance,
         stances=stances,
-        notes=(*contacts.notes, "stance from the contact estimate (probability >= 0.5)"),
+        notes=(*contacts.notes, note),
     )

@@ -10,53 +10,32 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from a1_leg_fk.kinematics.batch_velocities import velocities_of
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import (
+from a1_leg_fk.recording.foot_block import FootBlock
+from a1_leg_fk.recording.lowstate import no_finite_motors
+from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording
+from a1_leg_fk.tracking import FootTracker
+from a1_leg_fk.wire.joint_state import (
     JointStateDecoder,
     WireError,
     cdr_layout,
 )
-from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording
-from a1_leg_fk.tracking import FootTracker
 
 if TYPE_CHECKING:  # rosbags and tqdm are imported when a bag is read
     from rosbags.interfaces import Connection
     from tqdm import tqdm
 
-    from a1_leg_fk.kinematics.quadruped import Quadruped
+    from a1_leg_fk.recording.lowstate import LowStateInput
+    from a1_leg_fk.wire.lowstate import LowStateRows
 
 BLOCK_MESSAGES = 4096
 LEGS = len(LEG_NAMES)
-
-
-@dataclass(frozen=True)
-class FootBlock:
-    """Rows of consecutive accepted messages: like
-    :class:`~a1_leg_fk.recording.trajectories.FootTrajectories` (stamps [ns], feet [m] and foot
-    velocities [m/s] in the base frame, world feet [m]), velocities always an array (NaN where the
-    message gives none); with ``recording.forces``, ``forces`` (N, 4, 3) [N, base frame],
-    ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts`` (N, 4) probabilities (NaN
-    where none); with ``recording.efforts``, ``efforts`` (N, 12) [N m], the merged joint efforts
-    after each message in slot order (NaN where unknown).
-    """
-
-    stamps_ns: np.ndarray
-    bag_times_ns: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    world_positions: np.ndarray | None
-    angles: np.ndarray  # (N, 12) [rad]: the merged state after each message, NaN where unknown
-    rates: np.ndarray  # (N, 12) [rad/s]: the message's rates where a foot velocity came of them
-    forces: np.ndarray | None = None
-    normal_forces: np.ndarray | None = None
-    contacts: np.ndarray | None = None
-    efforts: np.ndarray | None = None
 
 
 def iter_foot_blocks(
@@ -82,7 +61,8 @@ def iter_foot_blocks(
     connections = [] if on_message else [joint_states]
     total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
     bar = _progress_bar(total, progress)
-    batch = _Batch(recording, tracker, JointStateDecoder(ros1=recording.ros1))
+    kind = _Batch if recording.lowstate is None else _LowStateBatch
+    batch = kind(recording, tracker, JointStateDecoder(ros1=recording.ros1))
     read = shown = 0
     messages = recording.reads.messages(connections, "the bag" if on_message else "")
     try:
@@ -108,6 +88,8 @@ def iter_foot_blocks(
             bar.close()
     if tracker.counts.messages and not batch.leg_joint_named and not recording.stopped:
         raise LegFkError(no_leg_joints_problem(recording, batch.first_names))
+    if isinstance(batch, _LowStateBatch) and batch.added and not batch.rows_out:
+        raise no_finite_motors(recording.reads, joint_states.topic, tracker.counts)
 
 
 def no_leg_joints_problem(recording: Recording, names: list[str]) -> str:
@@ -239,6 +221,40 @@ class _Batch:
         yield from pending.finish(self)
 
 
+class _LowStateBatch(_Batch):
+    """Consecutive LowState messages (:mod:`a1_leg_fk.recording.lowstate`): the motors as
+    joint states named by leg and role, stamped with their bag times.
+    """
+
+    rows_out = 0  # rows yielded so far
+
+    def blocks(self) -> Iterator[FootBlock]:
+        """The rows of the batch's messages; :class:`_Corrupt` after the rows before one that
+        cannot be decoded.
+        """
+        raws, bag_times = self.raws, self.bag_times
+        self.raws, self.bag_times = [], []
+        lowstate = cast("LowStateInput", self.recording.lowstate)
+        before = self.added - len(raws)
+        rows, bad = lowstate.decode(self.recording.reads, raws, bag_times, before)
+        if len(rows.tick):
+            self.seen(lowstate.names)
+            times = np.array(bag_times[: len(rows.tick)], dtype=np.int64)
+            wanted = self.recording.forces is not None or self.recording.efforts
+            arrays = (
+                times,
+                times,
+                rows.positions,
+                rows.velocities,
+                rows.efforts if wanted else None,
+            )
+            for block in _finish(self.recording, self.tracker, lowstate.names, *arrays, rows):
+                self.rows_out += len(block.stamps_ns)
+                yield block
+        if bad:
+            raise _Corrupt
+
+
 class _Pending:
     """Consecutive messages with one name list and the same array lengths, kept as bytes."""
 
@@ -303,10 +319,12 @@ def _finish(
     positions: np.ndarray,
     velocities: np.ndarray,
     efforts: np.ndarray | None = None,
+    lowstate: LowStateRows | None = None,
 ) -> Iterator[FootBlock]:
     """Run the rules over consecutive messages with one name list and yield their rows (if any).
     ``positions`` [rad] (K, n), ``velocities`` [rad/s] and ``efforts`` [N m] (K, n or 0 or
-    another length; efforts only with ``recording.forces`` or ``recording.efforts``).
+    another length; efforts only with ``recording.forces`` or ``recording.efforts``); the
+    ``lowstate`` rows they came from, for the foot sensors.
     """
     result = tracker.update_block(names, positions, velocities, efforts)
     angles = result.angles[result.accepted]
@@ -346,26 +364,8 @@ def _finish(
         rates,
         *forces,
         result.efforts[result.accepted][rows] if recording.efforts else None,
+        None if lowstate is None else lowstate.foot_force[result.accepted][rows],
     )
-
-
-def velocities_of(
-    quadruped: Quadruped, angles: np.ndarray, known: np.ndarray, rates: np.ndarray
-) -> np.ndarray:
-    """(N, 4, 3) J(q)·q̇ [m/s], base frame, for (N, 12) angles [rad] and rates [rad/s]; NaN for
-    legs not ``known`` (N, 4), legs whose rates are not all finite, and overflowed results.
-    """
-    out = np.full((angles.shape[0], LEGS, 3), math.nan)
-    usable = known & np.isfinite(rates).reshape(-1, LEGS, JOINTS_PER_LEG).all(axis=2)
-    rows = usable.any(axis=1)
-    if rows.any():
-        velocity = quadruped.foot_velocities_batch(
-            np.nan_to_num(angles[rows]), np.nan_to_num(rates[rows])
-        )
-        with np.errstate(invalid="ignore"):
-            velocity[~usable[rows] | ~np.isfinite(velocity).all(axis=2)] = math.nan
-        out[rows] = velocity
-    return out
 
 
 def _progress_bar(total: int, enabled: bool) -> tqdm[None] | None:

@@ -22,7 +22,7 @@ from a1_leg_fk.estimation.imu import has_orientation, measured_vector
 from a1_leg_fk.kinematics.frames import gravity_in_base
 from a1_leg_fk.model.legs import JOINT_COUNT
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError
+from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is read
     from rosbags.interfaces import Connection
@@ -71,21 +71,42 @@ class ImuTrack:
             )
             stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
             stamps.append(stamp or bag_time)
-        rotations = np.array(quaternions, dtype=float).reshape(-1, 4)
-        if not np.isfinite(rotations).all(axis=1).any():
+        return cls.of(
+            np.array(stamps, dtype=np.int64),
+            np.array(quaternions, dtype=float).reshape(-1, 4),
+            np.array(gyros, dtype=float).reshape(-1, 3),
+            np.array(accelerations, dtype=float).reshape(-1, 3),
+            connection.topic,
+            reads,
+        )
+
+    @classmethod
+    def of(
+        cls,
+        stamps_ns: np.ndarray,
+        quaternions: np.ndarray,
+        gyros: np.ndarray,
+        accelerations: np.ndarray,
+        topic: str,
+        reads: RecordingReads,
+    ) -> ImuTrack:
+        """The track of (M,) stamps [ns], (M, 4) quaternions x, y, z, w (a row not a rotation,
+        :func:`~a1_leg_fk.estimation.imu.has_orientation`, counts as none), (M, 3) gyro [rad/s]
+        and specific force [m/s^2] (NaN rows: none), in any order; :class:`LegFkError` if no row
+        has an orientation (:class:`DamagedRecording` if damage in ``reads`` came first).
+        """
+        usable = [has_orientation(0.0, row) for row in quaternions.tolist()]
+        rotations = np.where(np.array(usable, dtype=bool)[:, None], quaternions, math.nan)
+        if not usable or not any(usable):
             reads.check()
             raise LegFkError(
-                f"--imu {connection.topic}: no message with an orientation (a rotation quaternion "
+                f"--imu {topic}: no message with an orientation (a rotation quaternion "
                 "with orientation_covariance[0] != -1)"
             )
-        order = np.argsort(np.array(stamps, dtype=np.int64), kind="stable")
+        order = np.argsort(stamps_ns, kind="stable")
         unit = rotations[order] / np.linalg.norm(rotations[order], axis=1)[:, None]
         return cls(
-            np.array(stamps, dtype=np.int64)[order],
-            gravity_in_base(unit),
-            np.array(gyros, dtype=float)[order],
-            np.array(accelerations, dtype=float)[order],
-            connection.topic,
+            stamps_ns[order], gravity_in_base(unit), gyros[order], accelerations[order], topic
         )
 
     def at(self, stamps_ns: np.ndarray) -> np.ndarray:
@@ -111,6 +132,15 @@ def _vector(vector: Any, covariance: Sequence[float], zero_is_none: bool = False
     """
     values = (vector.x, vector.y, vector.z)
     return measured_vector(values, covariance[0], zero_is_none) or (math.nan,) * 3
+
+
+def vector_values(vectors: np.ndarray, zero_is_none: bool) -> np.ndarray:
+    """(M, 3) measured vectors of an IMU without covariances (Unitree's): each row as
+    :func:`~a1_leg_fk.estimation.imu.measured_vector` keeps it, else NaN.
+    """
+    kept = np.array([measured_vector(row, 0.0, zero_is_none) is not None for row in
+                     vectors.tolist()], dtype=bool).reshape(-1)  # fmt: skip
+    return np.where(kept[:, None], vectors, math.nan)
 
 
 def _known(row: np.ndarray) -> list[float] | None:

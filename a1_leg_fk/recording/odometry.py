@@ -111,12 +111,19 @@ def odometry_track(
     recording = open_recording(path, **choices)
     try:
         recording.efforts = contacts != KINEMATIC
-        if contacts == FORCE:
+        lowstate = recording.lowstate  # a LowState carries its motors' torques and its IMU
+        if contacts == FORCE and lowstate is None:
             check_has_efforts(
                 recording.reads, recording.joint_states, recording.ros1, "--contacts force"
             )
-        imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
-        imu = _imu_samples(recording.reads, imu_connection) if imu_connection else []
+        if lowstate is not None and imu_topic:
+            raise LegFkError(f"--imu: {lowstate.connection.topic} is a LowState, with its IMU")
+        if lowstate is not None:
+            imu_connection = lowstate.connection if use_imu else None
+            imu = lowstate.imu_samples(recording.reads) if use_imu else []
+        else:
+            imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
+            imu = _imu_samples(recording.reads, imu_connection) if imu_connection else []
         feed = OdometryFeed(
             recording.quadruped,
             settings,

@@ -38,6 +38,7 @@ VELOCITY_COLUMNS = [f"{leg}_v{axis}" for leg in LEG_NAMES for axis in AXES]
 WORLD_COLUMNS = [f"{leg}_w{axis}" for leg in LEG_NAMES for axis in AXES]
 CONTACT_COLUMNS = [f"{leg}_contact" for leg in LEG_NAMES]
 FORCE_COLUMNS = [f"{leg}_f{axis}" for leg in LEG_NAMES for axis in AXES] + CONTACT_COLUMNS
+SENSOR_COLUMNS = [f"{leg}_sensor" for leg in LEG_NAMES]
 
 
 @dataclass
@@ -193,7 +194,7 @@ def convert(
         for block in iter_foot_blocks(
             recording, progress=progress, on_message=copier.copy if copier else None
         ):
-            stats.add(block)
+            stats.add(block, recording)
             for writer in writers:
                 writer.write(block)
             if outputs.plot is not None:
@@ -223,8 +224,9 @@ def convert(
 
 class CsvWriter:
     """Rows ``stamp_ns, bag_time_ns, FR_x .. RL_z[, FR_vx .. RL_vz][, FR_wx .. RL_wz][, FR_fx ..
-    RL_fz][, FR_contact .. RL_contact]`` (forces [N] in the base frame, with ``--forces``;
-    contact probabilities, with ``--forces`` or ``--contacts``);
+    RL_fz][, FR_contact .. RL_contact][, FR_sensor .. RL_sensor]`` (forces [N] in the base frame,
+    with ``--forces``; contact probabilities, with ``--forces`` or ``--contacts``; a LowState's
+    foot sensors, raw counts);
     values written so that ``float(text)`` gives the same float back
     (:mod:`a1_leg_fk.recording.csv_text`); empty cells for NaN. The velocity columns are there when
     the recording has foot velocities: decided by the first block of rows; should velocities first
@@ -238,6 +240,7 @@ class CsvWriter:
         self.world = recording.base_pose is not None
         self.contacts = recording.forces is not None
         self.forces = recording.force_output
+        self.sensors = recording.lowstate is not None
         self.velocity_columns: bool | None = None  # not decided before the first rows
         self.file = open(path, "wb")  # noqa: SIM115 (open until close() or abort())
 
@@ -249,6 +252,7 @@ class CsvWriter:
             *(VELOCITY_COLUMNS if self.velocity_columns else []),
             *(WORLD_COLUMNS if self.world else []),
             *(FORCE_COLUMNS if self.forces else CONTACT_COLUMNS if self.contacts else []),
+            *(SENSOR_COLUMNS if self.sensors else []),
         ]
         return (",".join(columns) + "\n").encode()
 
@@ -270,6 +274,8 @@ class CsvWriter:
             parts.append(block.forces.reshape(rows, -1))
         if self.contacts and block.contacts is not None:
             parts.append(block.contacts)
+        if self.sensors and block.sensor is not None:
+            parts.append(block.sensor)
         self.file.write(
             format_rows(
                 np.stack([block.stamps_ns, block.bag_times_ns], axis=1),

@@ -17,11 +17,14 @@ from types import ModuleType
 from typing import TYPE_CHECKING, TypedDict
 
 from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER
+from a1_leg_fk.estimation.sensor_contacts import DEFAULT_SENSOR_THRESHOLD_COUNTS
 from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.base_pose import BASE_POSE_TYPES, DEFAULT_MAX_POSE_GAP_S, BasePoses
+from a1_leg_fk.recording.lowstate import LOWSTATE_TYPES, LowStateInput, refuse_humanoid
 from a1_leg_fk.recording.mcap_salvage import salvage
 from a1_leg_fk.recording.reads import RecordingReads
+from a1_leg_fk.recording.sport_feet import SportFeet
 from a1_leg_fk.recording.typestores import CannotOpen, open_reader, require_types
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
@@ -52,6 +55,7 @@ class RecordingChoices(TypedDict, total=False):
     contact_thresholds: tuple[float | None, float | None]
     force_model: str
     contact_rule: str
+    sensor_threshold: float
 
 
 @dataclass
@@ -76,6 +80,9 @@ class Recording:
     forces: ForcePass | None = None  # foot forces and contacts, when asked for
     force_output: bool = False  # the forces are wanted in the outputs (bag --forces)
     efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
+    lowstate: LowStateInput | None = None  # the joint states are a Unitree LowState's motors
+    sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS  # [counts] a LowState foot sensor's
+    sport: SportFeet | None = None  # a LowState robot's own feet (SportModeState), if recorded
 
     @property
     def stopped(self) -> str:
@@ -107,6 +114,7 @@ def open_recording(
     contact_thresholds: tuple[float | None, float | None] = (None, None),
     force_model: str = DYNAMIC,
     contact_rule: str = FILTER,
+    sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS,
 ) -> Recording:
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
     problem for bad input. Close with :func:`close_recording`. ``forces``: foot forces and
@@ -114,15 +122,21 @@ def open_recording(
     efforts); ``estimate_contacts``: contacts with or without efforts; the IMU from the
     ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule`` and
     ``contact_thresholds`` (the threshold rule's touchdown and liftoff forces [N], ``None``: the
-    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.ForcePass` takes them.
+    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.ForcePass` takes them;
+    ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact.
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
     reads = RecordingReads(reader, path)
     try:
-        joint_states = pick_topic(
-            reader, path, topic, (JOINT_STATE_TYPE,), "--topic", "JointState"
+        joint_states = pick_input(reader, path, topic)
+        lowstate = (
+            LowStateInput.open(reads, joint_states)
+            if joint_states.msgtype in LOWSTATE_TYPES
+            else None
         )
+        if lowstate is not None and imu:
+            raise LegFkError(f"--imu: {joint_states.topic} is a LowState, which carries its IMU")
         if not urdf:
             require_types(reader, path, _description_types(reader), types)
         description, description_topic = (
@@ -157,7 +171,7 @@ def open_recording(
         force_pass = (
             _force_pass(
                 reads,
-                (joint_states, imu),
+                (joint_states, imu, lowstate),
                 robot.quadruped,
                 forces,
                 (contact_thresholds, force_model, contact_rule),
@@ -179,6 +193,9 @@ def open_recording(
             salvage_note=salvage_note,
             forces=force_pass,
             force_output=forces,
+            lowstate=lowstate,
+            sensor_threshold=sensor_threshold,
+            sport=SportFeet.read(reads) if lowstate is not None else None,
         )
     except BaseException:
         _close_reader(reader)
@@ -187,23 +204,24 @@ def open_recording(
 
 def _force_pass(
     reads: RecordingReads,
-    where: tuple[Connection, str | None],
+    where: tuple[Connection, str | None, LowStateInput | None],
     quadruped: Quadruped,
     needs_efforts: bool,
     settings: tuple[tuple[float | None, float | None], str, str],
 ) -> ForcePass:
     """The force and contact estimation of a pass over the JointStates of ``where`` (their
-    connection, the IMU topic or None); :class:`LegFkError` if the JointStates carry no
+    connection, the IMU topic or None, the LowState input or None: its IMU is the IMU);
+    :class:`LegFkError` if the JointStates carry no
     efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
     contact thresholds, the force model and the contact rule.
     """
     from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuTrack, check_has_efforts
 
-    joint_states, imu = where
-    if needs_efforts:
+    joint_states, imu, lowstate = where
+    if needs_efforts and lowstate is None:  # a LowState always carries its motors' torques
         needs = "the force estimate (bag --forces, gait --contacts force)"
         check_has_efforts(reads, joint_states, not reads.reader.is2, needs)
-    track = None
+    track = lowstate.imu_track(reads) if lowstate is not None else None
     if imu:
         connection = pick_topic(reads.reader, reads.path, imu, (IMU_TYPE,), "--imu", "IMU")
         track = ImuTrack.read(reads, connection)
@@ -315,6 +333,21 @@ def pick_topic(
             )
         chosen = candidates[0]
     return next(connection for connection in reader.connections if connection.topic == chosen)
+
+
+def pick_input(reader: AnyReader, path: Path, wanted: str | None) -> Connection:
+    """The joint states' topic: ``wanted`` (a JointState or a Unitree LowState), else the only
+    JointState topic, else (a bag without one) the only LowState topic. A humanoid's LowState is
+    refused by name.
+    """
+    kinds = (JOINT_STATE_TYPE, *LOWSTATE_TYPES)
+    refuse_humanoid(reader, wanted, kinds)
+    if wanted is None:
+        joint_states = any(c.msgtype == JOINT_STATE_TYPE for c in reader.connections)
+        if not joint_states and any(c.msgtype in LOWSTATE_TYPES for c in reader.connections):
+            return pick_topic(reader, path, None, LOWSTATE_TYPES, "--topic", "LowState")
+        kinds = (JOINT_STATE_TYPE,)
+    return pick_topic(reader, path, wanted, kinds, "--topic", "JointState")
 
 
 def _description_connections(reader: AnyReader) -> list[Connection]:

@@ -3,7 +3,7 @@ recorded base pose). No ROS install: bags are read with ``rosbags`` (imported la
 
 The JointState rules are :class:`~a1_leg_fk.tracking.FootTracker`'s, as in the node; the model
 comes from :func:`~a1_leg_fk.kinematics.robot_config.load_robot`, as in the node. JointState
-messages are read from their serialized bytes (:mod:`a1_leg_fk.recording.joint_state_wire`), not
+messages are read from their serialized bytes (:mod:`a1_leg_fk.wire.joint_state`), not
 deserialized into Python objects, and processed in blocks of
 :data:`~a1_leg_fk.recording.blocks.BLOCK_MESSAGES` with numpy. Results stream out block by block
 (:func:`iter_foot_blocks`), so writers need memory independent of the bag's length;
@@ -26,9 +26,13 @@ from typing import TYPE_CHECKING, Unpack, cast
 
 import numpy as np
 
+from a1_leg_fk.estimation.sensor_contacts import SensorAgreement
 from a1_leg_fk.recording.base_pose import DEFAULT_MAX_POSE_GAP_S, BasePoses
-from a1_leg_fk.recording.blocks import LEGS, FootBlock, iter_foot_blocks
+from a1_leg_fk.recording.blocks import LEGS, iter_foot_blocks
+from a1_leg_fk.recording.foot_block import FootBlock
+from a1_leg_fk.recording.lowstate import STAMP_NOTE
 from a1_leg_fk.recording.reader import (
+    JOINT_STATE_TYPE,
     Recording,
     RecordingChoices,
     close_recording,
@@ -60,6 +64,10 @@ class RecordingSummary:
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
     types: str = ""  # which message types the bag was read with (recording.typestores)
     forces: str = ""  # with forces or contacts: what the estimate gave (ForcePass.summary)
+    input_type: str = JOINT_STATE_TYPE  # the message type of ``topic``
+    stamps: str = ""  # where the stamps came from, when not the messages' headers
+    sensors: str = ""  # a LowState's foot sensors against the contact estimate (SensorAgreement)
+    unitree: str = ""  # our feet against a recorded SportModeState's (SportFeet.line)
 
     @property
     def rejected(self) -> dict[str, int]:
@@ -83,7 +91,7 @@ class RecordingSummary:
         lines = [
             f"file:      {self.path}",
             f"model:     {self.model}",
-            f"topic:     {self.topic} (sensor_msgs/msg/JointState)",
+            f"topic:     {self.topic} ({self.input_type})",
             f"types:     {self.types}",
             (
                 f"messages:  {self.messages} read, {self.outcomes.get('accepted', 0)} accepted, "
@@ -105,8 +113,11 @@ class RecordingSummary:
                 f"base pose: {self.base_pose_topic}; {self.rows_without_pose} rows without a "
                 "pose (outside its time range or in a gap)"
             )
+        if self.stamps:
+            lines.insert(4, f"stamps:    {self.stamps}")
         if self.forces:
             lines.extend(self.forces.split("\n"))
+        lines.extend(line for line in (self.sensors, self.unitree) if line)
         if self.stopped:
             lines.append(f"stopped early: {self.stopped}")
         return lines
@@ -139,6 +150,7 @@ class FootTrajectories:
     forces: np.ndarray | None = None  # (N, 4, 3) [N], base frame, NaN where none; with forces
     normal_forces: np.ndarray | None = None  # (N, 4) [N] along minus gravity, NaN where none
     contacts: np.ndarray | None = None  # (N, 4) contact probabilities, NaN where none
+    sensor: np.ndarray | None = None  # (N, 4) a LowState's foot sensors [raw counts]
 
 
 class BlockStats:
@@ -150,10 +162,19 @@ class BlockStats:
         self.first: int | None = None
         self.last: int | None = None
         self.started = time.perf_counter()
+        self.sensors: SensorAgreement | None = None  # set by the first block with both
 
-    def add(self, block: FootBlock) -> None:
+    def add(self, block: FootBlock, recording: Recording | None = None) -> None:
+        """Count the block's rows; with ``recording``, compare them with its foot sensors (a
+        LowState's, when the rows have contact estimates) and its SportModeState feet.
+        """
         if not len(block.stamps_ns):
             return
+        if recording is not None and recording.sport is not None:
+            recording.sport.compare(block.stamps_ns, block.positions)
+        if recording is not None and block.sensor is not None and block.contacts is not None:
+            self.sensors = self.sensors or SensorAgreement(recording.sensor_threshold)
+            self.sensors.add(block.contacts, block.sensor)
         self.rows += len(block.stamps_ns)
         if block.world_positions is not None:
             self.rows_without_pose += int(np.isnan(block.world_positions).all(axis=(1, 2)).sum())
@@ -181,6 +202,10 @@ class BlockStats:
             "; ".join(part for part in (recording.salvage_note, recording.stopped) if part),
             recording.types,
             recording.forces.summary(recording.force_output) if recording.forces else "",
+            recording.joint_states.msgtype,
+            STAMP_NOTE if recording.lowstate is not None else "",
+            self.sensors.line() if self.sensors is not None and recording.force_output else "",
+            recording.sport.line() if recording.sport is not None else "",
         )
 
 
@@ -196,9 +221,11 @@ def read_foot_trajectories(
     ``path``: a ROS 2 bag directory, a ``.mcap`` file or a ROS 1 ``.bag``. ``progress``: a
     progress bar on stderr (with tqdm). ``choices``, keyword arguments as
     :func:`open_recording`'s (:class:`RecordingChoices`): ``topic``: the JointState topic
-    (needed when there are several). Model: ``urdf`` (a path), else the bag's
-    ``robot_description`` topic (the latest message before the first JointState), else the
-    embedded A1; ``foot_links``/``joint_aliases`` as the node's parameters (``"KEY=value"``).
+    (needed when there are several), or a Unitree LowState topic (read when the bag has no
+    JointState: its motors, IMU and foot sensors, ``sensor``; stamps: bag times). Model:
+    ``urdf`` (a path), else the bag's ``robot_description`` topic (the latest message before the
+    first JointState), else the embedded A1; ``foot_links``/``joint_aliases`` as the node's
+    parameters (``"KEY=value"``).
     ``base_pose``: an Odometry / PoseStamped / PoseWithCovarianceStamped / TFMessage topic that
     gives the base's pose in a world frame, interpolated at each JointState stamp (NaN where the
     stamp is outside the poses' range or in a gap longer than ``max_pose_gap_s`` [s], default
@@ -213,7 +240,7 @@ def read_foot_trajectories(
         stats = BlockStats()
         blocks = []
         for block in iter_foot_blocks(recording, progress=progress):
-            stats.add(block)
+            stats.add(block, recording)
             blocks.append(block)
         summary = stats.summary(recording)
     finally:
@@ -243,6 +270,7 @@ def collected(
         forces=joined("forces", (LEGS, 3)) if recording.forces is not None else None,
         normal_forces=joined("normal_forces", (LEGS,)) if recording.forces is not None else None,
         contacts=joined("contacts", (LEGS,)) if recording.forces is not None else None,
+        sensor=joined("sensor", (LEGS,)) if recording.lowstate is not None else None,
     )
 
 

@@ -8,7 +8,8 @@
   ``metadata.yaml``'s ``ros_distro`` (metadata version 8 on), else the ``schema`` table of its
   sqlite3 file (rosbag2 0.15.4 on, January 2023 in Humble); else of :data:`DEFAULT_DISTRO`.
   The standard types read here (JointState, Odometry, Pose*, TFMessage, Imu, String) are the same
-  from Foxy to Jazzy.
+  from Foxy to Jazzy. Unitree's (``unitree_go``) are no distro's: the package's own definitions
+  (:mod:`a1_leg_fk.wire.unitree_types`) are added to those bundled types.
 
 A type that the chosen types cannot define is named by :func:`require_types`. No ROS install:
 ``rosbags`` is imported when a bag is opened.
@@ -25,9 +26,11 @@ from typing import TYPE_CHECKING, Any
 
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.reads import BoundedPath, one_line
+from a1_leg_fk.wire.unitree_types import DEFINITIONS
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.highlevel import AnyReader
+    from rosbags.typesys.store import Typestore
 
 DEFAULT_DISTRO = "humble"
 """The ROS 2 distro whose bundled types read a bag that records neither definitions nor its
@@ -75,7 +78,7 @@ def _choose_types(reader: AnyReader, path: Path) -> str:
         return "recorded in the bag"  # rosbags defines the types from the definitions there are
     distro, source = recorded_distro(reader, path)
     chosen = distro if distro in _bundled_distros() else DEFAULT_DISTRO
-    reader.typestore = get_typestore(Stores(f"ros2_{chosen}"))
+    reader.typestore = with_unitree_types(get_typestore(Stores(f"ros2_{chosen}")))
     default = f"{chosen.capitalize()} is the default"
     if distro is None:
         why = f"no ROS distro recorded: {default}"
@@ -84,9 +87,22 @@ def _choose_types(reader: AnyReader, path: Path) -> str:
     else:
         why = f"ROS distro '{distro}' from {source} has no bundled types: {default}"
     return (
-        f"rosbags' bundled ROS 2 {chosen.capitalize()} types (the bag has no message "
-        f"definitions, as rosbag2 wrote before Iron; {why})"
+        f"rosbags' bundled ROS 2 {chosen.capitalize()} types and the package's Unitree "
+        f"definitions (the bag has no message definitions, as rosbag2 wrote before Iron; {why})"
     )
+
+
+def with_unitree_types(typestore: Typestore) -> Typestore:
+    """``typestore`` with Unitree's message types added (written from their published field
+    lists: :data:`~a1_leg_fk.wire.unitree_types.DEFINITIONS`).
+    """
+    from rosbags.typesys import get_types_from_msg
+
+    types = {}
+    for msgtype, text in DEFINITIONS.items():
+        types.update(get_types_from_msg(text, msgtype))
+    typestore.register(types)
+    return typestore
 
 
 def recorded_distro(reader: AnyReader, path: Path) -> tuple[str | None, str]:

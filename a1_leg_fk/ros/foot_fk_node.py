@@ -10,7 +10,7 @@ message is :mod:`a1_leg_fk.ros.foot_output`'s. All topic and service names are r
 latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z.
 
 The joint states are subscribed raw (serialized) and read by the bag tools' decoder
-(:mod:`a1_leg_fk.recording.joint_state_wire`): no message object is built per JointState.
+(:mod:`a1_leg_fk.wire.joint_state`): no message object is built per JointState.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message
 from rclpy.service import Service
-from sensor_msgs.msg import Imu, JointState
+from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
@@ -36,17 +36,19 @@ from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import ForcePass
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.joint_input import MissingMessages, joint_input
 from a1_leg_fk.ros.markers import foot_markers
-from a1_leg_fk.ros.odometry_wire import imu_fields, imu_message_fields, imu_sample
+from a1_leg_fk.ros.odometry_wire import imu_message_fields, imu_sample
 from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
+from a1_leg_fk.wire.imu import imu_fields
+from a1_leg_fk.wire.joint_state import WireError, doubles
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -60,10 +62,10 @@ class FootFkNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
+        message, topic, self._decoder = joint_input(self)  # before any output: a usage error
         self._robot = RobotSource(self, self._on_robot)
         self._model = self._robot.config
         self._tracker = FootTracker(self._model.quadruped)
-        self._decoder = JointStateDecoder()
         self._verifier: PyBulletFeet | None = None
         self._verifier_error = ""
         self._last_verify = "not called"
@@ -90,8 +92,8 @@ class FootFkNode(Node):
         self._load_verifier()
         self._update_verify_service()
         self.create_subscription(
-            JointState,
-            "joint_states",
+            message,
+            topic,
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
@@ -103,7 +105,7 @@ class FootFkNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
             f"feet of {self._model.source} in frame '{self._base_frame}' from "
-            f"{self.resolve_topic_name('joint_states')} to "
+            f"{self.resolve_topic_name(topic)} to "
             f"{self.resolve_topic_name('foot_positions')}/<leg>"
         )
 
@@ -115,6 +117,8 @@ class FootFkNode(Node):
         except WireError as error:
             self._warnings.warn("malformed", f"ignoring a joint_states message: {error}")
             return
+        if self._decoder.imu is not None:  # a LowState's own IMU
+            self._imu = imu_sample(self._decoder.imu)
         order = fields.order
         names = self._decoder.names
         efforts = doubles(fields.efforts, order) if fields.efforts else ()
@@ -372,7 +376,7 @@ class FootFkNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk foot_fk_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("foot_fk_node", FootFkNode, args)
+    return ros_glue.run_node("foot_fk_node", FootFkNode, args, (MissingMessages,))
 
 
 if __name__ == "__main__":

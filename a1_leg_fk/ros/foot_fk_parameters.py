@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from rcl_interfaces.msg import ParameterType
 
+from a1_leg_fk.ros.joint_input import INPUT_PARAMETER
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 
 MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
@@ -25,6 +26,7 @@ FORCE_PARAMETERS = (
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
+    INPUT_PARAMETER,
     ParameterSpec(
         "publish_velocities",
         True,

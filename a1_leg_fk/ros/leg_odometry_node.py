@@ -22,18 +22,16 @@ from typing import Unpack
 
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Imu, JointState
 
-from a1_leg_fk.estimation.filter_model import FLAT, GROUND_MODELS
-from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, imu_reading
+from a1_leg_fk.estimation.filter_model import GROUND_MODELS
+from a1_leg_fk.estimation.imu import imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (
-    AUTO,
     CONTACT_SOURCES,
     KINEMATIC,
     Foot,
@@ -42,90 +40,20 @@ from a1_leg_fk.estimation.odometry_feed import (
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, WireError, doubles
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.joint_input import LOWSTATE_TOPIC, MissingMessages, joint_input
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
-from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec, RobotSource
+from a1_leg_fk.ros.odometry_parameters import PARAMETERS
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
+from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
+from a1_leg_fk.wire.imu import ImuFields, imu_fields
+from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
 
 NODE_NAME = "leg_odometry"
 DIAGNOSTICS_PERIOD_S = 1.0
-DEFAULTS = OdometrySettings()
-SMALL_RANGE_M = (-1.0, 1.0)
-RANGE_S = (0.001, 10.0)
-RANGE_MPS = (0.001, 100.0)
-
-PARAMETERS = (
-    BASE_FRAME_PARAMETER,
-    ParameterSpec(
-        "odom_frame", "odom", ParameterType.PARAMETER_STRING, "header.frame_id of leg_odometry"
-    ),
-    ParameterSpec(
-        "use_imu",
-        True,
-        ParameterType.PARAMETER_BOOL,
-        "Use the imu topic (orientation unless its orientation_covariance[0] is -1, angular "
-        "velocity always); false = legs alone (planar pose)",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "contacts",
-        AUTO,
-        ParameterType.PARAMETER_STRING,
-        "The contacts' evidence: auto (the joint efforts' foot forces where a joint state has "
-        "efforts, with the feet's heights and speeds), force (the same; a joint state without "
-        "efforts has no foot standing) or kinematic (the feet's heights and speeds alone)",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "ground",
-        FLAT,
-        ParameterType.PARAMETER_STRING,
-        "flat: the stance feet's heights anchor the height (flat ground); none: they do not "
-        "(stairs, slopes)",
-        read_only=True,
-    ),
-    ParameterSpec(
-        "imu_timeout_s",
-        DEFAULT_IMU_TIMEOUT_S,
-        ParameterType.PARAMETER_DOUBLE,
-        f"A joint state takes the latest IMU sample stamped at most this long [s] before it, in "
-        f"{RANGE_S}",
-        read_only=True,
-        value_range=RANGE_S,
-    ),
-    ParameterSpec(
-        "foot_radius_m",
-        -1.0,
-        ParameterType.PARAMETER_DOUBLE,
-        "Rolling radius of the feet [m], in [0, 1]; negative = the foot links' collision spheres "
-        "in the URDF",
-        read_only=True,
-        value_range=SMALL_RANGE_M,
-    ),
-    ParameterSpec(
-        "slip_threshold_mps",
-        DEFAULTS.slip_threshold_mps,
-        ParameterType.PARAMETER_DOUBLE,
-        f"A stance foot whose velocity estimate is further than this [m/s] from the others' is "
-        f"dropped for that sample, in {RANGE_MPS}",
-        read_only=True,
-        value_range=RANGE_MPS,
-    ),
-    ParameterSpec(
-        "stance_band_m",
-        DEFAULTS.stance_band_m,
-        ParameterType.PARAMETER_DOUBLE,
-        "Kinematic stance: the feet whose contact points lie within this [m] of the lowest along "
-        "gravity, in [0, 1]",
-        read_only=True,
-        value_range=SMALL_RANGE_M,
-    ),
-)
-"""The node's own parameters; the model parameters are :class:`RobotSource`'s."""
 
 
 class LegOdometryNode(Node):
@@ -135,12 +63,12 @@ class LegOdometryNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
+        message, topic, self._decoder = joint_input(self)  # before any output: a usage error
         self._robot = RobotSource(self, self._on_robot)
         self._warnings = ros_glue.WarnThrottle(self)
         self._period = PeriodCounter()
         self._no_stance_before = 0
         self._without_velocities = 0
-        self._decoder = JointStateDecoder()
         self._msg = Odometry()
         self._values = [0.0] * SerializedOdometry.DOUBLES
         self._contacts = str(self.get_parameter("contacts").value)
@@ -157,15 +85,15 @@ class LegOdometryNode(Node):
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self.create_subscription(
-            JointState,
-            "joint_states",
+            message,
+            topic,
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             raw=True,
         )
         self._imu_topic = self.resolve_topic_name("imu")
-        if bool(self._setting("use_imu")):
+        if bool(self._setting("use_imu")) and topic != LOWSTATE_TOPIC:  # a LowState has its IMU
             self.create_subscription(
                 Imu,
                 "imu",
@@ -177,7 +105,7 @@ class LegOdometryNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
-            f"leg odometry of {self._config.source} from {self.resolve_topic_name('joint_states')}"
+            f"leg odometry of {self._config.source} from {self.resolve_topic_name(topic)}"
             + (f" and {self._imu_topic}" if bool(self._setting("use_imu")) else " (legs alone)")
             + f" to {self.resolve_topic_name('leg_odometry')}"
             + f" in frame '{self._msg.header.frame_id}'"
@@ -213,6 +141,10 @@ class LegOdometryNode(Node):
         if fields is None:
             msg = deserialize_message(raw, Imu)
             fields = imu_message_fields(msg)
+        self._on_imu_fields(fields)
+
+    def _on_imu_fields(self, fields: ImuFields) -> None:
+        """One Imu's fields (an Imu message's, or a LowState's own) into the odometry."""
         reading = imu_reading(*fields[1:])
         stamp = fields[0]
         if reading is None:
@@ -234,7 +166,12 @@ class LegOdometryNode(Node):
             positions = doubles(position_bytes, order)
             velocities = doubles(velocity_bytes, order)
             efforts = doubles(effort_bytes, order)
-        except WireError:
+            if self._decoder.imu is not None:  # a LowState's own IMU, stamped as its motors
+                self._on_imu_fields(self._decoder.imu)
+        except WireError as error:
+            if not isinstance(self._decoder, JointStateDecoder):
+                self._warnings.warn("malformed", f"ignoring a lowstate message: {error}")
+                return
             msg = deserialize_message(raw, JointState)
             stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
             names, positions, velocities, efforts = (
@@ -391,7 +328,7 @@ class LegOdometryNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args)
+    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args, (MissingMessages,))
 
 
 if __name__ == "__main__":

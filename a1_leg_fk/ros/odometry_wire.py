@@ -1,5 +1,6 @@
 """``leg_odometry_node``'s messages as bytes: sensor_msgs/Imu read from its CDR without building a
-message object, nav_msgs/Odometry written by patching a pre-serialized probe. At 1 kHz each of
+message object (:func:`a1_leg_fk.wire.imu.imu_fields`), nav_msgs/Odometry written by patching a
+pre-serialized probe. At 1 kHz each of
 the two would otherwise cost about as much as the odometry itself (rclpy's conversion between
 message objects and C, with numpy arrays for every covariance).
 
@@ -16,41 +17,9 @@ from typing import Any
 from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.estimation.imu import has_orientation, measured_vector
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, down_direction, unit_quaternion
-
-IMU_DOUBLES = struct.Struct("<37d")
-"""An Imu's fields after its header: orientation (4), its covariance (9), angular velocity (3),
-its covariance (9), linear acceleration (3), its covariance (9)."""
-_STAMP = struct.Struct("<iI")
-_LENGTH = struct.Struct("<I")
-LITTLE_ENDIAN_CDR = b"\x00\x01"
-
-Values = tuple[float, ...]
-ImuFields = tuple[int, Values, Values, Values, Values, Values, Values]
-"""(stamp [ns], orientation x y z w, orientation covariance (9), angular velocity [rad/s] (3),
-its covariance (9), linear acceleration [m/s^2] (3), its covariance (9))."""
-
-
-def imu_fields(raw: bytes) -> ImuFields | None:
-    """The fields of a serialized little-endian CDR sensor_msgs/msg/Imu, or None (another
-    encoding, or malformed: the caller then deserializes it the ordinary way).
-    """
-    if len(raw) < 16 or raw[:2] != LITTLE_ENDIAN_CDR:
-        return None
-    sec, nanosec = _STAMP.unpack_from(raw, 4)
-    text_end = 12 + _LENGTH.unpack_from(raw, 12)[0]  # relative to the data, after 4 bytes
-    start = 4 + ((text_end + 7) & -8)
-    if start + IMU_DOUBLES.size != len(raw):
-        return None
-    values = IMU_DOUBLES.unpack_from(raw, start)
-    return (
-        sec * 1_000_000_000 + nanosec,
-        values[0:4],
-        values[4:13],
-        values[13:16],
-        values[16:25],
-        values[25:28],
-        values[28:37],
-    )
+from a1_leg_fk.wire.imu import LENGTH as _LENGTH
+from a1_leg_fk.wire.imu import STAMP as _STAMP
+from a1_leg_fk.wire.imu import ImuFields
 
 
 def imu_message_fields(msg: Any) -> ImuFields:

@@ -19,7 +19,8 @@ from sensor_msgs.msg import Imu
 
 from a1_leg_fk import cli
 from a1_leg_fk.cli.odom import CSV_HEADER
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_fields, imu_message_fields
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
+from a1_leg_fk.wire.imu import imu_fields
 
 SIM_S = 4.0
 LANDED_S = 0.5

@@ -43,8 +43,8 @@ MS = 1_000_000  # [ns]
 NO_DEFINITIONS = "Bag contains no type definitions"
 OLD_HEADER = "Type 'std_msgs/msg/Header' is unknown"
 BUNDLED = (
-    "rosbags' bundled ROS 2 Humble types (the bag has no message definitions, as rosbag2 wrote "
-    "before Iron; "
+    "rosbags' bundled ROS 2 Humble types and the package's Unitree definitions (the bag has no "
+    "message definitions, as rosbag2 wrote before Iron; "
 )
 JOINT_STATE_MD5 = "3066dcd76a6cfaef579bd0f34173e9fd"  # sensor_msgs/JointState, ROS 1, since 2010
 
@@ -214,12 +214,12 @@ def test_copy_input_of_a_humble_bag(tmp_path: Path, capsys: pytest.CaptureFixtur
         message: Any = reader.deserialize(next(reader.messages([copied]))[2], copied.msgtype)
         assert message.data == "hello"
         assert {c.topic: c.msgcount for c in reader.connections}["/joint_states"] == 5
-    spec.add("/lowstate", "unitree_legged_msgs/msg/LowState", T0 + 7, b"\x00\x01\x00\x00\x07")
+    spec.add("/custom", "my_robot_msgs/msg/Custom", T0 + 7, b"\x00\x01\x00\x00\x07")
     path = write_bag(tmp_path / "custom", spec, "humble")
     capsys.readouterr()
     assert cli.main(["bag", str(path), "--output-bag", str(tmp_path / "o2"), "--copy-input"]) == 2
     error = capsys.readouterr().err
-    assert "--copy-input: /lowstate is unitree_legged_msgs/msg/LowState, which is not" in error
+    assert "--copy-input: /custom is my_robot_msgs/msg/Custom, which is not" in error
     assert not (tmp_path / "o2").exists() and len(error.splitlines()) == 1
 
 

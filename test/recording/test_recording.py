@@ -29,9 +29,9 @@ from hypothesis import strategies as st
 from pybullet_reference import PyBulletRobot
 
 from a1_leg_fk.kinematics.quadruped import Quadruped
-from a1_leg_fk.recording.joint_state_wire import JointStateDecoder, doubles
 from a1_leg_fk.recording.trajectories import read_foot_trajectories
 from a1_leg_fk.tracking import FootTracker
+from a1_leg_fk.wire.joint_state import JointStateDecoder, doubles
 
 A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)

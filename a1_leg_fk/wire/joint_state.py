@@ -19,6 +19,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.wire.imu import ImuFields
+
 _UINT32 = {"<": struct.Struct("<I"), ">": struct.Struct(">I")}
 Uint32Reader = Callable[[bytes, int], tuple[int, ...]]
 """``struct.Struct.unpack_from`` of a uint32 in the message's byte order: ``(raw, offset)``."""
@@ -57,6 +59,9 @@ def doubles(data: bytes, order: str) -> Sequence[float]:
 
 class JointStateDecoder:
     """Decodes consecutive JointState messages of one connection; ``ros1`` selects the layout."""
+
+    imu: ImuFields | None = None
+    """The IMU of the latest message: a JointState has none (a LowState's decoder has one)."""
 
     def __init__(self, ros1: bool = False) -> None:
         self.ros1 = ros1

@@ -20,7 +20,7 @@ import yaml
 from conftest import BIN
 from shared import ROOT
 
-from a1_leg_fk.ros import foot_fk_parameters, joint_input, leg_odometry_node, robot_source
+from a1_leg_fk.ros import foot_fk_parameters, joint_input, odometry_parameters, robot_source
 
 LAUNCH = ROOT / "launch" / "feet.launch.py"
 RVIZ = ROOT / "rviz" / "feet.rviz"
@@ -37,7 +37,7 @@ NODE_PARAMETERS = {
     "foot_fk_node": {spec.name for spec in (*robot_source.PARAMETERS,
                                             *foot_fk_parameters.PARAMETERS)},
     "leg_odometry_node": {spec.name for spec in (*robot_source.PARAMETERS,
-                                                 *leg_odometry_node.PARAMETERS)},
+                                                 *odometry_parameters.PARAMETERS)},
 }  # fmt: skip
 
 

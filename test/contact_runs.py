@@ -17,6 +17,7 @@ of the generators' source) and :func:`with_noise` adds a robot's sensor errors.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import fcntl
 import hashlib
@@ -24,6 +25,8 @@ import math
 import os
 import sys
 import time
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -45,6 +48,7 @@ from contact_gaits import (
     go2_urdf,
 )
 from pybullet_sim import A1_FEET, A1_JOINTS, A1_URDF, GRAVITY, STEP_S, QuadrupedSim
+from sensor_noise import with_noise  # noqa: F401 (the family's noise, re-exported)
 
 SETTLE_S = 0.5
 """Standing still before the gait [s]."""
@@ -209,54 +213,6 @@ def _slip(sim: QuadrupedSim, slips: Slips, was: int, weight_n: float) -> int:
     return side
 
 
-def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(..., 4) Hamilton products a ⊗ b of (x, y, z, w) quaternions."""
-    ax, ay, az, aw = np.moveaxis(np.asarray(a, dtype=float), -1, 0)
-    bx, by, bz, bw = np.moveaxis(np.asarray(b, dtype=float), -1, 0)
-    return np.stack(
-        [
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz,
-        ],
-        axis=-1,
-    )
-
-
-def with_noise(run: ContactRun, seed: int) -> ContactRun:
-    """``run`` as a robot's sensors would give it (name suffixed ``+noise``); truth unchanged.
-
-    Gaussian errors of standard deviation 5e-4 rad on the encoders, 0.05 rad/s on the joint rates,
-    0.3 N m on the efforts (after a scale error per motor, uniform in ±3 %), 0.005 rad/s on the
-    gyro plus a 0.01 rad/s bias of random sign per axis, 0.05 m/s^2 on the accelerometer plus a
-    0.05 m/s^2 bias of random sign per axis; the orientation tilted by a fixed 0.3° about a
-    random horizontal axis of the root frame (q ⊗ tilt: a mounting
-    error; gyro and accelerometer keep the root frame). Every error is fixed by ``seed``.
-    """
-    rng = np.random.default_rng(seed)
-    n = len(run.stamps_s)
-
-    def signs(count: int) -> np.ndarray:
-        return rng.choice([-1.0, 1.0], count)
-
-    heading = rng.uniform(0.0, 2.0 * math.pi)
-    half = math.radians(0.3) / 2.0
-    tilt = [math.cos(heading) * math.sin(half), math.sin(heading) * math.sin(half), 0, 1]
-    tilt[3] = math.cos(half)
-    scale = 1.0 + rng.uniform(-0.03, 0.03, 12)
-    return replace(
-        run,
-        name=f"{run.name}+noise",
-        angles=run.angles + rng.normal(0.0, 5e-4, (n, 12)),
-        rates=run.rates + rng.normal(0.0, 0.05, (n, 12)),
-        torques=run.torques * scale + rng.normal(0.0, 0.3, (n, 12)),
-        gyro=run.gyro + 0.01 * signs(3) + rng.normal(0.0, 0.005, (n, 3)),
-        specific_force=run.specific_force + 0.05 * signs(3) + rng.normal(0.0, 0.05, (n, 3)),
-        quaternions=quaternion_product(run.quaternions, np.array(tilt)),
-    )
-
-
 def source_hash() -> str:
     """16 hex digits of a hash of :data:`SOURCES` and PyBullet's API version."""
     digest = hashlib.sha256(str(pybullet.getAPIVersion()).encode())
@@ -301,9 +257,10 @@ def contact_runs(cache_dir: Path, names: tuple[str, ...] = tuple(SPECS)) -> dict
     """The clean runs ``names`` (default: all of :data:`SPECS`; any of :data:`ALL_SPECS`), by name.
 
     Each is read from ``cache_dir/NAME-HASH.npz`` (HASH: :func:`source_hash`), or simulated and
-    saved there; the Go2-like description is written there too. A lock file in ``cache_dir``
-    keeps concurrent callers (pytest-xdist workers, two sessions) from simulating twice; within a
-    process the runs are loaded once.
+    saved there; the Go2-like description is written there too. A lock file per run in
+    ``cache_dir`` keeps concurrent callers (two sessions, the workers of
+    :func:`simulate_missing`) from simulating one run twice; within a process the runs are loaded
+    once.
     """
     cache_dir = Path(cache_dir).resolve()
     cache_dir.mkdir(parents=True, exist_ok=True)
@@ -311,22 +268,45 @@ def contact_runs(cache_dir: Path, names: tuple[str, ...] = tuple(SPECS)) -> dict
     loaded = _LOADED.setdefault((cache_dir, digest), {})
     missing = [name for name in names if name not in loaded]
     if missing:
-        with (cache_dir / "contact_runs.lock").open("w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            go2_path = cache_dir / f"go2_like-{digest}.urdf"
+        go2_path = cache_dir / f"go2_like-{digest}.urdf"
+        with _locked(cache_dir / "go2_like.lock"):
             if not go2_path.exists():
                 temporary = go2_path.with_name(f".{go2_path.name}.{os.getpid()}.tmp")
                 temporary.write_text(go2_urdf(), encoding="utf-8")
                 temporary.replace(go2_path)
-            for name in missing:
-                path = cache_dir / f"{name}-{digest}.npz"
+        for name in missing:
+            path = cache_dir / f"{name}-{digest}.npz"
+            with _locked(cache_dir / f"{name}.lock"):
                 if not path.exists():
                     spec = ALL_SPECS[name]
                     urdf = A1_URDF if spec.robot == "a1" else go2_path
                     _save(simulate_run(name, spec, urdf), path)
-                run = _load(path)  # the Go2-like file in this folder, wherever it was written
-                loaded[name] = run if run.robot == "a1" else replace(run, urdf_path=str(go2_path))
+            run = _load(path)  # the Go2-like file in this folder, wherever it was written
+            loaded[name] = run if run.robot == "a1" else replace(run, urdf_path=str(go2_path))
     return {name: loaded[name] for name in names}
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the file ``path`` (created if needed)."""
+    with path.open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
+
+
+def _simulate_one(cache_dir: Path, name: str) -> None:
+    """A worker of :func:`simulate_missing`: run ``name`` into the cache."""
+    contact_runs(cache_dir, (name,))
+
+
+def simulate_missing(cache_dir: Path, names: tuple[str, ...], workers: int = 2) -> None:
+    """Simulate the runs ``names`` missing from ``cache_dir``, ``workers`` at a time (one per core:
+    the long runs take minutes each)."""
+    digest = source_hash()
+    missing = [n for n in names if not (Path(cache_dir) / f"{n}-{digest}.npz").exists()]
+    if len(missing) > 1 and workers > 1:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(_simulate_one, [Path(cache_dir)] * len(missing), missing))
 
 
 def swing_durations(contacts: np.ndarray, step_s: float = STEP_S) -> np.ndarray:

@@ -61,12 +61,13 @@ def _score(name: str) -> list[tuple[str, Any]]:
 def scores() -> dict[str, list[tuple[str, Any]]]:
     """Every run's four scores, computed in one worker per core (the runs simulated first, once
     per machine)."""
-    from contact_runs import contact_runs
+    from contact_runs import simulate_missing
     from odometry_scoring import HEADER
 
     names = TUNED + HELD_OUT
-    contact_runs(family_folder(), names)
-    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+    workers = min(2, os.cpu_count() or 1)
+    simulate_missing(family_folder(), names, workers)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
         results = dict(zip(names, pool.map(_score, names)))
     print("\n" + HEADER)
     for group, members in (("tuned", TUNED), ("held out", HELD_OUT)):

@@ -48,10 +48,10 @@ def linear_kf(run: ContactRun, quadruped: Quadruped) -> Estimate:
     previous = 0.0
     for row, seconds in enumerate(run.stamps_s.tolist()):
         gravity = rotations[row].T @ np.array([0.0, 0.0, -STANDARD_GRAVITY])
-        imu = ImuSample(gravity, run.gyro[row], run.specific_force[row])
+        imu = ImuSample(gravity.tolist(), run.gyro[row].tolist(), run.specific_force[row].tolist())
         step = contacts.step(
             seconds,
-            (run.angles[row], run.rates[row], run.torques[row]),
+            (run.angles[row].tolist(), run.rates[row].tolist(), run.torques[row].tolist()),
             list(zip(feet[row].tolist(), speeds[row].tolist())),
             imu,
         )

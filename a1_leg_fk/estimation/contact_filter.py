@@ -151,6 +151,25 @@ class ContactFilter:
         return posterior
 
 
+def gait_phase_prior(names: Sequence[str], probabilities: Sequence[float]) -> list[float]:
+    """The filter's gait-phase prior from a message naming its feet (``foot_fk_node``'s
+    ``gait_phase``, the layout of its ``foot_contacts``): per leg in :data:`LEG_NAMES` order the
+    probability of stance given for it, NaN (no prior for that foot) where it is not named, is
+    named more than once, or its value is not within [0, 1]; all NaN when there are not as many
+    values as names.
+    """
+    prior = [math.nan] * LEGS
+    if len(names) != len(probabilities):
+        return prior
+    for leg, leg_name in enumerate(LEG_NAMES):
+        given = [
+            value for name, value in zip(names, probabilities, strict=True) if name == leg_name
+        ]
+        if len(given) == 1 and 0.0 <= given[0] <= 1.0:
+            prior[leg] = given[0]
+    return prior
+
+
 def _kinematic(
     model: ContactModel,
     feet: Sequence[FootMotion | None],

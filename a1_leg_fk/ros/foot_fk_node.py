@@ -41,6 +41,7 @@ from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
+from a1_leg_fk.ros.gait_phase import GaitPhaseInput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.markers import foot_markers
 from a1_leg_fk.ros.odometry_wire import imu_fields, imu_message_fields, imu_sample
@@ -82,6 +83,7 @@ class FootFkNode(Node):
         self._contacts: list[float] | None = None  # the latest contact probabilities
         self._forces: ForcePass | None = None
         self._output = FootOutput(self)
+        self._gait_phase = GaitPhaseInput(self, self._float("gait_phase_timeout_s"))
         self._apply_settings()
         self._set_frame_ids()
         self._build_forces()
@@ -128,6 +130,7 @@ class FootFkNode(Node):
         if not feet:
             return
         forces = None
+        now = time.monotonic()
         if self._forces is not None:  # every message: the contacts carry their state
             forces = self._forces.message(
                 fields.stamp_ns or self.get_clock().now().nanoseconds,
@@ -138,9 +141,9 @@ class FootFkNode(Node):
                 ),
                 leg_feet(feet),
                 self._imu,
+                self._gait_phase.current(now),
             )
             self._contacts = forces[2]
-        now = time.monotonic()
         if now - self._last_publish < self._min_publish_interval_s:
             return
         self._last_publish = now
@@ -242,7 +245,9 @@ class FootFkNode(Node):
             description_rejected=robot.topic_rejected,
             last_verify=self._last_verify,
             verify_disagreed=self._verify_disagreed,
-            forces=force_values(self._forces, self._forces_problem, self._imu),
+            forces=force_values(
+                self._forces, self._forces_problem, self._imu, self._gait_phase.status()
+            ),
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
@@ -327,6 +332,7 @@ class FootFkNode(Node):
         self._enable_verify = self._bool("enable_verify")
         self._verify_tolerance_m = self._float("verify_tolerance_m")
         self._preserialized_output = self._bool("preserialized_output")
+        self._gait_phase.timeout_s = self._float("gait_phase_timeout_s")
 
     def _set_frame_ids(self) -> None:
         self._output.configure(self._base_frame, self._preserialized_output)

@@ -104,7 +104,9 @@ class MomentumObserver:
             (statics.gravity_torques, dynamics.kinetic_terms, statics.solve_torques)
             for statics, dynamics in zip(self._statics, self._dynamics, strict=True)
         )
-        """Per leg its generated functions, looked up once (the per-sample path)."""
+        self._inertial_terms = tuple(dynamics.inertial_terms for dynamics in self._dynamics)
+        """Per leg its generated functions, looked up once (the per-sample path); without a gyro,
+        the base taken as not turning, ``inertial_terms`` stand in for ``kinetic_terms``."""
         self._states = [_LegState() for _ in range(LEGS)]
 
     def reset(self) -> None:
@@ -129,6 +131,7 @@ class MomentumObserver:
         gx, gy, gz = gravity
         fx, fy, fz = gravity if specific_force is None else [-f for f in specific_force]
         wx, wy, wz = NO_ROTATION if angular_velocity is None else angular_velocity
+        turning = angular_velocity is not None
         if not isfinite(gx + gy + gz + fx + fy + fz + wx + wy + wz):
             self.reset()
             return [[math.nan] * 3 for _ in range(LEGS)], [True] * LEGS, [False] * LEGS
@@ -148,8 +151,10 @@ class MomentumObserver:
             g0, g1, g2 = gravity_torques(c0, s0, c1, s1, c2, s2, fx, fy, fz)
             d0, d1, d2 = rates[first], rates[first + 1], rates[first + 2]
             if isfinite(d0 + d1 + d2):
-                k0, k1, k2, p0, p1, p2 = kinetic_terms(
-                    c0, s0, c1, s1, c2, s2, d0, d1, d2, wx, wy, wz
+                k0, k1, k2, p0, p1, p2 = (
+                    kinetic_terms(c0, s0, c1, s1, c2, s2, d0, d1, d2, wx, wy, wz)
+                    if turning
+                    else self._inertial_terms[slot](c0, s0, c1, s1, c2, s2, d0, d1, d2)
                 )
                 r0, r1, r2 = _update(
                     states[slot], stamp_s, (p0, p1, p2),

@@ -61,12 +61,17 @@ def robot(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
 
 
 def ours(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(2, 12): dT/dq and p of every leg, slot order, the base not turning."""
+    """(2, 12): dT/dq and p of every leg, slot order, the base not turning (the general
+    function at omega = 0, and the one generated for an inertial base: the same numbers, to
+    rounding)."""
     out = np.empty((2, 12))
     for slot, leg in enumerate(quadruped.legs):
         joints = slice(3 * slot, 3 * slot + 3)
         trig = np.stack([np.cos(angles[joints]), np.sin(angles[joints])], axis=1).ravel()
-        terms = LegDynamics(quadruped.model, leg).kinetic_terms(*trig, *rates[joints], 0, 0, 0)
+        dynamics = LegDynamics(quadruped.model, leg)
+        terms = dynamics.kinetic_terms(*trig, *rates[joints], 0.0, 0.0, 0.0)
+        inertial = dynamics.inertial_terms(*trig, *rates[joints])
+        assert np.allclose(inertial, terms, rtol=1e-14, atol=1e-14)
         out[0, joints], out[1, joints] = terms[:3], terms[3:]
     return out
 
@@ -116,3 +121,4 @@ def test_generated_code_drops_vanishing_terms() -> None:
         floats = leg.kinetic_terms(*[float(t[row]) for t in trig], *rates[row], 0.1, -0.2, 0.3)
         assert np.array_equal(batch[:, row], floats)
     assert leg.source.count("\n") < 400
+    assert leg.inertial_source.count("\n") < leg.source.count("\n") / 1.5

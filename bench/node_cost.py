@@ -1,25 +1,27 @@
 """The node's CPU per input against the raw floor's, side by side: both answer the same JointState
 stream at the same time, so whatever else the machine runs weighs on both alike.
 
-Run: ``.venv/bin/python bench/node_cost.py`` (about 2 min; ``--rounds N``, ``--phase S``).
-On a shared machine, phases run one after the other (``bench/node_throughput.py``: the node's,
-then the floor's) see different loads from other processes, and their CPU ratio wanders by
-+-20 %. Here one load generator (``bench/throughput_roles.py generator``, 1 kHz) publishes
-``/joint_states`` and two processes take every message at once: ``foot_fk_node`` (namespace
-``/node``) and the raw floor (``throughput_roles.py baseline``, namespace ``/floor``: the stamp
-read from the bytes, the same pre-serialized messages out, no decoding, no rules, no FK). Each
-has its own receiver (``throughput_roles.py receiver``) taking all of its outputs, as a reliable
-reader would. Each round runs a phase without efforts (the node publishes the 4 feet, their 4
-velocities and ``foot_contacts``; the floor the same 9 messages) and one with efforts (also the 4
-``foot_forces``; the node runs the momentum observer and the filter on forces). Per phase: each
-process's CPU (utime + stime, /proc/<pid>/stat), the inputs it answered (``foot_positions/FR``
-stamps its receiver got in the phase's window), and the CPU per answered input; the ratio is the
+Run: ``.venv/bin/python bench/node_cost.py`` (about 2 min; ``--rounds N``, ``--phase S``). On a
+shared machine, phases run one after the other (``bench/node_throughput.py``: the node's, then the
+floor's) see different loads from other processes, and their CPU ratio wanders by +-20 %. Here one
+load generator (``bench/throughput_roles.py generator``, 1 kHz) publishes ``/joint_states`` and two
+processes take every message at once: ``foot_fk_node`` (namespace ``/node``) and the raw floor
+(``throughput_roles.py baseline``, namespace ``/floor``: the stamp read from the bytes, the same
+pre-serialized messages out, no decoding, no rules, no FK). Each has its own receiver
+(``throughput_roles.py receiver``) taking all of its outputs, as a reliable reader would
+(``--floor-raw``: the floor publishes as the node does, through
+``a1_leg_fk.ros.serialized_output.raw_publish``, not ``Publisher.publish``). Each round runs a
+phase without efforts (the node publishes the 4 feet, their 4 velocities and ``foot_contacts``; the
+floor the same 9 messages) and one with efforts (also the 4 ``foot_forces``; the node runs the
+momentum observer and the filter on forces). Per phase: each process's CPU (utime + stime,
+/proc/<pid>/stat), the inputs it answered (its ``foot_positions/FR`` messages in the phase's stamp
+window, counted by their DDS sequence numbers), and the CPU per answered input; the ratio is the
 node's per-input CPU over the floor's. The summary gives, per kind of phase, the ratios of every
 round (min, median, max): the spread is the figure, not one run.
 
-Every process runs on one ROS_DOMAIN_ID of its own (``--domain``, else $BENCH_ROS_DOMAIN_ID, else
-1 + pid % 100) with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; all are stopped at the end, on
-Ctrl-C and on SIGTERM.
+Every process runs on one ROS_DOMAIN_ID of its own (``--domain``, else $BENCH_ROS_DOMAIN_ID, else 1
++ pid % 100) with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST; all are stopped at the end, on Ctrl-C
+and on SIGTERM.
 """
 
 from __future__ import annotations
@@ -47,6 +49,12 @@ def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", type=int, default=5, help="rounds of both phases (5)")
     parser.add_argument("--phase", type=float, default=10.0, help="seconds per phase (10)")
+    parser.add_argument(
+        "--floor-raw",
+        action="store_true",
+        help="the floor publishes as the node does (raw_publish, without rclpy's per-call "
+        "wrapper), not with Publisher.publish",
+    )
     parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
     parser.add_argument(
         "--package-root",
@@ -106,9 +114,13 @@ def run(args: argparse.Namespace, log_dir: Path, children: list[Child]) -> list[
     for child in (*receivers.values(), generator):
         child.wait_event("up", 30)
     time.sleep(0.5)
+    floor_options = ["--raw-publish"] if args.floor_raw else []
     under_test = {
         "node": start("node", [python, "-m", "a1_leg_fk.ros.foot_fk_node", *in_namespace("node")]),
-        "floor": start("floor", [python, roles, "baseline", "node", *in_namespace("floor")]),
+        "floor": start(
+            "floor",
+            [python, roles, "baseline", "node", *floor_options, *in_namespace("floor")],
+        ),
     }
     for receiver in receivers.values():
         receiver.wait_event("ready", 60)
@@ -202,7 +214,8 @@ def main() -> int:
     print(machine())
     print(
         f"node_cost: {args.rounds} rounds of 2 x {args.phase:.0f} s at {RATE_HZ:.0f} Hz on "
-        f"ROS_DOMAIN_ID={args.domain}, node and raw floor side by side"
+        f"ROS_DOMAIN_ID={args.domain}, node and raw floor side by side (the floor publishing "
+        f"{'as the node does, raw_publish' if args.floor_raw else 'with Publisher.publish'})"
     )
     failed = False
     try:

@@ -14,7 +14,9 @@ interleaved runs:
   contact filter);
 - ``publish``: the node's outputs (``FootOutput.feet`` and ``.forces``: 9 messages, 13 with
   efforts);
-- ``callback``: the whole ``_on_joint_state``; ``floor``: the floor's whole callback.
+- ``callback``: the whole ``_on_joint_state``; ``floor``: the floor's whole callback
+  (``throughput_roles.floor_callback``, publishing with ``Publisher.publish``), and the same
+  publishing as the node does (``raw_publish``: without rclpy's per-call wrapper).
 
 The callback's excess over the floor is the node's own work; over DDS each microsecond of it
 costs more (the process wakes with cold caches at 1 kHz): ``bench/node_cost.py`` measures that.
@@ -24,7 +26,6 @@ from __future__ import annotations
 
 import math
 import os
-import struct
 from collections.abc import Callable
 
 from common import machine, median_seconds_per_call, shared
@@ -34,23 +35,12 @@ os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 import rclpy  # noqa: E402 (after the domain)
-from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
-from throughput_roles import _poses  # noqa: E402
+from throughput_roles import _poses, floor_callback  # noqa: E402
 
-from a1_leg_fk.model.legs import LEG_NAMES  # noqa: E402
-from a1_leg_fk.recording.bag_writer import (  # noqa: E402
-    contacts_bytes,
-    contacts_layout,
-    frame_bytes,
-    wrench_bytes,
-)
 from a1_leg_fk.recording.joint_state_wire import doubles  # noqa: E402
 from a1_leg_fk.ros.foot_fk_node import FootFkNode  # noqa: E402
-from a1_leg_fk.ros.glue import OUTPUT_QOS  # noqa: E402
-from a1_leg_fk.ros.serialized_output import SerializedStamped  # noqa: E402
 from a1_leg_fk.tracking import leg_feet  # noqa: E402
 
 MESSAGES = 250
@@ -63,37 +53,6 @@ def serialized_stream(efforts: bool) -> list[bytes]:
         msg.header.stamp.sec, msg.header.stamp.nanosec = 1000, index * 1_000_000
         stream.append(serialize_message(msg))
     return stream
-
-
-def floor_callback(node: Node, efforts: bool) -> Callable[[bytes], None]:
-    """The raw floor's callback (``throughput_roles.py baseline``) on publishers of ``node``."""
-    writer = SerializedStamped("trunk")
-    publishers = [
-        node.create_publisher(kind, f"floor/{prefix}/{leg}", OUTPUT_QOS)
-        for kind, prefix in ((PointStamped, "positions"), (Vector3Stamped, "velocities"))
-        for leg in LEG_NAMES
-    ]
-    forces = [
-        node.create_publisher(WrenchStamped, f"floor/forces/{leg}", OUTPUT_QOS)
-        for leg in LEG_NAMES
-    ]
-    contacts = node.create_publisher(JointState, "floor/contacts", OUTPUT_QOS)
-    head, layout = frame_bytes("trunk"), contacts_layout("trunk")
-    stamp = struct.Struct("<iI").unpack_from
-    values, force = (0.1, 0.2, 0.3), (1.0, 2.0, 30.0)
-    probabilities, normal = (1.0, 0.0, 0.0, 1.0), (30.0, 0.0, 0.0, 30.0)
-
-    def on_joint_state(raw: bytes) -> None:
-        sec, nanosec = stamp(raw, 4)
-        serialized = writer.serialized
-        for publisher in publishers:
-            publisher.publish(serialized(sec, nanosec, values))
-        if efforts:
-            for publisher in forces:
-                publisher.publish(wrench_bytes(head, sec, nanosec, force))
-        contacts.publish(contacts_bytes(layout, sec, nanosec, probabilities, normal))
-
-    return on_joint_state
 
 
 def cycling(call: Callable[[bytes], object], stream: list[bytes]) -> Callable[[], None]:
@@ -163,21 +122,28 @@ def main() -> None:
     try:
         for efforts, (node, staged) in zip((False, True), (nodes[:2], nodes[2:]), strict=True):
             stream = serialized_stream(efforts)
+            prefix = "efforts/" if efforts else "plain/"
+            floors = {
+                name: floor_callback(floor_node, [efforts], raw, f"{prefix}{name}/")
+                for name, raw in (("floor", False), ("floor_raw", True))
+            }
             timed: dict[str, Callable[[], object]] = {
                 "callback": cycling(node._on_joint_state, stream),
                 **stages(staged, stream),
-                "floor": cycling(floor_callback(floor_node, efforts), stream),
+                "floor": cycling(floors["floor"], stream),
+                "floor, published raw": cycling(floors["floor_raw"], stream),
             }
             runs = median_seconds_per_call(timed)
             what = "with efforts" if efforts else "without efforts"
             print(f"\n  one JointState {what:<16} {'us':>8}")
             for name, seconds in runs.items():
                 print(f"  {name:<31} {seconds * 1e6:8.1f}")
-            excess = runs["callback"] - runs["floor"]
-            print(
-                f"  the node's own work: {excess * 1e6:.1f} us per message "
-                f"({runs['callback'] / runs['floor']:.2f}x the floor's callback)"
-            )
+            for floor in ("floor", "floor, published raw"):
+                excess = runs["callback"] - runs[floor]
+                print(
+                    f"  the node's own work beside the {floor}: {excess * 1e6:.1f} us per "
+                    f"message ({runs['callback'] / runs[floor]:.2f}x its callback)"
+                )
     finally:
         for each in [*nodes, floor_node]:
             each.destroy_node()

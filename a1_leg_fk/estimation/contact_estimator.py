@@ -147,7 +147,9 @@ class ContactEstimator:
         norm = math.sqrt(gx * gx + gy * gy + gz * gz)
         down: Vector = (gx / norm, gy / norm, gz / norm)
         forces, missing, singular = self._forces(stamp_s, joints, gravity, imu)
-        normals = [normal_force(force, down) for force in forces]
+        normals = [math.nan] * LEGS  # none without efforts
+        if efforts is not None:
+            normals = [normal_force(force, down) for force in forces]
         if self.contact_rule == THRESHOLD:
             probabilities = self.rule.update(normals) if efforts is not None else [math.nan] * LEGS
             return ContactStep(forces, normals, probabilities, missing, singular)

@@ -134,8 +134,7 @@ class ContactFilter:
         forces = NO_FORCES if normal_forces is None else normal_forces
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # falling, no foot stands however low and still it is: the kinematics' stance is weak
-        falling = common < -1.0
-        kinematic = _kinematic(model, feet, omega, [falling or f for f in forced])
+        kinematic = _kinematic(model, feet, omega, forced, common < -1.0)
         posterior = []
         for leg, previous in enumerate(self.probabilities):
             odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + kinematic[leg]
@@ -175,15 +174,22 @@ def _kinematic(
     feet: Sequence[FootMotion | None],
     omega: Sequence[float],
     forced: Sequence[bool],
+    falling: bool,
 ) -> list[float]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
-    the feet whose force is evidence too, and for all while the base falls (``forced``).
+    the feet whose force is evidence too (``forced``), and for all while the base is
+    ``falling``.
     """
-    lowest = max((foot.depth for foot in feet if foot is not None), default=math.nan)
+    lowest = math.nan  # the deepest contact point, as max() finds it
+    known = False
+    for foot in feet:
+        if foot is not None and (not known or foot.depth > lowest):
+            lowest, known = foot.depth, True
     if not isfinite(lowest):
         return [0.0] * LEGS
     wx, wy, wz = omega
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
+    stance_cap = model.max_kinematic_stance
     speed_half, speed_scale = model.speed_half_mps, model.speed_scale_mps
     velocities: list[Vector | None] = [None] * LEGS
     heights = [math.nan] * LEGS
@@ -200,7 +206,7 @@ def _kinematic(
                 low, sx, sy, sz = low + 1, sx + vx, sy + vy, sz + vz
     out = []
     for leg in range(LEGS):
-        cap = model.max_kinematic_stance if forced[leg] else limit
+        cap = stance_cap if falling or forced[leg] else limit
         height, velocity = heights[leg], velocities[leg]
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)

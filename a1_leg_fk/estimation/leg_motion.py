@@ -159,7 +159,7 @@ class LegMotion:
         down: Vector,
     ) -> Vector:
         """``e`` of :class:`FootMotion`: ``-(J q_dot + w_calf x c)`` [m/s], base frame."""
-        ox, oy, oz = self.calf_rate(leg, angles, rates)
+        ox, oy, oz = self._calf_rates[leg](angles[0], angles[1], rates[0], rates[1], rates[2])
         radius = self.radii[leg]
         cx, cy, cz = radius * down[0], radius * down[1], radius * down[2]
         return (

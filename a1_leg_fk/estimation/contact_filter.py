@@ -210,7 +210,8 @@ def _kinematic(
         height, velocity = heights[leg], velocities[leg]
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
-            evidence = _clip((half - height) / scale, limit, cap)
+            x = (half - height) / scale  # _clip written out: per foot and sample
+            evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         if velocity is not None:
             mine = height < half  # its own velocity is in the sums: leave it out
             others = low - mine
@@ -220,7 +221,9 @@ def _kinematic(
                 dy = vy - (sy - mine * vy) / others
                 dz = vz - (sz - mine * vz) / others
                 speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
-                evidence += _clip((speed_half - speed) / speed_scale, limit, cap)
+                x = (speed_half - speed) / speed_scale  # _clip, written out too
+                if x == x:  # noqa: PLR0124 (NaN: no evidence)
+                    evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         out.append(evidence)
     return out
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from math import cos, isfinite, sin
+from math import cos, exp, isfinite, sin
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -59,7 +59,6 @@ MAX_GAP_S = 0.05
 """[s] A longer gap between joint states restarts the observers from the quasi-static estimate."""
 LEGS = len(LEG_NAMES)
 NO_ROTATION = (0.0, 0.0, 0.0)
-Vector = tuple[float, float, float]
 
 
 class _LegState:
@@ -156,10 +155,22 @@ class MomentumObserver:
                     if turning
                     else self._inertial_terms[slot](c0, s0, c1, s1, c2, s2, d0, d1, d2)
                 )
-                r0, r1, r2 = _update(
-                    states[slot], stamp_s, (p0, p1, p2),
-                    (t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2), gain, max_gap,
-                )  # fmt: skip
+                state = states[slot]
+                r0, r1, r2 = state.residual
+                dt = stamp_s - state.stamp_s
+                if not dt <= 0.0:  # else the same stamp, or older: hold (NaN: the first)
+                    e0, e1, e2 = t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2  # s = tau - beta
+                    if dt <= max_gap:  # NaN (the first) is neither
+                        keep = exp(-gain * dt)
+                        m0, m1, m2 = state.momentum
+                        change = (1.0 - keep) / dt
+                        r0 = keep * r0 + change * (p0 - m0 - dt * e0)
+                        r1 = keep * r1 + change * (p1 - m1 - dt * e1)
+                        r2 = keep * r2 + change * (p2 - m2 - dt * e2)
+                    else:  # quasi-static: dp/dt = 0
+                        r0, r1, r2 = -e0, -e1, -e2
+                    state.stamp_s, state.momentum = stamp_s, (p0, p1, p2)
+                    state.residual = (r0, r1, r2)
                 if not isfinite(r0 + r1 + r2):  # absurd values: start again
                     states[slot] = _LegState()
             else:  # no rates: the quasi-static estimate
@@ -207,33 +218,6 @@ class MomentumObserver:
             )
             forces[row] = out
         return ForceEstimate(forces, missing, singular)
-
-
-def _update(
-    state: _LegState, stamp_s: float, momentum: Vector, driving: Vector, gain: float,
-    max_gap_s: float,
-) -> Vector:  # fmt: skip
-    """The leg's residual [N m] after a joint state at ``stamp_s`` [s] with momentum ``p`` and
-    ``s = tau - beta`` (see the module text).
-    """
-    dt = stamp_s - state.stamp_s
-    if dt <= 0.0:  # the same stamp, or older: hold
-        return state.residual
-    s0, s1, s2 = driving
-    if dt <= max_gap_s:  # NaN (the first) is neither
-        keep = math.exp(-gain * dt)
-        r0, r1, r2 = state.residual
-        (p0, p1, p2), (q0, q1, q2) = momentum, state.momentum
-        change = (1.0 - keep) / dt
-        state.residual = (
-            keep * r0 + change * (p0 - q0 - dt * s0),
-            keep * r1 + change * (p1 - q1 - dt * s1),
-            keep * r2 + change * (p2 - q2 - dt * s2),
-        )
-    else:  # quasi-static: dp/dt = 0
-        state.residual = (-s0, -s1, -s2)
-    state.stamp_s, state.momentum = stamp_s, momentum
-    return state.residual
 
 
 _WHAT = ("angles", "rates", "efforts")

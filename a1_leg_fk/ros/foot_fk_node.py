@@ -7,7 +7,9 @@ message at a time) and :mod:`a1_leg_fk.verify` (the ``verify_fk`` service); what
 message is :mod:`a1_leg_fk.ros.foot_output`'s. All topic and service names are relative, so
 ``__ns`` and remaps work; every parameter is declared with a description
 (:mod:`a1_leg_fk.ros.foot_fk_parameters`). Gravity's direction for the forces comes from the
-latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z.
+latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z; a
+gait scheduler's optional ``gait_phase`` is the contact filter's prior
+(:mod:`a1_leg_fk.ros.gait_phase`).
 
 The joint states are subscribed raw (serialized) and read by the bag tools' decoder
 (:mod:`a1_leg_fk.recording.joint_state_wire`): no message object is built per JointState.

@@ -4,7 +4,8 @@
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
 #   make lint       ruff check, ruff format --check and mypy (config: ruff.toml, setup.cfg)
 #   make test       the whole test suite (node tests pick their own ROS domain)
-#   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, contact_speed.py, node_throughput.py, odometry_throughput.py, bag_speed.py
+#   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, contact_speed.py, node_stages.py,
+#                   node_cost.py, node_throughput.py, odometry_throughput.py, bag_speed.py
 #   make soak       bench/soak.py
 #   make fuzz       bench/fuzz_recordings.py: 4000 damaged recordings through bag, gait and odom
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
@@ -93,7 +94,8 @@ test: venv
 	  --session-timeout=$(TEST_SESSION_TIMEOUT) $(PYTEST_ARGS) test
 
 BENCH_SCRIPTS := bench/fk_speed.py bench/ik_speed.py bench/force_speed.py bench/contact_speed.py \
-  bench/node_throughput.py bench/odometry_throughput.py bench/bag_speed.py
+  bench/node_stages.py bench/node_cost.py bench/node_throughput.py bench/odometry_throughput.py \
+  bench/bag_speed.py
 
 bench: venv
 	@for script in $(BENCH_SCRIPTS); do echo "== $$script"; $(BIN)/python $$script; done

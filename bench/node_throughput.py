@@ -53,6 +53,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -580,13 +581,7 @@ def parse_args() -> argparse.Namespace:
         help="the receiver does not subscribe to foot_forces/<leg> and foot_contacts (what the "
         "forces cost without their DDS delivery)",
     )
-    parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
-    parser.add_argument(
-        "--package-root",
-        type=Path,
-        default=ROOT,
-        help="directory holding the a1_leg_fk to run (e.g. a saved copy, for before/after)",
-    )
+    add_process_arguments(parser)
     parser.add_argument(
         "--discovery-range",
         default="LOCALHOST",
@@ -603,9 +598,38 @@ def parse_args() -> argparse.Namespace:
         args.baseline_duration = args.baseline_duration or 2.0
     args.verify_duration = args.verify_duration or max(2.0, args.duration / 3)
     args.baseline_duration = args.baseline_duration or max(2.0, args.duration / 3)
+    choose_domain(args)
+    return args
+
+
+def add_process_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--domain`` and ``--package-root``, the processes' ROS domain and code."""
+    parser.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (0-101)")
+    parser.add_argument(
+        "--package-root",
+        type=Path,
+        default=ROOT,
+        help="directory holding the a1_leg_fk to run (e.g. a saved copy, for before/after)",
+    )
+
+
+def choose_domain(args: argparse.Namespace) -> None:
+    """``args.domain``, unless given: $BENCH_ROS_DOMAIN_ID, else 1 + pid % 100."""
     if args.domain is None:
         args.domain = int(os.environ.get("BENCH_ROS_DOMAIN_ID", 1 + os.getpid() % 100))
-    return args
+
+
+def process_env(args: argparse.Namespace, discovery_range: str = "LOCALHOST") -> dict[str, str]:
+    """The environment of every process: the domain, the discovery range, the package root."""
+    return dict(
+        os.environ,
+        ROS_DOMAIN_ID=str(args.domain),
+        ROS_AUTOMATIC_DISCOVERY_RANGE=discovery_range,
+        PYTHONUNBUFFERED="1",
+        PYTHONPATH=os.pathsep.join(
+            filter(None, [str(args.package_root), os.environ.get("PYTHONPATH")])
+        ),
+    )
 
 
 def main() -> int:
@@ -628,51 +652,57 @@ def main() -> int:
     base_phases += (
         [Phase(f"{r:.0f} Hz", r, args.step, ramp=True) for r in rates] if base_phases else []
     )
-    env = dict(
-        os.environ,
-        ROS_DOMAIN_ID=str(args.domain),
-        ROS_AUTOMATIC_DISCOVERY_RANGE=args.discovery_range,
-        PYTHONUNBUFFERED="1",
-        PYTHONPATH=os.pathsep.join(
-            filter(None, [str(args.package_root), os.environ.get("PYTHONPATH")])
-        ),
-    )
+    env = process_env(args, args.discovery_range)
     args.log_dir = Path(tempfile.mkdtemp(prefix="a1_leg_fk-bench-"))
     children: list[Child] = []
-
-    def on_term(_signum: int, _frame: object) -> None:
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGTERM, on_term)
     total = sum(p.duration for p in node_phases + base_phases)
     print(
         f"node_throughput: about {total + 15 + 1.4 * len(rates) * 2:.0f} s on "
         f"ROS_DOMAIN_ID={args.domain}",
         flush=True,
     )
-    node = base = None
-    keep_logs = False
-    try:
+
+    def work() -> None:
         node = Scenario("node", args, env, args.log_dir, children)
         node.run(node_phases)
+        base = None
         if base_phases:
             base = Scenario("baseline", args, env, args.log_dir, children)
             base.run(base_phases)
         print_report(node, base, node_phases, base_phases, args)
+
+    return run_children("node_throughput", work, children, args.log_dir, args.keep_logs)
+
+
+def run_children(
+    name: str, work: Callable[[], None], children: list[Child], log_dir: Path, keep_logs: bool
+) -> int:
+    """Run ``work`` (which starts ``children``); Ctrl-C, SIGTERM or a child that fails end it
+    with a line; every child is stopped in the end, and ``log_dir`` removed unless it failed or
+    ``keep_logs``. Exit status 0, or 1 when it failed.
+    """
+
+    def on_term(_signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, on_term)
+    failed = False
+    try:
+        work()
     except KeyboardInterrupt:
-        print("\nnode_throughput: interrupted; stopping every process", file=sys.stderr)
-        keep_logs = True
+        print(f"\n{name}: interrupted; stopping every process", file=sys.stderr)
+        failed = True
     except (TimeoutError, RuntimeError) as error:
-        print(f"node_throughput: {error}", file=sys.stderr)
-        keep_logs = True
+        print(f"{name}: {error}", file=sys.stderr)
+        failed = True
     finally:
         for child in reversed(children):
             child.stop(signal.SIGINT, timeout_s=3)
-        if keep_logs or args.keep_logs:
-            print(f"logs and records: {args.log_dir}")
+        if failed or keep_logs:
+            print(f"logs and records: {log_dir}")
         else:
-            shutil.rmtree(args.log_dir, ignore_errors=True)
-    return 0 if not keep_logs else 1
+            shutil.rmtree(log_dir, ignore_errors=True)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -45,6 +45,7 @@ import struct
 import sys
 import threading
 import time
+from collections.abc import Callable
 
 import rclpy
 from common import shared
@@ -300,53 +301,73 @@ def receiver(output: str, force_reader: bool = True) -> None:
 # --- bare echo baseline ------------------------------------------------------------------------
 
 
-def baseline(executor_name: str) -> None:
-    """The floor: raw JointState in, the stamp read from its bytes, nine pre-serialized messages
-    out (the node's own output writer: the feet, their velocities, foot_contacts), and in a
-    phase with efforts the four foot_forces too; no decoding, no rules, no FK."""
+def floor_callback(
+    node: Node, forces: list[bool], raw: bool = False, prefix: str = ""
+) -> Callable[[bytes], None]:
+    """The raw floor's JointState callback on publishers of ``node`` (topics under ``prefix``):
+    the stamp read from the bytes, nine pre-serialized messages out (the node's own output
+    writer: the feet, their velocities, foot_contacts), and while ``forces[0]`` the four
+    foot_forces too; no decoding, no rules, no FK. Published with ``Publisher.publish``, or
+    (``raw``) as the node publishes them, ``a1_leg_fk.ros.serialized_output.raw_publish``."""
     from a1_leg_fk.recording.bag_writer import (
         contacts_bytes,
         contacts_layout,
         frame_bytes,
         wrench_bytes,
     )
-    from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+    from a1_leg_fk.ros.glue import OUTPUT_QOS
     from a1_leg_fk.ros.serialized_output import SerializedStamped
 
-    _init()
-    control = Control()
-    node = Node("bench_raw_floor")
     writer = SerializedStamped("trunk")
     publishers = [
-        node.create_publisher(PointStamped, f"foot_positions/{leg}", OUTPUT_QOS)
-        for leg in shared.LEGS
-    ] + [
-        node.create_publisher(Vector3Stamped, f"foot_velocities/{leg}", OUTPUT_QOS)
+        node.create_publisher(kind, f"{prefix}{topic}/{leg}", OUTPUT_QOS)
+        for kind, topic in ((PointStamped, "foot_positions"), (Vector3Stamped, "foot_velocities"))
         for leg in shared.LEGS
     ]
     force_publishers = [
-        node.create_publisher(WrenchStamped, f"foot_forces/{leg}", OUTPUT_QOS)
+        node.create_publisher(WrenchStamped, f"{prefix}foot_forces/{leg}", OUTPUT_QOS)
         for leg in shared.LEGS
     ]
-    contacts_publisher = node.create_publisher(JointState, "foot_contacts", OUTPUT_QOS)
+    contacts_publisher = node.create_publisher(JointState, f"{prefix}foot_contacts", OUTPUT_QOS)
     head, layout = frame_bytes("trunk"), contacts_layout("trunk")
     stamp = struct.Struct("<iI").unpack_from
     values, force = (0.1, 0.2, 0.3), (1.0, 2.0, 30.0)
     probabilities, normal = (1.0, 0.0, 0.0, 1.0), (30.0, 0.0, 0.0, 30.0)
-    forces = [False]  # set per phase: the inputs carry efforts
+    if raw:
+        from a1_leg_fk.ros.serialized_output import raw_publish
 
-    def on_joint_state(raw: bytes) -> None:
-        sec, nanosec = stamp(raw, 4)
+        sends = [raw_publish(publisher) for publisher in publishers]
+        force_sends = [raw_publish(publisher) for publisher in force_publishers]
+        contacts_send = raw_publish(contacts_publisher)
+    else:
+        sends = [publisher.publish for publisher in publishers]
+        force_sends = [publisher.publish for publisher in force_publishers]
+        contacts_send = contacts_publisher.publish
+
+    def on_joint_state(data: bytes) -> None:
+        sec, nanosec = stamp(data, 4)
         serialized = writer.serialized
-        for publisher in publishers:
-            publisher.publish(serialized(sec, nanosec, values))
+        for send in sends:
+            send(serialized(sec, nanosec, values))
         if forces[0]:
-            for publisher in force_publishers:
-                publisher.publish(wrench_bytes(head, sec, nanosec, force))
-        contacts_publisher.publish(contacts_bytes(layout, sec, nanosec, probabilities, normal))
+            for send in force_sends:
+                send(wrench_bytes(head, sec, nanosec, force))
+        contacts_send(contacts_bytes(layout, sec, nanosec, probabilities, normal))
 
+    return on_joint_state
+
+
+def baseline(executor_name: str, raw: bool = False) -> None:
+    """The floor (:func:`floor_callback`; ``raw``: ``--raw-publish``) on ``joint_states``, with
+    the node's QoS and executor; a phase command says whether the inputs carry efforts."""
+    from a1_leg_fk.ros.glue import JOINT_STATES_QOS
+
+    _init()
+    control = Control()
+    node = Node("bench_raw_floor")
+    forces = [False]  # set per phase: the inputs carry efforts
     node.create_subscription(
-        JointState, "joint_states", on_joint_state, JOINT_STATES_QOS, raw=True
+        JointState, "joint_states", floor_callback(node, forces, raw), JOINT_STATES_QOS, raw=True
     )
     executor = make_executor(executor_name)
     executor.add_node(node)
@@ -449,7 +470,7 @@ if __name__ == "__main__":
     elif role == "receiver":
         receiver(arguments[0], "--no-force-reader" not in arguments)
     elif role == "baseline":
-        baseline(arguments[0] if arguments else "node")
+        baseline(arguments[0] if arguments else "node", "--raw-publish" in arguments)
     elif role == "verifier":
         verifier(float(arguments[0]) if arguments else 20.0)
     elif role == "node":

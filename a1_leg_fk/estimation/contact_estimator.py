@@ -20,13 +20,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
-from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
-from a1_leg_fk.estimation.momentum_observer import MomentumObserver
+from a1_leg_fk.estimation.leg_motion import LegMotion
+from a1_leg_fk.estimation.momentum_observer import NO_ROTATION, MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.kinematics.quadruped import Quadruped
@@ -72,8 +73,7 @@ class EvidenceCounts:
         )
 
 
-@dataclass(frozen=True)
-class ContactStep:
+class ContactStep(NamedTuple):
     """One joint state's result: 4 forces [N, base frame] (NaN: none), 4 normal forces [N]
     along minus gravity, 4 probabilities of stance, and per leg whether its values were missing
     and whether its Jacobian was near singular.
@@ -142,15 +142,24 @@ class ContactEstimator:
         stance per foot (None: none), evidence for the filter.
         """
         angles, rates, efforts = joints
-        gravity = tuple(imu.gravity) if imu.gravity is not None else LEVEL_GRAVITY
-        norm = math.sqrt(sum(g * g for g in gravity))
-        down: Vector = (gravity[0] / norm, gravity[1] / norm, gravity[2] / norm)
+        gravity = LEVEL_GRAVITY if imu.gravity is None else imu.gravity
+        gx, gy, gz = gravity
+        norm = math.sqrt(gx * gx + gy * gy + gz * gz)
+        down: Vector = (gx / norm, gy / norm, gz / norm)
         forces, missing, singular = self._forces(stamp_s, joints, gravity, imu)
-        normals = [normal_force(force, down) for force in forces]
+        normals = [math.nan] * LEGS  # none without efforts
+        if efforts is not None:
+            normals = [normal_force(force, down) for force in forces]
         if self.contact_rule == THRESHOLD:
             probabilities = self.rule.update(normals) if efforts is not None else [math.nan] * LEGS
             return ContactStep(forces, normals, probabilities, missing, singular)
-        motions = [self._motion(leg, angles, rates, foot, down) for leg, foot in enumerate(feet)]
+        foot, n = self.motion.foot, JOINTS_PER_LEG
+        motions = [
+            None if leg_foot is None or not _finite(leg_foot[0])
+            else foot(leg, angles[n * leg : n * leg + n], rates[n * leg : n * leg + n],
+                      leg_foot[0], leg_foot[1], down)
+            for leg, leg_foot in enumerate(feet)
+        ]  # fmt: skip
         dt = stamp_s - self._stamp_s
         self._stamp_s = stamp_s if not dt < 0.0 else self._stamp_s
         with_force = efforts is not None and any(n == n for n in normals)  # noqa: PLR0124 (NaN)
@@ -161,7 +170,7 @@ class ContactEstimator:
         probabilities = self.filter.update(
             dt if math.isfinite(dt) else 0.0,
             motions,
-            (imu.angular_velocity or (0.0, 0.0, 0.0), imu.specific_force),
+            (imu.angular_velocity or NO_ROTATION, imu.specific_force),
             normals if with_force else None,
             phase_prior,
         )
@@ -184,19 +193,11 @@ class ContactEstimator:
             stamp_s, (angles, rates, efforts), gravity, imu.specific_force, imu.angular_velocity
         )
 
-    def _motion(
-        self,
-        leg: int,
-        angles: Sequence[float],
-        rates: Sequence[float],
-        foot: tuple[Sequence[float], Sequence[float]] | None,
-        down: Vector,
-    ) -> FootMotion | None:
-        """The filter's view of one foot (None when its position is unknown)."""
-        if foot is None or not all(math.isfinite(v) for v in foot[0]):
-            return None
-        joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
-        return self.motion.foot(leg, angles[joints], rates[joints], foot[0], foot[1], down)
+
+def _finite(position: Sequence[float]) -> bool:
+    """True when a foot's position [m] is known: all three coordinates finite."""
+    isfinite = math.isfinite
+    return isfinite(position[0]) and isfinite(position[1]) and isfinite(position[2])
 
 
 def leg_length_m(quadruped: Quadruped) -> float:

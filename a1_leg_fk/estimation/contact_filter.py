@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from math import exp, isfinite, sqrt
 
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -40,6 +41,9 @@ from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 LEGS = len(LEG_NAMES)
+NO_FORCES = (math.nan,) * LEGS
+LOW, HIGH = 2e-9, 1.0 - 2e-9
+"""The probabilities whose log-odds the filter takes are kept within these."""
 Vector = tuple[float, float, float]
 
 
@@ -116,35 +120,53 @@ class ContactFilter:
         stance (None: no prior).
         """
         model = self.model
-        switch = 1.0 - math.exp(-max(dt_s, 0.0) / model.switch_time_s)
+        limit = model.max_log_ratio
+        switch = 1.0 - exp(-max(dt_s, 0.0) / model.switch_time_s)
         omega, specific_force = imu
         common = 0.0
         if specific_force is not None:
-            felt = math.sqrt(sum(f * f for f in specific_force))
-            if math.isfinite(felt):
+            fx, fy, fz = specific_force
+            felt = sqrt(fx * fx + fy * fy + fz * fz)
+            if isfinite(felt):
                 common = min(
-                    0.0, self._clip((felt - model.fall_half_mps2) / model.fall_scale_mps2)
+                    0.0, _clip((felt - model.fall_half_mps2) / model.fall_scale_mps2, limit, limit)
                 )
-        forced = [normal_forces is not None and math.isfinite(normal_forces[leg])
-                  for leg in range(LEGS)]  # fmt: skip
+        forces = NO_FORCES if normal_forces is None else normal_forces
+        forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # falling, no foot stands however low and still it is: the kinematics' stance is weak
-        kinematic = _kinematic(model, feet, omega, [common < -1.0 or f for f in forced])
+        kinematic = _kinematic(model, feet, omega, forced, common < -1.0)
         posterior = []
         for leg, previous in enumerate(self.probabilities):
             odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + kinematic[leg]
-            if not forced[leg]:  # free fall stands in for a foot's own force
+            if forced[leg]:
+                force = (forces[leg] - model.force_half_n) / model.force_scale_n
+                odds += _clip(force, limit, limit)
+            else:  # free fall stands in for a foot's own force
                 odds += common
-            if normal_forces is not None and forced[leg]:
-                odds += self._clip((normal_forces[leg] - model.force_half_n) / model.force_scale_n)
-            if phase_prior is not None and math.isfinite(phase_prior[leg]):
+            if phase_prior is not None and isfinite(phase_prior[leg]):
                 odds += model.phase_weight * _logit(phase_prior[leg])
-            posterior.append(1.0 / (1.0 + math.exp(-odds)))
+            posterior.append(1.0 / (1.0 + exp(-odds)))
         self.probabilities = posterior
         return posterior
 
-    def _clip(self, log_ratio: float) -> float:
-        limit = self.model.max_log_ratio
-        return _clip(log_ratio, self.model, limit)
+
+def gait_phase_prior(names: Sequence[str], probabilities: Sequence[float]) -> list[float]:
+    """The filter's gait-phase prior from a message naming its feet (``foot_fk_node``'s
+    ``gait_phase``, the layout of its ``foot_contacts``): per leg in :data:`LEG_NAMES` order the
+    probability of stance given for it, NaN (no prior for that foot) where it is not named, is
+    named more than once, or its value is not within [0, 1]; all NaN when there are not as many
+    values as names.
+    """
+    prior = [math.nan] * LEGS
+    if len(names) != len(probabilities):
+        return prior
+    for leg, leg_name in enumerate(LEG_NAMES):
+        given = [
+            value for name, value in zip(names, probabilities, strict=True) if name == leg_name
+        ]
+        if len(given) == 1 and 0.0 <= given[0] <= 1.0:
+            prior[leg] = given[0]
+    return prior
 
 
 def _kinematic(
@@ -152,35 +174,44 @@ def _kinematic(
     feet: Sequence[FootMotion | None],
     omega: Sequence[float],
     forced: Sequence[bool],
+    falling: bool,
 ) -> list[float]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
-    the feet whose force is evidence too, and for all while the base falls (``forced``).
+    the feet whose force is evidence too (``forced``), and for all while the base is
+    ``falling``.
     """
-    lowest = max((foot.depth for foot in feet if foot is not None), default=math.nan)
-    if not math.isfinite(lowest):
+    lowest = math.nan  # the deepest contact point, as max() finds it
+    known = False
+    for foot in feet:
+        if foot is not None and (not known or foot.depth > lowest):
+            lowest, known = foot.depth, True
+    if not isfinite(lowest):
         return [0.0] * LEGS
     wx, wy, wz = omega
-    half, scale = model.height_half_m, model.height_scale_m
+    half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
+    stance_cap = model.max_kinematic_stance
+    speed_half, speed_scale = model.speed_half_mps, model.speed_scale_mps
     velocities: list[Vector | None] = [None] * LEGS
     heights = [math.nan] * LEGS
     low, sx, sy, sz = 0, 0.0, 0.0, 0.0  # the low feet with a velocity: count and sums
     for leg, foot in enumerate(feet):
         if foot is None:
             continue
-        heights[leg] = lowest - foot.depth
-        (ex, ey, ez), (rx, ry, rz) = foot.e, foot.r  # the base velocity if it stands: e - w x r
+        heights[leg] = height = lowest - foot.depth
+        (ex, ey, ez), (rx, ry, rz), _ = foot  # the base velocity if it stands: e - w x r
         vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
-        if math.isfinite(vx + vy + vz):
+        if isfinite(vx + vy + vz):
             velocities[leg] = (vx, vy, vz)
-            if heights[leg] < half:
+            if height < half:
                 low, sx, sy, sz = low + 1, sx + vx, sy + vy, sz + vz
     out = []
     for leg in range(LEGS):
-        cap = model.max_kinematic_stance if forced[leg] else model.max_log_ratio
+        cap = stance_cap if falling or forced[leg] else limit
         height, velocity = heights[leg], velocities[leg]
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
-            evidence = _clip((half - height) / scale, model, cap)
+            x = (half - height) / scale  # _clip written out: per foot and sample
+            evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         if velocity is not None:
             mine = height < half  # its own velocity is in the sums: leave it out
             others = low - mine
@@ -189,23 +220,24 @@ def _kinematic(
                 dx = vx - (sx - mine * vx) / others
                 dy = vy - (sy - mine * vy) / others
                 dz = vz - (sz - mine * vz) / others
-                speed = math.sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
-                speed_odds = (model.speed_half_mps - speed) / model.speed_scale_mps
-                evidence += _clip(speed_odds, model, cap)
+                speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
+                x = (speed_half - speed) / speed_scale  # _clip, written out too
+                if x == x:  # noqa: PLR0124 (NaN: no evidence)
+                    evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         out.append(evidence)
     return out
 
 
-def _clip(log_ratio: float, model: ContactModel, cap: float) -> float:
-    """A kinematic log-likelihood ratio, within ``-max_log_ratio`` and ``cap``; NaN (from
-    absurd values) is no evidence.
+def _clip(log_ratio: float, limit: float, cap: float) -> float:
+    """A log-likelihood ratio within ``-limit`` and ``cap``; NaN (from absurd values) is no
+    evidence.
     """
     if log_ratio != log_ratio:  # noqa: PLR0124
         return 0.0
-    return min(max(log_ratio, -model.max_log_ratio), cap)
+    return -limit if log_ratio < -limit else min(log_ratio, cap)
 
 
 def _logit(probability: float) -> float:
     """The log-odds of a probability, kept finite (within +-20)."""
-    p = min(max(probability, 2e-9), 1.0 - 2e-9)
+    p = LOW if probability < LOW else min(probability, HIGH)
     return math.log(p / (1.0 - p))

@@ -22,12 +22,21 @@ Frames: the base frame (the URDF root link), as in :mod:`a1_leg_fk.kinematics.qu
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import NamedTuple
 
 from a1_leg_fk.kinematics.compiled_leg import CompiledLeg
+from a1_leg_fk.kinematics.fk_codegen import (
+    Code,
+    compile_source,
+    function_source,
+    linear,
+    product,
+    rotated_row,
+    term_tuple,
+    weighted_sum,
+)
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import LEG_NAMES, foot_sphere
 from a1_leg_fk.model.urdf import Joint
@@ -82,8 +91,10 @@ def sphere_centre_legs(quadruped: Quadruped) -> tuple[CompiledLeg | None, ...]:
     return tuple(legs)
 
 
-class _CalfRate:
-    """A leg's calf angular velocity relative to the base [rad/s, base frame].
+def calf_rate_source(leg: CompiledLeg) -> str:
+    """Python source of ``calf_rate(q0, q1, dq0, dq1, dq2) -> (wx, wy, wz)``: a leg's calf
+    angular velocity relative to the base [rad/s, base frame] for its hip and thigh angles [rad]
+    and three rates [rad/s], written out with every zero term dropped.
 
     With the stages of :mod:`a1_leg_fk.kinematics.leg_stages` (``p -> o + M Rot(a, q) p``), joint
     i's axis in the base frame is ``R_i M_i a_i``, with ``R_0 = I``, ``R_1 = M_0 Rot(a_0, q_0)``
@@ -91,18 +102,26 @@ class _CalfRate:
     leaves products with constants: ``w = A0 dq0 + R_1 (B1 dq1 + (K0 + cos q1 K1 + sin q1 K2)
     dq2)``.
     """
-
-    def __init__(self, leg: CompiledLeg) -> None:
-        hip, pitch, knee = leg.stages
-        self.a0: Vector = _vector(hip.rotation @ hip.axis)
-        self.hip = tuple(tuple(float(x) for x in term.ravel()) for term in hip.rodrigues_terms)
-        self.b1: Vector = _vector(pitch.rotation @ pitch.axis)
-        knee_axis = knee.rotation @ knee.axis
-        self.k = tuple(_vector(term @ knee_axis) for term in pitch.rodrigues_terms)
-
-
-def _vector(values: Sequence[float]) -> Vector:
-    return (float(values[0]), float(values[1]), float(values[2]))
+    hip, pitch, knee = leg.stages
+    code = Code("w")
+    code.lines += ["c0 = _cos(q0)", "s0 = _sin(q0)", "c1 = _cos(q1)", "s1 = _sin(q1)"]
+    knee_axis = knee.rotation @ knee.axis
+    k0, k1, k2 = (term @ knee_axis for term in pitch.rodrigues_terms)
+    b1 = pitch.rotation @ pitch.axis
+    cos_rate, sin_rate = code.assign([product("c1", "dq2"), product("s1", "dq2")])
+    rates = ("dq1", "dq2", cos_rate, sin_rate)
+    inner = code.assign(
+        [linear([b1[axis], k0[axis], k1[axis], k2[axis]], rates) for axis in range(3)]
+    )
+    a0 = hip.rotation @ hip.axis
+    rate = [
+        weighted_sum(
+            [("", linear([a0[axis]], ["dq0"])),
+             ("", rotated_row(hip.rodrigues_terms, axis, inner, "c0", "s0"))]
+        )
+        for axis in range(3)
+    ]  # fmt: skip
+    return function_source("calf_rate(q0, q1, dq0, dq1, dq2)", code.lines, term_tuple(rate))
 
 
 class LegMotion:
@@ -111,7 +130,12 @@ class LegMotion:
     """
 
     def __init__(self, quadruped: Quadruped, radii: Sequence[float] | float | None = None) -> None:
-        self._calves = tuple(_CalfRate(leg) for leg in quadruped.legs)
+        self.sources = tuple(calf_rate_source(leg) for leg in quadruped.legs)
+        """Each leg's generated ``calf_rate`` (:func:`calf_rate_source`)."""
+        self._calf_rates: tuple[Callable[..., Vector], ...] = tuple(
+            compile_source(source, f"calf rate of {leg.chain.leg}", self)["calf_rate"]
+            for source, leg in zip(self.sources, quadruped.legs, strict=True)
+        )
         self._centres = sphere_centre_legs(quadruped)
         if radii is None:
             radii = foot_radii(quadruped)
@@ -162,7 +186,7 @@ class LegMotion:
         down: Vector,
     ) -> Vector:
         """``e`` of :class:`FootMotion`: ``-(J q_dot + w_calf x c)`` [m/s], base frame."""
-        ox, oy, oz = self.calf_rate(leg, angles, rates)
+        ox, oy, oz = self._calf_rates[leg](angles[0], angles[1], rates[0], rates[1], rates[2])
         radius = self.radii[leg]
         cx, cy, cz = radius * down[0], radius * down[1], radius * down[2]
         return (
@@ -173,31 +197,6 @@ class LegMotion:
 
     def calf_rate(self, leg: int, angles: Sequence[float], rates: Sequence[float]) -> Vector:
         """The calf's angular velocity relative to the base [rad/s, base frame] for the leg's
-        three ``angles`` [rad] and ``rates`` [rad/s] (see :class:`_CalfRate`).
+        three ``angles`` [rad] and ``rates`` [rad/s] (see :func:`calf_rate_source`).
         """
-        calf = self._calves[leg]
-        q0, q1 = angles[0], angles[1]
-        dq0, dq1, dq2 = rates[0], rates[1], rates[2]
-        c0, s0, c1, s1 = math.cos(q0), math.sin(q0), math.cos(q1), math.sin(q1)
-        k0, k1, k2 = calf.k
-        wx = k0[0] + c1 * k1[0] + s1 * k2[0]
-        wy = k0[1] + c1 * k1[1] + s1 * k2[1]
-        wz = k0[2] + c1 * k1[2] + s1 * k2[2]
-        b1 = calf.b1
-        ux, uy, uz = b1[0] * dq1 + wx * dq2, b1[1] * dq1 + wy * dq2, b1[2] * dq1 + wz * dq2
-        h0, h1, h2 = calf.hip
-        a0 = calf.a0
-        return (
-            a0[0] * dq0
-            + (h0[0] + c0 * h1[0] + s0 * h2[0]) * ux
-            + (h0[1] + c0 * h1[1] + s0 * h2[1]) * uy
-            + (h0[2] + c0 * h1[2] + s0 * h2[2]) * uz,
-            a0[1] * dq0
-            + (h0[3] + c0 * h1[3] + s0 * h2[3]) * ux
-            + (h0[4] + c0 * h1[4] + s0 * h2[4]) * uy
-            + (h0[5] + c0 * h1[5] + s0 * h2[5]) * uz,
-            a0[2] * dq0
-            + (h0[6] + c0 * h1[6] + s0 * h2[6]) * ux
-            + (h0[7] + c0 * h1[7] + s0 * h2[7]) * uy
-            + (h0[8] + c0 * h1[8] + s0 * h2[8]) * uz,
-        )
+        return self._calf_rates[leg](angles[0], angles[1], rates[0], rates[1], rates[2])

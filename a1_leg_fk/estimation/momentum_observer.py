@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from math import cos, isfinite, sin
+from math import cos, exp, isfinite, sin
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -63,7 +63,7 @@ NO_ROTATION = (0.0, 0.0, 0.0)
 
 class _LegState:
     """One leg's observer between joint states: the latest stamp [s], momentum ``p`` [N m s]
-    and residual ``r`` [N m].
+    and residual ``r`` [N m] (a fresh state: no stamp, so the next joint state starts it).
     """
 
     __slots__ = ("momentum", "residual", "stamp_s")
@@ -72,32 +72,6 @@ class _LegState:
         self.stamp_s = math.nan
         self.momentum = (0.0, 0.0, 0.0)
         self.residual = (0.0, 0.0, 0.0)
-
-    def update(
-        self, stamp_s: float, momentum: tuple[float, float, float],
-        driving: tuple[float, float, float], gain: float, max_gap_s: float,
-    ) -> tuple[float, float, float]:  # fmt: skip
-        """The residual [N m] after a joint state at ``stamp_s`` [s] with momentum ``p`` and
-        ``s = tau - beta``.
-        """
-        dt = stamp_s - self.stamp_s
-        if dt <= 0.0:  # the same stamp, or older: hold
-            return self.residual
-        s0, s1, s2 = driving
-        if dt <= max_gap_s:  # NaN (the first) is neither
-            keep = math.exp(-gain * dt)
-            r0, r1, r2 = self.residual
-            (p0, p1, p2), (q0, q1, q2) = momentum, self.momentum
-            change = (1.0 - keep) / dt
-            self.residual = (
-                keep * r0 + change * (p0 - q0 - dt * s0),
-                keep * r1 + change * (p1 - q1 - dt * s1),
-                keep * r2 + change * (p2 - q2 - dt * s2),
-            )
-        else:  # quasi-static: dp/dt = 0
-            self.residual = (-s0, -s1, -s2)
-        self.stamp_s, self.momentum = stamp_s, momentum
-        return self.residual
 
 
 class MomentumObserver:
@@ -125,6 +99,13 @@ class MomentumObserver:
         self._statics = tuple(
             LegStatics(quadruped.model, leg, foot_radius_m) for leg in quadruped.legs
         )
+        self._legs = tuple(
+            (statics.gravity_torques, dynamics.kinetic_terms, statics.solve_torques)
+            for statics, dynamics in zip(self._statics, self._dynamics, strict=True)
+        )
+        self._inertial_terms = tuple(dynamics.inertial_terms for dynamics in self._dynamics)
+        """Per leg its generated functions, looked up once (the per-sample path); without a gyro,
+        the base taken as not turning, ``inertial_terms`` stand in for ``kinetic_terms``."""
         self._states = [_LegState() for _ in range(LEGS)]
 
     def reset(self) -> None:
@@ -146,46 +127,63 @@ class MomentumObserver:
         Jacobian is near singular.
         """
         angles, rates, efforts = sample
-        out = [[math.nan] * 3 for _ in range(LEGS)]
-        missing, singular = [True] * LEGS, [False] * LEGS
         gx, gy, gz = gravity
         fx, fy, fz = gravity if specific_force is None else [-f for f in specific_force]
         wx, wy, wz = NO_ROTATION if angular_velocity is None else angular_velocity
+        turning = angular_velocity is not None
         if not isfinite(gx + gy + gz + fx + fy + fz + wx + wy + wz):
             self.reset()
-            return out, missing, singular
-        for slot in range(LEGS):
+            return [[math.nan] * 3 for _ in range(LEGS)], [True] * LEGS, [False] * LEGS
+        out, missing, singular = [], [], []
+        states, gain, max_gap = self._states, self.gain_per_s, self.max_gap_s
+        for slot, (gravity_torques, kinetic_terms, solve_torques) in enumerate(self._legs):
             first = slot * JOINTS_PER_LEG
-            q0, q1, q2 = angles[first : first + 3]
-            t0, t1, t2 = efforts[first : first + 3]
+            q0, q1, q2 = angles[first], angles[first + 1], angles[first + 2]
+            t0, t1, t2 = efforts[first], efforts[first + 1], efforts[first + 2]
             if not isfinite(q0 + q1 + q2 + t0 + t1 + t2):
-                self._states[slot] = _LegState()
+                states[slot] = _LegState()
+                out.append([math.nan] * 3)
+                missing.append(True)
+                singular.append(False)
                 continue
-            missing[slot] = False
             c0, s0, c1, s1, c2, s2 = cos(q0), sin(q0), cos(q1), sin(q1), cos(q2), sin(q2)
-            statics = self._statics[slot]
-            g0, g1, g2 = statics.gravity_torques(c0, s0, c1, s1, c2, s2, fx, fy, fz)
-            d0, d1, d2 = rates[first : first + 3]
+            g0, g1, g2 = gravity_torques(c0, s0, c1, s1, c2, s2, fx, fy, fz)
+            d0, d1, d2 = rates[first], rates[first + 1], rates[first + 2]
             if isfinite(d0 + d1 + d2):
-                k0, k1, k2, p0, p1, p2 = self._dynamics[slot].kinetic_terms(
-                    c0, s0, c1, s1, c2, s2, d0, d1, d2, wx, wy, wz
+                k0, k1, k2, p0, p1, p2 = (
+                    kinetic_terms(c0, s0, c1, s1, c2, s2, d0, d1, d2, wx, wy, wz)
+                    if turning
+                    else self._inertial_terms[slot](c0, s0, c1, s1, c2, s2, d0, d1, d2)
                 )
-                state = self._states[slot]
-                r0, r1, r2 = state.update(
-                    stamp_s, (p0, p1, p2), (t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2),
-                    self.gain_per_s, self.max_gap_s,
-                )  # fmt: skip
+                state = states[slot]
+                r0, r1, r2 = state.residual
+                dt = stamp_s - state.stamp_s
+                if not dt <= 0.0:  # else the same stamp, or older: hold (NaN: the first)
+                    e0, e1, e2 = t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2  # s = tau - beta
+                    if dt <= max_gap:  # NaN (the first) is neither
+                        keep = exp(-gain * dt)
+                        m0, m1, m2 = state.momentum
+                        change = (1.0 - keep) / dt
+                        r0 = keep * r0 + change * (p0 - m0 - dt * e0)
+                        r1 = keep * r1 + change * (p1 - m1 - dt * e1)
+                        r2 = keep * r2 + change * (p2 - m2 - dt * e2)
+                    else:  # quasi-static: dp/dt = 0
+                        r0, r1, r2 = -e0, -e1, -e2
+                    state.stamp_s, state.momentum = stamp_s, (p0, p1, p2)
+                    state.residual = (r0, r1, r2)
                 if not isfinite(r0 + r1 + r2):  # absurd values: start again
-                    self._states[slot] = _LegState()
+                    states[slot] = _LegState()
             else:  # no rates: the quasi-static estimate
-                self._states[slot] = _LegState()
+                states[slot] = _LegState()
                 r0, r1, r2 = g0 - t0, g1 - t1, g2 - t2
-            x, y, z, det, size = statics.solve_torques(
-                c0, s0, c1, s1, c2, s2, r0, r1, r2, gx, gy, gz
-            )
-            singular[slot] = not abs(det) >= self.min_condition * size
-            if not singular[slot]:
-                out[slot] = [x / det, y / det, z / det]
+            x, y, z, det, size = solve_torques(c0, s0, c1, s1, c2, s2, r0, r1, r2, gx, gy, gz)
+            missing.append(False)
+            if abs(det) >= self.min_condition * size:
+                out.append([x / det, y / det, z / det])
+                singular.append(False)
+            else:
+                out.append([math.nan] * 3)
+                singular.append(True)
         return out, missing, singular
 
     def step_batch(

@@ -273,13 +273,16 @@ class ForcePass:
         joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
         feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
         imu: ImuSample,
+        phase_prior: Sequence[float] | None = None,
     ) -> tuple[list[list[float]], list[float], list[float]]:
         """:meth:`rows` for one joint state, on floats (the node's per-message path): 4 forces
-        [N, base frame], 4 normal forces [N] and 4 contact probabilities.
+        [N, base frame], 4 normal forces [N] and 4 contact probabilities; ``phase_prior``: a gait
+        scheduler's probability of stance per foot, as the estimator takes it.
         """
         if self._origin_ns is None:  # seconds since the first stamp: float64 keeps their ns
             self._origin_ns = stamp_ns
-        step = self.estimator.step((stamp_ns - self._origin_ns) * 1e-9, joints, feet, imu)
+        stamp_s = (stamp_ns - self._origin_ns) * 1e-9
+        step = self.estimator.step(stamp_s, joints, feet, imu, phase_prior)
         counts = self.counts
         counts.missing += sum(step.missing)
         counts.singular += sum(step.singular)

@@ -116,12 +116,15 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
     return level, summary, values
 
 
-def force_values(forces: ForcePass | None, problem: str, imu: ImuSample) -> dict[str, object]:
+def force_values(
+    forces: ForcePass | None, problem: str, imu: ImuSample, gait_phase: str
+) -> dict[str, object]:
     """The foot-force part of the status: whether forces are estimated (else ``problem``), the
     force model and contact rule, the leg forces estimated, the legs without one (efforts
     missing, not finite or of the wrong length; near-singular), the joint states whose contacts
     had force evidence and those with kinematic evidence alone, what the latest ``imu`` gave
-    (gravity's direction, gyro, accelerometer) and the threshold rule's forces [N].
+    (gravity's direction, gyro, accelerometer), the ``gait_phase`` input's state and the
+    threshold rule's forces [N].
     """
     if forces is None:
         return {"foot_forces": problem}
@@ -147,6 +150,7 @@ def force_values(forces: ForcePass | None, problem: str, imu: ImuSample) -> dict
             if value is not None
         )
         or "none (the base taken as inertial)",
+        "gait_phase": gait_phase,
         "touchdown_force_n": f"{thresholds.touchdown_n:.3f}",
         "liftoff_force_n": f"{thresholds.liftoff_n:.3f}",
     }

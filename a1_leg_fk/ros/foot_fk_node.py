@@ -7,7 +7,9 @@ message at a time) and :mod:`a1_leg_fk.verify` (the ``verify_fk`` service); what
 message is :mod:`a1_leg_fk.ros.foot_output`'s. All topic and service names are relative, so
 ``__ns`` and remaps work; every parameter is declared with a description
 (:mod:`a1_leg_fk.ros.foot_fk_parameters`). Gravity's direction for the forces comes from the
-latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z.
+latest ``imu`` orientation (the IMU assumed aligned with the base frame), else the base's -z; a
+gait scheduler's optional ``gait_phase`` is the contact filter's prior
+(:mod:`a1_leg_fk.ros.gait_phase`).
 
 The joint states are subscribed raw (serialized) and read by the bag tools' decoder
 (:mod:`a1_leg_fk.wire.joint_state`): no message object is built per JointState.
@@ -40,6 +42,7 @@ from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
+from a1_leg_fk.ros.gait_phase import GaitPhaseInput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.joint_input import MissingMessages, joint_input
 from a1_leg_fk.ros.markers import foot_markers
@@ -84,6 +87,7 @@ class FootFkNode(Node):
         self._contacts: list[float] | None = None  # the latest contact probabilities
         self._forces: ForcePass | None = None
         self._output = FootOutput(self)
+        self._gait_phase = GaitPhaseInput(self, self._float("gait_phase_timeout_s"))
         self._apply_settings()
         self._set_frame_ids()
         self._build_forces()
@@ -132,6 +136,7 @@ class FootFkNode(Node):
         if not feet:
             return
         forces = None
+        now = time.monotonic()
         if self._forces is not None:  # every message: the contacts carry their state
             forces = self._forces.message(
                 fields.stamp_ns or self.get_clock().now().nanoseconds,
@@ -142,9 +147,9 @@ class FootFkNode(Node):
                 ),
                 leg_feet(feet),
                 self._imu,
+                self._gait_phase.current(now),
             )
             self._contacts = forces[2]
-        now = time.monotonic()
         if now - self._last_publish < self._min_publish_interval_s:
             return
         self._last_publish = now
@@ -246,7 +251,9 @@ class FootFkNode(Node):
             description_rejected=robot.topic_rejected,
             last_verify=self._last_verify,
             verify_disagreed=self._verify_disagreed,
-            forces=force_values(self._forces, self._forces_problem, self._imu),
+            forces=force_values(
+                self._forces, self._forces_problem, self._imu, self._gait_phase.status()
+            ),
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name
@@ -331,6 +338,7 @@ class FootFkNode(Node):
         self._enable_verify = self._bool("enable_verify")
         self._verify_tolerance_m = self._float("verify_tolerance_m")
         self._preserialized_output = self._bool("preserialized_output")
+        self._gait_phase.timeout_s = self._float("gait_phase_timeout_s")
 
     def _set_frame_ids(self) -> None:
         self._output.configure(self._base_frame, self._preserialized_output)

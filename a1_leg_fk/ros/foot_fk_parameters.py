@@ -14,6 +14,7 @@ MARKER_RATE_RANGE_HZ = (0.001, 1000.0)
 PUBLISH_RATE_RANGE_HZ = (0.0, 1_000_000.0)
 VERIFY_TOLERANCE_RANGE_M = (1e-12, 1.0)
 CONTACT_FORCE_RANGE_N = (0.0, 1e6)
+GAIT_PHASE_TIMEOUT_RANGE_S = (0.001, 3600.0)
 """Inclusive ranges rclpy enforces (FloatingPointRange) on the node's double parameters."""
 FORCE_PARAMETERS = (
     "publish_forces",
@@ -113,6 +114,15 @@ PARAMETERS = (
         "most the touchdown force), in "
         f"{CONTACT_FORCE_RANGE_N}; 0 = 4 % of the robot's weight",
         value_range=CONTACT_FORCE_RANGE_N,
+    ),
+    ParameterSpec(
+        "gait_phase_timeout_s",
+        0.1,
+        ParameterType.PARAMETER_DOUBLE,
+        "contact_rule 'filter': the latest gait_phase (sensor_msgs/JointState, name = feet, "
+        "position = probability of stance) is the filter's prior for this long [s] after it "
+        f"arrived, then stale (no prior), in {GAIT_PHASE_TIMEOUT_RANGE_S}",
+        value_range=GAIT_PHASE_TIMEOUT_RANGE_S,
     ),
 )
 """The node's own parameters; the model parameters are

@@ -5,8 +5,9 @@
 Each goes out as bytes patched into a message serialized once (the feet:
 :mod:`a1_leg_fk.ros.serialized_output`; the forces and contacts: the bag tools' CDR writers of
 :mod:`a1_leg_fk.recording.bag_writer`, so the node and ``a1-leg-fk bag --output-bag`` write the
-same bytes), or as message objects where ``preserialized_output`` is off or the rmw's CDR is not
-the little-endian one patched here.
+same bytes), published through :func:`~a1_leg_fk.ros.serialized_output.raw_publish`, or as
+message objects where ``preserialized_output`` is off or the rmw's CDR is not the little-endian
+one patched here.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from a1_leg_fk.recording.bag_writer import (
     wrench_bytes,
 )
 from a1_leg_fk.ros.glue import OUTPUT_QOS
-from a1_leg_fk.ros.serialized_output import SerializedStamped
+from a1_leg_fk.ros.serialized_output import SerializedStamped, raw_publish
 from a1_leg_fk.tracking import Foot
 
 
@@ -47,6 +48,11 @@ class FootOutput:
         self._velocity_msgs = [Vector3Stamped() for _ in LEG_NAMES]
         self._force_msgs = [WrenchStamped() for _ in LEG_NAMES]
         self._contacts_msg = JointState(name=list(LEG_NAMES))
+        self._raw_positions, self._raw_velocities, self._raw_forces = (
+            [raw_publish(publisher) for publisher in publishers]
+            for publishers in (self._positions, self._velocities, self._forces)
+        )
+        self._raw_contacts = raw_publish(self._contacts)
         self.configure("", preserialized=False)
 
     def configure(self, base_frame: str, preserialized: bool) -> None:
@@ -78,13 +84,10 @@ class FootOutput:
         serialized = self._serialized
         if serialized is not None:
             for foot in feet:
-                self._positions[foot.leg_slot].publish(
-                    serialized.serialized(sec, nanosec, foot.position)
-                )
+                slot = foot.leg_slot
+                self._raw_positions[slot](serialized.serialized(sec, nanosec, foot.position))
                 if foot.velocity is not None and velocities:
-                    self._velocities[foot.leg_slot].publish(
-                        serialized.serialized(sec, nanosec, foot.velocity)
-                    )
+                    self._raw_velocities[slot](serialized.serialized(sec, nanosec, foot.velocity))
             return
         for foot in feet:
             position_msg = self._position_msgs[foot.leg_slot]
@@ -119,7 +122,7 @@ class FootOutput:
                 continue
             published = True
             if serialized:
-                self._forces[slot].publish(wrench_bytes(self._frame_head, sec, nanosec, force))
+                self._raw_forces[slot](wrench_bytes(self._frame_head, sec, nanosec, force))
                 continue
             msg = self._force_msgs[slot]
             _stamp(msg, sec, nanosec)
@@ -128,7 +131,7 @@ class FootOutput:
         if not published and not any(p == p for p in probabilities):  # noqa: PLR0124 (NaN)
             return
         if serialized:
-            self._contacts.publish(
+            self._raw_contacts(
                 contacts_bytes(self._contacts_layout, sec, nanosec, probabilities, normal)
             )
             return

@@ -11,9 +11,21 @@ parameter is off.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 
 from geometry_msgs.msg import PointStamped, Vector3Stamped
+from rclpy.publisher import Publisher
 from rclpy.serialization import serialize_message
+
+
+def raw_publish(publisher: Publisher) -> Callable[[bytes], None]:
+    """``publisher.publish`` for serialized bytes without rclpy's per-call wrapper: its type
+    checks and its guard against a publisher destroyed meanwhile (2.1-3.2 us against 0.7 us per
+    message on the project's machine, no reader; the same DDS write). For publishers used only
+    from their node's executor thread and destroyed with the node, after it stops spinning.
+    """
+    publish: Callable[[bytes], None] = publisher.handle.publish_raw
+    return publish
 
 
 class SerializedStamped:

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel, gait_phase_prior
 from a1_leg_fk.estimation.leg_motion import FootMotion
 
 MODEL = ContactModel.for_robot(weight_n=120.0, leg_length_m=0.4)
@@ -85,3 +85,19 @@ def test_a_gait_phase_prior_adds_its_log_odds() -> None:
     )
     logit = math.log(0.9 / 0.1) * MODEL.phase_weight
     assert out == pytest.approx([sigmoid(logit), sigmoid(-logit), 0.5, 0.5])
+
+
+def test_a_gait_phase_message_gives_each_named_foot_its_probability() -> None:
+    nan = math.nan
+    cases = [
+        ((["FR", "FL", "RR", "RL"], [0.9, 0.1, 0.0, 1.0]), [0.9, 0.1, 0.0, 1.0]),
+        ((["RL", "FR"], [0.25, 0.75]), [0.75, nan, nan, 0.25]),  # a subset, any order
+        ((["FR", "arm", "FR", "RR"], [0.5, 0.5, 0.5, 0.6]), [nan, nan, 0.6, nan]),  # FR twice
+        ((["FR", "FL", "RR", "RL"], [1.5, -0.1, nan, 0.5]), [nan, nan, nan, 0.5]),  # not in [0, 1]
+        ((["FR", "FL"], [0.5]), [nan, nan, nan, nan]),  # fewer values than names
+    ]
+    for (names, values), expected in cases:
+        prior = gait_phase_prior(names, values)
+        assert [None if math.isnan(p) else p for p in prior] == [
+            None if math.isnan(p) else p for p in expected
+        ], (names, values)

@@ -5,6 +5,8 @@ C^T dq = dM/dt dq - C dq`` against the mass matrix's change along ``dq`` (centra
 
 Two robots: the A1 (axes along x and y) and the synthetic robot of ``synthetic_urdf.py`` with
 anisotropic, rotated inertia tensors, tilted joints and non-unit axes, where no term vanishes.
+The calf's angular velocity that rolls a foot (:mod:`a1_leg_fk.estimation.leg_motion`, also
+generated) is judged on both against the calf link's.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import pybullet_data
 import pytest
 from synthetic_urdf import SYNTHETIC_JOINTS, SYNTHETIC_URDF
 
+from a1_leg_fk.estimation.leg_motion import LegMotion
 from a1_leg_fk.kinematics.leg_dynamics import LegDynamics
 from a1_leg_fk.kinematics.quadruped import Quadruped
 
@@ -61,12 +64,17 @@ def robot(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFacto
 
 
 def ours(quadruped: Quadruped, angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
-    """(2, 12): dT/dq and p of every leg, slot order, the base not turning."""
+    """(2, 12): dT/dq and p of every leg, slot order, the base not turning (the general
+    function at omega = 0, and the one generated for an inertial base: the same numbers, to
+    rounding)."""
     out = np.empty((2, 12))
     for slot, leg in enumerate(quadruped.legs):
         joints = slice(3 * slot, 3 * slot + 3)
         trig = np.stack([np.cos(angles[joints]), np.sin(angles[joints])], axis=1).ravel()
-        terms = LegDynamics(quadruped.model, leg).kinetic_terms(*trig, *rates[joints], 0, 0, 0)
+        dynamics = LegDynamics(quadruped.model, leg)
+        terms = dynamics.kinetic_terms(*trig, *rates[joints], 0.0, 0.0, 0.0)
+        inertial = dynamics.inertial_terms(*trig, *rates[joints])
+        assert np.allclose(inertial, terms, rtol=1e-14, atol=1e-14)
         out[0, joints], out[1, joints] = terms[:3], terms[3:]
     return out
 
@@ -116,3 +124,52 @@ def test_generated_code_drops_vanishing_terms() -> None:
         floats = leg.kinetic_terms(*[float(t[row]) for t in trig], *rates[row], 0.1, -0.2, 0.3)
         assert np.array_equal(batch[:, row], floats)
     assert leg.source.count("\n") < 400
+    assert leg.inertial_source.count("\n") < leg.source.count("\n") / 1.5
+
+
+def test_calf_rates_match_pybullet(robot) -> None:
+    """:class:`LegMotion`'s generated calf rate: the rate of turn of PyBullet's calf link (its
+    orientation's central difference along the rates; the fixed base is the world), on the A1
+    and on the tilted robot, where no term vanishes. (Not PyBullet's link velocity: it scales
+    a non-unit axis' rate by the axis' length.)"""
+    quadruped, client, body, _ = robot
+    joints = {
+        pybullet.getJointInfo(body, j, physicsClientId=client)[1].decode(): j
+        for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+    }
+    index = [joints[name] for name in quadruped.joint_names]  # PyBullet's joint of each slot
+    motion = LegMotion(quadruped)
+    rng = np.random.default_rng(5)
+    step = 1e-3  # [s]: PyBullet's link orientations carry float32's rounding
+
+    def calf_orientations(angles: np.ndarray) -> list[np.ndarray]:
+        for slot, joint in enumerate(index):
+            pybullet.resetJointState(body, joint, angles[slot], physicsClientId=client)
+        return [
+            np.array(
+                pybullet.getMatrixFromQuaternion(
+                    pybullet.getLinkState(
+                        body,
+                        index[3 * leg + 2],
+                        computeForwardKinematics=1,
+                        physicsClientId=client,
+                    )[5]
+                )
+            ).reshape(3, 3)
+            for leg in range(4)
+        ]
+
+    for _ in range(5):
+        angles, rates = rng.uniform(-1.0, 1.0, 12), rng.uniform(-6.0, 6.0, 12)
+        angles[2::3] = rng.uniform(-2.2, -0.8, 4)
+        ahead, behind = (
+            calf_orientations(angles + step * rates),
+            calf_orientations(angles - step * rates),
+        )
+        for leg in range(4):
+            turn = (ahead[leg] - behind[leg]) / (2 * step) @ ((ahead[leg] + behind[leg]) / 2).T
+            theirs = np.array([turn[2, 1], turn[0, 2], turn[1, 0]])  # the skew matrix's vector
+            legs = slice(3 * leg, 3 * leg + 3)
+            ours = motion.calf_rate(leg, angles[legs].tolist(), rates[legs].tolist())
+            assert np.linalg.norm(theirs) > 0.5
+            assert np.allclose(ours, theirs, atol=2e-3), (leg, ours, theirs)

@@ -18,6 +18,7 @@ DOCUMENTED_RANGES = {
     "verify_tolerance_m": (1e-12, 1.0),
     "touchdown_force_n": (0.0, 1e6),
     "liftoff_force_n": (0.0, 1e6),
+    "gait_phase_timeout_s": (0.001, 3600.0),
 }
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, EvidenceCounts, ImuSample
 from a1_leg_fk.estimation.filter_model import FLAT, MIN_PROBABILITY, FilterSettings, LegMeasurement
@@ -40,6 +41,19 @@ from a1_leg_fk.model.urdf import LegFkError
 
 Foot = tuple[Sequence[float], Sequence[float]]
 """A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
+
+
+class JointSample(NamedTuple):
+    """One joint state as the estimators take it: stamp [ns], per leg its :data:`Foot` (None:
+    unknown), the 12 angles [rad] and rates [rad/s] in slot order.
+    """
+
+    stamp_ns: int
+    feet: Sequence[Foot | None]
+    angles: Sequence[float]
+    rates: Sequence[float]
+
+
 MAX_BASE_SPEED_MPS = 1e3
 """[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
 rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from
@@ -128,11 +142,12 @@ class OdometryFeed:
         down = down_direction(None if imu is None else imu.orientation)
         if contacts is None:
             contacts = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
+        joint = JointSample(stamp_ns, feet, angles, rates)
         if imu is None or imu.specific_force is None or not self.filter.started:
-            sample = self._legs_alone(stamp_ns, feet, angles, rates, contacts, imu, down)
+            sample = self._legs_alone(joint, contacts, imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
-            sample = self._filtered(stamp_ns, feet, angles, rates, contacts, imu, down)
+            sample = self._filtered(joint, contacts, imu, down)
         position = sample.position
         if self._position is not None:
             last = self._position
@@ -141,16 +156,10 @@ class OdometryFeed:
         return sample
 
     def _filtered(
-        self,
-        stamp_ns: int,
-        feet: Sequence[Foot | None],
-        angles: Sequence[float],
-        rates: Sequence[float],
-        contacts: Sequence[float] | None,
-        imu: ImuReading,
-        down: Vector,
+        self, joint: JointSample, contacts: Sequence[float] | None, imu: ImuReading, down: Vector
     ) -> OdometrySample:
         """The state filter's estimate after its update with this joint state's feet."""
+        stamp_ns, feet, angles, rates = joint
         legs: list[LegMeasurement | None] = [None] * len(feet)
         for leg, foot in enumerate(feet):
             if contacts is not None and foot is not None and contacts[leg] >= MIN_PROBABILITY:
@@ -213,15 +222,13 @@ class OdometryFeed:
 
     def _legs_alone(
         self,
-        stamp_ns: int,
-        feet: Sequence[Foot | None],
-        angles: Sequence[float],
-        rates: Sequence[float],
+        joint: JointSample,
         contacts: Sequence[float] | None,
         imu: ImuReading | None,
         down: Vector,
     ) -> OdometrySample:
         """The averaging estimate of the standing feet (no accelerometer to propagate with)."""
+        stamp_ns, feet, angles, rates = joint
         odometry = self.odometry
         depths: list[float | None] = [None] * len(feet)
         motions: list[FootMotion | None] = [None] * len(feet)

@@ -18,8 +18,9 @@ STATE = 15
 FLAT, NO_GROUND = "flat", "none"
 GROUND_MODELS = (FLAT, NO_GROUND)
 """``flat``: the stance feet's heights anchor z; ``none``: they do not (stairs, slopes)."""
-MIN_PROBABILITY = 0.5
-"""A foot whose contact probability is below this gives no measurement."""
+EVEN_ODDS = 0.5
+"""A foot whose contact probability is not above this gives no measurement (even odds: the
+contact filter's start, before any evidence)."""
 
 
 @dataclass(frozen=True)
@@ -60,9 +61,14 @@ class FilterSettings:
     (0: fixed)."""
     min_noise_scale: float = 0.005
     """The feet's horizontal noise variance is scaled by no less than this (nor more than 1)."""
-    initial_velocity_mps: float = 0.5
+    initial_velocity_mps: float = 0.05
+    """The velocity's standard deviation at the start [m/s]: the filter starts at rest (a leg
+    kicking in the air at power-on says nothing); a base already moving is taken up by the
+    gate's reset after ``max_rejected_s``."""
     initial_gyro_bias_radps: float = 0.02
+    """The gyro bias' standard deviation at the start [rad/s]."""
     initial_accel_bias_mps2: float = 0.2
+    """The accelerometer bias' standard deviation at the start [m/s²]."""
     max_step_s: float = 0.1
     """IMU samples further apart are not integrated across (a gap: the covariance grows)."""
 
@@ -139,12 +145,17 @@ def block_diagonal(blocks: Sequence[np.ndarray]) -> np.ndarray:
     return result
 
 
+def stands(probability: float) -> bool:
+    """Whether a foot of this contact probability stands: above :data:`EVEN_ODDS` (NaN: no)."""
+    return probability > EVEN_ODDS
+
+
 def standing_still(legs: Sequence[LegMeasurement | None], fastest_mps: float) -> bool:
-    """Every foot standing (probability at least :data:`MIN_PROBABILITY`), none saying the base
+    """Every foot standing (:func:`stands`), none saying the base
     moves faster than ``fastest_mps`` on an axis: a zero-velocity update's condition.
     """
     for measurement in legs:
-        if measurement is None or not measurement.probability >= MIN_PROBABILITY:
+        if measurement is None or not stands(measurement.probability):
             return False
         ex, ey, ez = measurement.motion.e
         if not max(abs(ex), abs(ey), abs(ez)) <= fastest_mps:

@@ -23,7 +23,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, EvidenceCounts, ImuSample
-from a1_leg_fk.estimation.filter_model import FLAT, MIN_PROBABILITY, FilterSettings, LegMeasurement
+from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement, stands
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
@@ -162,7 +162,7 @@ class OdometryFeed:
         stamp_ns, feet, angles, rates = joint
         legs: list[LegMeasurement | None] = [None] * len(feet)
         for leg, foot in enumerate(feet):
-            if contacts is not None and foot is not None and contacts[leg] >= MIN_PROBABILITY:
+            if contacts is not None and foot is not None and stands(contacts[leg]):
                 legs[leg] = self._measurement(leg, foot, angles, rates, down, contacts[leg])
         used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]

@@ -39,7 +39,6 @@ import numpy as np
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     GROUND_MODELS,
-    MIN_PROBABILITY,
     STATE,
     FilterCounts,
     FilterSettings,
@@ -48,6 +47,7 @@ from a1_leg_fk.estimation.filter_model import (
     foot_noise,
     normalised_squares,
     standing_still,
+    stands,
 )
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, log_so3, matrix_of, quaternion_of, skew
@@ -225,7 +225,7 @@ class StateFilter:
         )  # fmt: skip
         candidates, levers, residuals, noises = [], [], [], []
         for leg, measurement in enumerate(legs):
-            if measurement is None or not measurement.probability >= MIN_PROBABILITY:
+            if measurement is None or not stands(measurement.probability):
                 continue
             (ex, ey, ez), (rx, ry, rz), _ = measurement.motion
             candidates.append(leg)

@@ -21,6 +21,9 @@ import numpy as np
 import pytest
 from conftest import FAMILY_NOISE_SEED, family_folder
 
+pytestmark = pytest.mark.timeout(900)
+"""The module's fixture simulates the nine long runs (two at a time) and scores 36 estimates, once
+per session: minutes, more than the suite's per-test bound."""
 TUNED = (
     "a1_trot_long",
     "a1_walk_long",

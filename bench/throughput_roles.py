@@ -309,14 +309,14 @@ def floor_callback(
     writer: the feet, their velocities, foot_contacts), and while ``forces[0]`` the four
     foot_forces too; no decoding, no rules, no FK. Published with ``Publisher.publish``, or
     (``raw``) as the node publishes them, ``a1_leg_fk.ros.serialized_output.raw_publish``."""
-    from a1_leg_fk.recording.bag_writer import (
+    from a1_leg_fk.ros.glue import OUTPUT_QOS
+    from a1_leg_fk.ros.serialized_output import SerializedStamped
+    from a1_leg_fk.wire.output import (
         contacts_bytes,
         contacts_layout,
         frame_bytes,
         wrench_bytes,
     )
-    from a1_leg_fk.ros.glue import OUTPUT_QOS
-    from a1_leg_fk.ros.serialized_output import SerializedStamped
 
     writer = SerializedStamped("trunk")
     publishers = [

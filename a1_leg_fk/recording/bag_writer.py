@@ -15,8 +15,6 @@ imported when a bag is written.
 from __future__ import annotations
 
 import contextlib
-import struct
-from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
@@ -25,6 +23,13 @@ import numpy as np
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.trajectories import FootBlock, Recording
+from a1_leg_fk.wire.output import (
+    contacts_bytes,
+    contacts_layout,
+    frame_bytes,
+    stamped_vector_bytes,
+    wrench_bytes,
+)
 
 if TYPE_CHECKING:  # rosbags is imported when a bag is written
     from rosbags.interfaces import Connection, Qos
@@ -102,13 +107,11 @@ class BagWriter:
                 if not len(rows):
                     continue
                 connection = self._connection(f"{prefix}/{leg}", msgtype)
-                tail = _NO_TORQUE if prefix == "/foot_forces" else b""
-                for row, (x, y, z) in zip(rows.tolist(), leg_values[rows].tolist()):
+                serialize = wrench_bytes if prefix == "/foot_forces" else stamped_vector_bytes
+                for row, vector in zip(rows.tolist(), leg_values[rows].tolist()):
                     sec, nanosec = divmod(stamps[row], 1_000_000_000)
                     self.writer.write(
-                        connection,
-                        bag_times[row],
-                        _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(x, y, z) + tail,
+                        connection, bag_times[row], serialize(head, sec, nanosec, vector)
                     )
 
     def _write_contacts(self, block: FootBlock, stamps: list[int], bag_times: list[int]) -> None:
@@ -172,70 +175,6 @@ class BagWriter:
         """Close the bag, ignoring errors (it is being discarded anyway)."""
         with contextlib.suppress(Exception):
             self.writer.close()
-
-
-_CDR_LE = b"\x00\x01\x00\x00"  # encapsulation header: CDR, little endian
-_STAMP = struct.Struct("<iI")
-_XYZ = struct.Struct("<3d")
-_NO_TORQUE = _XYZ.pack(0.0, 0.0, 0.0)  # the torque of a WrenchStamped, after its force
-_LEG_VALUES = struct.Struct(f"<{len(LEG_NAMES)}d")
-
-
-def contacts_layout(frame: str) -> tuple[bytes, bytes]:
-    """The constant CDR bytes of a ``/foot_contacts`` JointState: after the stamp, the frame,
-    the leg names and the position count (padded to 8); between the positions and the efforts,
-    the empty velocity and the effort count. Offsets relative to the encapsulation header.
-    """
-    body = bytearray(struct.pack("<I", len(frame) + 1) + frame.encode() + b"\0")
-    offset = 8  # the stamp
-    body += b"\0" * (-(offset + len(body)) % 4)
-    body += struct.pack("<I", len(LEG_NAMES))
-    for leg in LEG_NAMES:
-        body += b"\0" * (-(offset + len(body)) % 4)
-        body += struct.pack("<I", len(leg) + 1) + leg.encode() + b"\0"
-    body += b"\0" * (-(offset + len(body)) % 4)
-    body += struct.pack("<I", len(LEG_NAMES))
-    body += b"\0" * (-(offset + len(body)) % 8)
-    # the positions end 8-aligned: velocity count 0, effort count, and the efforts stay aligned
-    return bytes(body), struct.pack("<II", 0, len(LEG_NAMES))
-
-
-def frame_bytes(frame: str) -> bytes:
-    """The CDR ``frame_id`` string after the stamp, padded so the float64s that follow are
-    8-aligned (offsets relative to the 4-byte encapsulation header, which the stamp follows).
-    """
-    encoded = frame.encode() + b"\0"
-    text = struct.pack("<I", len(encoded)) + encoded
-    padding = -(8 + len(text)) % 8
-    return text + b"\0" * padding
-
-
-def wrench_bytes(head: bytes, sec: int, nanosec: int, force: Sequence[float]) -> bytes:
-    """A ``geometry_msgs/WrenchStamped``'s CDR: the stamp, ``head`` (:func:`frame_bytes`), the
-    force [N] and a zero torque.
-    """
-    return _CDR_LE + _STAMP.pack(sec, nanosec) + head + _XYZ.pack(*force) + _NO_TORQUE
-
-
-def contacts_bytes(
-    layout: tuple[bytes, bytes],
-    sec: int,
-    nanosec: int,
-    probabilities: Sequence[float],
-    normal: Sequence[float],
-) -> bytes:
-    """A ``foot_contacts`` JointState's CDR: the stamp, the :func:`contacts_layout` parts, the
-    four contact probabilities and the four normal forces [N].
-    """
-    head, middle = layout
-    return (
-        _CDR_LE
-        + _STAMP.pack(sec, nanosec)
-        + head
-        + _LEG_VALUES.pack(*probabilities)
-        + middle
-        + _LEG_VALUES.pack(*normal)
-    )
 
 
 def default_qos() -> Qos:

@@ -11,16 +11,16 @@ legs' dynamics. No ROS install: the bag is read through
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER, ContactEstimator, ImuSample
+from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER, ImuSample
+from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import has_orientation, measured_vector
 from a1_leg_fk.kinematics.frames import gravity_in_base
-from a1_leg_fk.model.legs import JOINT_COUNT
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError
 
@@ -148,28 +148,9 @@ def _known(row: np.ndarray) -> list[float] | None:
     return row.tolist() if np.isfinite(row).all() else None
 
 
-@dataclass
-class ForceCounts:
-    """Legs of the rows of a pass: with a force, without (efforts missing or not finite, or a
-    JointState whose effort array does not match its names), near-singular.
-    """
-
-    estimated: int = 0
-    missing: int = 0
-    singular: int = 0
-
-    def line(self) -> str:
-        """The summary line."""
-        return (
-            f"forces:    {self.estimated} leg forces; none for {self.missing} legs (efforts "
-            f"missing, NaN or of the wrong length) and {self.singular} near-singular legs"
-        )
-
-
-class ForcePass:
-    """Forces and contact probabilities row by row over one pass, the node's messages or a
-    recording's rows alike (:class:`~a1_leg_fk.estimation.contact_estimator.ContactEstimator`:
-    its state is carried from block to block).
+class RecordingForces(ForcePass):
+    """:class:`~a1_leg_fk.estimation.force_pass.ForcePass` over a recording's rows, its IMU from
+    an Imu topic (:class:`ImuTrack`, None: none).
     """
 
     def __init__(
@@ -180,31 +161,15 @@ class ForcePass:
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
     ) -> None:
-        """``thresholds``: touchdown and liftoff normal forces [N] of the ``"threshold"`` contact
-        rule, ``None`` for the default (:meth:`ContactThresholds.for_weight` of the URDF's total
-        mass); ``force_model`` and ``contact_rule`` as the estimator takes them.
-        """
-        self.estimator = ContactEstimator(quadruped, force_model, contact_rule, thresholds)
-        self.thresholds = self.estimator.rule.thresholds
-        self.name_to_slot: Mapping[str, int] = quadruped.name_to_slot
+        super().__init__(quadruped, thresholds, force_model, contact_rule)
         self.imu = imu
-        self.restart()
 
-    def restart(self) -> None:
-        """A new pass: the estimator's state and the counts anew."""
-        self.estimator.reset()
-        self.counts = ForceCounts()
-        self._origin_ns: int | None = None
-
-    def summary(self, forces: bool) -> str:
-        """The summary's lines (joined by newlines): the force counts (with ``forces``), and
-        where the contacts came from: the rule, the force model, the evidence per sample and
-        what the IMU gave.
+    def summary(self, forces: bool, motion: str | None = None) -> str:
+        """:meth:`ForcePass.summary`, the base's motion from the IMU track's gyro and
+        accelerometer where they were measured.
         """
-        estimator = self.estimator
         imu = self.imu
-        motion = "none (the base taken as inertial)"
-        if imu is not None:
+        if motion is None and imu is not None:
             parts = [
                 name
                 for name, values in (
@@ -213,31 +178,8 @@ class ForcePass:
                 )
                 if np.isfinite(values).all(axis=1).any()
             ]
-            motion = f"{', '.join(parts)} of {imu.topic}" if parts else motion
-        forces_used = f" on {estimator.force_model} forces" if self.counts.estimated else ""
-        rule = (
-            f"contacts:  the {estimator.contact_rule} rule{forces_used}; the base's motion from "
-            f"{motion}"
-        )
-        lines = [self.counts.line()] if forces else []
-        if estimator.contact_rule == FILTER:
-            lines += [rule, estimator.counts.line()]
-        else:
-            lines.append(rule)
-        return "\n".join(lines)
-
-    def slot_efforts(self, names: Sequence[str], efforts: np.ndarray) -> np.ndarray:
-        """(K, 12) efforts [N m] in slot order from the messages' (K, m) effort arrays; NaN for
-        joints not named, and for every joint when ``m`` is not the number of names.
-        """
-        out = np.full((efforts.shape[0], JOINT_COUNT), math.nan)
-        if efforts.shape[1] != len(names):
-            return out
-        known = [(i, self.name_to_slot.get(name)) for i, name in enumerate(names)]
-        pairs = [(i, slot) for i, slot in known if slot is not None]
-        if pairs:
-            out[:, [slot for _, slot in pairs]] = efforts[:, [i for i, _ in pairs]]
-        return out
+            motion = f"{', '.join(parts)} of {imu.topic}" if parts else None
+        return super().summary(forces, motion)
 
     def rows(
         self,
@@ -266,41 +208,6 @@ class ForcePass:
                 else self.imu.sample(int(nearest[row])),
             )  # fmt: skip
         return forces, normals, probabilities
-
-    def message(
-        self,
-        stamp_ns: int,
-        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
-        feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
-        imu: ImuSample,
-        phase_prior: Sequence[float] | None = None,
-    ) -> tuple[list[list[float]], list[float], list[float]]:
-        """:meth:`rows` for one joint state, on floats (the node's per-message path): 4 forces
-        [N, base frame], 4 normal forces [N] and 4 contact probabilities; ``phase_prior``: a gait
-        scheduler's probability of stance per foot, as the estimator takes it.
-        """
-        if self._origin_ns is None:  # seconds since the first stamp: float64 keeps their ns
-            self._origin_ns = stamp_ns
-        stamp_s = (stamp_ns - self._origin_ns) * 1e-9
-        step = self.estimator.step(stamp_s, joints, feet, imu, phase_prior)
-        counts = self.counts
-        counts.missing += sum(step.missing)
-        counts.singular += sum(step.singular)
-        counts.estimated += sum(1 for value in step.normals if value == value)  # noqa: PLR0124
-        return step.forces, step.normals, step.probabilities
-
-    def message_efforts(self, names: Sequence[str], efforts: Sequence[float]) -> list[float]:
-        """One message's efforts [N m] in slot order (as :meth:`slot_efforts`): NaN for joints
-        not named, and for every joint when there are not as many efforts as names.
-        """
-        out = [math.nan] * JOINT_COUNT
-        if len(efforts) == len(names):
-            slots = self.name_to_slot
-            for name, value in zip(names, efforts, strict=True):
-                slot = slots.get(name)
-                if slot is not None:
-                    out[slot] = value
-        return out
 
 
 def check_has_efforts(

@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # rosbags is imported when a bag is opened
     from rosbags.interfaces import Connection
 
     from a1_leg_fk.kinematics.quadruped import Quadruped
-    from a1_leg_fk.recording.forces import ForcePass
+    from a1_leg_fk.recording.forces import RecordingForces
     from a1_leg_fk.tracking import FootTracker
 
 ROSBAGS_HINT = "reading ROS bags needs rosbags: pip install rosbags"
@@ -77,7 +77,7 @@ class Recording:
     has_velocities: bool = False  # set while reading: some row had a finite foot velocity
     salvage_note: str = ""  # what was read of a truncated MCAP file
     tracker: FootTracker | None = None  # the rules' state and counts of the current pass
-    forces: ForcePass | None = None  # foot forces and contacts, when asked for
+    forces: RecordingForces | None = None  # foot forces and contacts, when asked for
     force_output: bool = False  # the forces are wanted in the outputs (bag --forces)
     efforts: bool = False  # the blocks carry the merged joint efforts (the odometry's contacts)
     lowstate: LowStateInput | None = None  # the joint states are a Unitree LowState's motors
@@ -122,8 +122,8 @@ def open_recording(
     efforts); ``estimate_contacts``: contacts with or without efforts; the IMU from the
     ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule`` and
     ``contact_thresholds`` (the threshold rule's touchdown and liftoff forces [N], ``None``: the
-    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.ForcePass` takes them;
-    ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact.
+    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.RecordingForces`
+    takes them; ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact.
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
@@ -208,14 +208,14 @@ def _force_pass(
     quadruped: Quadruped,
     needs_efforts: bool,
     settings: tuple[tuple[float | None, float | None], str, str],
-) -> ForcePass:
+) -> RecordingForces:
     """The force and contact estimation of a pass over the JointStates of ``where`` (their
     connection, the IMU topic or None, the LowState input or None: its IMU is the IMU);
     :class:`LegFkError` if the JointStates carry no
     efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
     contact thresholds, the force model and the contact rule.
     """
-    from a1_leg_fk.recording.forces import IMU_TYPE, ForcePass, ImuTrack, check_has_efforts
+    from a1_leg_fk.recording.forces import IMU_TYPE, ImuTrack, RecordingForces, check_has_efforts
 
     joint_states, imu, lowstate = where
     if needs_efforts and lowstate is None:  # a LowState always carries its motors' torques
@@ -226,7 +226,7 @@ def _force_pass(
         connection = pick_topic(reads.reader, reads.path, imu, (IMU_TYPE,), "--imu", "IMU")
         track = ImuTrack.read(reads, connection)
     thresholds, force_model, contact_rule = settings
-    return ForcePass(quadruped, track, thresholds, force_model, contact_rule)
+    return RecordingForces(quadruped, track, thresholds, force_model, contact_rule)
 
 
 def close_recording(recording: Recording) -> None:

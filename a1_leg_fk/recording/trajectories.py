@@ -63,7 +63,7 @@ class RecordingSummary:
     wall_time_s: float
     stopped: str = ""  # why reading stopped before the end of the bag ("" = read to the end)
     types: str = ""  # which message types the bag was read with (recording.typestores)
-    forces: str = ""  # with forces or contacts: what the estimate gave (ForcePass.summary)
+    forces: str = ""  # with forces or contacts: what the estimate gave (RecordingForces.summary)
     input_type: str = JOINT_STATE_TYPE  # the message type of ``topic``
     stamps: str = ""  # where the stamps came from, when not the messages' headers
     sensors: str = ""  # a LowState's foot sensors against the contact estimate (SensorAgreement)

@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from a1_leg_fk.estimation.contact_estimator import ImuSample
-from a1_leg_fk.recording.forces import ForcePass
+from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.tracking import REJECTIONS, TrackerCounts
 
 OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"

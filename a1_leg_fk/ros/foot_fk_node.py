@@ -35,9 +35,9 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
 from a1_leg_fk.estimation.contact_estimator import ImuSample
+from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.urdf import LegFkError
-from a1_leg_fk.recording.forces import ForcePass
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
@@ -355,7 +355,7 @@ class FootFkNode(Node):
         )
         choices = [self.get_parameter(name).value for name in ("force_model", "contact_rule")]
         try:
-            self._forces = ForcePass(self._model.quadruped, None, (touchdown, liftoff), *choices)
+            self._forces = ForcePass(self._model.quadruped, (touchdown, liftoff), *choices)
         except LegFkError as error:
             self._forces_problem = f"none: {error}"
             self.get_logger().warn(f"no foot forces: {error}")

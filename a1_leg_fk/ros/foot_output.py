@@ -20,15 +20,15 @@ from rclpy.publisher import Publisher
 from sensor_msgs.msg import JointState
 
 from a1_leg_fk.model.legs import LEG_NAMES
-from a1_leg_fk.recording.bag_writer import (
+from a1_leg_fk.ros.glue import OUTPUT_QOS
+from a1_leg_fk.ros.serialized_output import SerializedStamped, raw_publish
+from a1_leg_fk.tracking import Foot
+from a1_leg_fk.wire.output import (
     contacts_bytes,
     contacts_layout,
     frame_bytes,
     wrench_bytes,
 )
-from a1_leg_fk.ros.glue import OUTPUT_QOS
-from a1_leg_fk.ros.serialized_output import SerializedStamped, raw_publish
-from a1_leg_fk.tracking import Foot
 
 
 class FootOutput:

@@ -209,9 +209,9 @@ def test_efforts_by_name_partial_unknown_and_wrong_length() -> None:
     """Efforts go to their joints by name (aliases too); joints a message does not name, and all
     joints of a message whose effort array does not match its names, have none.
     """
-    from a1_leg_fk.recording.forces import ForcePass
+    from a1_leg_fk.recording.forces import RecordingForces
 
-    forces = ForcePass(A1, None)
+    forces = RecordingForces(A1, None)
     names = ["arm_joint", "FL_calf_joint", "FR_hip_joint", NAMES[1]]  # an alias, an unknown name
     efforts = forces.slot_efforts(names, np.array([[9.0, 1.0, 2.0, 3.0], [9.0, 4.0, 5.0, 6.0]]))
     expected = np.full((2, 12), math.nan)

@@ -5,8 +5,9 @@ tool (:class:`OdometryFeed`).
   (:class:`~a1_leg_fk.estimation.state_filter.StateFilter`); every IMU sample is kept to pair with
   the joint states (:class:`~a1_leg_fk.estimation.imu.ImuBuffer`).
 - Per joint state: the feet's contact probabilities (:class:`~a1_leg_fk.estimation.
-  contact_estimator.ContactEstimator`: the efforts' dynamic foot forces fused with the feet's
-  heights and speeds, or the kinematic evidence alone, see :data:`CONTACT_SOURCES`); each
+  force_pass.ForcePass`, the contact estimate as the node and the bag tools run it: the efforts'
+  dynamic foot forces fused with the feet's heights and speeds, or the kinematic evidence alone,
+  see :data:`CONTACT_SOURCES`); each
   standing foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`) and Jacobian; then
   the filter's update, gated per foot.
 - Without an IMU sample with an accelerometer paired with the joint state (no IMU, ``use_imu``
@@ -22,8 +23,9 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from a1_leg_fk.estimation.contact_estimator import ContactEstimator, EvidenceCounts, ImuSample
+from a1_leg_fk.estimation.contact_estimator import EvidenceCounts, ImuSample
 from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement, stands
+from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
@@ -90,9 +92,9 @@ class OdometryFeed:
         self.motion = LegMotion(quadruped, radii)
         self.note = ""
         """Why there are no foot forces for this robot ("" when there are)."""
-        self.contacts: ContactEstimator | None = None
+        self.contacts: ForcePass | None = None
         try:
-            self.contacts = ContactEstimator(quadruped)
+            self.contacts = ForcePass(quadruped)
         except LegFkError as error:  # a URDF without masses: the kinematic stance
             self.note = str(error)
         self.odometry = LegOdometry(settings)
@@ -104,13 +106,12 @@ class OdometryFeed:
         self.distance_m = 0.0
         """The path length of the estimate's positions [m]."""
         self._jacobians = tuple(leg.jacobian_from_trig for leg in quadruped.legs)
-        self._first_stamp_ns: int | None = None
         self._position: tuple[float, float, float] | None = None
 
     @property
     def counts(self) -> EvidenceCounts:
         """The joint states whose contacts had force evidence, and kinematic evidence alone."""
-        return self.contacts.counts if self.contacts is not None else EvidenceCounts()
+        return self.contacts.estimator.counts if self.contacts is not None else EvidenceCounts()
 
     def add_imu(self, stamp_ns: int, reading: ImuReading | None) -> None:
         """One IMU sample (None: unusable, ignored); with an accelerometer it moves the filter."""
@@ -184,8 +185,6 @@ class OdometryFeed:
             efforts = None
         elif self.source == FORCE and efforts is None:
             return [0.0] * len(feet)
-        if self._first_stamp_ns is None:
-            self._first_stamp_ns = stamp_ns
         gravity = (down[0] * STANDARD_GRAVITY, down[1] * STANDARD_GRAVITY,
                    down[2] * STANDARD_GRAVITY)  # fmt: skip
         sample = ImuSample(
@@ -193,8 +192,7 @@ class OdometryFeed:
             None if imu is None else imu.gyro,
             None if imu is None else imu.specific_force,
         )
-        stamp_s = (stamp_ns - self._first_stamp_ns) / 1e9
-        return self.contacts.step(stamp_s, (angles, rates, efforts), feet, sample).probabilities
+        return self.contacts.message(stamp_ns, (angles, rates, efforts), feet, sample)[2]
 
     def _measurement(
         self,

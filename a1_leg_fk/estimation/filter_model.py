@@ -9,8 +9,6 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from a1_leg_fk.estimation.leg_motion import FootMotion
 
 LEGS = 4
@@ -113,9 +111,9 @@ class FilterCounts:
 
 def foot_noise(
     measurement: LegMeasurement, fixed: tuple[float, float, tuple[float, ...]]
-) -> tuple[tuple[float, float, float], ...]:
-    """A foot's velocity noise (3 x 3, [m²/s²]): ``s_dq² J Jᵀ + s_w² [r]x[r]xᵀ`` plus the foot's
-    own (``fixed``: s_dq², s_w², its 3 x 3 row-major), over its contact probability.
+) -> tuple[float, ...]:
+    """A foot's velocity noise (3 x 3 row-major, [m²/s²]): ``s_dq² J Jᵀ + s_w² [r]x[r]xᵀ`` plus
+    the foot's own (``fixed``: s_dq², s_w², its 3 x 3 row-major), over its contact probability.
     """
     rate2, gyro2, own = fixed
     rx, ry, rz = measurement.motion.r
@@ -123,26 +121,39 @@ def foot_noise(
     j = measurement.jjt
     xy, xz, yz = gyro2 * rx * ry, gyro2 * rx * rz, gyro2 * ry * rz
     return (
-        (scale * (rate2 * j[0] + gyro2 * (r2 - rx * rx) + own[0]),
-         scale * (rate2 * j[1] - xy + own[1]), scale * (rate2 * j[2] - xz + own[2])),
-        (scale * (rate2 * j[3] - xy + own[3]),
-         scale * (rate2 * j[4] + gyro2 * (r2 - ry * ry) + own[4]),
-         scale * (rate2 * j[5] - yz + own[5])),
-        (scale * (rate2 * j[6] - xz + own[6]), scale * (rate2 * j[7] - yz + own[7]),
-         scale * (rate2 * j[8] + gyro2 * (r2 - rz * rz) + own[8])),
+        scale * (rate2 * j[0] + gyro2 * (r2 - rx * rx) + own[0]),
+        scale * (rate2 * j[1] - xy + own[1]),
+        scale * (rate2 * j[2] - xz + own[2]),
+        scale * (rate2 * j[3] - xy + own[3]),
+        scale * (rate2 * j[4] + gyro2 * (r2 - ry * ry) + own[4]),
+        scale * (rate2 * j[5] - yz + own[5]),
+        scale * (rate2 * j[6] - xz + own[6]),
+        scale * (rate2 * j[7] - yz + own[7]),
+        scale * (rate2 * j[8] + gyro2 * (r2 - rz * rz) + own[8]),
+    )
+
+
+def horizontally_scaled(
+    noise: tuple[float, ...], root: float, up: tuple[float, float, float]
+) -> tuple[float, ...]:
+    """``S N S`` for a symmetric 3 x 3 ``noise`` (row-major) and ``S = h I + (1 - h) u uᵀ``
+    (``h = root``, ``u = up`` a unit vector): the noise's variance across ``up`` scaled by
+    ``h²``, along it kept. Written out: ``h² N + h (1 - h) (w uᵀ + u wᵀ) + (1 - h)² (uᵀ w) u uᵀ``
+    with ``w = N u``.
+    """
+    a, b, c, _, d, e, _, _, f = noise
+    ux, uy, uz = up
+    wx, wy, wz = a * ux + b * uy + c * uz, b * ux + d * uy + e * uz, c * ux + e * uy + f * uz
+    g = 1.0 - root
+    hh, hg, gg = root * root, root * g, g * g * (ux * wx + uy * wy + uz * wz)
+    xy = hh * b + hg * (wx * uy + ux * wy) + gg * ux * uy
+    xz = hh * c + hg * (wx * uz + ux * wz) + gg * ux * uz
+    yz = hh * e + hg * (wy * uz + uy * wz) + gg * uy * uz
+    return (
+        hh * a + 2.0 * hg * wx * ux + gg * ux * ux, xy, xz,
+        xy, hh * d + 2.0 * hg * wy * uy + gg * uy * uy, yz,
+        xz, yz, hh * f + 2.0 * hg * wz * uz + gg * uz * uz,
     )  # fmt: skip
-
-
-def block_diagonal(blocks: Sequence[np.ndarray]) -> np.ndarray:
-    """The block-diagonal matrix of square ``blocks`` (a sequence or a (K, n, n) array)."""
-    size = sum(block.shape[0] for block in blocks)
-    result = np.zeros((size, size))
-    start = 0
-    for block in blocks:
-        end = start + block.shape[0]
-        result[start:end, start:end] = block
-        start = end
-    return result
 
 
 def stands(probability: float) -> bool:
@@ -164,20 +175,21 @@ def standing_still(legs: Sequence[LegMeasurement | None], fastest_mps: float) ->
 
 
 def normalised_squares(
-    innovations: list[list[list[float]]],
+    innovation: list[list[float]],
     residuals: list[tuple[float, float, float]],
     up: list[float],
 ) -> tuple[list[float], list[float]]:
     """Per foot, the NIS ``rᵀ S⁻¹ r`` of its residual ``r`` with its innovation covariance ``S``
-    (3 x 3, symmetric; by cofactors, in floats: numpy's per-call cost is larger), and the square
-    of its part along ``up``, ``(u·r)² / (uᵀ S u)``.
+    (the feet's 3 x 3 diagonal blocks of ``innovation``, symmetric, in the order of
+    ``residuals``; by cofactors, in floats: numpy's per-call cost is larger), and the square of
+    its part along ``up``, ``(u·r)² / (uᵀ S u)``.
     """
     squares, vertical = [], []
     ux, uy, uz = up
-    for (row0, row1, row2), (x, y, z) in zip(innovations, residuals):
-        a, b, c = row0
-        _, d, e = row1
-        f = row2[2]
+    for first, (x, y, z) in zip(range(0, 3 * len(residuals), 3), residuals):
+        a, b, c = innovation[first][first : first + 3]
+        d, e = innovation[first + 1][first + 1 : first + 3]
+        f = innovation[first + 2][first + 2]
         ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
         determinant = a * ca + b * cb + c * cc
         cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b

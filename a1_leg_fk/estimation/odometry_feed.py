@@ -211,12 +211,13 @@ class OdometryFeed:
             return None
         c = self._jacobians[leg](math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1]),
                                  math.cos(q[2]), math.sin(q[2]))  # fmt: skip
-        jjt = tuple(
-            c[row] * c[column] + c[3 + row] * c[3 + column] + c[6 + row] * c[6 + column]
-            for row in range(3)
-            for column in range(3)
-        )
-        return LegMeasurement(motion, probability, jjt)
+        xx = c[0] * c[0] + c[3] * c[3] + c[6] * c[6]
+        xy = c[0] * c[1] + c[3] * c[4] + c[6] * c[7]
+        xz = c[0] * c[2] + c[3] * c[5] + c[6] * c[8]
+        yy = c[1] * c[1] + c[4] * c[4] + c[7] * c[7]
+        yz = c[1] * c[2] + c[4] * c[5] + c[7] * c[8]
+        zz = c[2] * c[2] + c[5] * c[5] + c[8] * c[8]
+        return LegMeasurement(motion, probability, (xx, xy, xz, xy, yy, yz, xz, yz, zz))
 
     def _legs_alone(
         self,

@@ -35,20 +35,13 @@ def exp_so3(w: Sequence[float]) -> np.ndarray:
     )
 
 
-def log_so3(rotation: np.ndarray) -> np.ndarray:
+def log_so3(rotation: np.ndarray) -> tuple[float, float, float]:
     """The rotation vector [rad] of a rotation matrix (angles below π)."""
-    cosine = max(-1.0, min(1.0, (float(np.trace(rotation)) - 1.0) / 2.0))
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rotation.tolist()
+    cosine = max(-1.0, min(1.0, (m00 + m11 + m22 - 1.0) / 2.0))
     angle = math.acos(cosine)
-    axis = np.array(
-        [
-            rotation[2, 1] - rotation[1, 2],
-            rotation[0, 2] - rotation[2, 0],
-            rotation[1, 0] - rotation[0, 1],
-        ]
-    )
     scale = 0.5 if angle < 1e-8 else angle / (2.0 * math.sin(angle))
-    result: np.ndarray = scale * axis
-    return result
+    return (scale * (m21 - m12), scale * (m02 - m20), scale * (m10 - m01))
 
 
 def matrix_of(q: Quaternion) -> np.ndarray:
@@ -65,24 +58,19 @@ def matrix_of(q: Quaternion) -> np.ndarray:
 
 def quaternion_of(rotation: np.ndarray) -> Quaternion:
     """The unit quaternion (x, y, z, w, w >= 0) of a rotation matrix (Shepperd's method)."""
-    m = rotation
-    trace = float(m[0, 0] + m[1, 1] + m[2, 2])
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rotation.tolist()
+    trace = m00 + m11 + m22
     if trace > 0.0:
         s = 2.0 * math.sqrt(trace + 1.0)
-        q = ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4)
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = (s / 4, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s)
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = ((m[0, 1] + m[1, 0]) / s, s / 4, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s)
+        q = ((m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s, s / 4)
+    elif m00 > m11 and m00 > m22:
+        s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
+        q = (s / 4, (m01 + m10) / s, (m02 + m20) / s, (m21 - m12) / s)
+    elif m11 > m22:
+        s = 2.0 * math.sqrt(1.0 + m11 - m00 - m22)
+        q = ((m01 + m10) / s, s / 4, (m12 + m21) / s, (m02 - m20) / s)
     else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = ((m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, s / 4, (m[1, 0] - m[0, 1]) / s)
+        s = 2.0 * math.sqrt(1.0 + m22 - m00 - m11)
+        q = ((m02 + m20) / s, (m12 + m21) / s, s / 4, (m10 - m01) / s)
     sign = -1.0 if q[3] < 0.0 else 1.0
-    return (
-        float(sign * q[0]),
-        float(sign * q[1]),
-        float(sign * q[2]),
-        float(sign * q[3]),
-    )
+    return (sign * q[0], sign * q[1], sign * q[2], sign * q[3])

@@ -43,56 +43,55 @@ from a1_leg_fk.estimation.filter_model import (
     FilterCounts,
     FilterSettings,
     LegMeasurement,
-    block_diagonal,
-    foot_noise,
     normalised_squares,
     standing_still,
     stands,
 )
+from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.odometry import OdometrySample
-from a1_leg_fk.estimation.so3 import exp_so3, log_so3, matrix_of, quaternion_of, skew
+from a1_leg_fk.estimation.so3 import exp_so3, matrix_of, quaternion_of
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
-GRAVITY = np.array([0.0, 0.0, -STANDARD_GRAVITY])
-"""[m/s²] in the world (odom) frame."""
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
 Z = POSITION.start + 2
-ORIENTATION_ROWS = np.eye(3, STATE)
-"""The IMU's orientation observes dθ directly."""
+ONES_6 = np.ones(6)
+"""Sums the rows of a 6-column matrix (a product with it costs less than a sum)."""
 
 
 class StateFilter:
     """The running estimate (see the module text): :meth:`propagate` with every IMU sample,
     :meth:`update` with every joint state. It starts at the first IMU sample, oriented as that
     sample says (else level), at rest at the origin.
+
+    The algebra is numpy on whole matrices, a few calls per step, the small parts in floats:
+    numpy's cost per call, not the arithmetic, sets the filter's speed (``bench/``).
     """
 
     def __init__(self, settings: FilterSettings | None = None, ground: str = FLAT) -> None:
         if ground not in GROUND_MODELS:
             raise ValueError(f"ground must be one of {', '.join(GROUND_MODELS)}: {ground!r}")
-        self.settings = settings or FilterSettings()
+        self.settings = s = settings or FilterSettings()
         self.ground = ground
         self.counts = FilterCounts()
         self.rotation = np.eye(3)
-        self.velocity = np.zeros(3)
-        self.position = np.zeros(3)
-        self.gyro_bias = np.zeros(3)
-        self.accel_bias = np.zeros(3)
+        self._nominal = np.zeros(STATE - 3)
+        self.velocity, self.position, self.gyro_bias, self.accel_bias = (
+            self._nominal[k : k + 3] for k in range(0, STATE - 3, 3)
+        )
         self.covariance = np.zeros((STATE, STATE))
         self.started = False
         self.ground_z: float | None = None
         self._imu_stamp_ns = 0
         self._gyro: Vector = (0.0, 0.0, 0.0)
         self._rejected_since_ns: int | None = None
-        self._orientation_noise = np.eye(3) * self.settings.orientation_noise_rad**2
+        self._orientation_noise = np.eye(3) * s.orientation_noise_rad**2
         self._legs_stamp_ns: int | None = None
         self.noise_scale = 1.0
         """The feet's horizontal noise variance over the model's
         (:data:`FilterSettings.noise_adapt_s`)."""
         self._transition = np.eye(STATE)
         self._transition_dt = math.nan
-        self._noise = np.zeros(STATE)
-        s = self.settings
+        self._noise = np.zeros((STATE, STATE))
         self._noise_density = np.repeat(
             [s.gyro_noise**2, s.accel_noise**2, 0.0, s.gyro_bias_walk**2, s.accel_bias_walk**2],
             3,
@@ -131,23 +130,32 @@ class StateFilter:
         if dt > self.settings.max_step_s:
             self.counts.gaps += 1
             dt = self.settings.max_step_s
-        bg, ba = self.gyro_bias, self.accel_bias
-        fx, fy, fz = (specific_force[0] - ba[0], specific_force[1] - ba[1],
-                      specific_force[2] - ba[2])  # fmt: skip
-        turn = exp_so3(((gyro[0] - bg[0]) * dt, (gyro[1] - bg[1]) * dt, (gyro[2] - bg[2]) * dt))
+        bx, by, bz, cx, cy, cz = self._nominal[6:12].tolist()
+        fx, fy, fz = specific_force[0] - cx, specific_force[1] - cy, specific_force[2] - cz
+        turn = exp_so3(((gyro[0] - bx) * dt, (gyro[1] - by) * dt, (gyro[2] - bz) * dt))
         rotation = self.rotation
-        acceleration = rotation @ (fx, fy, fz) + GRAVITY
+        # R times [-dt [f]x | -dt I | f]: the velocity's rows of the transition, and R f
+        product = rotation.dot(np.array(
+            ((0.0, fz * dt, -fy * dt, -dt, 0.0, 0.0, fx),
+             (-fz * dt, 0.0, fx * dt, 0.0, -dt, 0.0, fy),
+             (fy * dt, -fx * dt, 0.0, 0.0, 0.0, -dt, fz)))
+        )  # fmt: skip
         transition = self._transition_for(dt)
         transition[THETA, THETA] = turn.T
-        force_skew = ((0.0, fz * dt, -fy * dt), (-fz * dt, 0.0, fx * dt), (fy * dt, -fx * dt, 0.0))
-        transition[VELOCITY, THETA] = rotation @ force_skew  # -dt R [f]x
-        transition[VELOCITY, ACCEL_BIAS] = rotation * -dt
-        covariance = transition @ self.covariance @ transition.T
-        covariance.flat[:: STATE + 1] += self._noise
+        transition[VELOCITY, THETA] = product[:, 0:3]
+        transition[VELOCITY, ACCEL_BIAS] = product[:, 3:6]
+        covariance = transition.dot(self.covariance).dot(transition.T)
+        covariance += self._noise
         self.covariance = covariance
-        self.position += (self.velocity + 0.5 * dt * acceleration) * dt
-        self.velocity += acceleration * dt
-        self.rotation = rotation @ turn
+        ax, ay, az = product[:, 6].tolist()
+        az -= STANDARD_GRAVITY
+        vx, vy, vz, px, py, pz = self._nominal[0:6].tolist()
+        half = 0.5 * dt
+        self._nominal[0:6] = (
+            vx + ax * dt, vy + ay * dt, vz + az * dt,
+            px + (vx + half * ax) * dt, py + (vy + half * ay) * dt, pz + (vz + half * az) * dt,
+        )  # fmt: skip
+        self.rotation = rotation.dot(turn)
 
     def _transition_for(self, dt: float) -> np.ndarray:
         """The transition matrix with its ``dt``-only blocks (and the noise) set for ``dt``."""
@@ -155,7 +163,7 @@ class StateFilter:
             transition = self._transition
             transition[THETA, GYRO_BIAS] = -dt * np.eye(3)
             transition[POSITION, VELOCITY] = dt * np.eye(3)
-            self._noise = self._noise_density * dt
+            self._noise = np.diag(self._noise_density * dt)
             self._transition_dt = dt
         return self._transition
 
@@ -168,98 +176,78 @@ class StateFilter:
     ) -> list[int]:
         """Correct the state with one joint state's standing feet (None: a foot that does not
         stand, or unknown) and the IMU's orientation (None: none); the legs used (the gate's).
+
+        One stacked update (:class:`~a1_leg_fk.estimation.filter_stack.Stack`: the orientation,
+        every standing foot, their heights, the zero-velocity update); the feet's gate reads its
+        innovation covariance, and the rows of the feet it rejects (and their heights) are
+        dropped before the gain.
         """
         self.counts.updates += 1
-        rotation_t = self.rotation.T
-        local = rotation_t @ self.velocity
-        base = np.zeros((3, STATE))
-        base[:, THETA] = skew(local)
-        base[:, VELOCITY] = rotation_t
-        blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        if orientation is not None:
-            blocks.append(self._orientation_block(orientation, orientation_variance))
-        used, leg_block = self._legs(stamp_ns, legs, local.tolist(), base)
-        if leg_block is not None:
-            blocks.append(leg_block)
-            if self.ground == FLAT:
-                blocks.extend(self._heights(used, legs))
-        if standing_still(legs, self.settings.still_speed_mps):
-            self.counts.still += 1
-            blocks.append((base, -local, (self.settings.still_noise_mps**2) * np.eye(3)))
-        if blocks:
-            self._correct(blocks)
+        candidates, feet = [], []
+        for leg, measurement in enumerate(legs):
+            if measurement is not None and stands(measurement.probability):
+                candidates.append(leg)
+                feet.append(measurement)
+        still = len(feet) == len(legs) and standing_still(legs, self.settings.still_speed_mps)
+        if orientation is None and not candidates and not still:
+            return []
+        heights = self.ground == FLAT and self.ground_z is not None
+        stack = Stack(
+            self._point(),
+            self.settings,
+            None if orientation is None else (orientation, orientation_variance),
+            feet,
+            heights,
+            still,
+        )
+        self.counts.still += still
+        cross = self.covariance.dot(stack.rows.T)
+        innovation = stack.rows.dot(cross) + stack.noise
+        used = candidates
+        if candidates:
+            rows = stack.layout.feet
+            nis, along = normalised_squares(
+                innovation[rows, rows].tolist(), stack.foot_residuals, stack.up
+            )
+            used, reset = self._gate(stamp_ns, candidates, nis, along)
+            if reset:  # the filter had lost its way: widen the velocity by the feet's disagreement
+                spread = sum(x * x + y * y + z * z for x, y, z in stack.foot_residuals)
+                self.covariance[VELOCITY, VELOCITY] += (spread / len(candidates)) * np.eye(3)
+                cross = self.covariance.dot(stack.rows.T)
+                innovation = stack.rows.dot(cross) + stack.noise
+            if used and self.ground == FLAT and self.ground_z is None:
+                self.ground_z = sum(stack.foot_heights[candidates.index(k)] for k in used) / len(
+                    used
+                )
+            if len(used) < len(candidates):
+                keep = stack.keep([candidates.index(leg) for leg in used])
+                if not keep.size:
+                    return used
+                innovation = innovation.take(keep, axis=0).take(keep, axis=1)
+                self._correct(cross.take(keep, axis=1), innovation, stack.residual.take(keep))
+                return used
+        self._correct(cross, innovation, stack.residual)
         return used
 
-    def _orientation_block(
-        self, orientation: Quaternion, variance: Vector | None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The IMU's orientation observes dθ directly: ``Log(R̂ᵀ R_m)``."""
-        residual = log_so3(self.rotation.T @ matrix_of(orientation))
-        noise = self._orientation_noise if variance is None else np.diag(variance)
-        return ORIENTATION_ROWS, residual, noise
-
-    def _legs(
-        self,
-        stamp_ns: int,
-        legs: Sequence[LegMeasurement | None],
-        local: list[float],
-        base: np.ndarray,
-    ) -> tuple[list[int], tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-        """The standing feet's velocity measurements, each gated alone: the legs accepted and
-        their stacked rows, residuals and noise (None: none accepted).
+    def _correct(self, cross: np.ndarray, innovation: np.ndarray, residual: np.ndarray) -> None:
+        """One Kalman update (``cross = P Hᵀ``, ``innovation = H P Hᵀ + N``), and the error's
+        injection into the nominal state.
         """
-        s = self.settings
-        wx, wy, wz = self._gyro
-        bx, by, bz = self.gyro_bias.tolist()
-        lx, ly, lz = local
-        rate2, gyro2 = s.joint_rate_noise_radps**2, s.gyro_sample_noise_radps**2
-        foot2 = s.foot_noise_mps**2
-        ux, uy, uz = self.rotation[2].tolist()  # world up in the base frame
-        extra = s.foot_vertical_noise_mps**2 - foot2
-        fixed = (
-            rate2,
-            gyro2,
-            (foot2 + extra * ux * ux, extra * ux * uy, extra * ux * uz,
-             extra * uy * ux, foot2 + extra * uy * uy, extra * uy * uz,
-             extra * uz * ux, extra * uz * uy, foot2 + extra * uz * uz),
-        )  # fmt: skip
-        candidates, levers, residuals, noises = [], [], [], []
-        for leg, measurement in enumerate(legs):
-            if measurement is None or not stands(measurement.probability):
-                continue
-            (ex, ey, ez), (rx, ry, rz), _ = measurement.motion
-            candidates.append(leg)
-            levers.append(((0.0, -rz, ry), (rz, 0.0, -rx), (-ry, rx, 0.0)))
-            residuals.append(
-                (
-                    ex - (wy * rz - wz * ry) - lx - (ry * bz - rz * by),
-                    ey - (wz * rx - wx * rz) - ly - (rz * bx - rx * bz),
-                    ez - (wx * ry - wy * rx) - lz - (rx * by - ry * bx),
-                )
-            )
-            noises.append(foot_noise(measurement, fixed))
-        if not candidates:
-            return [], None
-        rows = np.repeat(base[None], len(candidates), axis=0)
-        rows[:, :, GYRO_BIAS] = levers
-        up = self.rotation[2]  # world up in the base frame
-        h = math.sqrt(self.noise_scale)
-        shape = h * np.eye(3) + (1.0 - h) * np.outer(up, up)
-        residual, noise = np.array(residuals), shape @ np.array(noises) @ shape
-        innovation = rows @ self.covariance @ rows.transpose(0, 2, 1) + noise
-        nis, along = normalised_squares(innovation.tolist(), residuals, up.tolist())
-        accepted, reset = self._gate(stamp_ns, candidates, nis, along)
-        if not accepted:
-            return [], None
-        if reset:  # the filter had lost its way: widen the velocity by the feet's disagreement
-            spread = float((residual**2).sum(axis=1).mean())
-            self.covariance[VELOCITY, VELOCITY] += spread * np.eye(3)
-        keep = [candidates.index(leg) for leg in accepted]
-        return accepted, (
-            rows[keep].reshape(-1, STATE),
-            residual[keep].reshape(-1),
-            block_diagonal(noise[keep]),
-        )
+        gain_t = np.linalg.solve(innovation, cross.T)
+        error = residual.dot(gain_t)
+        covariance = self.covariance - cross.dot(gain_t)
+        covariance += covariance.T
+        covariance *= 0.5
+        self.covariance = covariance
+        self.rotation = self.rotation.dot(exp_so3(error[0:3].tolist()))
+        self._nominal += error[3:]
+
+    def _point(self) -> Point:
+        """The state an update linearises about (a :class:`Point`)."""
+        lx, ly, lz = self.rotation.T.dot(self.velocity).tolist()
+        _, _, pz, bx, by, bz = self._nominal[3:9].tolist()
+        return Point(self.rotation, (lx, ly, lz), self._gyro, (bx, by, bz),
+                     pz, self.ground_z, self.noise_scale)  # fmt: skip
 
     def _gate(
         self, stamp_ns: int, candidates: list[int], nis: list[float], vertical: list[float]
@@ -308,61 +296,25 @@ class StateFilter:
         scale = self.noise_scale * (1.0 + step * (min(max(ratio, 0.1), 10.0) - 1.0))
         self.noise_scale = min(max(scale, s.min_noise_scale), 1.0)
 
-    def _heights(
-        self, used: list[int], legs: Sequence[LegMeasurement | None]
-    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Flat ground: each used foot's contact point at the ground's height, remembered from
-        the first stance (``p_z + R₃·r``; its dθ row is ``r x R₃``, R₃ the third row of R).
-        """
-        r3x, r3y, r3z = self.rotation[2].tolist()
-        z = float(self.position[2])
-        rows, heights = np.zeros((len(used), STATE)), []
-        for index, leg in enumerate(used):
-            measurement = legs[leg]
-            assert measurement is not None
-            rx, ry, rz = measurement.motion.r
-            heights.append(z + r3x * rx + r3y * ry + r3z * rz)
-            rows[index, :3] = (ry * r3z - rz * r3y, rz * r3x - rx * r3z, rx * r3y - ry * r3x)
-        if self.ground_z is None:
-            self.ground_z = sum(heights) / len(heights)
-            return []
-        rows[:, Z] = 1.0
-        residual = np.array([self.ground_z - height for height in heights])
-        return [(rows, residual, (self.settings.height_noise_m**2) * np.eye(len(used)))]
-
-    def _correct(self, blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> None:
-        """One Kalman update with the stacked ``blocks`` (rows, residual, noise), and the error's
-        injection into the nominal state.
-        """
-        if len(blocks) == 1:
-            rows, residual, noise = blocks[0]
-        else:
-            rows = np.concatenate([block[0] for block in blocks])
-            residual = np.concatenate([block[1] for block in blocks])
-            noise = block_diagonal([block[2] for block in blocks])
-        covariance = self.covariance
-        cross = covariance @ rows.T
-        gain_t = np.linalg.solve(rows @ cross + noise, cross.T)
-        error = (residual @ gain_t).tolist()
-        covariance = covariance - cross @ gain_t
-        self.covariance = 0.5 * (covariance + covariance.T)
-        self.rotation = self.rotation @ exp_so3(error[0:3])
-        self.velocity += error[3:6]
-        self.position += error[6:9]
-        self.gyro_bias += error[9:12]
-        self.accel_bias += error[12:15]
-
     def sample(self, stamp_ns: int, stance: Sequence[int], used: Sequence[int]) -> OdometrySample:
         """The estimate as an :class:`OdometrySample` (twist in the base frame, pose in odom)
         with the diagonals of its covariances.
         """
         rotation, covariance = self.rotation, self.covariance
-        rotation_t = rotation.T
-        local = rotation_t @ self.velocity
-        row = np.hstack((skew(local), rotation_t))  # d(Rᵀ v) / d(dθ, dv)
-        twist = ((row @ covariance[:6, :6]) * row).sum(axis=1)
-        attitude = ((rotation @ covariance[THETA, THETA]) * rotation).sum(axis=1)
-        diagonal = covariance.diagonal()
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rotation.tolist()
+        vx, vy, vz = self.velocity.tolist()
+        lx, ly, lz = (
+            r0 * vx + r3 * vy + r6 * vz,
+            r1 * vx + r4 * vy + r7 * vz,
+            r2 * vx + r5 * vy + r8 * vz,
+        )
+        # the twist's rows d(Rᵀ v) / d(dθ, dv) over the attitude's (R, 0): both variances at once
+        rows = np.array(
+            ((0.0, -lz, ly, r0, r3, r6), (lz, 0.0, -lx, r1, r4, r7), (-ly, lx, 0.0, r2, r5, r8),
+             (r0, r1, r2, 0.0, 0.0, 0.0), (r3, r4, r5, 0.0, 0.0, 0.0), (r6, r7, r8, 0.0, 0.0, 0.0))
+        )  # fmt: skip
+        variances = (rows.dot(covariance[:6, :6]) * rows).dot(ONES_6).tolist()
+        diagonal = covariance.diagonal().tolist()
         gyro_noise = self.settings.gyro_sample_noise_radps**2
         wx, wy, wz = self._gyro
         bx, by, bz = self.gyro_bias.tolist()
@@ -371,10 +323,10 @@ class StateFilter:
             stamp_ns,
             (px, py, pz),
             quaternion_of(rotation),
-            tuple(local.tolist()),
+            (lx, ly, lz),
             (wx - bx, wy - by, wz - bz),
-            tuple(diagonal[POSITION].tolist() + attitude.tolist()),
-            tuple(twist.tolist() + (diagonal[GYRO_BIAS] + gyro_noise).tolist()),
+            tuple(diagonal[POSITION] + variances[3:6]),
+            tuple(variances[0:3] + [value + gyro_noise for value in diagonal[GYRO_BIAS]]),
             tuple(stance),
             tuple(used),
             False,

@@ -26,7 +26,7 @@ import numpy as np
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
-from a1_leg_fk.estimation.leg_motion import LegMotion
+from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.momentum_observer import NO_ROTATION, MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -75,8 +75,9 @@ class EvidenceCounts:
 
 class ContactStep(NamedTuple):
     """One joint state's result: 4 forces [N, base frame] (NaN: none), 4 normal forces [N]
-    along minus gravity, 4 probabilities of stance, and per leg whether its values were missing
-    and whether its Jacobian was near singular.
+    along minus gravity, 4 probabilities of stance, per leg whether its values were missing and
+    whether its Jacobian was near singular, and each foot's motion (:class:`FootMotion`, None:
+    unknown, or the threshold rule, which needs none).
     """
 
     forces: list[list[float]]
@@ -84,6 +85,7 @@ class ContactStep(NamedTuple):
     probabilities: list[float]
     missing: list[bool]
     singular: list[bool]
+    motions: list[FootMotion | None]
 
 
 class ContactEstimator:
@@ -152,7 +154,7 @@ class ContactEstimator:
             normals = [normal_force(force, down) for force in forces]
         if self.contact_rule == THRESHOLD:
             probabilities = self.rule.update(normals) if efforts is not None else [math.nan] * LEGS
-            return ContactStep(forces, normals, probabilities, missing, singular)
+            return ContactStep(forces, normals, probabilities, missing, singular, [None] * LEGS)
         foot, n = self.motion.foot, JOINTS_PER_LEG
         motions = [
             None if leg_foot is None or not _finite(leg_foot[0])
@@ -174,7 +176,7 @@ class ContactEstimator:
             normals if with_force else None,
             phase_prior,
         )
-        return ContactStep(forces, normals, probabilities, missing, singular)
+        return ContactStep(forces, normals, probabilities, missing, singular, motions)
 
     def _forces(
         self,

@@ -31,7 +31,7 @@ from a1_leg_fk.estimation.filter_model import (
     foot_noise,
     horizontally_scaled,
 )
-from a1_leg_fk.estimation.so3 import log_so3, matrix_of
+from a1_leg_fk.estimation.so3 import rotation_between
 from a1_leg_fk.kinematics.frames import Quaternion, Vector
 
 FOOT_COLUMNS = (0, 1, 2, 3, 4, 5, 9, 10, 11)
@@ -82,13 +82,14 @@ def layout(orientation: bool, feet: int, heights: bool, still: bool) -> Layout:
 
 
 class Point(NamedTuple):
-    """The state one update linearises about: the rotation base -> world (a 3 x 3 array), the
-    base's velocity in its own frame ``Rᵀ v`` [m/s], the gyro's last sample and bias [rad/s]
-    (base frame), the base's height ``p_z`` and the ground's [m] (None: not known yet), the
-    feet's horizontal noise scale.
+    """The state one update linearises about: the rotation base -> world (a 3 x 3 array, and
+    its rows in floats), the base's velocity in its own frame ``Rᵀ v`` [m/s], the gyro's last
+    sample and bias [rad/s] (base frame), the base's height ``p_z`` and the ground's [m] (None:
+    not known yet), the feet's horizontal noise scale.
     """
 
     rotation: np.ndarray
+    rows: list[list[float]]
     local: tuple[float, float, float]
     gyro: Vector
     gyro_bias: Vector
@@ -113,13 +114,13 @@ class Stack:
         still: bool,
     ) -> None:
         self.layout = shape = layout(orientation is not None, len(feet), heights, still)
-        self.up: list[float] = point.rotation[2].tolist()
+        self.up: list[float] = point.rows[2]
         self.foot_residuals: list[tuple[float, float, float]] = []
         self.foot_heights: list[float] = []
         self._contact_points: list[tuple[float, float, float]] = []
         lx, ly, lz = point.local
-        (t0, t1, t2), (t3, t4, t5), (t6, t7, t8) = point.rotation.T.tolist()
-        base = ((0.0, -lz, ly, t0, t1, t2), (lz, 0.0, -lx, t3, t4, t5), (-ly, lx, 0.0, t6, t7, t8))
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = point.rows
+        base = ((0.0, -lz, ly, r0, r3, r6), (lz, 0.0, -lx, r1, r4, r7), (-ly, lx, 0.0, r2, r5, r8))
         rows: list[float] = []
         noise: list[float] = []
         residual: list[float] = []
@@ -127,7 +128,7 @@ class Stack:
             quaternion, variance = orientation
             rows += (1.0, 1.0, 1.0)
             noise += variance or (settings.orientation_noise_rad**2,) * 3
-            residual += log_so3(point.rotation.T.dot(matrix_of(quaternion)))
+            residual += rotation_between(point.rows, quaternion)
         if feet:
             self._feet(point, settings, feet, base, (rows, noise, residual))
         if heights and feet:

@@ -14,7 +14,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER, ContactEstimator, ImuSample
+from a1_leg_fk.estimation.contact_estimator import (
+    DYNAMIC,
+    FILTER,
+    ContactEstimator,
+    ContactStep,
+    ImuSample,
+)
 from a1_leg_fk.model.legs import JOINT_COUNT
 
 if TYPE_CHECKING:
@@ -111,6 +117,18 @@ class ForcePass:
         [N, base frame], 4 normal forces [N] and 4 contact probabilities; ``phase_prior``: a gait
         scheduler's probability of stance per foot, as the estimator takes it.
         """
+        step = self.contact_step(stamp_ns, joints, feet, imu, phase_prior)
+        return step.forces, step.normals, step.probabilities
+
+    def contact_step(
+        self,
+        stamp_ns: int,
+        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
+        feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
+        imu: ImuSample,
+        phase_prior: Sequence[float] | None = None,
+    ) -> ContactStep:
+        """:meth:`message`'s whole :class:`ContactStep` (the feet's motions too), counted."""
         if self._origin_ns is None:  # seconds since the first stamp: float64 keeps their ns
             self._origin_ns = stamp_ns
         stamp_s = (stamp_ns - self._origin_ns) * 1e-9
@@ -119,7 +137,7 @@ class ForcePass:
         counts.missing += sum(step.missing)
         counts.singular += sum(step.singular)
         counts.estimated += sum(1 for value in step.normals if value == value)  # noqa: PLR0124
-        return step.forces, step.normals, step.probabilities
+        return step
 
     def message_efforts(self, names: Sequence[str], efforts: Sequence[float]) -> list[float]:
         """One message's efforts [N m] in slot order (as :meth:`slot_efforts`): NaN for joints

@@ -23,8 +23,8 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from a1_leg_fk.estimation.contact_estimator import EvidenceCounts, ImuSample
-from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement, stands
+from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, ImuSample
+from a1_leg_fk.estimation.filter_model import FLAT, LEGS, FilterSettings, LegMeasurement, stands
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
@@ -56,6 +56,8 @@ class JointSample(NamedTuple):
     rates: Sequence[float]
 
 
+NO_MOTIONS: tuple[None, ...] = (None,) * LEGS
+"""No foot's motion from the contact estimate: the feed works them out."""
 MAX_BASE_SPEED_MPS = 1e3
 """[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
 rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from
@@ -106,6 +108,10 @@ class OdometryFeed:
         self.distance_m = 0.0
         """The path length of the estimate's positions [m]."""
         self._jacobians = tuple(leg.jacobian_from_trig for leg in quadruped.legs)
+        self._shares_motions = (
+            self.contacts is not None and self.contacts.estimator.motion.radii == self.motion.radii
+        )
+        """The contact estimate's feet's motions are this feed's (the same rolling radii)."""
         self._position: tuple[float, float, float] | None = None
 
     @property
@@ -141,14 +147,18 @@ class OdometryFeed:
         imu = self.imu.at(stamp_ns)
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
+        motions: Sequence[FootMotion | None] = NO_MOTIONS
         if contacts is None:
-            contacts = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
+            step = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
+            if step is not None:
+                contacts = step.probabilities
+                motions = step.motions if self._shares_motions else NO_MOTIONS
         joint = JointSample(stamp_ns, feet, angles, rates)
         if imu is None or imu.specific_force is None or not self.filter.started:
             sample = self._legs_alone(joint, contacts, imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
-            sample = self._filtered(joint, contacts, imu, down)
+            sample = self._filtered(joint, (contacts, motions), imu, down)
         position = sample.position
         if self._position is not None:
             last = self._position
@@ -157,14 +167,25 @@ class OdometryFeed:
         return sample
 
     def _filtered(
-        self, joint: JointSample, contacts: Sequence[float] | None, imu: ImuReading, down: Vector
+        self,
+        joint: JointSample,
+        contacts: tuple[Sequence[float] | None, Sequence[FootMotion | None]],
+        imu: ImuReading,
+        down: Vector,
     ) -> OdometrySample:
-        """The state filter's estimate after its update with this joint state's feet."""
+        """The state filter's estimate after its update with this joint state's feet (their
+        contact probabilities, and their motions where the contact estimate has them).
+        """
         stamp_ns, feet, angles, rates = joint
+        probabilities, motions = contacts
         legs: list[LegMeasurement | None] = [None] * len(feet)
         for leg, foot in enumerate(feet):
-            if contacts is not None and foot is not None and stands(contacts[leg]):
-                legs[leg] = self._measurement(leg, foot, angles, rates, down, contacts[leg])
+            if probabilities is not None and foot is not None and stands(probabilities[leg]):
+                joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
+                motion = motions[leg] or self.motion.foot(
+                    leg, angles[joints], rates[joints], foot[0], foot[1], down
+                )
+                legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
         used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
         return self.filter.sample(stamp_ns, stance, used)
@@ -176,15 +197,16 @@ class OdometryFeed:
         joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
         imu: ImuReading | None,
         down: Vector,
-    ) -> list[float] | None:
-        """The contact estimate's probabilities (None: kinematic stance, a URDF without masses)."""
+    ) -> ContactStep | None:
+        """The contact estimate (None: kinematic stance, a URDF without masses)."""
         if self.contacts is None:
             return None
         angles, rates, efforts = joints
         if self.source == KINEMATIC:
             efforts = None
         elif self.source == FORCE and efforts is None:
-            return [0.0] * len(feet)
+            none = [0.0] * len(feet)
+            return ContactStep([], none, none, [], [], [None] * len(feet))
         gravity = (down[0] * STANDARD_GRAVITY, down[1] * STANDARD_GRAVITY,
                    down[2] * STANDARD_GRAVITY)  # fmt: skip
         sample = ImuSample(
@@ -192,22 +214,17 @@ class OdometryFeed:
             None if imu is None else imu.gyro,
             None if imu is None else imu.specific_force,
         )
-        return self.contacts.message(stamp_ns, (angles, rates, efforts), feet, sample)[2]
+        return self.contacts.contact_step(stamp_ns, (angles, rates, efforts), feet, sample)
 
     def _measurement(
-        self,
-        leg: int,
-        foot: Foot,
-        angles: Sequence[float],
-        rates: Sequence[float],
-        down: Vector,
-        probability: float,
+        self, leg: int, motion: FootMotion, q: Sequence[float], probability: float
     ) -> LegMeasurement | None:
-        """A standing foot's measurement: its motion and ``J Jᵀ``; None when unusable."""
-        joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
-        q = angles[joints]
-        motion = self.motion.foot(leg, q, rates[joints], foot[0], foot[1], down)
-        if not all(abs(value) <= MAX_BASE_SPEED_MPS for value in motion.e):  # also NaN
+        """A standing foot's measurement: its motion and ``J Jᵀ`` (``q``: its leg's three angles
+        [rad]); None when unusable.
+        """
+        ex, ey, ez = motion.e
+        fastest = MAX_BASE_SPEED_MPS
+        if not (abs(ex) <= fastest and abs(ey) <= fastest and abs(ez) <= fastest):  # also NaN
             return None
         c = self._jacobians[leg](math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1]),
                                  math.cos(q[2]), math.sin(q[2]))  # fmt: skip

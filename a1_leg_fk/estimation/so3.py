@@ -18,7 +18,14 @@ def skew(v: Sequence[float] | np.ndarray) -> np.ndarray:
 
 
 def exp_so3(w: Sequence[float]) -> np.ndarray:
-    """The rotation matrix of the rotation vector ``w`` [rad] (Rodrigues, written out)."""
+    """The rotation matrix of the rotation vector ``w`` [rad] (:func:`exp_so3_rows`)."""
+    return np.array(exp_so3_rows(w))
+
+
+def exp_so3_rows(w: Sequence[float]) -> tuple[tuple[float, float, float], ...]:
+    """The rows of the rotation matrix of the rotation vector ``w`` [rad] (Rodrigues, written
+    out, in floats).
+    """
     x, y, z = float(w[0]), float(w[1]), float(w[2])
     angle2 = x * x + y * y + z * z
     if angle2 < 1e-12:  # the series to second order
@@ -26,22 +33,31 @@ def exp_so3(w: Sequence[float]) -> np.ndarray:
     else:
         angle = math.sqrt(angle2)
         a, b = math.sin(angle) / angle, (1.0 - math.cos(angle)) / angle2
-    return np.array(
-        [
-            [1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
-            [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
-            [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)],
-        ]
+    return (
+        (1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y),
+        (b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x),
+        (b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)),
     )
 
 
-def log_so3(rotation: np.ndarray) -> tuple[float, float, float]:
-    """The rotation vector [rad] of a rotation matrix (angles below π)."""
-    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rotation.tolist()
-    cosine = max(-1.0, min(1.0, (m00 + m11 + m22 - 1.0) / 2.0))
-    angle = math.acos(cosine)
+def rotation_between(rows: Sequence[Sequence[float]], q: Quaternion) -> tuple[float, float, float]:
+    """``Log(Rᵀ R_q)`` [rad]: the rotation vector (angles below π) from the rotation whose
+    ``rows`` are given to that of the unit quaternion ``q`` (x, y, z, w), in the first's frame.
+    """
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = rows
+    x, y, z, w = q
+    b00, b01, b02 = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)
+    b10, b11, b12 = 2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)
+    b20, b21, b22 = 2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)
+    trace = (a00 * b00 + a01 * b01 + a02 * b02 + a10 * b10 + a11 * b11 + a12 * b12
+             + a20 * b20 + a21 * b21 + a22 * b22)  # fmt: skip
+    angle = math.acos(max(-1.0, min(1.0, (trace - 1.0) / 2.0)))
     scale = 0.5 if angle < 1e-8 else angle / (2.0 * math.sin(angle))
-    return (scale * (m21 - m12), scale * (m02 - m20), scale * (m10 - m01))
+    return (
+        scale * (a02 * b01 + a12 * b11 + a22 * b21 - a01 * b02 - a11 * b12 - a21 * b22),
+        scale * (a00 * b02 + a10 * b12 + a20 * b22 - a02 * b00 - a12 * b10 - a22 * b20),
+        scale * (a01 * b00 + a11 * b10 + a21 * b20 - a00 * b01 - a10 * b11 - a20 * b21),
+    )
 
 
 def matrix_of(q: Quaternion) -> np.ndarray:
@@ -56,9 +72,11 @@ def matrix_of(q: Quaternion) -> np.ndarray:
     )
 
 
-def quaternion_of(rotation: np.ndarray) -> Quaternion:
-    """The unit quaternion (x, y, z, w, w >= 0) of a rotation matrix (Shepperd's method)."""
-    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rotation.tolist()
+def quaternion_of(rows: Sequence[Sequence[float]]) -> Quaternion:
+    """The unit quaternion (x, y, z, w, w >= 0) of a rotation matrix given by its ``rows``
+    (Shepperd's method).
+    """
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rows
     trace = m00 + m11 + m22
     if trace > 0.0:
         s = 2.0 * math.sqrt(trace + 1.0)

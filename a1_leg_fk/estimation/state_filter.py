@@ -49,7 +49,7 @@ from a1_leg_fk.estimation.filter_model import (
 )
 from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.odometry import OdometrySample
-from a1_leg_fk.estimation.so3 import exp_so3, matrix_of, quaternion_of
+from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of, quaternion_of
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
@@ -132,16 +132,19 @@ class StateFilter:
             dt = self.settings.max_step_s
         bx, by, bz, cx, cy, cz = self._nominal[6:12].tolist()
         fx, fy, fz = specific_force[0] - cx, specific_force[1] - cy, specific_force[2] - cz
-        turn = exp_so3(((gyro[0] - bx) * dt, (gyro[1] - by) * dt, (gyro[2] - bz) * dt))
-        rotation = self.rotation
-        # R times [-dt [f]x | -dt I | f]: the velocity's rows of the transition, and R f
-        product = rotation.dot(np.array(
-            ((0.0, fz * dt, -fy * dt, -dt, 0.0, 0.0, fx),
-             (-fz * dt, 0.0, fx * dt, 0.0, -dt, 0.0, fy),
-             (fy * dt, -fx * dt, 0.0, 0.0, 0.0, -dt, fz)))
+        (t0, t1, t2), (t3, t4, t5), (t6, t7, t8) = exp_so3_rows(
+            ((gyro[0] - bx) * dt, (gyro[1] - by) * dt, (gyro[2] - bz) * dt)
+        )
+        # R times [-dt [f]x | -dt I | f | Exp(ω dt)]: the velocity's rows of the transition, the
+        # acceleration and the next rotation in one product
+        inputs = np.array(
+            ((0.0, fz * dt, -fy * dt, -dt, 0.0, 0.0, fx, t0, t1, t2),
+             (-fz * dt, 0.0, fx * dt, 0.0, -dt, 0.0, fy, t3, t4, t5),
+             (fy * dt, -fx * dt, 0.0, 0.0, 0.0, -dt, fz, t6, t7, t8))
         )  # fmt: skip
+        product = self.rotation.dot(inputs)
         transition = self._transition_for(dt)
-        transition[THETA, THETA] = turn.T
+        transition[THETA, THETA] = inputs[:, 7:10].T
         transition[VELOCITY, THETA] = product[:, 0:3]
         transition[VELOCITY, ACCEL_BIAS] = product[:, 3:6]
         covariance = transition.dot(self.covariance).dot(transition.T)
@@ -155,7 +158,7 @@ class StateFilter:
             vx + ax * dt, vy + ay * dt, vz + az * dt,
             px + (vx + half * ax) * dt, py + (vy + half * ay) * dt, pz + (vz + half * az) * dt,
         )  # fmt: skip
-        self.rotation = rotation.dot(turn)
+        self.rotation = product[:, 7:10].copy()
 
     def _transition_for(self, dt: float) -> np.ndarray:
         """The transition matrix with its ``dt``-only blocks (and the noise) set for ``dt``."""
@@ -244,10 +247,12 @@ class StateFilter:
 
     def _point(self) -> Point:
         """The state an update linearises about (a :class:`Point`)."""
-        lx, ly, lz = self.rotation.T.dot(self.velocity).tolist()
-        _, _, pz, bx, by, bz = self._nominal[3:9].tolist()
-        return Point(self.rotation, (lx, ly, lz), self._gyro, (bx, by, bz),
-                     pz, self.ground_z, self.noise_scale)  # fmt: skip
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rotation = self.rotation.tolist()
+        vx, vy, vz, _, _, pz, bx, by, bz = self._nominal[0:9].tolist()
+        local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
+                 r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
+        return Point(self.rotation, rotation, local, self._gyro, (bx, by, bz), pz,
+                     self.ground_z, self.noise_scale)  # fmt: skip
 
     def _gate(
         self, stamp_ns: int, candidates: list[int], nis: list[float], vertical: list[float]
@@ -301,8 +306,8 @@ class StateFilter:
         with the diagonals of its covariances.
         """
         rotation, covariance = self.rotation, self.covariance
-        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rotation.tolist()
-        vx, vy, vz = self.velocity.tolist()
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows_of_rotation = rotation.tolist()
+        vx, vy, vz, px, py, pz, bx, by, bz = self._nominal[0:9].tolist()
         lx, ly, lz = (
             r0 * vx + r3 * vy + r6 * vz,
             r1 * vx + r4 * vy + r7 * vz,
@@ -317,12 +322,10 @@ class StateFilter:
         diagonal = covariance.diagonal().tolist()
         gyro_noise = self.settings.gyro_sample_noise_radps**2
         wx, wy, wz = self._gyro
-        bx, by, bz = self.gyro_bias.tolist()
-        px, py, pz = self.position.tolist()
         return OdometrySample(
             stamp_ns,
             (px, py, pz),
-            quaternion_of(rotation),
+            quaternion_of(rows_of_rotation),
             (lx, ly, lz),
             (wx - bx, wy - by, wz - bz),
             tuple(diagonal[POSITION] + variances[3:6]),

@@ -11,7 +11,7 @@ import numpy as np
 from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
-from a1_leg_fk.estimation.odometry import ImuReading
+from a1_leg_fk.estimation.odometry import ImuReading, OdometrySample
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.kinematics.quadruped import Quadruped
 
@@ -38,23 +38,59 @@ def estimate(
     accelerometer: bool = True,
     **options: Any,
 ) -> Estimate:
-    """Feed every sample of ``run`` (IMU first, then the joint state) to a new feed
-    (``options``: its keywords); ``accelerometer`` false: the IMU has none (the legs alone)."""
+    """Feed every sample of ``run`` to a new feed (``options``: its keywords); ``accelerometer``
+    false: the IMU has none (the legs alone)."""
     quadruped = quadruped or Quadruped.from_urdf(run.urdf_path)
     feed = OdometryFeed(quadruped, contacts="auto" if efforts else "kinematic", **options)
+    samples = feed_samples(
+        feed,
+        quadruped,
+        run,
+        run.quaternions,
+        efforts=run.torques if efforts else None,
+        accelerometer=accelerometer,
+    )
+    used = np.zeros((len(samples), 4), dtype=bool)
+    for row, sample in enumerate(samples):
+        used[row, list(sample.used)] = True
+    return Estimate(
+        np.array([sample.linear for sample in samples]),
+        np.array([sample.twist_variance[:3] for sample in samples]),
+        np.array([sample.position for sample in samples]),
+        used,
+        feed,
+    )
+
+
+def feed_samples(
+    feed: OdometryFeed,
+    quadruped: Quadruped,
+    run: Any,
+    quaternions: np.ndarray,
+    efforts: np.ndarray | None = None,
+    contacts: np.ndarray | None = None,
+    accelerometer: bool = True,
+) -> list[OdometrySample]:
+    """Feed every sample of a simulated ``run`` (its ``stamps_s``, ``angles``, ``rates``,
+    ``gyro`` and ``specific_force``; the base's ``quaternions`` x, y, z, w) to ``feed``: the
+    IMU first, then the joint state with ``efforts`` [N m] and ``contacts`` (N, 4) from
+    elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples."""
+    rows = len(run.stamps_s)
     feet = quadruped.fk_batch(run.angles).tolist()
     speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
-    angles, rates, torques = run.angles.tolist(), run.rates.tolist(), run.torques.tolist()
-    quaternions, gyro = run.quaternions.tolist(), run.gyro.tolist()
-    forces = run.specific_force.tolist() if accelerometer else [None] * len(angles)
-    velocity, variance, position, used = [], [], [], []
+    angles, rates = run.angles.tolist(), run.rates.tolist()
+    gyro, orientations = run.gyro.tolist(), quaternions.tolist()
+    forces = run.specific_force.tolist() if accelerometer else [None] * rows
+    torques = efforts.tolist() if efforts is not None else [None] * rows
+    standing = contacts.tolist() if contacts is not None else [None] * rows
+    samples = []
     for row, seconds in enumerate(run.stamps_s.tolist()):
         stamp = round(seconds * 1e9)
         force = forces[row]
         feed.add_imu(
             stamp,
             ImuReading(
-                tuple(quaternions[row]),
+                tuple(orientations[row]),
                 tuple(gyro[row]),
                 specific_force=None if force is None else tuple(force),
             ),
@@ -64,19 +100,12 @@ def estimate(
             list(zip(feet[row], speeds[row])),
             angles[row],
             rates[row],
-            efforts=torques[row] if efforts else None,
+            standing[row],
+            torques[row],
         )
         assert sample is not None
-        velocity.append(sample.linear)
-        variance.append(sample.twist_variance[:3])
-        position.append(sample.position)
-        mask = [False] * 4
-        for leg in sample.used:
-            mask[leg] = True
-        used.append(mask)
-    return Estimate(
-        np.array(velocity), np.array(variance), np.array(position), np.array(used), feed
-    )
+        samples.append(sample)
+    return samples
 
 
 @dataclass(frozen=True)

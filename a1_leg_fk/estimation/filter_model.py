@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.estimation.odometry import require_non_negative
 
 LEGS = 4
 STATE = 15
@@ -71,9 +72,7 @@ class FilterSettings:
     """IMU samples further apart are not integrated across (a gap: the covariance grows)."""
 
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"filter setting {name} must be a finite number >= 0: {value}")
+        require_non_negative(self, "filter")
 
 
 @dataclass(frozen=True)

@@ -54,6 +54,15 @@ MIN_VARIANCE = 1e-9
 """The floor of every variance [m^2, rad^2, (m/s)^2, (rad/s)^2]."""
 
 
+def require_non_negative(settings: object, kind: str) -> None:
+    """Raise ValueError naming the first of ``settings``' fields (a dataclass of floats) that is
+    not a finite number >= 0; ``kind`` names the settings in the message.
+    """
+    for name, value in vars(settings).items():
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{kind} setting {name} must be a finite number >= 0: {value}")
+
+
 @dataclass(frozen=True)
 class OdometrySettings:
     """The estimate's tuning; units in the names."""
@@ -78,9 +87,7 @@ class OdometrySettings:
     """Stamps further apart than this (or going back) are not integrated across."""
 
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"odometry setting {name} must be a finite number >= 0: {value}")
+        require_non_negative(self, "odometry")
 
 
 class ImuReading(NamedTuple):

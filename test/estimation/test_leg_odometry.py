@@ -13,6 +13,7 @@ import numpy as np
 import pybullet
 import pybullet_data
 import pytest
+from odometry_scoring import feed_samples
 from pybullet_sim import simulate, walking_targets
 
 from a1_leg_fk.estimation.imu import ImuBuffer, imu_reading
@@ -50,34 +51,16 @@ def odometry_of(
     torques as the joint states' efforts (the feed's own force contacts); ``accelerometer``
     false: an IMU without one (the legs alone, averaged)."""
     feed = OdometryFeed(quadruped, radii=radius, use_imu=imu)
-    feet = quadruped.fk_batch(run.angles).tolist()
-    velocities = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
-    angles, rates = run.angles.tolist(), run.rates.tolist()
-    torques = run.torques.tolist() if efforts else [None] * len(angles)
-    standing = (run.contact_forces[:, :, 2] > CONTACT_FORCE_N).astype(float).tolist()
-    forces = run.specific_force.tolist() if accelerometer else [None] * len(angles)
-    samples = []
-    for row, seconds in enumerate(run.stamps_s):
-        stamp = round(seconds * 1e9)
-        force = forces[row]
-        feed.add_imu(
-            stamp,
-            ImuReading(
-                tuple(run.base_quaternions[row]),
-                tuple(run.gyro[row]),
-                specific_force=None if force is None else tuple(force),
-            ),
-        )
-        sample = feed.step(
-            stamp,
-            list(zip(feet[row], velocities[row])),
-            angles[row],
-            rates[row],
-            standing[row] if contacts else None,
-            torques[row],
-        )
-        assert sample is not None
-        samples.append(sample)
+    standing = (run.contact_forces[:, :, 2] > CONTACT_FORCE_N).astype(float)
+    samples = feed_samples(
+        feed,
+        quadruped,
+        run,
+        run.base_quaternions,
+        efforts=run.torques if efforts else None,
+        contacts=standing if contacts else None,
+        accelerometer=accelerometer,
+    )
     linear = np.array([s.linear for s in samples])
     position = np.array([s.position for s in samples])
     assert feed.counts.force == (len(samples) if efforts and not contacts else 0)

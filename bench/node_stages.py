@@ -100,11 +100,11 @@ def stages(node: FootFkNode, stream: list[bytes]) -> dict[str, Callable[[], obje
         forces.message(clock[0], joints, legs, node._imu)
 
     result = forces.message(clock[0], joints, legs, node._imu)
-    assert efforts or all(math.isnan(f) for f, _, _ in result[0]), "no forces without efforts"
+    assert efforts or all(math.isnan(f) for f, _, _ in result.forces), "no forces without efforts"
 
     def publish() -> None:
         output.feet(feet, 1000, 0, True)
-        output.forces(*result, 1000, 0)
+        output.forces(result.forces, result.normals, result.probabilities, 1000, 0)
 
     return {
         "decode": decode,

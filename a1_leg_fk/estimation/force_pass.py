@@ -112,23 +112,12 @@ class ForcePass:
         feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
         imu: ImuSample,
         phase_prior: Sequence[float] | None = None,
-    ) -> tuple[list[list[float]], list[float], list[float]]:
-        """:meth:`rows` for one joint state, on floats (the node's per-message path): 4 forces
-        [N, base frame], 4 normal forces [N] and 4 contact probabilities; ``phase_prior``: a gait
-        scheduler's probability of stance per foot, as the estimator takes it.
-        """
-        step = self.contact_step(stamp_ns, joints, feet, imu, phase_prior)
-        return step.forces, step.normals, step.probabilities
-
-    def contact_step(
-        self,
-        stamp_ns: int,
-        joints: tuple[Sequence[float], Sequence[float], Sequence[float] | None],
-        feet: Sequence[tuple[Sequence[float], Sequence[float]] | None],
-        imu: ImuSample,
-        phase_prior: Sequence[float] | None = None,
     ) -> ContactStep:
-        """:meth:`message`'s whole :class:`ContactStep` (the feet's motions too), counted."""
+        """:meth:`rows` for one joint state, on floats (the node's per-message path): the
+        estimator's :class:`ContactStep` (4 forces [N, base frame], 4 normal forces [N], 4
+        contact probabilities, the feet's motions), counted; ``phase_prior``: a gait scheduler's
+        probability of stance per foot, as the estimator takes it.
+        """
         if self._origin_ns is None:  # seconds since the first stamp: float64 keeps their ns
             self._origin_ns = stamp_ns
         stamp_s = (stamp_ns - self._origin_ns) * 1e-9

@@ -214,7 +214,7 @@ class OdometryFeed:
             None if imu is None else imu.gyro,
             None if imu is None else imu.specific_force,
         )
-        return self.contacts.contact_step(stamp_ns, (angles, rates, efforts), feet, sample)
+        return self.contacts.message(stamp_ns, (angles, rates, efforts), feet, sample)
 
     def _measurement(
         self, leg: int, motion: FootMotion, q: Sequence[float], probability: float

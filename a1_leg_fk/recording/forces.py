@@ -198,7 +198,7 @@ class RecordingForces(ForcePass):
         normals, probabilities = np.full((rows, 4), math.nan), np.full((rows, 4), math.nan)
         nearest = None if self.imu is None else self.imu.at(stamps_ns)
         for row in range(rows):
-            forces[row], normals[row], probabilities[row] = self.message(
+            step = self.message(
                 int(stamps_ns[row]),
                 (angles[row].tolist(), rates[row].tolist(),
                  None if efforts is None else efforts[row].tolist()),
@@ -207,6 +207,11 @@ class RecordingForces(ForcePass):
                 ImuSample() if nearest is None or self.imu is None
                 else self.imu.sample(int(nearest[row])),
             )  # fmt: skip
+            forces[row], normals[row], probabilities[row] = (
+                step.forces,
+                step.normals,
+                step.probabilities,
+            )
         return forces, normals, probabilities
 
 

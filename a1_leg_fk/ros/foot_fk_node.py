@@ -149,14 +149,14 @@ class FootFkNode(Node):
                 self._imu,
                 self._gait_phase.current(now),
             )
-            self._contacts = forces[2]
+            self._contacts = forces.probabilities
         if now - self._last_publish < self._min_publish_interval_s:
             return
         self._last_publish = now
         sec, nanosec = self._stamp_of(fields.stamp_ns)
         self._output.feet(feet, sec, nanosec, self._publish_velocities)
         if forces is not None:
-            self._output.forces(*forces, sec, nanosec)
+            self._output.forces(forces.forces, forces.normals, forces.probabilities, sec, nanosec)
         if self._markers_wanted and now - self._last_markers >= self._marker_interval_s:
             self._last_markers = now
             self._publish_markers(Time(sec=sec, nanosec=nanosec))

@@ -53,8 +53,14 @@ class FilterSettings:
     gate_chi2: float = 16.27
     """χ² (3 dof) a foot's velocity innovation must stay below: 99.9 %."""
     max_rejected_s: float = 0.25
-    """After this long with every stance foot rejected, the feet are believed again [s], the
-    velocity's covariance widened by their mean innovation."""
+    """After this long with every stance foot rejected [s] (at once while no foot has been
+    believed yet: a start in motion), the gate resets: the feet that agree are believed again
+    (``reset_agreement_mps``), the velocity's covariance widened by their mean innovation."""
+    reset_agreement_mps: float = 0.1
+    """The gate's reset believes the largest group of feet whose velocities agree within this
+    [m/s] (:func:`~a1_leg_fk.estimation.stance.consistent_feet`), a lone foot only as close to
+    the estimate: a lone foot far off, or feet that disagree, may be swinging feet taken for
+    standing."""
     noise_adapt_s: float = 5.0
     """The time constant [s] of the feet's horizontal noise scale, matched to their mean NIS
     (0: fixed)."""
@@ -63,7 +69,7 @@ class FilterSettings:
     initial_velocity_mps: float = 0.05
     """The velocity's standard deviation at the start [m/s]: the filter starts at rest (a leg
     kicking in the air at power-on says nothing); a base already moving is taken up by the
-    gate's reset after ``max_rejected_s``."""
+    gate's reset once two feet agree (``reset_agreement_mps``)."""
     initial_gyro_bias_radps: float = 0.02
     """The gyro bias' standard deviation at the start [rad/s]."""
     initial_accel_bias_mps2: float = 0.2

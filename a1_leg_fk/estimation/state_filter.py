@@ -50,6 +50,7 @@ from a1_leg_fk.estimation.filter_model import (
 from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of, quaternion_of
+from a1_leg_fk.estimation.stance import consistent_feet
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
@@ -212,10 +213,11 @@ class StateFilter:
             nis, along = normalised_squares(
                 innovation[rows, rows].tolist(), stack.foot_residuals, stack.up
             )
-            used, reset = self._gate(stamp_ns, candidates, nis, along)
-            if reset:  # the filter had lost its way: widen the velocity by the feet's disagreement
-                spread = sum(x * x + y * y + z * z for x, y, z in stack.foot_residuals)
-                self.covariance[VELOCITY, VELOCITY] += (spread / len(candidates)) * np.eye(3)
+            used, reset = self._gate(stamp_ns, candidates, (nis, along), stack.foot_residuals)
+            if reset:  # the filter had lost its way: widen the velocity by the feet's innovation
+                taken = [stack.foot_residuals[candidates.index(leg)] for leg in used]
+                spread = sum(x * x + y * y + z * z for x, y, z in taken) / len(taken)
+                self.covariance[VELOCITY, VELOCITY] += spread * np.eye(3)
                 cross = self.covariance.dot(stack.rows.T)
                 innovation = stack.rows.dot(cross) + stack.noise
             if used and self.ground == FLAT and self.ground_z is None:
@@ -255,14 +257,20 @@ class StateFilter:
                      self.ground_z, self.noise_scale)  # fmt: skip
 
     def _gate(
-        self, stamp_ns: int, candidates: list[int], nis: list[float], vertical: list[float]
+        self,
+        stamp_ns: int,
+        candidates: list[int],
+        normalised: tuple[list[float], list[float]],
+        residuals: list[tuple[float, float, float]],
     ) -> tuple[list[int], bool]:
-        """The candidate legs whose NIS passes the gate, and whether the gate was reset (every
-        foot failed for :data:`FilterSettings.max_rejected_s`: all taken); counts kept, the
-        horizontal noise scale matched to the accepted feet's NIS (``vertical``: its part along
-        world up, 1 dof).
+        """The candidate legs whose NIS (``normalised``: each foot's, and its part along world
+        up, 1 dof) passes the gate, and whether the gate was reset (every foot failed for
+        :data:`FilterSettings.max_rejected_s`, or none was ever believed: the feet whose
+        ``residuals`` agree taken); counts kept, the horizontal noise scale matched to the
+        accepted feet's NIS.
         """
         s, counts = self.settings, self.counts
+        nis, vertical = normalised
         accepted = [leg for leg, value in zip(candidates, nis) if value <= s.gate_chi2]
         reset = False
         if accepted:
@@ -270,9 +278,13 @@ class StateFilter:
         else:
             if self._rejected_since_ns is None:
                 self._rejected_since_ns = stamp_ns
-            if (stamp_ns - self._rejected_since_ns) / 1e9 >= s.max_rejected_s:
-                accepted, self._rejected_since_ns, reset = list(candidates), None, True
-                counts.gate_resets += 1
+            lost = (stamp_ns - self._rejected_since_ns) / 1e9 >= s.max_rejected_s
+            if lost or not sum(counts.used):
+                found = dict(zip(candidates, residuals))
+                group = consistent_feet(found, (0.0, 0.0, 0.0), 0.0, s.reset_agreement_mps)
+                if group:
+                    accepted, self._rejected_since_ns, reset = group, None, True
+                    counts.gate_resets += 1
         total = up = 0.0
         for leg, value, along in zip(candidates, nis, vertical):
             if leg in accepted:

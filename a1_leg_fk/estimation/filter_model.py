@@ -17,6 +17,8 @@ STATE = 15
 FLAT, NO_GROUND = "flat", "none"
 GROUND_MODELS = (FLAT, NO_GROUND)
 """``flat``: the stance feet's heights anchor z; ``none``: they do not (stairs, slopes)."""
+FASTEST_MPS = 1e3
+"""[m/s]: a larger residual (no leg comes near it) counts as this in :func:`doubt`."""
 EVEN_ODDS = 0.5
 """A foot whose contact probability is not above this gives no measurement (even odds: the
 contact filter's start, before any evidence)."""
@@ -39,7 +41,13 @@ class FilterSettings:
     foot_noise_mps: float = 0.007
     """A standing foot's own horizontal velocity error [m/s]: rolling, slip."""
     foot_vertical_noise_mps: float = 0.02
-    """A standing foot's own vertical velocity error [m/s]: impacts, the ground's compliance."""
+    """A standing foot's own vertical velocity error [m/s]: the ground's compliance (before the
+    vertical noise adaptation, ``vertical_adapt_s``; the impacts: ``touchdown_noise_mps``)."""
+    touchdown_noise_mps: float = 0.1
+    """A foot's vertical velocity error at its touchdown [m/s]: the impact's give (the ground and
+    the foot compressed, then springing back), decaying over ``touchdown_s`` (0: none)."""
+    touchdown_s: float = 0.03
+    """The time constant [s] of the touchdown's vertical error."""
     orientation_noise_rad: float = 0.01
     """The IMU orientation's standard deviation [rad] when its message gives none."""
     height_noise_m: float = 0.01
@@ -56,6 +64,10 @@ class FilterSettings:
     """After this long with every stance foot rejected [s] (at once while no foot has been
     believed yet: a start in motion), the gate resets: the feet that agree are believed again
     (``reset_agreement_mps``), the velocity's covariance widened by their mean innovation."""
+    lost_weight: float = 0.5
+    """While the gate rejects every standing foot, the weight of the other explanation (the
+    state lost, two feet that agree with each other right) in the reported velocity's variance
+    (:func:`doubt`; 0: none)."""
     reset_agreement_mps: float = 0.1
     """The gate's reset believes the largest group of feet whose velocities agree within this
     [m/s] (:func:`~a1_leg_fk.estimation.stance.consistent_feet`), a lone foot only as close to
@@ -64,8 +76,12 @@ class FilterSettings:
     noise_adapt_s: float = 5.0
     """The time constant [s] of the feet's horizontal noise scale, matched to their mean NIS
     (0: fixed)."""
+    vertical_adapt_s: float = 5.0
+    """The time constant [s] of the feet's vertical noise scale, matched to their NIS along world
+    up (0: fixed); the touchdowns' transients are modelled apart, not scaled."""
     min_noise_scale: float = 0.005
-    """The feet's horizontal noise variance is scaled by no less than this (nor more than 1)."""
+    """The feet's horizontal and vertical noise variances are scaled by no less than this (nor
+    more than 1)."""
     initial_velocity_mps: float = 0.05
     """The velocity's standard deviation at the start [m/s]: the filter starts at rest (a leg
     kicking in the air at power-on says nothing); a base already moving is taken up by the
@@ -138,19 +154,24 @@ def foot_noise(
     )
 
 
-def horizontally_scaled(
-    noise: tuple[float, ...], root: float, up: tuple[float, float, float]
+def scaled(
+    noise: tuple[float, ...],
+    roots: tuple[float, float],
+    up: tuple[float, float, float],
+    impact: float,
 ) -> tuple[float, ...]:
-    """``S N S`` for a symmetric 3 x 3 ``noise`` (row-major) and ``S = h I + (1 - h) u uᵀ``
-    (``h = root``, ``u = up`` a unit vector): the noise's variance across ``up`` scaled by
-    ``h²``, along it kept. Written out: ``h² N + h (1 - h) (w uᵀ + u wᵀ) + (1 - h)² (uᵀ w) u uᵀ``
-    with ``w = N u``.
+    """``S N S + i u uᵀ`` for a symmetric 3 x 3 ``noise`` (row-major), ``S = h I + (v - h) u uᵀ``
+    (``roots``: ``h`` and ``v``, the square roots of the horizontal and vertical noise scales;
+    ``u = up`` a unit vector) and the touchdown's vertical variance ``i = impact``: the noise's
+    variance across ``up`` scaled by ``h²``, along it by ``v²``. Written out: ``h² N + h g (w uᵀ +
+    u wᵀ) + (g² (uᵀ w) + i) u uᵀ`` with ``g = v - h``, ``w = N u``.
     """
     a, b, c, _, d, e, _, _, f = noise
+    h, v = roots
     ux, uy, uz = up
     wx, wy, wz = a * ux + b * uy + c * uz, b * ux + d * uy + e * uz, c * ux + e * uy + f * uz
-    g = 1.0 - root
-    hh, hg, gg = root * root, root * g, g * g * (ux * wx + uy * wy + uz * wz)
+    g = v - h
+    hh, hg, gg = h * h, h * g, g * g * (ux * wx + uy * wy + uz * wz) + impact
     xy = hh * b + hg * (wx * uy + ux * wy) + gg * ux * uy
     xz = hh * c + hg * (wx * uz + ux * wz) + gg * ux * uz
     yz = hh * e + hg * (wy * uz + uy * wz) + gg * uy * uz
@@ -159,6 +180,80 @@ def horizontally_scaled(
         xy, hh * d + 2.0 * hg * wy * uy + gg * uy * uy, yz,
         xz, yz, hh * f + 2.0 * hg * wz * uz + gg * uz * uz,
     )  # fmt: skip
+
+
+def touchdown_variance(settings: FilterSettings, seconds: float) -> float:
+    """A foot's extra vertical velocity variance [m²/s²] ``seconds`` after its touchdown (its
+    first joint state in stance): the impact's transient, ``touchdown_noise_mps`` decaying
+    exponentially over ``touchdown_s``.
+    """
+    if not settings.touchdown_noise_mps > 0.0:
+        return 0.0
+    decay = math.exp(-seconds / max(settings.touchdown_s, 1e-9))
+    return (settings.touchdown_noise_mps * decay) ** 2
+
+
+def inverse_square(
+    a: float, b: float, c: float, d: float, e: float, f: float, x: float, y: float, z: float
+) -> float:
+    """``rᵀ M⁻¹ r`` for ``r = (x, y, z)`` and the symmetric 3 x 3 ``M`` of rows ``a b c / b d e
+    / c e f``, by cofactors in floats.
+    """
+    ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
+    cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b
+    quadratic = ca * x * x + cd * y * y + cf * z * z + 2.0 * (cb * x * y + cc * x * z + ce * y * z)
+    return quadratic / (a * ca + b * cb + c * cc)
+
+
+def scattered(residuals: list[tuple[float, float, float]], noises: list[tuple[float, ...]],
+              chi2: float) -> float:  # fmt: skip
+    """The variance [m²/s², per axis] to add to each accepted foot's noise (3 x 3 row-major
+    ``noises``) when the feet disagree beyond them: their ``residuals``' deviations from their
+    mean, normalised by their noises and summed (~χ² of 3 (K - 1) dof), above ``chi2`` (K - 1),
+    give their sample variance per axis; else 0. Each foot passed the gate alone, but two feet
+    sliding apart, one pushing off as it unloads, say the noises are too small for this update
+    (the adapted scale is a mean over seconds).
+    """
+    count = len(residuals)
+    if count < 2:
+        return 0.0
+    mx = my = mz = 0.0
+    for x, y, z in residuals:
+        mx, my, mz = mx + x, my + y, mz + z
+    mx, my, mz = mx / count, my / count, mz / count
+    test = spread = 0.0
+    for (x, y, z), (a, b, c, _, d, e, _, _, f) in zip(residuals, noises):
+        dx, dy, dz = x - mx, y - my, z - mz
+        test += inverse_square(a, b, c, d, e, f, dx, dy, dz)
+        spread += dx * dx + dy * dy + dz * dz
+    return spread / (3.0 * (count - 1)) if test > chi2 * (count - 1) else 0.0
+
+
+def doubt(
+    residuals: list[tuple[float, float, float]],
+    noises: list[tuple[float, ...]],
+    nis: Sequence[float],
+    settings: FilterSettings,
+) -> tuple[float, float, float]:
+    """The variance [m²/s², per base axis] the reported velocity adds while every standing foot
+    fails the gate: the filter keeps its state (the feet slip), but when the two feet of least
+    NIS agree with each other (their difference's NIS within ``gate_chi2``) the other
+    explanation (the state is lost, their mean residual ``δ`` right) has ``lost_weight`` ``w``:
+    the two hypotheses' mixture, moment-matched, adds ``w (1 - w) δ²`` (the diagonal of
+    ``δ δᵀ``). One foot alone (a swinging foot taken for standing) raises no doubt.
+    """
+    if len(residuals) < 2:
+        return (0.0, 0.0, 0.0)
+    first, second = sorted(range(len(nis)), key=nis.__getitem__)[:2]
+    (ax, ay, az), (bx, by, bz) = residuals[first], residuals[second]
+    n = [p + q for p, q in zip(noises[first], noises[second])]
+    agreement = inverse_square(n[0], n[1], n[2], n[4], n[5], n[8], ax - bx, ay - by, az - bz)
+    if not agreement <= settings.gate_chi2:  # also NaN
+        return (0.0, 0.0, 0.0)
+    weight = settings.lost_weight * (1.0 - settings.lost_weight)
+    dx, dy, dz = (min(max((p + q) / 2.0, -FASTEST_MPS), FASTEST_MPS)
+                  for p, q in ((ax, bx), (ay, by), (az, bz)))  # fmt: skip
+    return (weight * dx * dx, weight * dy * dy, weight * dz * dz)
 
 
 def stands(probability: float) -> bool:
@@ -195,13 +290,7 @@ def normalised_squares(
         a, b, c = innovation[first][first : first + 3]
         d, e = innovation[first + 1][first + 1 : first + 3]
         f = innovation[first + 2][first + 2]
-        ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
-        determinant = a * ca + b * cb + c * cc
-        cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b
-        quadratic = (
-            ca * x * x + cd * y * y + cf * z * z + 2.0 * (cb * x * y + cc * x * z + ce * y * z)
-        )
-        squares.append(quadratic / determinant)
+        squares.append(inverse_square(a, b, c, d, e, f, x, y, z))
         along = ux * x + uy * y + uz * z
         spread = (
             a * ux * ux

@@ -29,7 +29,7 @@ from a1_leg_fk.estimation.filter_model import (
     FilterSettings,
     LegMeasurement,
     foot_noise,
-    horizontally_scaled,
+    scaled,
 )
 from a1_leg_fk.estimation.so3 import rotation_between
 from a1_leg_fk.kinematics.frames import Quaternion, Vector
@@ -95,7 +95,7 @@ class Point(NamedTuple):
     gyro_bias: Vector
     height: float
     ground: float | None
-    noise_scale: float
+    noise_scales: tuple[float, float]
 
 
 class Stack:
@@ -109,13 +109,14 @@ class Stack:
         point: Point,
         settings: FilterSettings,
         orientation: tuple[Quaternion, Vector | None] | None,
-        feet: list[LegMeasurement],
+        feet: list[tuple[LegMeasurement, float]],
         heights: bool,
         still: bool,
     ) -> None:
         self.layout = shape = layout(orientation is not None, len(feet), heights, still)
         self.up: list[float] = point.rows[2]
         self.foot_residuals: list[tuple[float, float, float]] = []
+        self.foot_noises: list[tuple[float, ...]] = []
         self.foot_heights: list[float] = []
         self._contact_points: list[tuple[float, float, float]] = []
         lx, ly, lz = point.local
@@ -147,7 +148,7 @@ class Stack:
         self,
         point: Point,
         settings: FilterSettings,
-        feet: list[LegMeasurement],
+        feet: list[tuple[LegMeasurement, float]],
         base: tuple[tuple[float, ...], ...],
         into: tuple[list[float], list[float], list[float]],
     ) -> None:
@@ -169,8 +170,9 @@ class Stack:
              extra * uy * ux, foot2 + extra * uy * uy, extra * uy * uz,
              extra * uz * ux, extra * uz * uy, foot2 + extra * uz * uz),
         )  # fmt: skip
-        root = math.sqrt(point.noise_scale)
-        for measurement in feet:
+        horizontal, vertical = point.noise_scales
+        roots = (math.sqrt(horizontal), math.sqrt(vertical))
+        for measurement, impact in feet:
             (ex, ey, ez), (rx, ry, rz), _ = measurement.motion
             rows += base[0] + (0.0, -rz, ry) + base[1] + (rz, 0.0, -rx) + base[2] + (-ry, rx, 0.0)
             foot = (
@@ -181,7 +183,10 @@ class Stack:
             self.foot_residuals.append(foot)
             residual += foot
             own = foot_noise(measurement, fixed)
-            noise += own if root == 1.0 else horizontally_scaled(own, root, (ux, uy, uz))
+            if roots != (1.0, 1.0) or impact:
+                own = scaled(own, roots, (ux, uy, uz), impact)
+            self.foot_noises.append(own)
+            noise += own
             self.foot_heights.append(point.height + ux * rx + uy * ry + uz * rz)
             self._contact_points.append((rx, ry, rz))
 

@@ -9,18 +9,25 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
 - **Propagation** at every IMU sample (:meth:`StateFilter.propagate`): ``ω = ω_m - b_g``,
   ``a = R (f_m - b_a) + g``; ``R <- R Exp(ω dt)``, ``p <- p + v dt + a dt²/2``, ``v <- v + a dt``;
   the covariance grows by the sensors' white noise and the biases' random walks.
-- **Updates** at every joint state (:meth:`StateFilter.update`), stacked into one: the IMU's own
-  orientation when it gives one (``dθ`` observed directly); per foot in stance the base's velocity
-  in the base frame, ``z = e - ω_m x r = Rᵀ v + r x b_g`` (``e = -(J q̇ + ω_calf x c)`` at the
-  rolling contact point ``r``, :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
-  :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability; on flat
-  ground (``ground="flat"``) the stance feet's heights ``p_z + (R r)_z`` equal the ground's, taken
-  at the first stance; standing still (every foot in stance, none moving) a zero-velocity update.
-- **Gating**: each foot's innovation is tested alone (NIS against χ², 3 dof); a foot that fails
-  (a slip, a swinging foot taken for standing) is left out and counted. When every foot has failed
-  for ``max_rejected_s`` the filter has lost its way: the feet are taken again, the velocity's
-  covariance widened by their disagreement. The feet's horizontal noise is scaled to keep their
-  mean NIS at its expectation (covariance matching, ``noise_adapt_s``).
+- **Updates** at every joint state (:meth:`StateFilter.update`), stacked into one
+  (:mod:`a1_leg_fk.estimation.filter_stack`): the IMU's own orientation when it gives one (``dθ``
+  observed directly); per foot in stance the base's velocity in the base frame, ``z = e - ω_m x
+  r = Rᵀ v + r x b_g`` (``e = -(J q̇ + ω_calf x c)`` at the rolling contact point ``r``,
+  :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
+  :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability plus the
+  touchdown's vertical transient (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`,
+  since the foot's first joint state in stance); on flat ground (``ground="flat"``) the stance
+  feet's heights ``p_z + (R r)_z`` equal the ground's, taken at the first feet believed; standing
+  still (every foot in stance, none moving) a zero-velocity update.
+- **Gating** (:class:`~a1_leg_fk.estimation.foot_gate.FootGate`): each foot's innovation is
+  tested alone (NIS against χ², 3 dof); a foot that fails (a slip, a swinging foot taken for
+  standing) is left out and counted. When every foot has failed for ``max_rejected_s`` (at once
+  while none was ever believed) the filter has lost its way: the feet that agree are taken again,
+  the velocity's covariance widened by their innovation; until then the reported velocity's
+  variance holds that alternative (:func:`~a1_leg_fk.estimation.filter_model.doubt`). The
+  accepted feet's noises are widened by their scatter when they disagree beyond them
+  (:func:`~a1_leg_fk.estimation.filter_model.scattered`), and scaled, horizontally and
+  vertically, to keep their mean NIS at its expectation (covariance matching).
 
 Why an ESKF (Bloesch et al., RSS 2012, in its error-state form) and not the invariant EKF
 (Hartley et al., IJRR 2020): the leg measurement here is a velocity, not a foot position kept in
@@ -39,22 +46,28 @@ import numpy as np
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     GROUND_MODELS,
+    LEGS,
     STATE,
     FilterCounts,
     FilterSettings,
     LegMeasurement,
+    doubt,
     normalised_squares,
+    scattered,
     standing_still,
     stands,
+    touchdown_variance,
 )
 from a1_leg_fk.estimation.filter_stack import Point, Stack
+from a1_leg_fk.estimation.foot_gate import FootGate
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of, quaternion_of
-from a1_leg_fk.estimation.stance import consistent_feet
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
 Z = POSITION.start + 2
+NO_DOUBT = (0.0, 0.0, 0.0)
+"""The reported velocity's variance added while some foot is believed [m²/s²]."""
 ONES_6 = np.ones(6)
 """Sums the rows of a 6-column matrix (a product with it costs less than a sum)."""
 
@@ -84,12 +97,12 @@ class StateFilter:
         self.ground_z: float | None = None
         self._imu_stamp_ns = 0
         self._gyro: Vector = (0.0, 0.0, 0.0)
-        self._rejected_since_ns: int | None = None
         self._orientation_noise = np.eye(3) * s.orientation_noise_rad**2
-        self._legs_stamp_ns: int | None = None
-        self.noise_scale = 1.0
-        """The feet's horizontal noise variance over the model's
-        (:data:`FilterSettings.noise_adapt_s`)."""
+        self._touchdowns: list[int | None] = [None] * LEGS
+        self.gate = FootGate(self.settings, self.counts)
+        self.doubt = NO_DOUBT
+        """The reported velocity's variance added while the gate rejects every foot
+        (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
         self._transition = np.eye(STATE)
         self._transition_dt = math.nan
         self._noise = np.zeros((STATE, STATE))
@@ -187,12 +200,9 @@ class StateFilter:
         dropped before the gain.
         """
         self.counts.updates += 1
-        candidates, feet = [], []
-        for leg, measurement in enumerate(legs):
-            if measurement is not None and stands(measurement.probability):
-                candidates.append(leg)
-                feet.append(measurement)
+        candidates, feet = self._standing(stamp_ns, legs)
         still = len(feet) == len(legs) and standing_still(legs, self.settings.still_speed_mps)
+        self.doubt = NO_DOUBT
         if orientation is None and not candidates and not still:
             return []
         heights = self.ground == FLAT and self.ground_z is not None
@@ -207,32 +217,75 @@ class StateFilter:
         self.counts.still += still
         cross = self.covariance.dot(stack.rows.T)
         innovation = stack.rows.dot(cross) + stack.noise
-        used = candidates
-        if candidates:
-            rows = stack.layout.feet
-            nis, along = normalised_squares(
-                innovation[rows, rows].tolist(), stack.foot_residuals, stack.up
-            )
-            used, reset = self._gate(stamp_ns, candidates, (nis, along), stack.foot_residuals)
-            if reset:  # the filter had lost its way: widen the velocity by the feet's innovation
-                taken = [stack.foot_residuals[candidates.index(leg)] for leg in used]
-                spread = sum(x * x + y * y + z * z for x, y, z in taken) / len(taken)
-                self.covariance[VELOCITY, VELOCITY] += spread * np.eye(3)
-                cross = self.covariance.dot(stack.rows.T)
-                innovation = stack.rows.dot(cross) + stack.noise
-            if used and self.ground == FLAT and self.ground_z is None:
-                self.ground_z = sum(stack.foot_heights[candidates.index(k)] for k in used) / len(
-                    used
-                )
-            if len(used) < len(candidates):
-                keep = stack.keep([candidates.index(leg) for leg in used])
-                if not keep.size:
-                    return used
+        if not candidates:
+            self._correct(cross, innovation, stack.residual)
+            return []
+        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation)
+        if reset:
+            cross = self.covariance.dot(stack.rows.T)
+            innovation = stack.rows.dot(cross) + stack.noise
+        positions = [candidates.index(leg) for leg in used]
+        spread = scattered(
+            [stack.foot_residuals[k] for k in positions],
+            [stack.foot_noises[k] for k in positions],
+            self.settings.gate_chi2,
+        )
+        for k in positions if spread else ():  # the feet disagree beyond their noises
+            first = stack.layout.feet.start + 3 * k
+            innovation[first : first + 3, first : first + 3] += spread * np.eye(3)
+        if len(used) < len(candidates):
+            keep = stack.keep(positions)
+            if keep.size:
                 innovation = innovation.take(keep, axis=0).take(keep, axis=1)
                 self._correct(cross.take(keep, axis=1), innovation, stack.residual.take(keep))
-                return used
+            return used
         self._correct(cross, innovation, stack.residual)
         return used
+
+    def _standing(
+        self, stamp_ns: int, legs: Sequence[LegMeasurement | None]
+    ) -> tuple[list[int], list[tuple[LegMeasurement, float]]]:
+        """The legs whose feet stand, and each one's measurement with its touchdown's vertical
+        variance (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`, since its first
+        joint state in stance).
+        """
+        candidates, feet = [], []
+        for leg, measurement in enumerate(legs):
+            if measurement is None or not stands(measurement.probability):
+                self._touchdowns[leg] = None
+                continue
+            touchdown = self._touchdowns[leg]
+            if touchdown is None:
+                touchdown = self._touchdowns[leg] = stamp_ns
+            candidates.append(leg)
+            feet.append(
+                (measurement, touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9))
+            )
+        return candidates, feet
+
+    def _gate_feet(
+        self, stamp_ns: int, candidates: list[int], stack: Stack, innovation: np.ndarray
+    ) -> tuple[list[int], bool]:
+        """The standing feet the gate lets through (:class:`FootGate`, on their NIS in
+        ``innovation``), and whether it was reset (the velocity's covariance then widened by
+        their innovation); the doubt while it rejects every foot; the ground's height at the
+        first feet believed.
+        """
+        rows = stack.layout.feet
+        residuals = stack.foot_residuals
+        nis, along = normalised_squares(innovation[rows, rows].tolist(), residuals, stack.up)
+        used, reset = self.gate(stamp_ns, candidates, (nis, along), residuals)
+        if not used:
+            self.doubt = doubt(residuals, stack.foot_noises, nis, self.settings)
+            return used, reset
+        if reset:  # the filter had lost its way: widen the velocity by the feet's innovation
+            taken = [residuals[candidates.index(leg)] for leg in used]
+            spread = sum(x * x + y * y + z * z for x, y, z in taken) / len(taken)
+            self.covariance[VELOCITY, VELOCITY] += spread * np.eye(3)
+        if self.ground == FLAT and self.ground_z is None:
+            heights = [stack.foot_heights[candidates.index(leg)] for leg in used]
+            self.ground_z = sum(heights) / len(heights)
+        return used, reset
 
     def _correct(self, cross: np.ndarray, innovation: np.ndarray, residual: np.ndarray) -> None:
         """One Kalman update (``cross = P Hᵀ``, ``innovation = H P Hᵀ + N``), and the error's
@@ -254,64 +307,7 @@ class StateFilter:
         local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
                  r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
         return Point(self.rotation, rotation, local, self._gyro, (bx, by, bz), pz,
-                     self.ground_z, self.noise_scale)  # fmt: skip
-
-    def _gate(
-        self,
-        stamp_ns: int,
-        candidates: list[int],
-        normalised: tuple[list[float], list[float]],
-        residuals: list[tuple[float, float, float]],
-    ) -> tuple[list[int], bool]:
-        """The candidate legs whose NIS (``normalised``: each foot's, and its part along world
-        up, 1 dof) passes the gate, and whether the gate was reset (every foot failed for
-        :data:`FilterSettings.max_rejected_s`, or none was ever believed: the feet whose
-        ``residuals`` agree taken); counts kept, the horizontal noise scale matched to the
-        accepted feet's NIS.
-        """
-        s, counts = self.settings, self.counts
-        nis, vertical = normalised
-        accepted = [leg for leg, value in zip(candidates, nis) if value <= s.gate_chi2]
-        reset = False
-        if accepted:
-            self._rejected_since_ns = None
-        else:
-            if self._rejected_since_ns is None:
-                self._rejected_since_ns = stamp_ns
-            lost = (stamp_ns - self._rejected_since_ns) / 1e9 >= s.max_rejected_s
-            if lost or not sum(counts.used):
-                found = dict(zip(candidates, residuals))
-                group = consistent_feet(found, (0.0, 0.0, 0.0), 0.0, s.reset_agreement_mps)
-                if group:
-                    accepted, self._rejected_since_ns, reset = group, None, True
-                    counts.gate_resets += 1
-        total = up = 0.0
-        for leg, value, along in zip(candidates, nis, vertical):
-            if leg in accepted:
-                counts.used[leg] += 1
-                total += value
-                up += along
-            else:
-                counts.rejected[leg] += 1
-        if accepted:
-            counts.nis_sum += total
-            counts.nis_count += len(accepted)
-            self._adapt(stamp_ns, max(total - up, 0.0) / (2.0 * len(accepted)))
-        return accepted, reset
-
-    def _adapt(self, stamp_ns: int, ratio: float) -> None:
-        """Move the feet's horizontal noise scale towards consistency: ``ratio`` is the accepted
-        feet's mean horizontal NIS over its expectation (2), held within [0.1, 10] for a step.
-        The vertical noise stays the model's: a foot's vertical error (the ground's give, the
-        impacts) is no white noise a mean NIS could measure.
-        """
-        previous, self._legs_stamp_ns = self._legs_stamp_ns, stamp_ns
-        s = self.settings
-        if previous is None or not s.noise_adapt_s > 0.0:
-            return
-        step = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s) / s.noise_adapt_s
-        scale = self.noise_scale * (1.0 + step * (min(max(ratio, 0.1), 10.0) - 1.0))
-        self.noise_scale = min(max(scale, s.min_noise_scale), 1.0)
+                     self.ground_z, (self.gate.noise_scale, self.gate.vertical_scale))  # fmt: skip
 
     def sample(self, stamp_ns: int, stance: Sequence[int], used: Sequence[int]) -> OdometrySample:
         """The estimate as an :class:`OdometrySample` (twist in the base frame, pose in odom)
@@ -334,6 +330,7 @@ class StateFilter:
         diagonal = covariance.diagonal().tolist()
         gyro_noise = self.settings.gyro_sample_noise_radps**2
         wx, wy, wz = self._gyro
+        dx, dy, dz = self.doubt
         return OdometrySample(
             stamp_ns,
             (px, py, pz),
@@ -341,7 +338,12 @@ class StateFilter:
             (lx, ly, lz),
             (wx - bx, wy - by, wz - bz),
             tuple(diagonal[POSITION] + variances[3:6]),
-            tuple(variances[0:3] + [value + gyro_noise for value in diagonal[GYRO_BIAS]]),
+            (
+                variances[0] + dx,
+                variances[1] + dy,
+                variances[2] + dz,
+                *(value + gyro_noise for value in diagonal[GYRO_BIAS]),
+            ),
             tuple(stance),
             tuple(used),
             False,

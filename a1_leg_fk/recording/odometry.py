@@ -214,7 +214,7 @@ def _track(
         filtered=feed.samples_filtered,
         filter_counts=feed.filter.counts,
         biases=(tuple(feed.filter.gyro_bias.tolist()), tuple(feed.filter.accel_bias.tolist())),
-        noise_scale=feed.filter.noise_scale,
+        noise_scale=feed.filter.gate.noise_scale,
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,

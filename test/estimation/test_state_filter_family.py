@@ -34,12 +34,8 @@ TUNED = (
 HELD_OUT = ("a1_trot_fast_long", "a1_turn_long", "a1_flying_trot", "a1_trot_slips")
 CONFIGS = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
 """(sensors, efforts) of each run's four estimates."""
-UNMET = {
-    "a1_flying_trot_fast": "3-sigma coverage below 95 % (flight phases)",
-    "a1_flying_trot": "3-sigma coverage below 95 % (flight phases)",
-    "a1_trot_slips": "clean: RMSE above 0.03 m/s, 3-sigma coverage below 95 % (the slips' start)",
-}
-"""Runs whose goals are not met yet (strict xfail: a run that meets them must say so)."""
+UNMET: dict[str, str] = {}
+"""Runs whose goals are not met yet, with why (strict xfail: a run that meets them must say so)."""
 
 
 def _score(name: str) -> list[tuple[str, Any]]:

@@ -232,7 +232,8 @@ def _filter_line(track: OdometryTrack) -> str:
         f"filter:    {track.filtered} rows (IMU-propagated ESKF); feet used {used}; rejected by "
         f"the gate {rejected}; gate resets {counts.gate_resets}; mean NIS "
         f"{counts.mean_nis:.2f}; gyro bias {gyro} rad/s; accelerometer bias {accel} m/s^2; "
-        f"feet noise scale {track.noise_scale:.3f}"
+        f"feet noise scales {track.noise_scales[0]:.3f} horizontal, {track.noise_scales[1]:.3f} "
+        "vertical"
     )
 
 

@@ -27,6 +27,11 @@ class FootGate:
         self._rejected_since_ns: int | None = None
         self._stamp_ns: int | None = None
 
+    @property
+    def scales(self) -> tuple[float, float]:
+        """The feet's noise scales: horizontal, vertical."""
+        return (self.noise_scale, self.vertical_scale)
+
     def __call__(
         self,
         stamp_ns: int,

@@ -307,7 +307,7 @@ class StateFilter:
         local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
                  r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
         return Point(self.rotation, rotation, local, self._gyro, (bx, by, bz), pz,
-                     self.ground_z, (self.gate.noise_scale, self.gate.vertical_scale))  # fmt: skip
+                     self.ground_z, self.gate.scales)  # fmt: skip
 
     def sample(self, stamp_ns: int, stance: Sequence[int], used: Sequence[int]) -> OdometrySample:
         """The estimate as an :class:`OdometrySample` (twist in the base frame, pose in odom)

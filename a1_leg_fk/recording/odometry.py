@@ -82,7 +82,7 @@ class OdometryTrack:
     filtered: int
     filter_counts: FilterCounts
     biases: tuple[tuple[float, ...], tuple[float, ...]]
-    noise_scale: float
+    noise_scales: tuple[float, float]
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
@@ -214,7 +214,7 @@ def _track(
         filtered=feed.samples_filtered,
         filter_counts=feed.filter.counts,
         biases=(tuple(feed.filter.gyro_bias.tolist()), tuple(feed.filter.accel_bias.tolist())),
-        noise_scale=feed.filter.gate.noise_scale,
+        noise_scales=feed.filter.gate.scales,
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,

@@ -279,7 +279,7 @@ class LegOdometryNode(Node):
                     tuple(self._feed.filter.gyro_bias.tolist()),
                     tuple(self._feed.filter.accel_bias.tolist()),
                 ),
-                noise_scale=self._feed.filter.gate.noise_scale,
+                noise_scales=self._feed.filter.gate.scales,
                 distance_m=self._feed.distance_m,
                 model=self._config.source,
                 description_topic=robot.topic_name,

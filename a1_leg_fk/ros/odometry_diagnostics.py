@@ -43,7 +43,7 @@ class OdometryReport:
     filtered: int  # samples the state filter gave
     filter: FilterCounts
     biases: tuple[tuple[float, ...], tuple[float, ...]]  # gyro [rad/s], accelerometer [m/s^2]
-    noise_scale: float
+    noise_scales: tuple[float, float]  # the feet's noise scales: horizontal, vertical
     distance_m: float
 
 
@@ -97,7 +97,8 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "mean_nis": f"{report.filter.mean_nis:.3f}",
         "gyro_bias_radps": " ".join(f"{value:.5f}" for value in report.biases[0]),
         "accel_bias_mps2": " ".join(f"{value:.4f}" for value in report.biases[1]),
-        "feet_noise_scale": f"{report.noise_scale:.4f}",
+        "feet_noise_scale": f"{report.noise_scales[0]:.4f}",
+        "feet_vertical_noise_scale": f"{report.noise_scales[1]:.4f}",
         **{f"slips_{leg}": n for leg, n in zip(LEG_NAMES, odometry.slips)},
         "stamp_gaps": odometry.gaps + report.filter.gaps,
         "distance_m": f"{report.distance_m:.3f}",

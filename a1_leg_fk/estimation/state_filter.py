@@ -38,7 +38,6 @@ probability weighting and the per-foot gate work on the velocity directly.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -66,6 +65,11 @@ from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
 Z = POSITION.start + 2
+DT_ENTRIES = np.array(
+    [(THETA.start + k) * STATE + GYRO_BIAS.start + k for k in range(3)]
+    + [(POSITION.start + k) * STATE + VELOCITY.start + k for k in range(3)]
+)
+"""The transition's flat entries that are ``-dt`` (dθ by db_g) and ``dt`` (dp by dv)."""
 NO_DOUBT = (0.0, 0.0, 0.0)
 """The reported velocity's variance added while some foot is believed [m²/s²]."""
 ONES_6 = np.ones(6)
@@ -97,19 +101,20 @@ class StateFilter:
         self.ground_z: float | None = None
         self._imu_stamp_ns = 0
         self._gyro: Vector = (0.0, 0.0, 0.0)
-        self._orientation_noise = np.eye(3) * s.orientation_noise_rad**2
         self._touchdowns: list[int | None] = [None] * LEGS
         self.gate = FootGate(self.settings, self.counts)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
         self._transition = np.eye(STATE)
-        self._transition_dt = math.nan
-        self._noise = np.zeros((STATE, STATE))
-        self._noise_density = np.repeat(
-            [s.gyro_noise**2, s.accel_noise**2, 0.0, s.gyro_bias_walk**2, s.accel_bias_walk**2],
-            3,
-        )
+        self._noise_density = np.diag(
+            np.repeat(
+                [s.gyro_noise**2, s.accel_noise**2, 0.0, s.gyro_bias_walk**2,
+                 s.accel_bias_walk**2],
+                3,
+            )
+        )  # fmt: skip
+        """The process noise's spectral densities (diagonal), per second."""
 
     def start(self, stamp_ns: int, orientation: Quaternion | None) -> None:
         """Begin at rest at the origin, oriented as ``orientation`` (None: level)."""
@@ -157,12 +162,13 @@ class StateFilter:
              (fy * dt, -fx * dt, 0.0, 0.0, 0.0, -dt, fz, t6, t7, t8))
         )  # fmt: skip
         product = self.rotation.dot(inputs)
-        transition = self._transition_for(dt)
+        transition = self._transition
+        transition.ravel()[DT_ENTRIES] = (-dt, -dt, -dt, dt, dt, dt)  # dθ by db_g, dp by dv
         transition[THETA, THETA] = inputs[:, 7:10].T
         transition[VELOCITY, THETA] = product[:, 0:3]
         transition[VELOCITY, ACCEL_BIAS] = product[:, 3:6]
         covariance = transition.dot(self.covariance).dot(transition.T)
-        covariance += self._noise
+        covariance += self._noise_density * dt
         self.covariance = covariance
         ax, ay, az = product[:, 6].tolist()
         az -= STANDARD_GRAVITY
@@ -173,16 +179,6 @@ class StateFilter:
             px + (vx + half * ax) * dt, py + (vy + half * ay) * dt, pz + (vz + half * az) * dt,
         )  # fmt: skip
         self.rotation = product[:, 7:10].copy()
-
-    def _transition_for(self, dt: float) -> np.ndarray:
-        """The transition matrix with its ``dt``-only blocks (and the noise) set for ``dt``."""
-        if dt != self._transition_dt:
-            transition = self._transition
-            transition[THETA, GYRO_BIAS] = -dt * np.eye(3)
-            transition[POSITION, VELOCITY] = dt * np.eye(3)
-            self._noise = np.diag(self._noise_density * dt)
-            self._transition_dt = dt
-        return self._transition
 
     def update(
         self,

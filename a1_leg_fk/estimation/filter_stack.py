@@ -82,13 +82,12 @@ def layout(orientation: bool, feet: int, heights: bool, still: bool) -> Layout:
 
 
 class Point(NamedTuple):
-    """The state one update linearises about: the rotation base -> world (a 3 x 3 array, and
-    its rows in floats), the base's velocity in its own frame ``Rᵀ v`` [m/s], the gyro's last
-    sample and bias [rad/s] (base frame), the base's height ``p_z`` and the ground's [m] (None:
-    not known yet), the feet's horizontal noise scale.
+    """The state one update linearises about: the rows of the rotation base -> world, the
+    base's velocity in its own frame ``Rᵀ v`` [m/s], the gyro's last sample and bias [rad/s]
+    (base frame), the base's height ``p_z`` and the ground's [m] (None: not known yet), the
+    feet's horizontal and vertical noise scales.
     """
 
-    rotation: np.ndarray
     rows: list[list[float]]
     local: tuple[float, float, float]
     gyro: Vector
@@ -100,8 +99,8 @@ class Point(NamedTuple):
 
 class Stack:
     """One update's stacked ``rows`` (H), ``residual`` and ``noise`` (see the module text), with
-    the standing feet's own residuals and contact-point heights (for the gate and the ground)
-    and world ``up`` in the base frame.
+    the standing feet's own residuals, noises and contact-point heights (for the gate, the
+    scatter, the doubt and the ground) and world ``up`` in the base frame.
     """
 
     def __init__(
@@ -152,8 +151,9 @@ class Stack:
         base: tuple[tuple[float, ...], ...],
         into: tuple[list[float], list[float], list[float]],
     ) -> None:
-        """Append each foot's velocity rows, noise and residual to ``into``; keep its residual
-        and its contact point's height.
+        """Append each foot's velocity rows, noise and residual to ``into`` (``feet``: each
+        foot's measurement and touchdown variance); keep its residual, its noise and its contact
+        point's height.
         """
         rows, noise, residual = into
         s = settings

@@ -1,5 +1,6 @@
-"""Rotations for the state filter: skew matrices, SO(3)'s exponential and logarithm, and the
-conversions between rotation matrices and (x, y, z, w) unit quaternions (numpy, 3 x 3).
+"""Rotations for the state filter: SO(3)'s exponential, the rotation vector between a rotation
+matrix and a quaternion, and the conversions between rotation matrices and (x, y, z, w) unit
+quaternions (numpy 3 x 3, or their rows in floats).
 """
 
 from __future__ import annotations
@@ -10,11 +11,6 @@ from collections.abc import Sequence
 import numpy as np
 
 from a1_leg_fk.kinematics.frames import Quaternion
-
-
-def skew(v: Sequence[float] | np.ndarray) -> np.ndarray:
-    """[v]x: the 3 x 3 matrix of the cross product with ``v``."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def exp_so3(w: Sequence[float]) -> np.ndarray:

@@ -64,7 +64,6 @@ from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of, quaternio
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Quaternion, Vector
 
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, 15, 3))
-Z = POSITION.start + 2
 DT_ENTRIES = np.array(
     [(THETA.start + k) * STATE + GYRO_BIAS.start + k for k in range(3)]
     + [(POSITION.start + k) * STATE + VELOCITY.start + k for k in range(3)]
@@ -296,27 +295,30 @@ class StateFilter:
         self.rotation = self.rotation.dot(exp_so3(error[0:3].tolist()))
         self._nominal += error[3:]
 
-    def _point(self) -> Point:
-        """The state an update linearises about (a :class:`Point`)."""
-        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rotation = self.rotation.tolist()
-        vx, vy, vz, _, _, pz, bx, by, bz = self._nominal[0:9].tolist()
+    def _floats(self) -> tuple[list[list[float]], Vector, list[float]]:
+        """The rotation's rows, the velocity in the base frame ``Rᵀ v`` [m/s] and the nominal
+        velocity, position and gyro bias (9 values), in floats.
+        """
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows = self.rotation.tolist()
+        nominal = self._nominal[0:9].tolist()
+        vx, vy, vz = nominal[0:3]
         local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
                  r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
-        return Point(self.rotation, rotation, local, self._gyro, (bx, by, bz), pz,
-                     self.ground_z, self.gate.scales)  # fmt: skip
+        return rows, local, nominal
+
+    def _point(self) -> Point:
+        """The state an update linearises about (a :class:`Point`)."""
+        rows, local, (_, _, _, _, _, pz, bx, by, bz) = self._floats()
+        return Point(rows, local, self._gyro, (bx, by, bz), pz, self.ground_z, self.gate.scales)
 
     def sample(self, stamp_ns: int, stance: Sequence[int], used: Sequence[int]) -> OdometrySample:
         """The estimate as an :class:`OdometrySample` (twist in the base frame, pose in odom)
         with the diagonals of its covariances.
         """
-        rotation, covariance = self.rotation, self.covariance
-        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows_of_rotation = rotation.tolist()
-        vx, vy, vz, px, py, pz, bx, by, bz = self._nominal[0:9].tolist()
-        lx, ly, lz = (
-            r0 * vx + r3 * vy + r6 * vz,
-            r1 * vx + r4 * vy + r7 * vz,
-            r2 * vx + r5 * vy + r8 * vz,
-        )
+        covariance = self.covariance
+        rows_of_rotation, (lx, ly, lz), nominal = self._floats()
+        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows_of_rotation
+        _, _, _, px, py, pz, bx, by, bz = nominal
         # the twist's rows d(Rᵀ v) / d(dθ, dv) over the attitude's (R, 0): both variances at once
         rows = np.array(
             ((0.0, -lz, ly, r0, r3, r6), (lz, 0.0, -lx, r1, r4, r7), (-ly, lx, 0.0, r2, r5, r8),

@@ -42,8 +42,8 @@ class FootGate:
         """The candidate legs whose NIS (``normalised``: each foot's, and its part along world
         up, 1 dof) passes the gate, and whether the gate was reset (every foot failed for
         :data:`FilterSettings.max_rejected_s`, or none was ever believed: the feet whose
-        ``residuals`` agree taken); counts kept, the horizontal noise scale matched to the
-        accepted feet's NIS.
+        ``residuals`` agree taken); counts kept, the noise scales matched to the accepted feet's
+        NIS.
         """
         s, counts = self.settings, self.counts
         nis, vertical = normalised
@@ -83,13 +83,20 @@ class FootGate:
         mean NIS could measure, are modelled apart (they would inflate the scale).
         """
         previous, self._stamp_ns = self._stamp_ns, stamp_ns
-        s = self.settings
-        if previous is None or not s.noise_adapt_s > 0.0:
+        if previous is None:
             return
-        step = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s) / s.noise_adapt_s
-        scale = self.noise_scale * (1.0 + step * (min(max(ratio, 0.1), 10.0) - 1.0))
-        self.noise_scale = min(max(scale, s.min_noise_scale), 1.0)
-        if s.vertical_adapt_s > 0.0:
-            step *= s.noise_adapt_s / s.vertical_adapt_s
-            scale = self.vertical_scale * (1.0 + step * (min(max(vertical, 0.1), 10.0) - 1.0))
-            self.vertical_scale = min(max(scale, s.min_noise_scale), 1.0)
+        s = self.settings
+        seconds = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s)
+        self.noise_scale = self._moved(self.noise_scale, seconds, s.noise_adapt_s, ratio)
+        self.vertical_scale = self._moved(
+            self.vertical_scale, seconds, s.vertical_adapt_s, vertical
+        )
+
+    def _moved(self, scale: float, seconds: float, time_constant: float, ratio: float) -> float:
+        """``scale`` moved over ``seconds`` with ``time_constant`` [s] (0: fixed) towards
+        ``ratio`` (held within [0.1, 10] for a step), within [``min_noise_scale``, 1].
+        """
+        if not time_constant > 0.0:
+            return scale
+        scale *= 1.0 + seconds / time_constant * (min(max(ratio, 0.1), 10.0) - 1.0)
+        return min(max(scale, self.settings.min_noise_scale), 1.0)

@@ -17,8 +17,10 @@ STATE = 15
 FLAT, NO_GROUND = "flat", "none"
 GROUND_MODELS = (FLAT, NO_GROUND)
 """``flat``: the stance feet's heights anchor z; ``none``: they do not (stairs, slopes)."""
-FASTEST_MPS = 1e3
-"""[m/s]: a larger residual (no leg comes near it) counts as this in :func:`doubt`."""
+MAX_BASE_SPEED_MPS = 1e3
+"""[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
+rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from
+overflow; a larger residual counts as this in :func:`doubt`."""
 EVEN_ODDS = 0.5
 """A foot whose contact probability is not above this gives no measurement (even odds: the
 contact filter's start, before any evidence)."""
@@ -251,7 +253,7 @@ def doubt(
     if not agreement <= settings.gate_chi2:  # also NaN
         return (0.0, 0.0, 0.0)
     weight = settings.lost_weight * (1.0 - settings.lost_weight)
-    dx, dy, dz = (min(max((p + q) / 2.0, -FASTEST_MPS), FASTEST_MPS)
+    dx, dy, dz = (min(max((p + q) / 2.0, -MAX_BASE_SPEED_MPS), MAX_BASE_SPEED_MPS)
                   for p, q in ((ax, bx), (ay, by), (az, bz)))  # fmt: skip
     return (weight * dx * dx, weight * dy * dy, weight * dz * dz)
 

@@ -24,7 +24,14 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, ImuSample
-from a1_leg_fk.estimation.filter_model import FLAT, LEGS, FilterSettings, LegMeasurement, stands
+from a1_leg_fk.estimation.filter_model import (
+    FLAT,
+    LEGS,
+    MAX_BASE_SPEED_MPS,
+    FilterSettings,
+    LegMeasurement,
+    stands,
+)
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
@@ -58,10 +65,6 @@ class JointSample(NamedTuple):
 
 NO_MOTIONS: tuple[None, ...] = (None,) * LEGS
 """No foot's motion from the contact estimate: the feed works them out."""
-MAX_BASE_SPEED_MPS = 1e3
-"""[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
-rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from
-overflow."""
 AUTO, FORCE, KINEMATIC = "auto", "force", "kinematic"
 CONTACT_SOURCES = (AUTO, FORCE, KINEMATIC)
 """Where the contacts' evidence comes from (the node's ``contacts`` parameter, ``a1-leg-fk odom
@@ -155,7 +158,7 @@ class OdometryFeed:
                 motions = step.motions if self._shares_motions else NO_MOTIONS
         joint = JointSample(stamp_ns, feet, angles, rates)
         if imu is None or imu.specific_force is None or not self.filter.started:
-            sample = self._legs_alone(joint, contacts, imu, down)
+            sample = self._legs_alone(joint, (contacts, motions), imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
             sample = self._filtered(joint, (contacts, motions), imu, down)
@@ -176,15 +179,13 @@ class OdometryFeed:
         """The state filter's estimate after its update with this joint state's feet (their
         contact probabilities, and their motions where the contact estimate has them).
         """
-        stamp_ns, feet, angles, rates = joint
+        stamp_ns, feet, angles, _ = joint
         probabilities, motions = contacts
         legs: list[LegMeasurement | None] = [None] * len(feet)
         for leg, foot in enumerate(feet):
             if probabilities is not None and foot is not None and stands(probabilities[leg]):
+                motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
-                motion = motions[leg] or self.motion.foot(
-                    leg, angles[joints], rates[joints], foot[0], foot[1], down
-                )
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
         used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
@@ -216,15 +217,20 @@ class OdometryFeed:
         )
         return self.contacts.message(stamp_ns, (angles, rates, efforts), feet, sample)
 
+    def _motion(self, leg: int, foot: Foot, joint: JointSample, down: Vector) -> FootMotion:
+        """Leg ``leg``'s foot's motion worked out here (the contact estimate had none)."""
+        joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
+        return self.motion.foot(
+            leg, joint.angles[joints], joint.rates[joints], foot[0], foot[1], down
+        )
+
     def _measurement(
         self, leg: int, motion: FootMotion, q: Sequence[float], probability: float
     ) -> LegMeasurement | None:
         """A standing foot's measurement: its motion and ``J Jᵀ`` (``q``: its leg's three angles
-        [rad]); None when unusable.
+        [rad]); None when unusable (:func:`usable`).
         """
-        ex, ey, ez = motion.e
-        fastest = MAX_BASE_SPEED_MPS
-        if not (abs(ex) <= fastest and abs(ey) <= fastest and abs(ez) <= fastest):  # also NaN
+        if not usable(motion):
             return None
         c = self._jacobians[leg](math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1]),
                                  math.cos(q[2]), math.sin(q[2]))  # fmt: skip
@@ -239,12 +245,15 @@ class OdometryFeed:
     def _legs_alone(
         self,
         joint: JointSample,
-        contacts: Sequence[float] | None,
+        contacts: tuple[Sequence[float] | None, Sequence[FootMotion | None]],
         imu: ImuReading | None,
         down: Vector,
     ) -> OdometrySample:
-        """The averaging estimate of the standing feet (no accelerometer to propagate with)."""
-        stamp_ns, feet, angles, rates = joint
+        """The averaging estimate of the standing feet (no accelerometer to propagate with; their
+        contact probabilities, and their motions where the contact estimate has them).
+        """
+        stamp_ns, feet, _, _ = joint
+        probabilities, shared = contacts
         odometry = self.odometry
         depths: list[float | None] = [None] * len(feet)
         motions: list[FootMotion | None] = [None] * len(feet)
@@ -252,17 +261,25 @@ class OdometryFeed:
             if foot is not None:
                 depth = self.motion.contact(leg, foot[0], down)[1]
                 depths[leg] = depth if math.isfinite(depth) else None
-        if contacts is None:
+        if probabilities is None:
             weights = kinematic_stance(depths, odometry.settings.stance_band_m)
         else:
-            weights = odometry.stance(depths, contacts)
+            weights = odometry.stance(depths, probabilities)
         for leg in list(weights):
             foot = feet[leg]
-            joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
             assert foot is not None
-            motion = self.motion.foot(leg, angles[joints], rates[joints], foot[0], foot[1], down)
-            if all(abs(value) <= MAX_BASE_SPEED_MPS for value in motion.e):
+            motion = shared[leg] or self._motion(leg, foot, joint, down)
+            if usable(motion):
                 motions[leg] = motion
             else:
                 del weights[leg]
         return odometry.estimate(stamp_ns, motions, weights, imu)
+
+
+def usable(motion: FootMotion) -> bool:
+    """A foot's motion gives a measurement: its base velocity finite and no faster than
+    :data:`~a1_leg_fk.estimation.filter_model.MAX_BASE_SPEED_MPS` on any axis.
+    """
+    ex, ey, ez = motion.e
+    fastest = MAX_BASE_SPEED_MPS
+    return abs(ex) <= fastest and abs(ey) <= fastest and abs(ez) <= fastest  # False for NaN

@@ -3,7 +3,8 @@
 #   make venv       create/refresh $(VENV): pinned requirements + this package (editable)
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
 #   make lint       ruff check, ruff format --check and mypy (config: ruff.toml, setup.cfg)
-#   make test       the whole test suite (node tests pick their own ROS domain)
+#   make test       the test suite but the long families (node tests pick their own ROS domain)
+#   make accept     the long families (tests marked accept): every simulated run, tuned and held out
 #   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, contact_speed.py, node_stages.py,
 #                   node_cost.py, node_throughput.py, odometry_throughput.py, bag_speed.py
 #   make soak       bench/soak.py
@@ -21,6 +22,7 @@ PYTHON ?= python3
 # the session (checked between tests, so a run ends by about the sum).
 TEST_TIMEOUT ?= 300
 TEST_SESSION_TIMEOUT ?= 1200
+ACCEPT_SESSION_TIMEOUT ?= 3600
 PYTEST_ARGS ?=
 
 BIN := $(VENV)/bin
@@ -35,10 +37,10 @@ PACKAGE_STAMP := $(VENV)/.a1_leg_fk-editable.stamp
 # Two `make test` started together (several people share a tree) must not both install.
 VENV_LOCK := $(or $(TMPDIR),/tmp)/a1_leg_fk-venv-$(shell echo '$(abspath $(VENV))' | sha256sum | cut -c1-16).lock
 
-.PHONY: help venv venv-unlocked demo lint test bench soak fuzz clean distclean
+.PHONY: help venv venv-unlocked demo lint test accept bench soak fuzz clean distclean
 
 help:
-	@sed -n '3,11p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
+	@sed -n '3,12p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
 
 venv:
 	@flock '$(VENV_LOCK)' $(MAKE) --no-print-directory venv-unlocked
@@ -89,9 +91,14 @@ lint: venv
 	$(BIN)/mypy || status=1; \
 	exit $$status
 
+# The long families (marked accept) run in `make accept`, so that .ci/run stays within its budget.
 test: venv
 	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \
-	  --session-timeout=$(TEST_SESSION_TIMEOUT) $(PYTEST_ARGS) test
+	  --session-timeout=$(TEST_SESSION_TIMEOUT) -m 'not accept' $(PYTEST_ARGS) test
+
+accept: venv
+	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \
+	  --session-timeout=$(ACCEPT_SESSION_TIMEOUT) -m accept $(PYTEST_ARGS) test
 
 BENCH_SCRIPTS := bench/fk_speed.py bench/ik_speed.py bench/force_speed.py bench/contact_speed.py \
   bench/node_stages.py bench/node_cost.py bench/node_throughput.py bench/odometry_throughput.py \

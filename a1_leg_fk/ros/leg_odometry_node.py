@@ -29,7 +29,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import Imu
 
 from a1_leg_fk.estimation.filter_model import GROUND_MODELS
-from a1_leg_fk.estimation.imu import imu_reading
+from a1_leg_fk.estimation.imu import MAX_ANGULAR_RATE_RADPS, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (
     CONTACT_SOURCES,
@@ -139,14 +139,19 @@ class LegOdometryNode(Node):
 
     def _on_imu_fields(self, fields: ImuFields) -> None:
         """One Imu's fields (an Imu message's, read by :func:`read_imu`, or a LowState's own)
-        into the odometry; one without a finite angular velocity is counted as
-        ``rejected_imu_non_finite`` (a LowState's: ``rejected_lowstate_non_finite``).
+        into the odometry; one whose angular velocity is not finite or beyond
+        :data:`MAX_ANGULAR_RATE_RADPS` is counted as ``rejected_imu_gyro_out_of_range`` (a
+        LowState's: ``rejected_lowstate_gyro_out_of_range``).
         """
         reading = imu_reading(*fields[1:])
         stamp = fields[0]
         if reading is None:
             topic = "imu" if self._decoder.imu is None else LOWSTATE_TOPIC
-            self._inputs.reject(topic, "non_finite", "angular velocity not finite")
+            self._inputs.reject(
+                topic,
+                "gyro_out_of_range",
+                f"angular velocity not finite or beyond {MAX_ANGULAR_RATE_RADPS:g} rad/s",
+            )
             return
         self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
 

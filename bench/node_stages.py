@@ -14,7 +14,8 @@ interleaved runs:
   contact filter);
 - ``publish``: the node's outputs (``FootOutput.feet`` and ``.forces``: 9 messages, 13 with
   efforts);
-- ``callback``: the whole ``_on_joint_state``; ``floor``: the floor's whole callback
+- ``callback``: the whole subscription callback (the guarded read, then ``_on_joint_state``);
+  ``floor``: the floor's whole callback
   (``throughput_roles.floor_callback``, publishing with ``Publisher.publish``), and the same
   publishing as the node does (``raw_publish``: without rclpy's per-call wrapper).
 
@@ -128,7 +129,7 @@ def main() -> None:
                 for name, raw in (("floor", False), ("floor_raw", True))
             }
             timed: dict[str, Callable[[], object]] = {
-                "callback": cycling(node._on_joint_state, stream),
+                "callback": cycling(node._inputs.callbacks["joint_states"], stream),
                 **stages(staged, stream),
                 "floor": cycling(floors["floor"], stream),
                 "floor, published raw": cycling(floors["floor_raw"], stream),

@@ -21,6 +21,9 @@ OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"
 them)."""
 
 MAX_LISTED_UNKNOWN_NAMES = 20
+INPUTS_REJECTED = "some input messages rejected (rejected_<topic>_<reason>)"
+"""The summary of a period in which some input's messages were rejected
+(:mod:`a1_leg_fk.ros.guarded_input`)."""
 
 
 def rejected_messages(counts: TrackerCounts) -> int:
@@ -74,12 +77,15 @@ class FkReport:
     last_verify: str
     verify_disagreed: bool  # the latest verify_fk found a foot beyond the tolerance
     forces: Mapping[str, object] = field(default_factory=dict)  # force_values()
+    inputs_rejected_in_period: int = 0  # input messages rejected (unreadable...) in the period
+    inputs_rejected: Mapping[str, int] = field(default_factory=dict)  # GuardedInputs.values()
 
 
 def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
     """(level, summary, values) of the report. ERROR when verify_fk disagreed with PyBullet; else
     WARN for a rejected robot description, no joint state yet, or rejected messages in the
-    period, non-finite values or joints outside limits; else OK.
+    period, non-finite values or joints outside limits, messages of an input that could not be
+    read in the period; else OK.
     """
     counts = report.counts
     outside = report.joints_outside_limits
@@ -88,6 +94,8 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         level, summary = WARN, "no joint_states received yet"
     elif report.rejected_in_period or outside or counts.non_finite_joints:
         level, summary = WARN, "some joint_states rejected or joints outside limits"
+    elif report.inputs_rejected_in_period:
+        level, summary = WARN, INPUTS_REJECTED
     level, summary, description = robot_description_status(
         level,
         summary,
@@ -112,6 +120,7 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
         "last_verify": report.last_verify,
         **description,
         **report.forces,
+        **report.inputs_rejected,
     }
     return level, summary, values
 

@@ -28,7 +28,6 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.serialization import deserialize_message
 from rclpy.service import Service
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
@@ -44,14 +43,15 @@ from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
 from a1_leg_fk.ros.gait_phase import GaitPhaseInput
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.guarded_input import GuardedInputs, read_imu
 from a1_leg_fk.ros.joint_input import MissingMessages, joint_input
 from a1_leg_fk.ros.markers import foot_markers
-from a1_leg_fk.ros.odometry_wire import imu_message_fields, imu_sample
+from a1_leg_fk.ros.odometry_wire import imu_sample
 from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
-from a1_leg_fk.wire.imu import imu_fields
-from a1_leg_fk.wire.joint_state import WireError, doubles
+from a1_leg_fk.wire.imu import ImuFields
+from a1_leg_fk.wire.joint_state import WireFields, doubles
 
 NODE_NAME = "a1_leg_fk"
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -66,7 +66,8 @@ class FootFkNode(Node):
         for spec in PARAMETERS:
             spec.declare(self)
         message, topic, self._decoder = joint_input(self)  # before any output: a usage error
-        self._robot = RobotSource(self, self._on_robot)
+        self._inputs = GuardedInputs(self)
+        self._robot = RobotSource(self, self._on_robot, self._inputs)
         self._model = self._robot.config
         self._tracker = FootTracker(self._model.quadruped)
         self._verifier: PyBulletFeet | None = None
@@ -87,7 +88,7 @@ class FootFkNode(Node):
         self._contacts: list[float] | None = None  # the latest contact probabilities
         self._forces: ForcePass | None = None
         self._output = FootOutput(self)
-        self._gait_phase = GaitPhaseInput(self, self._float("gait_phase_timeout_s"))
+        self._gait_phase = GaitPhaseInput(self._inputs, self._float("gait_phase_timeout_s"))
         self._apply_settings()
         self._set_frame_ids()
         self._build_forces()
@@ -95,15 +96,15 @@ class FootFkNode(Node):
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self._load_verifier()
         self._update_verify_service()
-        self.create_subscription(
+        self._inputs.subscribe(
             message,
             topic,
+            self._decoder.fields,
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-            raw=True,
         )
-        self.create_subscription(Imu, "imu", self._on_imu, JOINT_STATES_QOS, raw=True)
+        self._inputs.subscribe(Imu, "imu", read_imu, self._on_imu, JOINT_STATES_QOS)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.create_timer(SUBSCRIBER_CHECK_PERIOD_S, self._check_subscribers)
         self.add_post_set_parameters_callback(self._after_set_parameters)
@@ -115,12 +116,10 @@ class FootFkNode(Node):
 
     # --- per message ---------------------------------------------------------------------
 
-    def _on_joint_state(self, raw: bytes) -> None:
-        try:
-            fields = self._decoder.fields(raw)
-        except WireError as error:
-            self._warnings.warn("malformed", f"ignoring a joint_states message: {error}")
-            return
+    def _on_joint_state(self, fields: WireFields) -> None:
+        """One joint state's fields, read from its bytes by the input's decoder (a message that
+        cannot be read never gets here: :class:`GuardedInputs`).
+        """
         if self._decoder.imu is not None:  # a LowState's own IMU
             self._imu = imu_sample(self._decoder.imu)
         order = fields.order
@@ -161,11 +160,10 @@ class FootFkNode(Node):
             self._last_markers = now
             self._publish_markers(Time(sec=sec, nanosec=nanosec))
 
-    def _on_imu(self, raw: bytes) -> None:
+    def _on_imu(self, fields: ImuFields) -> None:
         """The IMU for the forces and contacts: gravity's direction from its orientation (the
         IMU aligned with the base; none: the base's -z), its gyro and accelerometer.
         """
-        fields = imu_fields(raw) or imu_message_fields(deserialize_message(raw, Imu))
         self._imu = imu_sample(fields)
 
     def _stamp_of(self, stamp_ns: int) -> tuple[int, int]:
@@ -235,6 +233,7 @@ class FootFkNode(Node):
         received, rejected = self._period.take(
             self._tracker.counts
         )  # the period runs unobserved too
+        inputs_rejected = self._inputs.rejected_since()
         if self._diagnostics_pub.get_subscription_count() == 0:
             return
         robot = self._robot
@@ -254,6 +253,8 @@ class FootFkNode(Node):
             forces=force_values(
                 self._forces, self._forces_problem, self._imu, self._gait_phase.status()
             ),
+            inputs_rejected_in_period=inputs_rejected,
+            inputs_rejected=self._inputs.values(),
         )
         level, summary, values = fk_status(report)
         hardware_id = self._model.quadruped.model.name

@@ -30,8 +30,9 @@ from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros import glue as ros_glue
-from a1_leg_fk.ros.diagnostics import robot_description_status
+from a1_leg_fk.ros.diagnostics import INPUTS_REJECTED, robot_description_status
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.guarded_input import GuardedInputs, message_reader
 from a1_leg_fk.ros.robot_source import (
     BASE_FRAME_PARAMETER,
     ParameterSpec,
@@ -65,7 +66,8 @@ class FootIkNode(Node):
         super().__init__(NODE_NAME, **node_options)
         for spec in PARAMETERS:
             spec.declare(self)
-        self._robot = RobotSource(self, self._on_robot)
+        self._inputs = GuardedInputs(self)
+        self._robot = RobotSource(self, self._on_robot, self._inputs)
         self._model: RobotConfig = self._robot.config
         self._apply_settings(self._settings({}))
         self._seeds: list[list[float] | None] = [None] * len(LEG_NAMES)
@@ -79,9 +81,14 @@ class FootIkNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self._commands = self.create_publisher(JointState, "joint_commands", OUTPUT_QOS)
         self._diagnostics = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
+        read_target = message_reader(PointStamped)
         for slot, leg in enumerate(LEG_NAMES):
-            self.create_subscription(
-                PointStamped, f"foot_targets/{leg}", self._on_target_of(slot), TARGETS_QOS
+            self._inputs.subscribe(
+                PointStamped,
+                f"foot_targets/{leg}",
+                read_target,
+                self._on_target_of(slot),
+                TARGETS_QOS,
             )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.get_logger().info(
@@ -183,6 +190,8 @@ class FootIkNode(Node):
             return
         counts = self._counts
         level, summary = DiagnosticStatus.OK, "joint commands published"
+        if self._inputs.rejected_since():
+            level, summary = DiagnosticStatus.WARN, INPUTS_REJECTED
         if not counts["targets_received"]:
             level, summary = DiagnosticStatus.WARN, "no foot targets received yet"
         elif (
@@ -217,6 +226,7 @@ class FootIkNode(Node):
             "rejected_non_finite": counts["rejected_non_finite"],
             "base_frame": self._base_frame,
             **description,
+            **self._inputs.values(),
         }
         hardware_id = self._model.quadruped.model.name
         array = ros_glue.diagnostics(

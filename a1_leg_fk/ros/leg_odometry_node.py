@@ -25,11 +25,11 @@ from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.serialization import deserialize_message, serialize_message
-from sensor_msgs.msg import Imu, JointState
+from rclpy.serialization import serialize_message
+from sensor_msgs.msg import Imu
 
 from a1_leg_fk.estimation.filter_model import GROUND_MODELS
-from a1_leg_fk.estimation.imu import imu_reading
+from a1_leg_fk.estimation.imu import MAX_ANGULAR_RATE_RADPS, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (
     CONTACT_SOURCES,
@@ -43,14 +43,15 @@ from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros import glue as ros_glue
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
+from a1_leg_fk.ros.guarded_input import GuardedInputs, read_imu
 from a1_leg_fk.ros.joint_input import LOWSTATE_TOPIC, MissingMessages, joint_input
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.ros.odometry_parameters import PARAMETERS
-from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
+from a1_leg_fk.ros.odometry_wire import SerializedOdometry
 from a1_leg_fk.ros.robot_source import RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
-from a1_leg_fk.wire.imu import ImuFields, imu_fields
-from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
+from a1_leg_fk.wire.imu import ImuFields
+from a1_leg_fk.wire.joint_state import WireFields, doubles
 
 NODE_NAME = "leg_odometry"
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -64,7 +65,8 @@ class LegOdometryNode(Node):
         for spec in PARAMETERS:
             spec.declare(self)
         message, topic, self._decoder = joint_input(self)  # before any output: a usage error
-        self._robot = RobotSource(self, self._on_robot)
+        self._inputs = GuardedInputs(self)
+        self._robot = RobotSource(self, self._on_robot, self._inputs)
         self._warnings = ros_glue.WarnThrottle(self)
         self._period = PeriodCounter()
         self._no_stance_before = 0
@@ -84,23 +86,23 @@ class LegOdometryNode(Node):
         self._start(self._robot.config)
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
-        self.create_subscription(
+        self._inputs.subscribe(
             message,
             topic,
+            self._decoder.fields,
             self._on_joint_state,
             JOINT_STATES_QOS,
             qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-            raw=True,
         )
         self._imu_topic = self.resolve_topic_name("imu")
         if bool(self._setting("use_imu")) and topic != LOWSTATE_TOPIC:  # a LowState has its IMU
-            self.create_subscription(
+            self._inputs.subscribe(
                 Imu,
                 "imu",
-                self._on_imu,
+                read_imu,
+                self._on_imu_fields,
                 JOINT_STATES_QOS,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
-                raw=True,
             )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self.add_post_set_parameters_callback(self._after_set_parameters)
@@ -135,51 +137,36 @@ class LegOdometryNode(Node):
 
     # --- per message ---------------------------------------------------------------------
 
-    def _on_imu(self, raw: bytes) -> None:
-        """One serialized Imu: read from its bytes (:func:`imu_fields`), else deserialized."""
-        fields = imu_fields(raw)
-        if fields is None:
-            msg = deserialize_message(raw, Imu)
-            fields = imu_message_fields(msg)
-        self._on_imu_fields(fields)
-
     def _on_imu_fields(self, fields: ImuFields) -> None:
-        """One Imu's fields (an Imu message's, or a LowState's own) into the odometry."""
+        """One Imu's fields (an Imu message's, read by :func:`read_imu`, or a LowState's own)
+        into the odometry; one whose angular velocity is not finite or beyond
+        :data:`MAX_ANGULAR_RATE_RADPS` is counted as ``rejected_imu_gyro_out_of_range`` (a
+        LowState's: ``rejected_lowstate_gyro_out_of_range``).
+        """
         reading = imu_reading(*fields[1:])
         stamp = fields[0]
         if reading is None:
-            self._warnings.warn(
-                "imu", f"ignoring an Imu message on {self._imu_topic}: angular velocity not finite"
+            topic = "imu" if self._decoder.imu is None else LOWSTATE_TOPIC
+            self._inputs.reject(
+                topic,
+                "gyro_out_of_range",
+                f"angular velocity not finite or beyond {MAX_ANGULAR_RATE_RADPS:g} rad/s",
             )
             return
         self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
 
-    def _on_joint_state(self, raw: bytes) -> None:
-        """One serialized JointState: read from its bytes (:class:`JointStateDecoder`, as the bag
-        tools read them), else deserialized; then :class:`FootTracker`'s rules and the odometry.
+    def _on_joint_state(self, fields: WireFields) -> None:
+        """One joint state's fields, read from its bytes by the input's decoder (as the bag tools
+        read them; a message that cannot be read never gets here: :class:`GuardedInputs`); then
+        :class:`FootTracker`'s rules and the odometry.
         """
-        try:
-            stamp_ns, _, order, position_bytes, velocity_bytes, effort_bytes = (
-                self._decoder.fields(raw)
-            )
-            names: Sequence[str] = self._decoder.names
-            positions = doubles(position_bytes, order)
-            velocities = doubles(velocity_bytes, order)
-            efforts = doubles(effort_bytes, order)
-            if self._decoder.imu is not None:  # a LowState's own IMU, stamped as its motors
-                self._on_imu_fields(self._decoder.imu)
-        except WireError as error:
-            if not isinstance(self._decoder, JointStateDecoder):
-                self._warnings.warn("malformed", f"ignoring a lowstate message: {error}")
-                return
-            msg = deserialize_message(raw, JointState)
-            stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-            names, positions, velocities, efforts = (
-                msg.name,
-                msg.position,
-                msg.velocity,
-                msg.effort,
-            )
+        stamp_ns, _, order, position_bytes, velocity_bytes, effort_bytes = fields
+        names: Sequence[str] = self._decoder.names
+        positions = doubles(position_bytes, order)
+        velocities = doubles(velocity_bytes, order)
+        efforts = doubles(effort_bytes, order)
+        if self._decoder.imu is not None:  # a LowState's own IMU, stamped as its motors
+            self._on_imu_fields(self._decoder.imu)
         tracker = self._tracker
         feet = tracker.update(names, positions, velocities, efforts)
         if tracker.new_unknown_names:
@@ -248,6 +235,7 @@ class LegOdometryNode(Node):
 
     def _publish_diagnostics(self) -> None:
         received, rejected = self._period.take(self._tracker.counts)
+        inputs_rejected = self._inputs.rejected_since()
         counts = self._feed.odometry.counts
         no_stance, self._no_stance_before = (
             counts.no_stance - self._no_stance_before,
@@ -285,6 +273,8 @@ class LegOdometryNode(Node):
                 description_topic=robot.topic_name,
                 description_status=robot.topic_status,
                 description_rejected=robot.topic_rejected,
+                inputs_rejected_in_period=inputs_rejected,
+                inputs_rejected=self._inputs.values(),
             )
         )
         self._diagnostics_pub.publish(

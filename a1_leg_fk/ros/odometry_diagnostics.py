@@ -9,13 +9,20 @@ estimates and the feet's noise scale; samples without a stance foot and feet dro
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FilterCounts
 from a1_leg_fk.estimation.odometry import OdometryCounts
 from a1_leg_fk.model.legs import LEG_NAMES
-from a1_leg_fk.ros.diagnostics import OK, WARN, rejected_messages, robot_description_status
+from a1_leg_fk.ros.diagnostics import (
+    INPUTS_REJECTED,
+    OK,
+    WARN,
+    rejected_messages,
+    robot_description_status,
+)
 from a1_leg_fk.tracking import TrackerCounts
 
 
@@ -45,11 +52,14 @@ class OdometryReport:
     biases: tuple[tuple[float, ...], tuple[float, ...]]  # gyro [rad/s], accelerometer [m/s^2]
     noise_scales: tuple[float, float]  # the feet's noise scales: horizontal, vertical
     distance_m: float
+    inputs_rejected_in_period: int = 0  # input messages rejected (unreadable...) in the period
+    inputs_rejected: Mapping[str, int] = field(default_factory=dict)  # GuardedInputs.values()
 
 
 def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, object]]:
     """(level, summary, values). WARN for: no joint state yet, rejected joint states in the
-    period, joint states without velocities, no IMU sample, samples without a stance foot in the
+    period, input messages rejected in the period (:mod:`a1_leg_fk.ros.guarded_input`), joint
+    states without velocities, no IMU sample, samples without a stance foot in the
     period, force contacts asked for a robot without masses, a rejected robot description; else
     OK.
     """
@@ -61,6 +71,8 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         level, summary = WARN, "joint_states carry no velocities: no odometry"
     elif report.rejected_in_period:
         level, summary = WARN, "some joint_states rejected"
+    elif report.inputs_rejected_in_period:
+        level, summary = WARN, INPUTS_REJECTED
     elif report.no_stance_in_period:
         level, summary = WARN, "samples without a stance foot: velocity held and decaying"
     elif report.contacts == "force" and report.contacts_note:
@@ -103,6 +115,7 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "stamp_gaps": odometry.gaps + report.filter.gaps,
         "distance_m": f"{report.distance_m:.3f}",
         **description,
+        **report.inputs_rejected,
     }
     if report.contacts_note:
         values["contacts_note"] = f"no foot forces: {report.contacts_note}"

@@ -39,6 +39,7 @@ from std_msgs.msg import String
 from a1_leg_fk.kinematics.robot_config import RobotConfig, load_robot
 from a1_leg_fk.model.legs import FOOT_NAME_SUFFIXES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.ros.guarded_input import GuardedInputs, message_reader
 
 DESCRIPTION_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -166,7 +167,10 @@ class RobotSource:
     Raises :class:`LegFkError` when the robot the node starts with cannot be used.
     """
 
-    def __init__(self, node: Node, on_change: Callable[[RobotConfig], None]) -> None:
+    def __init__(
+        self, node: Node, on_change: Callable[[RobotConfig], None], inputs: GuardedInputs
+    ) -> None:
+        """``inputs``: the node's guarded subscriptions, which the topic joins."""
         self._node = node
         self._on_change = on_change
         for spec in PARAMETERS:
@@ -185,7 +189,9 @@ class RobotSource:
         node.add_on_set_parameters_callback(self._check_parameters)
         node.add_post_set_parameters_callback(self._apply_parameters)
         if topic:
-            node.create_subscription(String, topic, self._on_description, DESCRIPTION_QOS)
+            inputs.subscribe(
+                String, topic, message_reader(String), self._on_description, DESCRIPTION_QOS
+            )
         node.get_logger().info(self._precedence())
 
     def _precedence(self) -> str:

@@ -1,0 +1,348 @@
+"""Damaged messages on every input topic of a running node (issue 38): the harness of the CI fuzz
+(test/ros/test_input_fuzz.py; the nodes: test/fuzzed_nodes.py).
+
+Each input topic gets serialized messages published raw (a publisher of the topic's type given
+bytes), interleaved with good input the node must answer. Damage whose outcome is known by
+construction comes first (:data:`KNOWN`): bytes cut short and a length field of gigabytes cannot
+be read; bytes appended (CDR readers ignore what follows the last field) and well-formed absurd
+values (NaN, infinities, 1e300, a zero quaternion, 1e6 m/s^2, another robot's text) can. After
+them the node's ``rejected_<topic>_malformed`` must equal the unreadable ones sent. Then damage
+whose outcome is not known beforehand (:data:`UNKNOWN`: bit flips anywhere, another message
+type's bytes on the topic): the count may grow by at most the number sent. All the while the
+node must answer every good input after a batch of damage and publish nothing non-finite.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import struct
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
+from hostile_values import SPECIAL_VALUES
+from nav_msgs.msg import Odometry
+from rclpy.qos import QoSProfile
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import Imu, JointState
+from shared import (
+    PYBULLET_NAMES,
+    STANDING,
+)
+from std_msgs.msg import String
+
+TRUNCATED, ABSURD_LENGTH, EXTENDED, ABSURD_VALUES = (
+    "truncated",
+    "absurd length",
+    "extended",
+    "absurd values",
+)
+"""Truncated messages keep at least 8 bytes: the rmw may not deliver a payload of its 4-byte
+encapsulation alone."""
+BIT_FLIPS, OTHER_TYPE = "bit flips", "another type"
+KNOWN = (TRUNCATED, ABSURD_LENGTH, EXTENDED, ABSURD_VALUES)
+UNKNOWN = (BIT_FLIPS, OTHER_TYPE)
+UNREADABLE = (TRUNCATED, ABSURD_LENGTH)
+ABSURD_LENGTHS = (0xFFFFFFFF, 0x80000000, 0x7FFFFFF0, 1 << 24)
+FRAME_ID_LENGTH = 12
+"""Where a message that starts with a std_msgs/Header keeps its frame_id's length (after the
+4-byte encapsulation and the stamp)."""
+DELIVERED = 0.85
+"""The share of a burst of damaged messages a best-effort subscriber is sure to receive here."""
+BATCH = 25
+"""Damaged messages between two good inputs (well under the nodes' queue of 100)."""
+
+
+def frame_stamp(msg: object, stamp_ns: int) -> None:
+    """Set ``msg.header.stamp`` to ``stamp_ns`` [ns]."""
+    stamp = msg.header.stamp  # type: ignore[attr-defined]
+    stamp.sec, stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+
+
+def joint_state_bytes(stamp_ns: int, values: Sequence[float] = STANDING) -> bytes:
+    """A JointState of the A1 (PyBullet's names), velocities and efforts included."""
+    msg = JointState(name=list(PYBULLET_NAMES), position=[float(v) for v in values])
+    msg.velocity = [0.1] * 12
+    msg.effort = [2.0] * 12
+    frame_stamp(msg, stamp_ns)
+    return serialize_message(msg)
+
+
+def imu_bytes(stamp_ns: int, rng: random.Random | None = None) -> bytes:
+    """An Imu level and at rest, or (``rng``) one of well-formed absurd values."""
+    msg = Imu()
+    msg.orientation.w = 1.0
+    msg.linear_acceleration.z = 9.81
+    if rng is not None:
+        pick = rng.choice
+        q = msg.orientation
+        q.x, q.y, q.z, q.w = (pick([*SPECIAL_VALUES, 0.0]) for _ in range(4))
+        w, a = msg.angular_velocity, msg.linear_acceleration
+        w.x, w.y, w.z = (pick(SPECIAL_VALUES) for _ in range(3))
+        a.x, a.y, a.z = (pick([*SPECIAL_VALUES, 1e6, -1e6]) for _ in range(3))
+        msg.orientation_covariance[0] = pick([-1.0, 0.0, math.nan, 1e300])
+        msg.angular_velocity_covariance[0] = pick([-1.0, 0.0, math.inf])
+    frame_stamp(msg, stamp_ns)
+    return serialize_message(msg)
+
+
+def absurd_joint_state(stamp_ns: int, rng: random.Random) -> bytes:
+    """A JointState of the A1's names with absurd values and array lengths."""
+    values = [rng.choice(SPECIAL_VALUES) for _ in range(12)]
+    msg = JointState(name=list(PYBULLET_NAMES), position=values)
+    msg.velocity = [rng.choice(SPECIAL_VALUES) for _ in range(rng.choice([0, 11, 12, 13]))]
+    msg.effort = [rng.choice([1e300, -1e6, math.nan]) for _ in range(rng.choice([0, 12, 40]))]
+    frame_stamp(msg, stamp_ns)
+    return serialize_message(msg)
+
+
+def point_bytes(stamp_ns: int, xyz: Sequence[float]) -> bytes:
+    msg = PointStamped()
+    msg.point.x, msg.point.y, msg.point.z = (float(v) for v in xyz)
+    frame_stamp(msg, stamp_ns)
+    return serialize_message(msg)
+
+
+def string_bytes(text: str) -> bytes:
+    return serialize_message(String(data=text))
+
+
+ABSURD_DESCRIPTIONS = (
+    "",
+    "hello robot",
+    "<robot name='x'/>",
+    "<robot name='x'><link name='a'>",
+    "\u0000" * 3 + "\U0001f9bf" * 50,
+)
+
+
+@dataclass
+class InputTopic:
+    """One input topic of a node: its type, a good message and a well-formed absurd one, the
+    offsets of its length fields, and the QoS to publish it with.
+    """
+
+    topic: str
+    message: type
+    good: Callable[[int], bytes]  # stamp [ns] -> bytes
+    absurd: Callable[[int, random.Random], bytes]
+    length_offsets: tuple[int, ...] = (FRAME_ID_LENGTH,)
+    qos: QoSProfile = field(default_factory=lambda: QoSProfile(depth=1000))
+    pause_s: float = 0.0  # between messages (a keep-last-1 reader keeps only the latest)
+    good_each_batch: bool = True  # False: the good message only once, when connecting
+
+
+def data_length(raw: bytes, message: type) -> int:
+    """The bytes of ``raw`` its fields take: rclpy's serializer may leave a few bytes after
+    them, which a reader never looks at (so cutting them off leaves a readable message).
+    """
+    low, high = 4, len(raw)  # deserialize_message(raw[:high]) works, raw[:low] does not
+    while high - low > 1:
+        middle = (low + high) // 2
+        try:
+            deserialize_message(raw[:middle], message)
+        except Exception:  # noqa: BLE001 (rclpy's RMWError: too short)
+            low = middle
+        else:
+            high = middle
+    return high
+
+
+def damaged(kind: str, topic: InputTopic, stamp_ns: int, rng: random.Random) -> bytes:
+    """One message of ``topic`` damaged as ``kind`` says."""
+    good = topic.good(stamp_ns)
+    if kind == TRUNCATED:
+        return good[: rng.randrange(8, data_length(good, topic.message))]  # see TRUNCATED
+    if kind == ABSURD_LENGTH:
+        data = bytearray(good)
+        struct.pack_into("<I", data, rng.choice(topic.length_offsets), rng.choice(ABSURD_LENGTHS))
+        return bytes(data)
+    if kind == EXTENDED:
+        return good + rng.randbytes(rng.randrange(1, 200))
+    if kind == ABSURD_VALUES:
+        return topic.absurd(stamp_ns, rng)
+    if kind == BIT_FLIPS:
+        data = bytearray(good)
+        for _ in range(rng.randint(1, 8)):
+            data[rng.randrange(len(data))] ^= 1 << rng.randrange(8)
+        return bytes(data)
+    others = [
+        joint_state_bytes(stamp_ns),
+        imu_bytes(stamp_ns),
+        point_bytes(stamp_ns, (0.1, 0.2, -0.3)),
+        string_bytes("<robot/>"),
+        rng.randbytes(rng.randrange(0, 400)),
+    ]
+    return rng.choice(others)
+
+
+@dataclass
+class Tally:
+    """What was sent to one topic."""
+
+    sent: dict[str, int] = field(default_factory=lambda: dict.fromkeys(KNOWN + UNKNOWN, 0))
+
+    @property
+    def unreadable(self) -> int:
+        return sum(self.sent[kind] for kind in UNREADABLE)
+
+    @property
+    def unknown(self) -> int:
+        return sum(self.sent[kind] for kind in UNKNOWN)
+
+
+@dataclass
+class FuzzedNode:
+    """A node under fuzz: its command, its input topics, how to drive it (publish one good input
+    with a stamp [ns]) and the output topic whose stamps answer the drive, and the outputs
+    checked for finite values.
+    """
+
+    name: str
+    command: list[str]
+    inputs: list[InputTopic]
+    status: str  # the end of its /diagnostics status name
+    drive_topic: str
+    drive: Callable[[int], bytes]
+    answer: tuple[str, type]
+    outputs: dict[str, type]
+
+
+def all_values(msg: object) -> list[float]:
+    """The floats of an output message the checks look at."""
+    if isinstance(msg, PointStamped):
+        return [msg.point.x, msg.point.y, msg.point.z]
+    if isinstance(msg, Vector3Stamped):
+        return [msg.vector.x, msg.vector.y, msg.vector.z]
+    if isinstance(msg, WrenchStamped):
+        f = msg.wrench.force
+        return [f.x, f.y, f.z]
+    if isinstance(msg, Odometry):
+        p, q, v, w = (
+            msg.pose.pose.position,
+            msg.pose.pose.orientation,
+            *((msg.twist.twist.linear, msg.twist.twist.angular)),
+        )
+        return [p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z,
+                *msg.pose.covariance, *msg.twist.covariance]  # fmt: skip
+    if isinstance(msg, JointState):
+        return list(msg.position)
+    raise TypeError(type(msg))
+
+
+class NodeFuzz:
+    """Publishers of every input and subscribers of every output of one running node."""
+
+    def __init__(self, probe, node: FuzzedNode, seed: int) -> None:
+        self.probe = probe
+        self.node = node
+        self.rng = random.Random(seed)
+        self.publishers = {
+            topic.topic: probe.node.create_publisher(topic.message, topic.topic, topic.qos)
+            for topic in node.inputs
+        }
+        if node.drive_topic not in self.publishers:
+            self.publishers[node.drive_topic] = probe.node.create_publisher(
+                JointState, node.drive_topic, QoSProfile(depth=1000)
+            )
+        self.tallies = {topic.topic: Tally() for topic in node.inputs}
+        self.answered: set[int] = set()
+        self.non_finite: list[str] = []
+        self.outputs = 0
+        answer_topic = node.answer[0]
+        for topic, kind in node.outputs.items():
+            probe.node.create_subscription(
+                kind, topic, self._output(topic, topic == answer_topic), QoSProfile(depth=1000)
+            )
+        self.diagnostics: dict[str, str] = {}
+        self.diagnostics_received = 0
+        probe.node.create_subscription(
+            DiagnosticArray, "/diagnostics", self._on_diagnostics, QoSProfile(depth=10)
+        )
+
+    def _output(self, topic: str, answers: bool) -> Callable[[object], None]:
+        def on_output(msg: object) -> None:
+            self.outputs += 1
+            values = all_values(msg)
+            if not all(math.isfinite(v) for v in values):
+                self.non_finite.append(f"{topic}: {values}")
+            if answers:
+                stamp = msg.header.stamp  # type: ignore[attr-defined]
+                self.answered.add(stamp.sec * 1_000_000_000 + stamp.nanosec)
+
+        return on_output
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name.endswith(self.node.status):
+                self.diagnostics = {kv.key: kv.value for kv in status.values}
+                self.diagnostics_received += 1
+
+    def now_ns(self) -> int:
+        return int(self.probe.node.get_clock().now().nanoseconds)
+
+    def good_input_answered(self, timeout_s: float = 15.0, every: bool = False) -> bool:
+        """Publish a good message on every input (``every``: also those sent only once), then
+        the drive; True once it is answered.
+        """
+        for topic in self.node.inputs:
+            if topic.topic != self.node.drive_topic and (every or topic.good_each_batch):
+                self.publishers[topic.topic].publish(topic.good(self.now_ns()))
+        self.probe.spin_for(0.01)
+        stamp = self.now_ns()
+        self.publishers[self.node.drive_topic].publish(self.node.drive(stamp))
+        return self.probe.spin_until(lambda: stamp in self.answered, timeout_s)
+
+    def wait_connected(self, timeout_s: float = 30.0) -> bool:
+        """Drive the node until it answers (discovery done both ways) with the robot of the
+        good robot_description (its /diagnostics ``model``).
+        """
+        return self.probe.spin_until(
+            lambda: (
+                self.good_input_answered(0.5, every=True)
+                and "robot_description" in self.diagnostics.get("model", "")
+            ),
+            timeout_s,
+        )
+
+    def send(self, topic: InputTopic, kinds: Sequence[str], count: int) -> list[str]:
+        """``count`` damaged messages of ``kinds`` on ``topic`` in batches, the good input after
+        each; the batches whose good input was not answered.
+        """
+        publisher, tally, missed = self.publishers[topic.topic], self.tallies[topic.topic], []
+        for start in range(0, count, BATCH):
+            for _ in range(min(BATCH, count - start)):
+                kind = self.rng.choice(kinds)
+                publisher.publish(damaged(kind, topic, self.now_ns(), self.rng))
+                tally.sent[kind] += 1
+                if topic.pause_s:
+                    self.probe.spin_for(topic.pause_s)
+                else:
+                    self.probe.executor.spin_once(timeout_sec=0.0005)
+            if not self.good_input_answered():
+                missed.append(f"{topic.topic}: no answer after message {start + BATCH}")
+        return missed
+
+    def rejected(self, topic: str) -> int:
+        key = f"rejected_{topic.strip('/').replace('/', '_')}_malformed"
+        return int(self.diagnostics.get(key, "-1"))
+
+    def rejected_values(self) -> dict[str, str]:
+        """The latest report's ``rejected_*`` values."""
+        return {k: v for k, v in self.diagnostics.items() if k.startswith("rejected_")}
+
+    def counts_reach(self, wanted: dict[str, int], timeout_s: float = 15.0) -> bool:
+        """Spin until every topic's rejected count is at most the wanted one and at least
+        :data:`DELIVERED` of it (a fresh report each): the inputs are best effort, and on a loaded
+        machine DDS drops a few messages of a burst (no readable message may be counted).
+        """
+
+        def reached() -> bool:
+            return all(DELIVERED * n <= self.rejected(t) <= n for t, n in wanted.items())
+
+        seen = self.diagnostics_received
+        return self.probe.spin_until(
+            lambda: self.diagnostics_received > seen and reached(), timeout_s
+        )

@@ -18,6 +18,8 @@ from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, smooth
+from a1_leg_fk.estimation.contact_smoother import probabilities as stance_probabilities
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -63,9 +65,12 @@ def robot_of(run: ContactRun) -> Quadruped:
 
 
 def estimate(
-    run: ContactRun, quadruped: Quadruped, evidence: str
+    run: ContactRun, quadruped: Quadruped, evidence: str, smoothed: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run."""
+    """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run: the
+    causal filter's, or ``smoothed`` over the whole run (the filter's evidence through
+    :func:`~a1_leg_fk.estimation.contact_smoother.smooth`, as ``a1-leg-fk bag`` does it).
+    """
     rotations = rotation_matrices(run.quaternions)
     gravity = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -STANDARD_GRAVITY])
     if evidence == OLD_RULE:
@@ -79,6 +84,7 @@ def estimate(
     feet = quadruped.fk_batch(run.angles)
     velocities = quadruped.foot_velocities_batch(run.angles, run.rates)
     probabilities, normals = np.empty((len(run.stamps_s), 4)), np.empty((len(run.stamps_s), 4))
+    kept = []
     for n, stamp in enumerate(run.stamps_s.tolist()):
         step = estimator.step(
             stamp,
@@ -88,6 +94,11 @@ def estimate(
             ImuSample(gravity[n].tolist(), run.gyro[n].tolist(), run.specific_force[n].tolist()),
         )  # fmt: skip
         probabilities[n], normals[n] = step.probabilities, step.normals
+        kept.append(estimator.filter.evidence)
+    if smoothed:
+        switch, kinematic, forced, total = (np.array(c) for c in zip(*kept, strict=True))
+        rows = EvidenceRows(run.stamps_s, switch, kinematic, forced, total)
+        probabilities = stance_probabilities(smooth(rows, np.zeros(4))[0])
     return probabilities, normals
 
 

@@ -96,6 +96,12 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         help="a Unitree LowState's foot sensor above this raw count is in contact (default "
         f"{DEFAULT_SENSOR_THRESHOLD_COUNTS:g}, as a controller run on real A1s takes it)",
     )
+    parser.add_argument(
+        "--causal",
+        action="store_true",
+        help="the contact filter's live answer, each sample from the samples before it, as the "
+        "node has it (default: smoothed over the whole recording, forward and backward)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -154,6 +160,7 @@ def recording_options(
         "force_model": options.force_model,
         "contact_rule": options.contact_rule,
         "sensor_threshold": getattr(options, "sensor_threshold", DEFAULT_SENSOR_THRESHOLD_COUNTS),
+        "causal": options.causal,
     }
 
 
@@ -184,6 +191,7 @@ def check_force_options(options: argparse.Namespace, forces: bool, needs: str) -
         ("--contact-rule", options.contact_rule != FILTER),
         ("--touchdown-force", options.touchdown_force is not None),
         ("--liftoff-force", options.liftoff_force is not None),
+        ("--causal", options.causal),
     ]
     for option, given in chosen:
         if given and not forces:

@@ -176,7 +176,8 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    print(f"contacts:  {source}")
+    smoothing = " (causal, as the node)" if options.causal else " (smoothed over the recording)"
+    print(f"contacts:  {source}{smoothing if source == 'force' else ''}")
     for line in report_lines(report, trajectories.world_frame):
         print(line)
     options.contact_source = source  # for the JSON

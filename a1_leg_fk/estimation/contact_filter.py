@@ -34,6 +34,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from math import exp, isfinite, sqrt
+from typing import NamedTuple
 
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -95,6 +96,19 @@ SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
 """Speed over the ground at even odds, and per unit of log-odds, in leg lengths per second."""
 
 
+class SampleEvidence(NamedTuple):
+    """One sample's transition and evidence per foot, as the filter used them: the probability
+    ``switch`` of a change of state since the previous sample, the kinematic (height and speed)
+    log-likelihood ratios, whether the foot's force was evidence, and the ``total``
+    log-likelihood ratio (kinematic, force or free fall, phase prior).
+    """
+
+    switch: float
+    kinematic: list[float]
+    forced: list[bool]
+    total: list[float]
+
+
 class ContactFilter:
     """The four feet's filters, carried from one sample to the next. Every foot starts at even
     odds.
@@ -104,6 +118,8 @@ class ContactFilter:
         self.model = model
         self.probabilities = [0.5] * LEGS
         """Each foot's probability of stance after the latest sample."""
+        self.evidence = SampleEvidence(0.0, [0.0] * LEGS, [False] * LEGS, [0.0] * LEGS)
+        """The latest sample's transition and evidence, for a smoother (kept by reference)."""
 
     def update(
         self,
@@ -135,9 +151,10 @@ class ContactFilter:
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # falling, no foot stands however low and still it is: the kinematics' stance is weak
         kinematic = _kinematic(model, feet, omega, forced, common < -1.0)
-        posterior = []
+        posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
-            odds = _logit(previous + switch * (1.0 - 2.0 * previous)) + kinematic[leg]
+            prior = _logit(previous + switch * (1.0 - 2.0 * previous))
+            odds = prior + kinematic[leg]
             if forced[leg]:
                 force = (forces[leg] - model.force_half_n) / model.force_scale_n
                 odds += _clip(force, limit, limit)
@@ -146,7 +163,9 @@ class ContactFilter:
             if phase_prior is not None and isfinite(phase_prior[leg]):
                 odds += model.phase_weight * _logit(phase_prior[leg])
             posterior.append(1.0 / (1.0 + exp(-odds)))
+            totals.append(odds - prior)
         self.probabilities = posterior
+        self.evidence = SampleEvidence(switch, kinematic, forced, totals)
         return posterior
 
 

@@ -17,6 +17,7 @@ import numpy as np
 from a1_leg_fk.kinematics.batch_velocities import velocities_of
 from a1_leg_fk.model.legs import JOINTS_PER_LEG, LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.contact_smoothing import smoothed_blocks
 from a1_leg_fk.recording.foot_block import FootBlock
 from a1_leg_fk.recording.lowstate import no_finite_motors
 from a1_leg_fk.recording.reader import JOINT_STATE_TYPE, Recording
@@ -46,6 +47,9 @@ def iter_foot_blocks(
 ) -> Iterator[FootBlock]:
     """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
     called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
+    Contacts smoothed over the recording when ``recording.forces.smoothed``
+    (:func:`~a1_leg_fk.recording.contact_smoothing.smoothed_blocks`: the blocks then come a
+    lag later, cut where the smoothed rows end).
 
     A truncated or corrupt bag ends the pass early (:class:`~a1_leg_fk.recording.reads.
     RecordingReads`): what was read is yielded, and ``recording.stopped`` says where and why.
@@ -53,6 +57,17 @@ def iter_foot_blocks(
     model's legs (a bag of another robot): then every row (there are none) and output would be
     empty.
     """
+    blocks = _foot_blocks(recording, progress, on_message)
+    forces = recording.forces
+    return smoothed_blocks(blocks) if forces is not None and forces.smoothed else blocks
+
+
+def _foot_blocks(
+    recording: Recording,
+    progress: bool,
+    on_message: Callable[[Connection, int, bytes], None] | None,
+) -> Iterator[FootBlock]:
+    """The pass of :func:`iter_foot_blocks`, with the filter's own (causal) contacts."""
     reader, joint_states = recording.reader, recording.joint_states
     tracker = recording.tracker = FootTracker(recording.quadruped)
     if recording.forces is not None:
@@ -344,14 +359,14 @@ def _finish(
         origin, rotation = recording.base_pose.at(stamps)
         world = origin[:, None, :] + np.einsum("nij,nlj->nli", rotation, feet)
     rates[~np.repeat(np.isfinite(foot_velocities).all(axis=2), JOINTS_PER_LEG, axis=1)] = math.nan
-    forces: tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None] = (None, None, None)
+    forces, normals, contacts, evidence = None, None, None, None
     if recording.forces is not None:
         slot_efforts = (
             recording.forces.slot_efforts(names, efforts)[result.accepted][rows]
             if efforts is not None and efforts.shape[1]
             else None
         )
-        forces = recording.forces.rows(
+        forces, normals, contacts, evidence = recording.forces.rows(
             stamps, (angles[rows], rates, slot_efforts), (feet, foot_velocities)
         )
     yield FootBlock(
@@ -362,9 +377,12 @@ def _finish(
         world,
         angles[rows],
         rates,
-        *forces,
+        forces,
+        normals,
+        contacts,
         result.efforts[result.accepted][rows] if recording.efforts else None,
         None if lowstate is None else lowstate.foot_force[result.accepted][rows],
+        evidence,
     )
 
 

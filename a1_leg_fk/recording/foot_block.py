@@ -5,8 +5,11 @@ iter_foot_blocks`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows
 
 
 @dataclass(frozen=True)
@@ -18,7 +21,8 @@ class FootBlock:
     ``normal_forces`` (N, 4) [N] along minus gravity and ``contacts`` (N, 4) probabilities (NaN
     where none); with ``recording.efforts``, ``efforts`` (N, 12) [N m], the merged joint efforts
     after each message in slot order (NaN where unknown); from a LowState, ``sensor``: its foot
-    sensors' raw counts (FR, FL, RR, RL).
+    sensors' raw counts (FR, FL, RR, RL); ``evidence``: the contact filter's evidence per row
+    while its contacts are to be smoothed (:mod:`a1_leg_fk.estimation.contact_smoother`).
     """
 
     stamps_ns: np.ndarray
@@ -33,3 +37,16 @@ class FootBlock:
     contacts: np.ndarray | None = None
     efforts: np.ndarray | None = None
     sensor: np.ndarray | None = None  # (N, 4) a LowState's foot sensors [raw counts]
+    evidence: EvidenceRows | None = None  # the contact filter's, when contacts are smoothed
+
+    def rows(self, chosen: slice, contacts: np.ndarray | None = None) -> FootBlock:
+        """The rows ``chosen`` of every array (``contacts`` instead of theirs and no evidence, if
+        given).
+        """
+        kept = {name: getattr(self, name) for name in self.__dataclass_fields__}
+        cut: dict[str, Any] = {
+            name: None if value is None else value[chosen] for name, value in kept.items()
+        }
+        if contacts is not None:
+            cut["contacts"], cut["evidence"] = contacts, None
+        return FootBlock(**cut)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER, ImuSample
+from a1_leg_fk.estimation.contact_filter import SampleEvidence
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, smoothing_line
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import has_orientation, measured_vector
 from a1_leg_fk.kinematics.frames import gravity_in_base
@@ -163,6 +165,9 @@ class RecordingForces(ForcePass):
     ) -> None:
         super().__init__(quadruped, thresholds, force_model, contact_rule)
         self.imu = imu
+        self.smoothed = False
+        """Keep the filter's evidence per row (:meth:`rows`), for contacts smoothed over the
+        recording; False: the filter's own, causal contacts, as the node has them."""
 
     def summary(self, forces: bool, motion: str | None = None) -> str:
         """:meth:`ForcePass.summary`, the base's motion from the IMU track's gyro and
@@ -179,17 +184,21 @@ class RecordingForces(ForcePass):
                 if np.isfinite(values).all(axis=1).any()
             ]
             motion = f"{', '.join(parts)} of {imu.topic}" if parts else None
-        return super().summary(forces, motion)
+        lines = super().summary(forces, motion)
+        if self.estimator.contact_rule != FILTER:
+            return lines
+        return f"{lines}\n{smoothing_line(self.smoothed)}"
 
     def rows(
         self,
         stamps_ns: np.ndarray,
         joints: tuple[np.ndarray, np.ndarray, np.ndarray | None],
         feet: tuple[np.ndarray, np.ndarray],
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(N, 4, 3) forces [N, base frame], (N, 4) normal forces [N] along minus gravity and
-        (N, 4) contact probabilities for rows of (N, 12) angles [rad], rates [rad/s] and efforts
-        [N m] (NaN where unknown; efforts None: none), and (N, 4, 3) feet [m] and their
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, EvidenceRows | None]:
+        """(N, 4, 3) forces [N, base frame], (N, 4) normal forces [N] along minus gravity,
+        (N, 4) contact probabilities (the filter's, causal) and, while :attr:`smoothed`, the
+        filter's evidence per row (else None) for rows of (N, 12) angles [rad], rates [rad/s] and
+        efforts [N m] (NaN where unknown; efforts None: none), and (N, 4, 3) feet [m] and their
         velocities [m/s], base frame.
         """
         angles, rates, efforts = joints
@@ -197,6 +206,7 @@ class RecordingForces(ForcePass):
         forces = np.full((rows, 4, 3), math.nan)
         normals, probabilities = np.full((rows, 4), math.nan), np.full((rows, 4), math.nan)
         nearest = None if self.imu is None else self.imu.at(stamps_ns)
+        kept: list[SampleEvidence] | None = [] if self.smoothed else None
         for row in range(rows):
             step = self.message(
                 int(stamps_ns[row]),
@@ -212,7 +222,27 @@ class RecordingForces(ForcePass):
                 step.normals,
                 step.probabilities,
             )
-        return forces, normals, probabilities
+            if kept is not None:
+                kept.append(self.estimator.filter.evidence)
+        return (
+            forces,
+            normals,
+            probabilities,
+            None if kept is None else self._evidence(stamps_ns, kept),
+        )
+
+    def _evidence(self, stamps_ns: np.ndarray, kept: list[SampleEvidence]) -> EvidenceRows:
+        """The evidence of rows stamped ``stamps_ns`` as arrays, their stamps [s] since the
+        first of the pass.
+        """
+        switch, kinematic, forced, total = zip(*kept, strict=True) if kept else ((),) * 4
+        return EvidenceRows(
+            (stamps_ns - (self._origin_ns or 0)) * 1e-9,
+            np.array(switch, dtype=float),
+            np.array(kinematic, dtype=float).reshape(-1, 4),
+            np.array(forced, dtype=bool).reshape(-1, 4),
+            np.array(total, dtype=float).reshape(-1, 4),
+        )
 
 
 def check_has_efforts(

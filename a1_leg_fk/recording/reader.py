@@ -56,6 +56,7 @@ class RecordingChoices(TypedDict, total=False):
     force_model: str
     contact_rule: str
     sensor_threshold: float
+    causal: bool
 
 
 @dataclass
@@ -115,6 +116,7 @@ def open_recording(
     force_model: str = DYNAMIC,
     contact_rule: str = FILTER,
     sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS,
+    causal: bool = False,
 ) -> Recording:
     """Open a bag and make the choices (topic, model, base pose); :class:`LegFkError` naming the
     problem for bad input. Close with :func:`close_recording`. ``forces``: foot forces and
@@ -123,7 +125,8 @@ def open_recording(
     ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule`` and
     ``contact_thresholds`` (the threshold rule's touchdown and liftoff forces [N], ``None``: the
     defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.RecordingForces`
-    takes them; ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact.
+    takes them; ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact;
+    ``causal``: the filter's contacts as the node has them, else smoothed over the recording.
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
@@ -174,7 +177,7 @@ def open_recording(
                 (joint_states, imu, lowstate),
                 robot.quadruped,
                 forces,
-                (contact_thresholds, force_model, contact_rule),
+                (contact_thresholds, force_model, contact_rule, causal),
             )
             if forces or estimate_contacts
             else None
@@ -207,13 +210,13 @@ def _force_pass(
     where: tuple[Connection, str | None, LowStateInput | None],
     quadruped: Quadruped,
     needs_efforts: bool,
-    settings: tuple[tuple[float | None, float | None], str, str],
+    settings: tuple[tuple[float | None, float | None], str, str, bool],
 ) -> RecordingForces:
     """The force and contact estimation of a pass over the JointStates of ``where`` (their
     connection, the IMU topic or None, the LowState input or None: its IMU is the IMU);
     :class:`LegFkError` if the JointStates carry no
     efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
-    contact thresholds, the force model and the contact rule.
+    contact thresholds, the force model, the contact rule and whether causal (else smoothed).
     """
     from a1_leg_fk.recording.forces import IMU_TYPE, ImuTrack, RecordingForces, check_has_efforts
 
@@ -225,8 +228,10 @@ def _force_pass(
     if imu:
         connection = pick_topic(reads.reader, reads.path, imu, (IMU_TYPE,), "--imu", "IMU")
         track = ImuTrack.read(reads, connection)
-    thresholds, force_model, contact_rule = settings
-    return RecordingForces(quadruped, track, thresholds, force_model, contact_rule)
+    thresholds, force_model, contact_rule, causal = settings
+    forces = RecordingForces(quadruped, track, thresholds, force_model, contact_rule)
+    forces.smoothed = not causal and contact_rule == FILTER
+    return forces
 
 
 def close_recording(recording: Recording) -> None:

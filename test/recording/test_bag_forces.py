@@ -1,7 +1,7 @@
 """``a1-leg-fk bag --forces`` and ``a1-leg-fk gait --contacts``: a PyBullet trot recorded as a bag
 (JointState with efforts, an IMU, the base pose) gives the same foot forces and contacts through
 the bag tools as through the Python API; bad efforts cost their legs only; a bag without efforts
-is refused in one line.
+is refused in one line; contacts are smoothed over the recording unless ``--causal``.
 """
 
 from __future__ import annotations
@@ -259,3 +259,55 @@ def test_imu_without_orientation_is_refused(tmp_path: Path, capsys: pytest.Captu
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "--imu /imu: no message with an orientation" in error
     assert not out.exists()
+
+
+def contacts_of(bag: Path, out: Path, options: list[str]) -> np.ndarray:
+    """(N, 4) contact probabilities of ``a1-leg-fk bag --contacts`` with ``options``."""
+    arguments = ["bag", str(bag), "--topic", "/joint_states", "--imu", "/imu", "--contacts"]
+    assert cli.main([*arguments, "--csv", str(out), "--quiet", "--force", *options]) == 0
+    return csv_columns(out, CONTACT_COLUMNS)
+
+
+SETTLED = 250
+"""Rows after the drop onto the ground has settled (0.5 s at 500 Hz)."""
+
+
+WORSE_WITH_EFFORTS = pytest.mark.xfail(
+    strict=True,
+    reason="with efforts, smoothing this in-place trot agrees on 95.66 % against the causal "
+    "filter's 96.74 %: without the filter's lag its liftoffs come early where the force fades "
+    "slowly (as on the family's walks and pronk, docs/forces.md)",
+)
+
+
+@pytest.mark.parametrize(
+    "efforts",
+    [pytest.param(True, marks=WORSE_WITH_EFFORTS), False],
+    ids=["efforts", "kinematic"],
+)
+def test_smoothed_contacts_beat_the_causal_ones(
+    tmp_path: Path, trot: dict[str, np.ndarray], efforts: bool, capsys: pytest.CaptureFixture
+) -> None:
+    bag = write_trot_bag(tmp_path / "in", trot, "mcap", efforts=efforts)
+    causal = contacts_of(bag, tmp_path / "causal.csv", ["--causal"])
+    assert "smoothing: none, the causal filter's contacts" in capsys.readouterr().out
+    smoothed = contacts_of(bag, tmp_path / "smoothed.csv", [])
+    assert "smoothing: contacts smoothed over the recording" in capsys.readouterr().out
+    assert causal.shape == smoothed.shape == (len(trot["angles"]), 4)
+    assert ((smoothed >= 0.0) & (smoothed <= 1.0)).all()
+    truth = trot["foot_forces"][SETTLED:, :, 2] > 0.0  # the family's truth: a normal force
+    agree = {
+        name: ((values[SETTLED:] >= 0.5) == truth).mean()
+        for name, values in (("causal", causal), ("smoothed", smoothed))
+    }
+    print(f"efforts {efforts}: agreement with PyBullet {agree}")
+    assert agree["smoothed"] >= agree["causal"]
+
+
+def test_causal_needs_contacts(
+    tmp_path: Path, trot: dict[str, np.ndarray], capsys: pytest.CaptureFixture
+) -> None:
+    bag = write_trot_bag(tmp_path / "in", trot, "mcap")
+    assert cli.main(["bag", str(bag), "--csv", str(tmp_path / "f.csv"), "--causal"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--causal needs --forces or --contacts" in error

@@ -56,10 +56,19 @@ def messages(run: ContactRun, row: int) -> tuple[Imu, JointState]:
 
 
 def bag_contacts(run: ContactRun, rows: int, folder: Path) -> dict[int, list[float]]:
-    """``a1-leg-fk bag --forces --imu`` on the stream: {stamp: probabilities}."""
+    """``a1-leg-fk bag --forces --imu --causal`` on the stream: {stamp: probabilities}."""
     bag = write_run_bag(folder / "in", run, rows=rows)
     out = folder / "out"
-    arguments = ["bag", str(bag), "--topic", "/joint_states", "--imu", "/imu", "--forces"]
+    arguments = [
+        "bag",
+        str(bag),
+        "--topic",
+        "/joint_states",
+        "--imu",
+        "/imu",
+        "--forces",
+        "--causal",
+    ]
     assert cli.main([*arguments, "--urdf", run.urdf_path, "--output-bag", str(out)]) == 0
     contacts: dict[int, list[float]] = {}
     with AnyReader([out]) as reader:

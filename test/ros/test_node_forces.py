@@ -53,8 +53,8 @@ def imu(record: dict[str, np.ndarray], row: int) -> Imu:
 
 
 def bag_tool_outputs(tmp_path: Path, record: dict[str, np.ndarray]) -> tuple[dict, dict]:
-    """``a1-leg-fk bag --forces --imu --output-bag`` on the same stream: per leg {stamp: force},
-    and {stamp: (probabilities, normal forces)}."""
+    """``a1-leg-fk bag --forces --imu --causal --output-bag`` on the same stream: per leg
+    {stamp: force}, and {stamp: (probabilities, normal forces)}."""
     spec = BagSpec()
     efforts = recorded_efforts(record["torques"])
     for row in range(len(record["angles"])):
@@ -78,7 +78,16 @@ def bag_tool_outputs(tmp_path: Path, record: dict[str, np.ndarray]) -> tuple[dic
             JointStateMsg(stamp, NAMES, positions, rates, "", efforts[row]),
         )
     bag, out = write_bag(tmp_path / "in", spec), tmp_path / "out"
-    arguments = ["bag", str(bag), "--topic", "/joint_states", "--forces", "--imu", "/imu"]
+    arguments = [
+        "bag",
+        str(bag),
+        "--topic",
+        "/joint_states",
+        "--forces",
+        "--imu",
+        "/imu",
+        "--causal",
+    ]
     assert cli.main([*arguments, "--output-bag", str(out), "--quiet"]) == 0
     forces: dict[str, dict[int, list[float]]] = {leg: {} for leg in LEGS}
     contacts: dict[int, tuple[list[float], list[float]]] = {}

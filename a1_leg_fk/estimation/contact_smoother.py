@@ -1,0 +1,193 @@
+"""Contacts of a recording from the whole recording: the contact filter's hidden Markov model
+(:mod:`a1_leg_fk.estimation.contact_filter`) run forward and backward over the evidence it
+recorded per sample (:class:`~a1_leg_fk.estimation.contact_filter.SampleEvidence`), giving each
+foot's posterior probability of stance given every sample before *and after* it. Without ROS;
+numpy arrays in, numpy arrays out.
+
+The evidence does not depend on the filter's state (forces, heights, speeds, free fall and the
+phase prior are the kinematics' and the efforts'), so the forward-backward pass over the stored
+log-likelihood ratios and switch probabilities is exact for the filter's model. Both passes run in
+log-odds: with the symmetric transition (a change of state with probability ``s``), a message
+``m`` (log-odds) carried across one step becomes
+``log(((1 - s) e^m + s) / (s e^m + 1 - s))``.
+
+One more piece of knowledge only the future can use: a foot unloads before it has moved
+measurably (:data:`LIFTOFF_LEAD_S`). Where a foot has no force evidence, its clear kinematic
+evidence of swing (:data:`CLEAR_SWING`) ``lead_s`` later also counts as evidence of swing now
+(the smaller of the two kinematic log-ratios); a touchdown, where the foot stops as it lands,
+is left where the evidence puts it.
+
+:class:`FixedLagSmoother` runs this over a stream of rows in windows: a row is final once the
+rows after it cover ``lag_s`` (the backward message from further on is taken as flat; see
+:data:`LAG_S`), so memory is bounded by a block plus the lag, whatever the recording's length.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from a1_leg_fk.model.legs import LEG_NAMES
+
+LEGS = len(LEG_NAMES)
+LIFTOFF_LEAD_S = 0.014
+"""[s] How long before a foot has moved measurably it has unloaded: its clear kinematic evidence of
+swing counts this much earlier (tuned on the contact family's tuned runs, docs/forces.md)."""
+CLEAR_SWING = -1.0
+"""A kinematic log-likelihood ratio below this is clear evidence of swing, which the lead moves
+earlier; weaker evidence is left in place (a noisy foot's stance hovers near zero)."""
+LAG_S = 0.5
+"""[s] The future a row is smoothed with in :class:`FixedLagSmoother`: five of the transition's
+mean times between changes (``switch_time_s``, 0.1 s), after which further evidence moves a
+posterior by far less than a sample's own evidence does."""
+
+
+@dataclass
+class EvidenceRows:
+    """The filter's evidence over N rows (:class:`~a1_leg_fk.estimation.contact_filter.
+    SampleEvidence` stacked): ``stamps_s`` (N,) [s], ``switch`` (N,) probabilities of a change of
+    state since the previous row, ``kinematic`` (N, 4) and ``total`` (N, 4) log-likelihood
+    ratios, ``forced`` (N, 4) bool (the foot's force was evidence).
+    """
+
+    stamps_s: np.ndarray
+    switch: np.ndarray
+    kinematic: np.ndarray
+    forced: np.ndarray
+    total: np.ndarray
+
+    @classmethod
+    def empty(cls) -> EvidenceRows:
+        """No rows."""
+        legs = np.empty((0, LEGS))
+        return cls(np.empty(0), np.empty(0), legs, np.empty((0, LEGS), dtype=bool), legs.copy())
+
+    def __len__(self) -> int:
+        return len(self.stamps_s)
+
+    def __getitem__(self, chosen: slice) -> EvidenceRows:
+        """The rows ``chosen``."""
+        return EvidenceRows(*(getattr(self, name)[chosen] for name in FIELDS))
+
+    def then(self, later: EvidenceRows) -> EvidenceRows:
+        """These rows followed by ``later``'s."""
+        return EvidenceRows(
+            *(np.concatenate([getattr(self, name), getattr(later, name)]) for name in FIELDS)
+        )
+
+
+FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total")
+
+
+def led_evidence(rows: EvidenceRows, lead_s: float = LIFTOFF_LEAD_S) -> np.ndarray:
+    """(N, 4) log-likelihood ratios with the kinematic evidence of swing ``lead_s`` [s] later
+    counted now too, for the feet without force evidence (the module text).
+    """
+    kinematic = rows.kinematic
+    reached = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
+    later = np.searchsorted(reached, reached + lead_s)
+    inside = later < len(rows)
+    led = kinematic.copy()
+    ahead = kinematic[later[inside]]
+    clear = ahead < CLEAR_SWING
+    led[inside] = np.where(clear, np.minimum(kinematic[inside], ahead), kinematic[inside])
+    led[rows.forced] = kinematic[rows.forced]
+    result: np.ndarray = rows.total + (led - kinematic)
+    return result
+
+
+def smooth(
+    rows: EvidenceRows, start: np.ndarray, lead_s: float = LIFTOFF_LEAD_S
+) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) smoothed log-odds of stance of ``rows`` and (N, 4) filtered (forward) log-odds,
+    from ``start``: the 4 feet's log-odds before the first row (zeros: even odds). The
+    backward message after the last row is flat.
+    """
+    evidence = led_evidence(rows, lead_s).tolist()
+    with np.errstate(divide="ignore"):
+        stay = np.log1p(-rows.switch).tolist()
+        move = np.log(rows.switch).tolist()
+    count = len(rows)
+    forward = [[0.0] * LEGS for _ in range(count)]
+    odds = [float(value) for value in start]
+    for k in range(count):
+        a, b, e, out = stay[k], move[k], evidence[k], forward[k]
+        for leg in range(LEGS):
+            odds[leg] = out[leg] = _carried(odds[leg], a, b) + e[leg]
+    backward = [[0.0] * LEGS for _ in range(count)]
+    message = [0.0] * LEGS  # log-odds of the evidence after row k, as seen from row k
+    for k in range(count - 2, -1, -1):
+        a, b, e, out = stay[k + 1], move[k + 1], evidence[k + 1], backward[k]
+        for leg in range(LEGS):
+            message[leg] = out[leg] = _carried(message[leg] + e[leg], a, b)
+    filtered = np.array(forward).reshape(count, LEGS)
+    return filtered + np.array(backward).reshape(count, LEGS), filtered
+
+
+def _carried(m: float, stay: float, move: float) -> float:
+    """Log-odds ``m`` carried across one step of the symmetric transition, ``stay`` = log(1 - s)
+    and ``move`` = log(s): ``log(((1 - s) e^m + s) / (s e^m + 1 - s))``, finite for any ``m``.
+    """
+    if move == -math.inf:  # no time passed: nothing changes
+        return m
+    return _log_add(m + stay, move) - _log_add(m + move, stay)
+
+
+def _log_add(x: float, y: float) -> float:
+    """log(e^x + e^y) without overflow."""
+    if x < y:
+        x, y = y, x
+    return x + math.log1p(math.exp(y - x))
+
+
+def probabilities(log_odds: np.ndarray) -> np.ndarray:
+    """Probabilities of stance from log-odds (NaN stays NaN)."""
+    result: np.ndarray = 0.5 * (1.0 + np.tanh(0.5 * log_odds))
+    return result
+
+
+def smoothing_line(smoothed: bool) -> str:
+    """The summary's line saying which contacts these are."""
+    if smoothed:
+        return (
+            f"smoothing: contacts smoothed over the recording (forward-backward, {LAG_S:g} s lag, "
+            f"liftoff lead {1000 * LIFTOFF_LEAD_S:g} ms; --causal: the node's)"
+        )
+    return "smoothing: none, the causal filter's contacts as the node has them (--causal)"
+
+
+class FixedLagSmoother:
+    """Smoothed contacts over rows arriving in blocks: :meth:`add` a block's evidence, :meth:`take`
+    the rows that are final (every row ``lag_s`` [s] before the latest, or all at the end).
+    Keeps only the rows not yet taken.
+    """
+
+    def __init__(self, lag_s: float = LAG_S, lead_s: float = LIFTOFF_LEAD_S) -> None:
+        self.lag_s, self.lead_s = lag_s, lead_s
+        self.pending = EvidenceRows.empty()
+        self.start = np.zeros(LEGS)  # the forward log-odds before the first pending row
+
+    def add(self, rows: EvidenceRows) -> None:
+        """Rows after those added before."""
+        self.pending = self.pending.then(rows)
+
+    def final_rows(self) -> int:
+        """How many of the pending rows are followed by ``lag_s`` of later rows."""
+        stamps = self.pending.stamps_s
+        if not len(stamps):
+            return 0
+        reached = np.maximum.accumulate(stamps)
+        return int(np.searchsorted(reached, reached[-1] - self.lag_s, side="right"))
+
+    def take(self, count: int) -> np.ndarray:
+        """(count, 4) probabilities of stance of the first ``count`` pending rows, smoothed with
+        every pending row after them; those rows are then forgotten.
+        """
+        if count <= 0:
+            return np.empty((0, LEGS))
+        smoothed, filtered = smooth(self.pending, self.start, self.lead_s)
+        self.start = filtered[count - 1]
+        self.pending = self.pending[count:]
+        return probabilities(smoothed[:count])

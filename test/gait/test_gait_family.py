@@ -137,6 +137,15 @@ def scored(family):
     return get
 
 
+def cause_of(evidence: str, goal: str) -> str:
+    """Why ``goal`` is unmet under ``evidence``: with efforts, the walk's start splits a stride
+    (duty vs the estimate, stances) or the estimate lifts off late (events); without, the
+    evidence's own cause (:data:`CAUSE`)."""
+    if evidence == FORCE:
+        return WALK_START if goal in (SAME, STANCES) else FORCE_LATE
+    return CAUSE[evidence]
+
+
 def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> list:
     """One parameter per (run, evidence), tuned then held out; a strict xfail where unmet."""
     out = []
@@ -146,7 +155,7 @@ def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> li
                 continue
             for evidence in evidences:
                 measured = UNMET.get((name, evidence, goal))
-                cause = WALK_START if goal in (SAME, STANCES) else CAUSE.get(evidence, FORCE_LATE)
+                cause = cause_of(evidence, goal)
                 marks = (
                     [pytest.mark.xfail(strict=True, reason=f"{cause}: {measured}")]
                     if measured

@@ -23,24 +23,31 @@ def mask_of(spans: list[tuple[float, float]], end_s: float = 1.0) -> tuple[np.nd
     return times, stance
 
 
-def test_a_blip_before_a_gap_is_dropped_not_bridged() -> None:
-    """The issue's FR: 2 ms of stance at 0.264 s, 14 ms of swing, the real touchdown at 0.280 s;
-    the stance is [0.280, 0.456) and nothing else (today's rule gave [0.263, 0.455])."""
-    times, stance = mask_of([(0.264, 0.266), (0.280, 0.456), (0.564, 0.566), (0.580, 0.756)])
-    out, blips = drop_blips(times, stance, MIN_PHASE_S)
-    _, expected = mask_of([(0.280, 0.456), (0.580, 0.756)])
-    np.testing.assert_array_equal(out, expected)
-    assert blips == Blips(dropped=2, bridged=0)
-
-
-def test_a_false_liftoff_inside_a_stance_is_bridged_a_real_swing_kept() -> None:
-    """4 ms of swing inside a stance is bridged; a 100 ms swing (a real step) is kept; and a
-    chattering touchdown (6 ms stance, 2 ms swing, then the stance) keeps its first contact."""
-    times, stance = mask_of([(0.1, 0.2), (0.204, 0.3), (0.4, 0.406), (0.408, 0.6)])
-    out, blips = drop_blips(times, stance, MIN_PHASE_S)
-    _, expected = mask_of([(0.1, 0.3), (0.4, 0.6)])
-    np.testing.assert_array_equal(out, expected)
-    assert blips == Blips(dropped=0, bridged=2)
+@pytest.mark.parametrize(
+    ("spans", "expected", "blips"),
+    [
+        pytest.param(  # the issue's FR: today's rule gave [0.263, 0.455]
+            [(0.264, 0.266), (0.280, 0.456), (0.564, 0.566), (0.580, 0.756)],
+            [(0.280, 0.456), (0.580, 0.756)],
+            Blips(dropped=2, bridged=0),
+            id="a_blip_before_a_gap_is_dropped_not_bridged",
+        ),
+        pytest.param(  # a chattering touchdown (6 ms stance, 2 ms swing) keeps its first contact
+            [(0.1, 0.2), (0.204, 0.3), (0.4, 0.406), (0.408, 0.6)],
+            [(0.1, 0.3), (0.4, 0.6)],
+            Blips(dropped=0, bridged=2),
+            id="a_false_liftoff_inside_a_stance_is_bridged_a_real_swing_kept",
+        ),
+    ],
+)
+def test_blips_are_flipped_never_grown_over(spans, expected, blips) -> None:
+    """The issue's FR (2 ms of stance at 0.264 s, 14 ms of swing, the real touchdown at 0.280 s)
+    keeps only the stance [0.280, 0.456); 4 ms of swing inside a stance is bridged and a 100 ms
+    swing (a real step) kept."""
+    times, stance = mask_of(spans)
+    out, found = drop_blips(times, stance, MIN_PHASE_S)
+    np.testing.assert_array_equal(out, mask_of(expected)[1])
+    assert found == blips
 
 
 def test_runs_at_the_data_edges_are_kept() -> None:

@@ -2,9 +2,8 @@
 another one (``--before``: a checkout of an older version), side by side: duty factors, stances per
 stride and the blips the minimum-phase rule removed, per leg.
 
-Run: ``.venv/bin/python bench/gait_real_clips.py [--before /path/to/older/checkout] [--amp-a1
-trot0.txt] [--keep DIR]``. The inputs are read from pybullet_data at run time (none is in this
-repository):
+Run: ``.venv/bin/python bench/gait_real_clips.py [--before /path/to/older/checkout] [--keep
+DIR]``. The inputs are read from pybullet_data at run time (none is in this repository):
 
 - ``laikago/data1.txt``: a real Laikago's recorded joint angles (frame, time [ms], 12 angles; rows
   2-3 ms apart), mapped onto ``laikago/laikago_toes.urdf`` as pybullet_robots/laikago/laikago.py
@@ -20,9 +19,6 @@ repository):
   offset per cycle. Three bags: the frames at their own 16 Hz; the frames interpolated to 500 Hz
   as pybullet's DeepMimic player does (linear, the orientation slerped); and the 500 Hz angles
   alone (the base held at the clip's first pose).
-- ``--amp-a1``: optionally an AMP_for_hardware-format A1 clip (JSON ``FrameDuration`` and
-  ``Frames``: base position, quaternion x, y, z, w, 12 angles FR, FL, RR, RL of pybullet_data's
-  ``a1/a1.urdf``), looped the same way.
 
 A clip's base pose is PyBullet's base, the trunk's centre of mass; the bag gets the URDF root's
 pose. Each input becomes an MCAP bag (``/joint_states``, ``/base_pose`` PoseStamped in
@@ -53,7 +49,7 @@ from a1_leg_fk.model.legs import LEG_NAMES
 
 DATA = Path(pybullet_data.getDataPath())
 LAIKAGO = DATA / "laikago" / "laikago_toes.urdf"
-A1 = DATA / "a1" / "a1.urdf"
+WALK = DATA / "data" / "motions" / "laikago_walk.txt"
 DIRECTIONS = np.array([-1, 1, 1, 1, 1, 1, -1, 1, 1, 1, 1, 1], dtype=float)
 """laikago.py's joint directions: the recorded angle times this, plus the offset, is the URDF's."""
 OFFSETS = np.tile([0.0, -0.7, 0.7], 4)
@@ -227,34 +223,27 @@ def strides_per_cycle(angles: np.ndarray) -> int:
     return int(np.argmax(np.abs(np.fft.rfft(thighs, axis=0)).sum(axis=1)[1:])) + 1
 
 
-def motion_clips(path: Path, urdf: Path, name: str, laikago: bool) -> list[Clip]:
-    """A looping clip as bags: at its own rate, at ``RATE_HZ``, and (Laikago's) the angles
-    alone."""
-    document = json.loads(path.read_text())
-    if laikago:  # DeepMimic: each frame starts with its duration
-        raw = np.array(document["Frames"], dtype=float)
-        dt, frames = float(raw[0, 0]), raw[:, 1:20]
-    else:  # AMP_for_hardware
-        dt, frames = float(document["FrameDuration"]), np.array(document["Frames"])[:, 0:19]
+def laikago_walk() -> list[Clip]:
+    """The looping walk: at its own rate, at ``RATE_HZ``, and the angles alone."""
+    raw = np.array(json.loads(WALK.read_text())["Frames"], dtype=float)
+    dt, frames = float(raw[0, 0]), raw[:, 1:20]  # DeepMimic: each frame starts with its duration
     stamps, positions, quaternions, angles = looped(frames, dt)
-    if laikago:
-        angles = angles * DIRECTIONS + OFFSETS
+    angles = angles * DIRECTIONS + OFFSETS
     stride = dt * (len(frames) - 1) / strides_per_cycle(frames[:-1, 7:19])
-    rate = f"{1 / dt:.0f} Hz"
-    out = [Clip(f"{name} {rate}", urdf, stamps, angles, *to_root(urdf, positions, quaternions),
-                stride)]  # fmt: skip
+    name, urdf = "laikago_walk", LAIKAGO
+    out = [Clip(f"{name} {1 / dt:.0f} Hz", urdf, stamps, angles,
+                *to_root(urdf, positions, quaternions), stride)]  # fmt: skip
     fine = resampled(stamps, positions, quaternions, angles)
     root = to_root(urdf, fine[1], fine[2])
     out.append(Clip(f"{name} {RATE_HZ:.0f} Hz", urdf, fine[0], fine[3], *root, stride))
-    if laikago:
-        held = (np.repeat(root[0][:1], fine[0].size, 0), np.repeat(root[1][:1], fine[0].size, 0))
-        out.append(Clip(f"{name} {RATE_HZ:.0f} Hz, angles alone", urdf, fine[0], fine[3], *held,
-                        stride))  # fmt: skip
+    held = (np.repeat(root[0][:1], fine[0].size, 0), np.repeat(root[1][:1], fine[0].size, 0))
+    out.append(Clip(f"{name} {RATE_HZ:.0f} Hz, angles alone", urdf, fine[0], fine[3], *held,
+                    stride))  # fmt: skip
     return out
 
 
 def joint_names(urdf: Path) -> list[str]:
-    """The revolute joints' names in URDF order (FR, FL, RR, RL x 3 in both files)."""
+    """The revolute joints' names in URDF order (FR, FL, RR, RL x 3 in laikago_toes)."""
     client = pybullet.connect(pybullet.DIRECT)
     try:
         robot = pybullet.loadURDF(str(urdf), physicsClientId=client)
@@ -306,10 +295,10 @@ def imu_message(stamp_ns: int, turned: np.ndarray, imu: np.ndarray) -> object:
 
 def gait(bag: Path, clip: Clip, checkout: Path, out: Path) -> dict:
     """``a1-leg-fk gait``'s JSON report on ``bag`` with the package of ``checkout``."""
-    feet = [f"{leg}=toe{leg}" for leg in LEG_NAMES] if clip.urdf == LAIKAGO else []
+    feet = [f"{leg}=toe{leg}" for leg in LEG_NAMES]
     command = [sys.executable, "-m", "a1_leg_fk.cli", "gait", str(bag), "--urdf", str(clip.urdf),
                "--base-pose", "/base_pose", "--json", str(out), "--quiet", "--force",
-               *(["--foot-links", *feet] if feet else []),
+               "--foot-links", *feet,
                *(["--imu", "/imu"] if clip.imu is not None else [])]  # fmt: skip
     environment = {**os.environ, "PYTHONPATH": str(checkout)}
     done = subprocess.run(  # cwd: not this checkout, which python -m would put first on the path
@@ -341,16 +330,11 @@ def leg_cells(report: dict, clip: Clip) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path, help="an older checkout to compare with")
-    parser.add_argument("--amp-a1", type=Path, help="an AMP_for_hardware-format A1 clip")
     parser.add_argument("--keep", type=Path, help="write the bags and reports here")
     options = parser.parse_args()
     if options.keep is not None and options.keep.exists():
         parser.error(f"--keep {options.keep}: exists already")
-    clips = laikago_data1()
-    clips += motion_clips(DATA / "data" / "motions" / "laikago_walk.txt", LAIKAGO,
-                          "laikago_walk", laikago=True)  # fmt: skip
-    if options.amp_a1:
-        clips += motion_clips(options.amp_a1, A1, options.amp_a1.stem + " (A1)", laikago=False)
+    clips = [*laikago_data1(), *laikago_walk()]
     checkouts = {"after": ROOT, **({"before": options.before} if options.before else {})}
     with tempfile.TemporaryDirectory() as scratch:
         folder = options.keep or Path(scratch)

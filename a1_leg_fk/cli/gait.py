@@ -38,6 +38,7 @@ from a1_leg_fk.gait.analysis import (
     Contacts,
     ContactThresholds,
     GaitReport,
+    LegMetrics,
     detect_contacts,
     gait_metrics,
 )
@@ -69,7 +70,8 @@ THRESHOLD_HELP = {
     "speed_off_mps": "stance ends above this foot speed [m/s] (derived: the same gap above on)",
     "height_on_max_m": "the ceiling of each foot's derived stance-start height [m]",
     "speed_on_max_mps": "the ceiling of each foot's derived stance-start speed [m/s]",
-    "min_phase_s": "shorter swings, then stances, are merged into their neighbours [s]",
+    "min_phase_s": "shorter stances and swings (blips) are removed, shortest first: a stance "
+    "blip dropped, a swing blip bridged [s]",
     "ground_percentile": "the ground level is this percentile of the still feet's heights [%%]",
     "speed_window_s": "speeds are difference quotients over at least this span [s]",
 }
@@ -266,6 +268,11 @@ def _number(value: float | None, form: str) -> str:
     return "-" if value is None else format(value, form)
 
 
+def _blips(metrics: LegMetrics) -> str:
+    """``-D/+B``: the leg's stance blips dropped and swing blips bridged."""
+    return f"-{metrics.blips_dropped}/+{metrics.blips_bridged}"
+
+
 def threshold_summary(report: GaitReport) -> str:
     """The thresholds each leg was judged by, in one line: height on/off [m], speed on/off
     [m/s].
@@ -300,7 +307,7 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
         ),
         (
             f"{'leg':<4} {'status':<19} {'stances':>7} {'duty':>6} {'stride[s]':>9} "
-            f"{'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8}"
+            f"{'freq[Hz]':>8} {'step[m]':>8} {'clear[m]':>8} {'blips':>11}"
         ),
     ]
     for leg, metrics in report.legs.items():
@@ -309,7 +316,8 @@ def report_lines(report: GaitReport, world_frame: str | None) -> list[str]:
             f"{_number(metrics.duty_factor, '.3f'):>6} "
             f"{_number(metrics.stride_period_s, '.3f'):>9} "
             f"{_number(metrics.stride_frequency_hz, '.2f'):>8} "
-            f"{_number(metrics.step_length_m, '.3f'):>8} {_number(metrics.clearance_m, '.3f'):>8}"
+            f"{_number(metrics.step_length_m, '.3f'):>8} {_number(metrics.clearance_m, '.3f'):>8} "
+            f"{_blips(metrics):>11}"
         )
     lines.extend(f"note:      {note}" for note in report.notes)
     return lines

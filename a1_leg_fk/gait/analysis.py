@@ -21,16 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from a1_leg_fk.gait.contacts import (
-    Contacts,
-    GroundPlane,
-    Stance,
-    detect_contacts,
-)
+from a1_leg_fk.gait.contacts import Contacts, GroundPlane, detect_contacts
 from a1_leg_fk.gait.metrics import GaitReport, LegMetrics, gait_metrics
+from a1_leg_fk.gait.phases import Blips, Stance
 from a1_leg_fk.gait.thresholds import ContactThresholds
 
 __all__ = [
+    "Blips",
     "ContactThresholds",
     "Contacts",
     "GaitReport",

@@ -21,8 +21,8 @@ when it is near the ground and nearly still:
 * **Hysteresis.** Swing -> stance when height < ``height_on_m`` and speed < ``speed_on_mps``;
   stance -> swing when height > ``height_off_m`` or speed > ``speed_off_mps`` (the foot's own
   thresholds).
-* **Minimum phase.** Interior swings, then interior stances, shorter than ``min_phase_s`` are
-  merged into their neighbours.
+* **Minimum phase.** Interior stances and swings shorter than ``min_phase_s`` (blips) are removed,
+  shortest first (:mod:`a1_leg_fk.gait.phases`: a stance blip dropped, a swing blip bridged).
 * **Edges.** Each stance's first/last samples are trimmed to those within three noise deviations
   (robust, from all stance heights; at least 1 mm) of the stance's median height, so the speed
   window's reach does not bias touchdown early and lift-off late. An edge time is the midpoint
@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, runs, segment_slices, stances_of
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -76,21 +77,6 @@ class GroundPlane:
 
 
 @dataclass(frozen=True)
-class Stance:
-    """One stance phase [s from the first stamp]; an edge at the data's or a gap's border is not
-    observed.
-    """
-
-    t_on: float
-    t_off: float
-    first: int  # sample indices, inclusive
-    last: int
-    touchdown_observed: bool
-    liftoff_observed: bool
-    segment: int  # index of the gap-free run of samples it lies in
-
-
-@dataclass(frozen=True)
 class Contacts:
     """Per-sample contact states and the stance phases of each leg (arrays sorted by time)."""
 
@@ -106,6 +92,8 @@ class Contacts:
     notes: tuple[str, ...] = ()
     # the thresholds each foot was judged by (derived from the data when adaptive), per leg
     leg_thresholds: tuple[ContactThresholds, ...] = ()
+    blips: tuple[Blips, ...] = ()  # per leg: what the minimum-phase rule dropped and bridged
+    blip_samples: np.ndarray | None = None  # (N, 4) bool: the samples it changed (None: none)
 
 
 # --- input -------------------------------------------------------------------------------------
@@ -216,50 +204,12 @@ def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) ->
     return state.astype(bool)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
-    """``(first, last, value)`` of each run of equal values in ``mask``."""
-    cuts = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
-    firsts = np.concatenate(([0], cuts))
-    lasts = np.concatenate((cuts - 1, [mask.size - 1]))
-    return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
-
-
-def segment_slices(valid: np.ndarray) -> list[slice]:
-    """The gap-free runs of one leg's (N,) validity mask, in time order, as row slices."""
-    return [slice(first, last + 1) for first, last, value in _runs(valid) if value]
-
-
-def _phase_span(times: np.ndarray, first: int, last: int) -> tuple[float, float]:
-    """``(start, end)`` [s] of the phase on samples ``first..last`` of a gap-free run's ``times``:
-    each edge midway between the phase's border sample and its neighbour, or the border sample's
-    own time at the run's start or end (an edge not observed).
-    """
-    start = times[first] if first == 0 else 0.5 * (times[first - 1] + times[first])
-    end = times[last] if last == times.size - 1 else 0.5 * (times[last] + times[last + 1])
-    return float(start), float(end)
-
-
-def drop_short_phases(times: np.ndarray, stance: np.ndarray, min_phase_s: float) -> np.ndarray:
-    """``stance`` with interior swings, then interior stances, shorter than ``min_phase_s`` merged
-    away.
-    """
-    stance = stance.copy()
-    for value in (False, True):
-        for first, last, run_value in _runs(stance):
-            interior = first > 0 and last < stance.size - 1
-            if run_value == value and interior:
-                start, end = _phase_span(times, first, last)
-                if end - start < min_phase_s:
-                    stance[first : last + 1] = not value
-    return stance
-
-
 def trim_edges(heights: np.ndarray, stance: np.ndarray, tolerance_m: float) -> np.ndarray:
     """``stance`` with each stance's edge samples higher than its median + ``tolerance_m`` moved to
     swing.
     """
     stance = stance.copy()
-    for first, last, value in _runs(stance):
+    for first, last, value in runs(stance):
         if not value:
             continue
         low = np.flatnonzero(
@@ -306,14 +256,12 @@ def detect_contacts(
     ground = fit_ground(feet[still], thresholds.ground_percentile)
     heights = np.where(valid, ground.height_of(np.where(valid[..., None], feet, 0.0)), np.nan)
     per_leg = height_thresholds(heights, speeds, per_leg)
-    stance = np.zeros(valid.shape, dtype=bool)
+    raw = np.zeros(valid.shape, dtype=bool)
     for slot in range(legs):
         for rows in segments[slot]:
-            stance[rows, slot] = drop_short_phases(
-                times[rows],
-                hysteresis(heights[rows, slot], speeds[rows, slot], per_leg[slot]),
-                thresholds.min_phase_s,
-            )
+            raw[rows, slot] = hysteresis(heights[rows, slot], speeds[rows, slot], per_leg[slot])
+    stance, blips = apply_min_phase(times, raw, segments, thresholds.min_phase_s)
+    blip_samples = stance != raw
     stance_heights = heights[stance]
     deviation = (
         1.4826 * float(np.median(np.abs(stance_heights - np.median(stance_heights))))
@@ -342,27 +290,6 @@ def detect_contacts(
         thresholds,
         tuple(notes),
         tuple(per_leg),
+        blips,
+        blip_samples,
     )
-
-
-def stances_of(times: np.ndarray, stance: np.ndarray, segments: list[slice]) -> tuple[Stance, ...]:
-    """One leg's stance phases from its (N,) stance mask, within each gap-free run ``segments``."""
-    out = []
-    for segment, rows in enumerate(segments):
-        local = times[rows]
-        for first, last, value in _runs(stance[rows]):
-            if not value:
-                continue
-            t_on, t_off = _phase_span(local, first, last)
-            out.append(
-                Stance(
-                    t_on,
-                    t_off,
-                    rows.start + first,
-                    rows.start + last,
-                    first > 0,
-                    last < local.size - 1,
-                    segment,
-                )
-            )
-    return tuple(out)

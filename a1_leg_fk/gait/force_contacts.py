@@ -9,13 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from a1_leg_fk.gait.contacts import (
-    Contacts,
-    drop_short_phases,
-    prepare,
-    segment_slices,
-    stances_of,
-)
+from a1_leg_fk.gait.contacts import Contacts, prepare
+from a1_leg_fk.gait.phases import apply_min_phase, segment_slices, stances_of
 
 
 def with_force_stance(
@@ -28,19 +23,15 @@ def with_force_stance(
     """``contacts`` (from :func:`~a1_leg_fk.gait.contacts.detect_contacts` on the same stamps
     [s]) with the stance of (N, 4) contact probabilities (NaN: no estimate, counted as swing),
     rows sorted and de-duplicated as ``contacts``' were; phases shorter than the thresholds'
-    ``min_phase_s`` merged into their neighbours, as for the kinematic stance; ``note`` says
-    where the stance came from.
+    ``min_phase_s`` removed as for the kinematic stance (:mod:`a1_leg_fk.gait.phases`: blips
+    dropped or bridged, counted per leg); ``note`` says where the stance came from.
     """
     known = np.nan_to_num(probabilities, nan=-1.0)  # finite, so that prepare keeps every row
     _, packed, _ = prepare(stamps_s, np.repeat(known[..., None], 3, axis=2), unsorted)
-    stance = (packed[..., 0] >= 0.5) & contacts.valid
+    raw = (packed[..., 0] >= 0.5) & contacts.valid
     times = contacts.times_s
-    segments = [segment_slices(contacts.valid[:, slot]) for slot in range(stance.shape[1])]
-    for slot, rows_of_leg in enumerate(segments):
-        for rows in rows_of_leg:
-            stance[rows, slot] = drop_short_phases(
-                times[rows], stance[rows, slot], contacts.thresholds.min_phase_s
-            )
+    segments = [segment_slices(contacts.valid[:, slot]) for slot in range(raw.shape[1])]
+    stance, blips = apply_min_phase(times, raw, segments, contacts.thresholds.min_phase_s)
     stances = tuple(
         stances_of(times, stance[:, slot], segments[slot]) for slot in range(stance.shape[1])
     )
@@ -49,4 +40,6 @@ def with_force_stance(
         stance=stance,
         stances=stances,
         notes=(*contacts.notes, note),
+        blips=blips,
+        blip_samples=stance != raw,
     )

@@ -9,9 +9,10 @@ time of the complete strides; strides off the leg's median period by more than h
 pause to stand, are left out and counted as irregular), stride period and frequency (touchdown to
 touchdown), step length (horizontal distance between consecutive touchdown positions, each the
 median position of its stance), swing clearance (peak height of each complete swing above the
-ground plane); for the robot, each leg's touchdown phase relative to FR's strides (0..1, circular
-mean, with its consistency ``R`` in 0..1) and the gait named from the phases and the duty factor
-in Hildebrand's terms (:mod:`a1_leg_fk.gait.naming`: limb phase, region, fit).
+ground plane), the blips the phase rule removed (stances dropped, swings bridged); for the
+robot, each leg's touchdown phase relative to FR's strides (0..1, circular mean, with its
+consistency ``R`` in 0..1) and the gait named from the phases and the duty factor in Hildebrand's
+terms (:mod:`a1_leg_fk.gait.naming`: limb phase, region, fit).
 Times are in seconds from the first stamp.
 """
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from a1_leg_fk.gait.contacts import Contacts, GroundPlane
 from a1_leg_fk.gait.naming import GaitName, name_gait
+from a1_leg_fk.gait.phases import Blips
 from a1_leg_fk.gait.thresholds import ContactThresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 
@@ -53,6 +55,9 @@ class LegMetrics:
     step_length_m: float | None
     clearance_m: float | None
     reason: str | None = None
+    # runs shorter than min_phase_s the phase rule removed: stances dropped, swings bridged
+    blips_dropped: int = 0
+    blips_bridged: int = 0
 
 
 @dataclass(frozen=True)
@@ -126,6 +131,8 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
     valid = contacts.valid[:, slot]
     in_stance = contacts.stance[:, slot] & valid
 
+    blips = contacts.blips[slot] if contacts.blips else Blips()
+
     def without_strides(
         status: str,
         reason: str,
@@ -133,7 +140,19 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
         clearance_m: float | None = None,
     ) -> LegMetrics:
         return LegMetrics(
-            leg, status, intervals, 0, 0, duty_factor, None, None, None, clearance_m, reason
+            leg,
+            status,
+            intervals,
+            0,
+            0,
+            duty_factor,
+            None,
+            None,
+            None,
+            clearance_m,
+            reason,
+            blips.dropped,
+            blips.bridged,
         )
 
     if not valid.any():
@@ -189,6 +208,9 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
         1.0 / period,
         float(np.array(steps)[regular].mean()),
         clearance,
+        None,
+        blips.dropped,
+        blips.bridged,
     )
     return metrics, kept
 

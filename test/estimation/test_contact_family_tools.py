@@ -63,3 +63,30 @@ def test_gait_tool_duty_factors(family, name, contacts, tmp_path: Path) -> None:
     print(f"{name} {contacts}: duty {duty.round(3)} true {true_duty.round(3)}")
     assert not any(math.isnan(d) for d in duty)
     assert np.abs(duty - true_duty).max() <= 0.03
+
+
+def test_gait_tool_reports_the_blips(family, tmp_path: Path, capsys) -> None:
+    """The noisy fast trot's estimate flickers: the samples the report marks as blips are exactly
+    those where its stance differs from the estimate's (probability >= 0.5), and the text and
+    JSON count them per leg."""
+    run = family["a1_trot_fast+noise"]
+    bag = write_run_bag(tmp_path / "in", run)
+    report, table = tmp_path / "gait.json", tmp_path / "contacts.csv"
+    arguments = ["gait", str(bag), "--topic", "/joint_states", "--base-pose", "/base_pose"]
+    arguments += ["--urdf", run.urdf_path, "--imu", "/imu", "--json", str(report)]
+    arguments += ["--csv-contacts", str(table)]
+    assert cli.main(arguments) == 0
+    text = capsys.readouterr().out
+    rows = list(csv.DictReader(table.open()))
+    legs = ("FR", "FL", "RR", "RL")
+    stance = np.array([[int(row[f"{leg}_stance"]) for leg in legs] for row in rows], dtype=bool)
+    blip = np.array([[int(row[f"{leg}_blip"]) for leg in legs] for row in rows], dtype=bool)
+    expected, _ = estimate(run, robot_of(run), FORCE)
+    np.testing.assert_array_equal(blip, stance != (expected >= 0.5))
+    document = json.loads(report.read_text())
+    for slot, leg in enumerate(legs):
+        entry = document["legs"][leg]
+        flips = entry["blips_dropped"] + entry["blips_bridged"]
+        assert (flips > 0) == blip[:, slot].any(), leg
+        assert f"-{entry['blips_dropped']}/+{entry['blips_bridged']}" in text
+    assert sum(document["legs"][leg]["blips_dropped"] for leg in legs) > 0

@@ -66,15 +66,15 @@ def test_gait_tool_duty_factors(family, name, contacts, tmp_path: Path) -> None:
 
 
 def test_gait_tool_reports_the_blips(family, tmp_path: Path, capsys) -> None:
-    """The noisy fast trot's estimate flickers: the samples the report marks as blips are exactly
-    those where its stance differs from the estimate's (probability >= 0.5), and the text and
-    JSON count them per leg."""
+    """The noisy fast trot's causal estimate (the node's) flickers: the samples the report marks
+    as blips are exactly those where its stance differs from the estimate's (probability >= 0.5),
+    and the text and JSON count them per leg."""
     run = family["a1_trot_fast+noise"]
     bag = write_run_bag(tmp_path / "in", run)
     report, table = tmp_path / "gait.json", tmp_path / "contacts.csv"
     arguments = ["gait", str(bag), "--topic", "/joint_states", "--base-pose", "/base_pose"]
     arguments += ["--urdf", run.urdf_path, "--imu", "/imu", "--json", str(report)]
-    arguments += ["--csv-contacts", str(table)]
+    arguments += ["--csv-contacts", str(table), "--causal"]
     assert cli.main(arguments) == 0
     text = capsys.readouterr().out
     rows = list(csv.DictReader(table.open()))

@@ -44,8 +44,8 @@ class Pending(NamedTuple):
 
 class OdometrySmoother:
     """Smooths the samples of ``state_filter`` (which it gives a history): :meth:`add` each
-    causal sample as it comes, :meth:`finish` at the end; both return the samples that are
-    final, smoothed, in order.
+    causal sample as it comes (with the feed's ``samples_filtered``), :meth:`finish` at the
+    end; both return the samples that are final, smoothed, in order.
     """
 
     def __init__(
@@ -56,10 +56,15 @@ class OdometrySmoother:
         self.window_s = window_s
         self.overlap_ns = round(overlap_s * 1e9)
         self._pending: deque[Pending] = deque()
+        self._filtered = 0
 
-    def add(self, sample: OdometrySample, filtered: bool) -> list[OdometrySample]:
-        """One causal sample (``filtered``: the state filter's, else kept as it is)."""
-        step = self.history.steps if filtered else None
+    def add(self, sample: OdometrySample, filtered: int) -> list[OdometrySample]:
+        """One causal sample; ``filtered``: the samples the state filter gave so far (the
+        feed's ``samples_filtered``: if it grew, this one is the filter's, else it is kept as
+        it is).
+        """
+        step = self.history.steps if filtered > self._filtered else None
+        self._filtered = filtered
         self._pending.append(Pending(step, sample, self.filter.gyro, self.filter.doubt))
         history = self.history
         if history.span_s() < self.window_s + self.overlap_ns / 1e9:

@@ -30,11 +30,8 @@ def _linear_system(rng: np.random.Generator, steps: int):
     stays zero and every rotation the identity)."""
     transition = np.eye(N)
     angle = 0.3 * DT
-    transition[0:3, 0:3] = [
-        [math.cos(angle), math.sin(angle), 0],
-        [-math.sin(angle), math.cos(angle), 0],
-        [0, 0, 1],
-    ]
+    cos, sin = math.cos(angle), math.sin(angle)
+    transition[0:3, 0:3] = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
     transition[0:3, 9:12] = -DT * np.eye(3)
     transition[3:6, 12:15] = -DT * rng.normal(size=(3, 3))
     transition[6:9, 3:6] = DT * np.eye(3)

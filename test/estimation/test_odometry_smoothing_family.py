@@ -20,8 +20,15 @@ import pytest
 from conftest import FAMILY_NOISE_SEED, family_folder
 from odometry_scoring import CONFIGS, HELD_OUT, TUNED, missed, xfail_params
 
-UNMET: dict[str, str] = {}
-"""Runs whose goals are not met, with the measured numbers (strict xfail)."""
+NOISY_UNMET = (
+    "with the noisy sensors the RMSE is not halved: the error left is the sensors' white noise, "
+    "of which a smoother removes at most half the mean square (71 % of the RMSE stays); "
+    "a1_trot_long, whole: noisy 0.0042/0.0058 m/s with efforts, 0.0043/0.0058 kinematic "
+    "(smoothed/causal); clean 0.0008/0.0017 both, met"
+)
+UNMET: dict[str, str] = dict.fromkeys(TUNED + HELD_OUT, NOISY_UNMET)
+"""Runs whose goals are not met, with the measured numbers (strict xfail): every run's noisy
+estimates (a1_trot_long measured whole; the others by the same bound, docs/leg_odometry.md)."""
 SHORT_S = 8.0
 """[s] The normal suite's runs: their first seconds (the gait starts within the first two)."""
 

@@ -34,6 +34,7 @@ __all__ = [
     "ROOT",
     "SPEED_POSE",
     "machine",
+    "measured_cli",
     "median_seconds_per_call",
     "shared",
     "trig_floor",
@@ -108,3 +109,27 @@ def trig_floor(angles: np.ndarray) -> Callable[[], None]:
         np.cos(angles)
 
     return sin_and_cos
+
+
+CLI_RUN = """
+import resource, sys
+from a1_leg_fk import cli
+code = cli.main(sys.argv[1:])
+usage = resource.getrusage(resource.RUSAGE_SELF)
+print(usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0)
+sys.exit(code)
+"""
+
+
+def measured_cli(arguments: list[str]) -> tuple[float, float, float]:
+    """Wall time, CPU time [s] and peak RSS [MB] of ``a1-leg-fk ARGUMENTS`` in a fresh
+    process."""
+    import subprocess
+    import time
+
+    started = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-c", CLI_RUN, *arguments], capture_output=True, text=True, check=True
+    )
+    cpu, peak = done.stdout.strip().splitlines()[-1].split()
+    return time.perf_counter() - started, float(cpu), float(peak)

@@ -15,35 +15,18 @@ trot-like motion, no efforts: kinematic evidence) of ``S`` and ``S / 3`` seconds
 from __future__ import annotations
 
 import argparse
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
 from bag_speed import generate
-from common import machine
-
-RUN = """
-import resource, sys
-from a1_leg_fk import cli
-code = cli.main(sys.argv[1:])
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0)
-sys.exit(code)
-"""
+from common import machine, measured_cli
 
 
 def measured(bag: Path, out: Path, causal: bool) -> tuple[float, float]:
     """Wall time [s] and peak RSS [MB] of ``a1-leg-fk bag --contacts`` in a fresh process."""
     arguments = ["bag", str(bag), "--contacts", "--csv", str(out), "--quiet", "--force"]
-    started = time.perf_counter()
-    done = subprocess.run(
-        [sys.executable, "-c", RUN, *arguments, *(["--causal"] if causal else [])],
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return time.perf_counter() - started, float(done.stdout.strip().splitlines()[-1])
+    wall, _, peak = measured_cli(arguments + (["--causal"] if causal else []))
+    return wall, peak
 
 
 def main() -> None:

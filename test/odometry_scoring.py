@@ -13,10 +13,40 @@ from pybullet_sim import rotation_matrices
 
 from a1_leg_fk.estimation.odometry import ImuReading, OdometrySample
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother
 from a1_leg_fk.kinematics.quadruped import Quadruped
 
 WINDOW_S = 0.1
 """The burst test's window [s]."""
+TUNED = (
+    "a1_trot_long",
+    "a1_walk_long",
+    "a1_flying_trot_fast",
+    "go2_trot_long",
+    "go2_trot_slips",
+)
+HELD_OUT = ("a1_trot_fast_long", "a1_turn_long", "a1_flying_trot", "a1_trot_slips")
+"""The state filter's family (test_state_filter_family.py): its settings were tuned on TUNED
+only, HELD_OUT are scored with the same defaults."""
+CONFIGS = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
+"""(sensors, efforts) of each run's four estimates."""
+
+
+def missed(label: str, checks: tuple[tuple[Any, str], ...]) -> list[str]:
+    """``label: what`` for each check (ok, what) not ok."""
+    return [f"{label}: {what}" for ok, what in checks if not ok]
+
+
+def xfail_params(names: tuple[str, ...], unmet: dict[str, str]) -> list[Any]:
+    """pytest params of ``names``, those in ``unmet`` strict xfails with their reason."""
+    import pytest
+
+    return [
+        pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=unmet[name]))
+        if name in unmet
+        else name
+        for name in names
+    ]
 
 
 @dataclass(frozen=True)
@@ -29,6 +59,8 @@ class Estimate:
     position: np.ndarray
     used: np.ndarray
     feed: OdometryFeed | None
+    causal: Estimate | None = None
+    """With ``smoothed``: the filter's own estimate of the same pass."""
 
 
 def estimate(
@@ -36,12 +68,15 @@ def estimate(
     efforts: bool,
     quadruped: Quadruped | None = None,
     accelerometer: bool = True,
+    smoothed: bool = False,
     **options: Any,
 ) -> Estimate:
     """Feed every sample of ``run`` to a new feed (``options``: its keywords); ``accelerometer``
-    false: the IMU has none (the legs alone)."""
+    false: the IMU has none (the legs alone); ``smoothed``: the samples smoothed over the run
+    (:class:`OdometrySmoother`, as ``a1-leg-fk odom`` without ``--causal``)."""
     quadruped = quadruped or Quadruped.from_urdf(run.urdf_path)
     feed = OdometryFeed(quadruped, contacts="auto" if efforts else "kinematic", **options)
+    causal: list[OdometrySample] = []
     samples = feed_samples(
         feed,
         quadruped,
@@ -49,7 +84,15 @@ def estimate(
         run.quaternions,
         efforts=run.torques if efforts else None,
         accelerometer=accelerometer,
+        smoother=OdometrySmoother(feed.filter) if smoothed else None,
+        causal=causal,
     )
+    return _estimate(samples, feed, _estimate(causal, feed) if smoothed else None)
+
+
+def _estimate(
+    samples: list[OdometrySample], feed: OdometryFeed, causal: Estimate | None = None
+) -> Estimate:
     used = np.zeros((len(samples), 4), dtype=bool)
     for row, sample in enumerate(samples):
         used[row, list(sample.used)] = True
@@ -59,6 +102,7 @@ def estimate(
         np.array([sample.position for sample in samples]),
         used,
         feed,
+        causal,
     )
 
 
@@ -70,11 +114,14 @@ def feed_samples(
     efforts: np.ndarray | None = None,
     contacts: np.ndarray | None = None,
     accelerometer: bool = True,
+    smoother: OdometrySmoother | None = None,
+    causal: list[OdometrySample] | None = None,
 ) -> list[OdometrySample]:
     """Feed every sample of a simulated ``run`` (its ``stamps_s``, ``angles``, ``rates``,
     ``gyro`` and ``specific_force``; the base's ``quaternions`` x, y, z, w) to ``feed``: the
     IMU first, then the joint state with ``efforts`` [N m] and ``contacts`` (N, 4) from
-    elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples."""
+    elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples (with
+    a ``smoother``: its samples, smoothed, the feed's own appended to ``causal``)."""
     rows = len(run.stamps_s)
     feet = quadruped.fk_batch(run.angles).tolist()
     speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
@@ -104,8 +151,13 @@ def feed_samples(
             torques[row],
         )
         assert sample is not None
-        samples.append(sample)
-    return samples
+        if smoother is None:
+            samples.append(sample)
+        else:
+            samples += smoother.add(sample, feed.samples_filtered)
+            if causal is not None:
+                causal.append(sample)
+    return samples if smoother is None else samples + smoother.finish()
 
 
 @dataclass(frozen=True)

@@ -68,6 +68,13 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "(stairs, slopes)",
     )
     odom.add_argument(
+        "--causal",
+        action="store_true",
+        help="the state filter's own estimate, each row from the rows before it, as "
+        "leg_odometry_node has it (default: smoothed over the whole recording, a "
+        "Rauch-Tung-Striebel pass backward over the filter's steps)",
+    )
+    odom.add_argument(
         "--truth",
         metavar="TOPIC",
         help="the base's true pose to compare with (nav_msgs/Odometry, geometry_msgs/PoseStamped, "
@@ -115,6 +122,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             radius_m=options.foot_radius,
             contacts=options.contacts,
             ground=options.ground,
+            smoothed=not options.causal,
             progress=show_progress(options),
             topic=options.topic,
             urdf=options.urdf,
@@ -228,8 +236,10 @@ def _filter_line(track: OdometryTrack) -> str:
     used = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.used))
     rejected = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.rejected))
     gyro, accel = (" ".join(f"{value:+.4f}" for value in bias) for bias in track.biases)
+    which = "smoothed over the recording (RTS)" if track.smoothed else "causal, as the node has it"
     return (
-        f"filter:    {track.filtered} rows (IMU-propagated ESKF); feet used {used}; rejected by "
+        f"filter:    {track.filtered} rows (IMU-propagated ESKF, {which}); feet used {used}; "
+        f"rejected by "
         f"the gate {rejected}; gate resets {counts.gate_resets}; mean NIS "
         f"{counts.mean_nis:.2f}; gyro bias {gyro} rad/s; accelerometer bias {accel} m/s^2; "
         f"feet noise scales {track.noise_scales[0]:.3f} horizontal, {track.noise_scales[1]:.3f} "

@@ -88,3 +88,37 @@ def quaternion_of(rows: Sequence[Sequence[float]]) -> Quaternion:
         q = ((m02 + m20) / s, (m12 + m21) / s, s / 4, (m10 - m01) / s)
     sign = -1.0 if q[3] < 0.0 else 1.0
     return (sign * q[0], sign * q[1], sign * q[2], sign * q[3])
+
+
+def exp_so3_batch(w: np.ndarray) -> np.ndarray:
+    """The rotation matrices (N, 3, 3) of the rotation vectors ``w`` (N, 3) [rad] (Rodrigues,
+    the series to second order below 1e-6 rad, as :func:`exp_so3_rows`).
+    """
+    angle2 = np.einsum("ni,ni->n", w, w)
+    small = angle2 < 1e-12
+    angle = np.sqrt(np.where(small, 1.0, angle2))
+    a = np.where(small, 1.0 - angle2 / 6.0, np.sin(angle) / angle)
+    b = np.where(small, 0.5 - angle2 / 24.0, (1.0 - np.cos(angle)) / np.where(small, 1.0, angle2))
+    x, y, z = w[:, 0], w[:, 1], w[:, 2]
+    zero = np.zeros_like(x)
+    skew = np.stack([zero, -z, y, z, zero, -x, -y, x, zero], axis=1).reshape(-1, 3, 3)
+    rotations: np.ndarray = np.eye(3) + a[:, None, None] * skew + b[:, None, None] * (skew @ skew)
+    return rotations
+
+
+def log_so3_batch(rotations: np.ndarray) -> np.ndarray:
+    """The rotation vectors (N, 3) [rad, angles below π] of the rotation matrices (N, 3, 3)."""
+    trace = np.einsum("nii->n", rotations)
+    angle = np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0))
+    small = angle < 1e-8
+    scale = np.where(small, 0.5, angle / (2.0 * np.sin(np.where(small, 1.0, angle))))
+    vee = np.stack(
+        [
+            rotations[:, 2, 1] - rotations[:, 1, 2],
+            rotations[:, 0, 2] - rotations[:, 2, 0],
+            rotations[:, 1, 0] - rotations[:, 0, 1],
+        ],
+        axis=1,
+    )
+    vectors: np.ndarray = scale[:, None] * vee
+    return vectors

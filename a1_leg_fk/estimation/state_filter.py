@@ -42,6 +42,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from a1_leg_fk.estimation.filter_history import FilterHistory
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     GROUND_MODELS,
@@ -114,6 +115,8 @@ class StateFilter:
             )
         )  # fmt: skip
         """The process noise's spectral densities (diagonal), per second."""
+        self.history: FilterHistory | None = None
+        """Each step's states and transition, for a smoother (offline only; None: not kept)."""
 
     def start(self, stamp_ns: int, orientation: Quaternion | None) -> None:
         """Begin at rest at the origin, oriented as ``orientation`` (None: level)."""
@@ -144,6 +147,9 @@ class StateFilter:
         dt = (stamp_ns - self._imu_stamp_ns) / 1e9
         if not dt > 0.0:
             return
+        history = self.history
+        if history is not None:
+            history.before(self._imu_stamp_ns, self.rotation, self._nominal, self.covariance)
         self._imu_stamp_ns = stamp_ns
         if dt > self.settings.max_step_s:
             self.counts.gaps += 1
@@ -178,6 +184,8 @@ class StateFilter:
             px + (vx + half * ax) * dt, py + (vy + half * ay) * dt, pz + (vz + half * az) * dt,
         )  # fmt: skip
         self.rotation = product[:, 7:10].copy()
+        if history is not None:
+            history.after(transition, self.rotation, self._nominal)
 
     def update(
         self,
@@ -296,53 +304,97 @@ class StateFilter:
         self._nominal += error[3:]
 
     def _floats(self) -> tuple[list[list[float]], Vector, list[float]]:
-        """The rotation's rows, the velocity in the base frame ``Rᵀ v`` [m/s] and the nominal
-        velocity, position and gyro bias (9 values), in floats.
+        """The rotation's rows, ``Rᵀ v`` and the nominal state's first 9 values
+        (:func:`floats_of`).
         """
-        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows = self.rotation.tolist()
-        nominal = self._nominal[0:9].tolist()
-        vx, vy, vz = nominal[0:3]
-        local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
-                 r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
-        return rows, local, nominal
+        return floats_of(self.rotation, self._nominal)
 
     def _point(self) -> Point:
         """The state an update linearises about (a :class:`Point`)."""
         rows, local, (_, _, _, _, _, pz, bx, by, bz) = self._floats()
         return Point(rows, local, self._gyro, (bx, by, bz), pz, self.ground_z, self.gate.scales)
 
+    @property
+    def gyro(self) -> Vector:
+        """The gyro's last sample [rad/s, base frame]."""
+        return self._gyro
+
+    @property
+    def nominal(self) -> np.ndarray:
+        """The nominal velocity, position, gyro and accelerometer biases (12, odom and base)."""
+        return self._nominal
+
+    @property
+    def noise_density(self) -> np.ndarray:
+        """The process noise's spectral densities (15, per second)."""
+        return self._noise_density.diagonal().copy()
+
+    def keep_history(self) -> FilterHistory:
+        """Keep each step's states from now on (:attr:`history`), for a smoother."""
+        self.history = FilterHistory(self.noise_density)
+        return self.history
+
     def sample(self, stamp_ns: int, stance: Sequence[int], used: Sequence[int]) -> OdometrySample:
-        """The estimate as an :class:`OdometrySample` (twist in the base frame, pose in odom)
-        with the diagonals of its covariances.
-        """
-        covariance = self.covariance
-        rows_of_rotation, (lx, ly, lz), nominal = self._floats()
-        (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows_of_rotation
-        _, _, _, px, py, pz, bx, by, bz = nominal
-        # the twist's rows d(Rᵀ v) / d(dθ, dv) over the attitude's (R, 0): both variances at once
-        rows = np.array(
-            ((0.0, -lz, ly, r0, r3, r6), (lz, 0.0, -lx, r1, r4, r7), (-ly, lx, 0.0, r2, r5, r8),
-             (r0, r1, r2, 0.0, 0.0, 0.0), (r3, r4, r5, 0.0, 0.0, 0.0), (r6, r7, r8, 0.0, 0.0, 0.0))
-        )  # fmt: skip
-        variances = (rows.dot(covariance[:6, :6]) * rows).dot(ONES_6).tolist()
-        diagonal = covariance.diagonal().tolist()
-        gyro_noise = self.settings.gyro_sample_noise_radps**2
-        wx, wy, wz = self._gyro
-        dx, dy, dz = self.doubt
-        return OdometrySample(
-            stamp_ns,
-            (px, py, pz),
-            quaternion_of(rows_of_rotation),
-            (lx, ly, lz),
-            (wx - bx, wy - by, wz - bz),
-            tuple(diagonal[POSITION] + variances[3:6]),
-            (
-                variances[0] + dx,
-                variances[1] + dy,
-                variances[2] + dz,
-                *(value + gyro_noise for value in diagonal[GYRO_BIAS]),
-            ),
-            tuple(stance),
-            tuple(used),
-            False,
+        """The estimate as an :class:`OdometrySample` (:func:`state_sample`)."""
+        state = (self.rotation, self._nominal, self.covariance)
+        return state_sample(
+            stamp_ns, state, (self._gyro, self.doubt), self.settings, (stance, used)
         )
+
+
+def floats_of(
+    rotation: np.ndarray, nominal: np.ndarray
+) -> tuple[list[list[float]], Vector, list[float]]:
+    """The rotation's rows, the velocity in the base frame ``Rᵀ v`` [m/s] and the nominal
+    velocity, position and gyro bias (9 values), in floats.
+    """
+    (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows = rotation.tolist()
+    values = nominal[0:9].tolist()
+    vx, vy, vz = values[0:3]
+    local = (r0 * vx + r3 * vy + r6 * vz, r1 * vx + r4 * vy + r7 * vz,
+             r2 * vx + r5 * vy + r8 * vz)  # fmt: skip
+    return rows, local, values
+
+
+def state_sample(
+    stamp_ns: int,
+    state: tuple[np.ndarray, np.ndarray, np.ndarray],
+    gyro: tuple[Vector, Vector],
+    settings: FilterSettings,
+    legs: tuple[Sequence[int], Sequence[int]],
+) -> OdometrySample:
+    """A state (rotation, nominal, covariance: the filter's or a smoother's) as an
+    :class:`OdometrySample` (twist in the base frame, pose in odom) with the diagonals of its
+    covariances; ``gyro``: the gyro's sample [rad/s] and the gate's doubt [m²/s²], ``legs``: the
+    stance and used legs.
+    """
+    rotation, nominal, covariance = state
+    rows_of_rotation, (lx, ly, lz), values = floats_of(rotation, nominal)
+    (r0, r1, r2), (r3, r4, r5), (r6, r7, r8) = rows_of_rotation
+    _, _, _, px, py, pz, bx, by, bz = values
+    # the twist's rows d(Rᵀ v) / d(dθ, dv) over the attitude's (R, 0): both variances at once
+    rows = np.array(
+        ((0.0, -lz, ly, r0, r3, r6), (lz, 0.0, -lx, r1, r4, r7), (-ly, lx, 0.0, r2, r5, r8),
+         (r0, r1, r2, 0.0, 0.0, 0.0), (r3, r4, r5, 0.0, 0.0, 0.0), (r6, r7, r8, 0.0, 0.0, 0.0))
+    )  # fmt: skip
+    variances = (rows.dot(covariance[:6, :6]) * rows).dot(ONES_6).tolist()
+    diagonal = covariance.diagonal().tolist()
+    gyro_noise = settings.gyro_sample_noise_radps**2
+    (wx, wy, wz), (dx, dy, dz) = gyro
+    return OdometrySample(
+        stamp_ns,
+        (px, py, pz),
+        quaternion_of(rows_of_rotation),
+        (lx, ly, lz),
+        (wx - bx, wy - by, wz - bz),
+        tuple(diagonal[POSITION] + variances[3:6]),
+        (
+            variances[0] + dx,
+            variances[1] + dy,
+            variances[2] + dz,
+            *(value + gyro_noise for value in diagonal[GYRO_BIAS]),
+        ),
+        tuple(legs[0]),
+        tuple(legs[1]),
+        False,
+    )

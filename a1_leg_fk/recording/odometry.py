@@ -22,6 +22,7 @@ from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.imu import imu_reading
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
+from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.forces import check_has_efforts
 from a1_leg_fk.recording.reader import pick_topic
@@ -57,7 +58,8 @@ class OdometryTrack:
     evidence, ``contacts_note`` why there are no foot forces for this robot ("" when there are).
     ``filtered``: the rows the state filter gave (the others: the legs alone, without an
     accelerometer), ``filter_counts``, its final biases (gyro [rad/s], accelerometer [m/s^2])
-    and the feet's noise scale.
+    and the feet's noise scale. ``smoothed``: the filter's rows smoothed over the recording
+    (else the filter's own, causal).
     """
 
     stamps_ns: np.ndarray
@@ -70,6 +72,7 @@ class OdometryTrack:
     stance: np.ndarray
     used: np.ndarray
     planar: bool
+    smoothed: bool
     base_frame: str
     imu_topic: str | None
     imu_samples: int
@@ -98,13 +101,17 @@ def odometry_track(
     contacts: str = AUTO,
     filter_settings: FilterSettings | None = None,
     ground: str = FLAT,
+    smoothed: bool = False,
     progress: bool = False,
     **choices: Unpack[RecordingChoices],
 ) -> OdometryTrack:
     """The leg odometry of a bag. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
     one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
     ``contacts``: the contacts' source (``auto``, ``force``: a bag without efforts is bad input,
-    ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``choices`` as
+    ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``smoothed``: the
+    filter's states smoothed over the recording (:class:`~a1_leg_fk.estimation.
+    odometry_smoother.OdometrySmoother`), else the filter's own, as the node has them;
+    ``choices`` as
     :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
     whose ``base_pose`` is the truth to compare with. :class:`LegFkError` for bad input.
     """
@@ -136,6 +143,7 @@ def odometry_track(
         if contacts == FORCE and feed.note:
             raise LegFkError(f"--contacts force: {feed.note}")
         stats, samples, next_imu = BlockStats(), [], 0
+        smoother = OdometrySmoother(feed.filter) if smoothed else None
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
             usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
@@ -161,13 +169,20 @@ def odometry_track(
                     for position, velocity, ok in zip(positions, velocities, known)
                 ]
                 sample = feed.step(stamp, feet, angles, rates, efforts=effort)
-                if sample is not None:
+                if sample is None:
+                    continue
+                if smoother is None:
                     samples.append(sample)
+                else:
+                    samples += smoother.add(sample, feed.samples_filtered)
+        if smoother is not None:
+            samples += smoother.finish()
         summary = stats.summary(recording)
     finally:
         close_recording(recording)
     return _track(
         samples,
+        smoothed,
         recording.quadruped.base_frame,
         imu_connection,
         len(imu),
@@ -180,6 +195,7 @@ def odometry_track(
 
 def _track(
     samples: Sequence[OdometrySample],
+    smoothed: bool,
     base_frame: str,
     imu_connection: Connection | None,
     imu_samples: int,
@@ -202,6 +218,7 @@ def _track(
         stance=_mask([s.stance for s in samples]),
         used=_mask([s.used for s in samples]),
         planar=bool(samples[-1].planar) if samples else True,
+        smoothed=smoothed,
         base_frame=base_frame,
         imu_topic=imu_connection.topic if imu_connection else None,
         imu_samples=imu_samples,

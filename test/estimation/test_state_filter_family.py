@@ -20,20 +20,11 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import FAMILY_NOISE_SEED, family_folder
+from odometry_scoring import CONFIGS, HELD_OUT, TUNED, missed, xfail_params
 
 pytestmark = pytest.mark.timeout(900)
 """The module's fixture simulates the nine long runs (two at a time) and scores 36 estimates, once
 per session: minutes, more than the suite's per-test bound."""
-TUNED = (
-    "a1_trot_long",
-    "a1_walk_long",
-    "a1_flying_trot_fast",
-    "go2_trot_long",
-    "go2_trot_slips",
-)
-HELD_OUT = ("a1_trot_fast_long", "a1_turn_long", "a1_flying_trot", "a1_trot_slips")
-CONFIGS = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
-"""(sensors, efforts) of each run's four estimates."""
 UNMET: dict[str, str] = {}
 """Runs whose goals are not met yet, with why (strict xfail: a run that meets them must say so)."""
 
@@ -83,16 +74,17 @@ def _misses(name: str, scored: list[tuple[str, Any]]) -> list[str]:
     misses = []
     for label, e in scored:
         rmse = 0.03 if " clean " in label else 0.05
-        for ok, what in (
-            (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
-            (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
-            (e.horizontal_pct <= drift, f"horizontal drift {e.horizontal_pct:.2f} %"),
-            (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
-            (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
-            (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
-        ):
-            if not ok:
-                misses.append(f"{label}: {what}")
+        misses += missed(
+            label,
+            (
+                (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
+                (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
+                (e.horizontal_pct <= drift, f"horizontal drift {e.horizontal_pct:.2f} %"),
+                (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
+                (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
+                (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
+            ),
+        )
     return misses
 
 
@@ -101,21 +93,12 @@ def _check(name: str, scores: dict[str, list[tuple[str, Any]]]) -> None:
     assert not misses, "\n".join(misses)
 
 
-def _params(names: tuple[str, ...]) -> list[Any]:
-    return [
-        pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=UNMET[name]))
-        if name in UNMET
-        else name
-        for name in names
-    ]
-
-
-@pytest.mark.parametrize("name", _params(TUNED))
+@pytest.mark.parametrize("name", xfail_params(TUNED, UNMET))
 def test_tuned_runs_meet_the_goals(name: str, scores) -> None:
     _check(name, scores)
 
 
-@pytest.mark.parametrize("name", _params(HELD_OUT))
+@pytest.mark.parametrize("name", xfail_params(HELD_OUT, UNMET))
 def test_held_out_runs_meet_the_goals(name: str, scores) -> None:
     _check(name, scores)
 

@@ -24,15 +24,20 @@ from node_fuzz import KNOWN, READABLE, UNKNOWN, UNREADABLE, FuzzedNode, NodeFuzz
 @dataclass(frozen=True)
 class Counts:
     """Damaged messages per input topic for each part of the run (robot_description gets a
-    fifth: it is paced)."""
+    ``description_share``-th: it is paced)."""
 
     known: int
     unknown: int
     exact: int  # each of the two exact phases
+    description_share: int = 5
+
+    @property
+    def total(self) -> int:
+        return self.known + self.unknown + 2 * self.exact
 
     def of(self, topic: str) -> Counts:
-        share = 5 if topic == "robot_description" else 1
-        return Counts(self.known // share, self.unknown // share, self.exact // share)
+        share = self.description_share if topic == "robot_description" else 1
+        return Counts(self.known // share, self.unknown // share, self.exact // share, 1)
 
 
 @dataclass

@@ -145,8 +145,11 @@ def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
         for topic, msgtype, stamp, message in entries:
             if topic not in connections:
                 connections[topic] = writer.add_connection(topic, msgtype, typestore=TYPESTORE)
-            raw = isinstance(message, bytes)  # written as given (a damaged message's bytes)
-            data = message if raw else TYPESTORE.serialize_cdr(message, msgtype)
+            data = (  # bytes are written as given (a damaged message's)
+                message
+                if isinstance(message, bytes)
+                else TYPESTORE.serialize_cdr(message, msgtype)
+            )
             writer.write(connections[topic], stamp, data)
     return path
 

@@ -8,7 +8,8 @@
 #   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, contact_speed.py, node_stages.py,
 #                   node_cost.py, node_throughput.py, odometry_throughput.py, bag_speed.py
 #   make soak       bench/soak.py
-#   make fuzz       bench/fuzz_recordings.py: 4000 damaged recordings through bag, gait and odom
+#   make fuzz       bench/fuzz_recordings.py: 4000 damaged recordings through bag, gait and odom;
+#                   bench/fuzz_nodes.py: 2000 damaged messages on every input topic of every node
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
 
 SHELL := bash
@@ -110,10 +111,13 @@ bench: venv
 soak: venv
 	$(BIN)/python bench/soak.py
 
-# FUZZ_ARGS: e.g. --copies 1 --first-seed SEED to rerun a failure the run printed.
+# FUZZ_ARGS: e.g. --copies 1 --first-seed SEED to rerun a failure the run printed;
+# FUZZ_NODES_ARGS: e.g. --node foot_fk_node --seed SEED.
 FUZZ_ARGS ?=
+FUZZ_NODES_ARGS ?=
 fuzz: venv
 	$(BIN)/python bench/fuzz_recordings.py $(FUZZ_ARGS)
+	$(BIN)/python bench/fuzz_nodes.py $(FUZZ_NODES_ARGS)
 
 clean:
 	rm -rf build install log dist .pytest_cache .hypothesis .coverage .coverage.* htmlcov \

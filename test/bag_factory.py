@@ -113,7 +113,8 @@ class BagSpec:
 
 
 def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
-    """Write ``spec`` as ``kind``: "mcap" or "sqlite3" (a ROS 2 bag directory), "humble" or "foxy"
+    """Write ``spec`` as ``kind``: "mcap" or "sqlite3" (a ROS 2 bag directory; a message given
+    as ``bytes`` is written as it is), "humble" or "foxy"
     (a ROS 2 bag directory as those distros' rosbag2 wrote it), "ros1" or "ros1-roslib" (.bag,
     the latter with ``roslib/Header`` in its definitions), "mcap-zstd" (a directory with one
     ``.mcap`` file of zstd chunks, see :func:`write_chunked_mcap`).
@@ -144,7 +145,12 @@ def write_bag(path: Path, spec: BagSpec, kind: str = "mcap") -> Path:
         for topic, msgtype, stamp, message in entries:
             if topic not in connections:
                 connections[topic] = writer.add_connection(topic, msgtype, typestore=TYPESTORE)
-            writer.write(connections[topic], stamp, TYPESTORE.serialize_cdr(message, msgtype))
+            data = (  # bytes are written as given (a damaged message's)
+                message
+                if isinstance(message, bytes)
+                else TYPESTORE.serialize_cdr(message, msgtype)
+            )
+            writer.write(connections[topic], stamp, data)
     return path
 
 

@@ -24,6 +24,9 @@ from sensor_msgs.msg import Imu, JointState
 from shared import LEGS, ik_node_command, node_command, odometry_node_command
 from std_msgs.msg import String
 
+from a1_leg_fk.ros.guarded_input import message_reader, read_imu
+from a1_leg_fk.wire.joint_state import JointStateDecoder
+
 # --- the nodes ------------------------------------------------------------------------------
 
 DESCRIPTION_QOS = QoSProfile(
@@ -38,19 +41,26 @@ def description_topic(urdf: str) -> InputTopic:
         String,
         lambda _stamp: string_bytes(urdf),
         lambda _stamp, rng: string_bytes(rng.choice(ABSURD_DESCRIPTIONS)),
+        message_reader(String),
         length_offsets=(4,),
         qos=DESCRIPTION_QOS,
-        pause_s=0.1,
+        pause_s=0.02,
         good_each_batch=False,  # a new robot takes the node a second: the reader's one slot
     )
 
 
 def joint_states_topic() -> InputTopic:
-    return InputTopic("joint_states", JointState, joint_state_bytes, absurd_joint_state)
+    return InputTopic(
+        "joint_states",
+        JointState,
+        joint_state_bytes,
+        absurd_joint_state,
+        JointStateDecoder().fields,
+    )
 
 
 def imu_topic() -> InputTopic:
-    return InputTopic("imu", Imu, imu_bytes, imu_bytes)
+    return InputTopic("imu", Imu, imu_bytes, imu_bytes, read_imu)
 
 
 def target_topic(leg: str) -> InputTopic:
@@ -59,6 +69,7 @@ def target_topic(leg: str) -> InputTopic:
         PointStamped,
         lambda stamp: point_bytes(stamp, (0.18, -0.13, -0.3)),
         lambda stamp, rng: point_bytes(stamp, [rng.choice(SPECIAL_VALUES) for _ in range(3)]),
+        message_reader(PointStamped),
     )
 
 
@@ -115,4 +126,4 @@ def gait_phase_topic() -> InputTopic:
         frame_stamp(msg, stamp)
         return serialize_message(msg)
 
-    return InputTopic("gait_phase", JointState, good, absurd)
+    return InputTopic("gait_phase", JointState, good, absurd, JointStateDecoder().fields)

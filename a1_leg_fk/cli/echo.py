@@ -154,8 +154,16 @@ class FootTable:
                 rows.append(f"{leg:<4}{'-':>9}{'-':>9}{'-':>9}{rate_text}   no message yet")
             else:
                 x, y, z, _ = value
-                rows.append(f"{leg:<4}{1000 * x:9.1f}{1000 * y:9.1f}{1000 * z:9.1f}{rate_text}")
+                rows.append(f"{leg:<4}{millimetres(x)}{millimetres(y)}{millimetres(z)}{rate_text}")
         return rows
+
+
+def millimetres(metres: float) -> str:
+    """A coordinate [m] as a 9-character column [mm]: 0.1 mm steps, or for an absurd value (a
+    damaged message's 1e300) powers of ten, so the table keeps its columns.
+    """
+    value = 1000 * metres
+    return f"{value:9.1f}" if abs(value) < 1e6 else f"{value:9.2g}"
 
 
 class TableWriter:

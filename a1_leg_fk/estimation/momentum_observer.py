@@ -123,8 +123,8 @@ class MomentumObserver:
         """One joint state at ``stamp_s`` [s] in plain floats (the node's path): ``sample`` is
         12 angles [rad], rates [rad/s] and efforts [N m] (slot order); ``gravity`` (3,) [m/s^2]
         and the IMU's ``specific_force`` [m/s^2] and ``angular_velocity`` [rad/s], base frame.
-        Per leg its force [N] (NaN when none), whether its values are missing, whether its
-        Jacobian is near singular.
+        Per leg its force [N] (NaN when none), whether its values are missing (or absurd: a
+        force that is not finite), whether its Jacobian is near singular.
         """
         angles, rates, efforts = sample
         gx, gy, gz = gravity
@@ -177,13 +177,18 @@ class MomentumObserver:
                 states[slot] = _LegState()
                 r0, r1, r2 = g0 - t0, g1 - t1, g2 - t2
             x, y, z, det, size = solve_torques(c0, s0, c1, s1, c2, s2, r0, r1, r2, gx, gy, gz)
-            missing.append(False)
-            if abs(det) >= self.min_condition * size:
-                out.append([x / det, y / det, z / det])
-                singular.append(False)
-            else:
+            if abs(det) < self.min_condition * size:
                 out.append([math.nan] * 3)
+                missing.append(False)
                 singular.append(True)
+                continue
+            force = [x / det, y / det, z / det]
+            finite = isfinite(force[0] + force[1] + force[2])
+            if not finite:  # absurd values (efforts of 1e300 N m): no force, start again
+                states[slot] = _LegState()
+            out.append(force if finite else [math.nan] * 3)
+            missing.append(not finite)
+            singular.append(False)
         return out, missing, singular
 
     def step_batch(

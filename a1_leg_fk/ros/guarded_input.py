@@ -12,7 +12,10 @@ more than a plain subscription (no work per field).
 ``use`` may call :meth:`GuardedInputs.reject` for a message that was read but cannot be used
 (e.g. ``non_finite``). The counts are ``/diagnostics`` values ``rejected_<topic>_<reason>``
 (:meth:`GuardedInputs.values`; the topic as subscribed, ``/`` as ``_``):
-``rejected_imu_malformed``, ``rejected_foot_targets_FR_malformed``, ...
+``rejected_imu_malformed``, ``rejected_foot_targets_FR_malformed``, ..., beside
+``received_<topic>``: every message the subscription was given, read or not (one increment on the
+good path), so that a count of rejected messages can be checked against what arrived, whatever
+a best-effort transport dropped on the way.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ class GuardedInputs:
         self.rejected: Counter[str] = Counter()
         """Messages rejected so far, by ``<topic>_<reason>``."""
         self._reported = 0  # the total at the previous :meth:`rejected_since`
+        self._received: dict[str, list[int]] = {}  # per topic key: [messages received]
         self.callbacks: dict[str, Callable[[bytes], None]] = {}
         """Each topic's subscription callback (bytes in), as rclpy calls it."""
 
@@ -62,9 +66,11 @@ class GuardedInputs:
         """
         key = topic.strip("/").replace("/", "_")
         self.rejected[f"{key}_{MALFORMED}"] += 0  # listed from the start
+        received = self._received.setdefault(key, [0])
         reject = self.reject
 
         def on_message(raw: bytes) -> None:
+            received[0] += 1
             try:
                 value = read(raw)
             except Exception as error:  # noqa: BLE001 (bytes that cannot be read, whatever the reader says)
@@ -89,8 +95,11 @@ class GuardedInputs:
         )
 
     def values(self) -> dict[str, int]:
-        """The ``/diagnostics`` values: ``rejected_<topic>_<reason>`` -> messages."""
-        return {f"rejected_{key}": count for key, count in sorted(self.rejected.items())}
+        """The ``/diagnostics`` values: ``received_<topic>`` and ``rejected_<topic>_<reason>``
+        -> messages.
+        """
+        received = {f"received_{key}": count[0] for key, count in sorted(self._received.items())}
+        return received | {f"rejected_{key}": n for key, n in sorted(self.rejected.items())}
 
     def rejected_since(self) -> int:
         """Messages rejected since the previous call (all of them at the first)."""

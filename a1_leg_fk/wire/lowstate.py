@@ -197,7 +197,9 @@ class LowStateJointStates:
     """
 
     def __init__(self, msgtype: str, clock: Callable[[], int]) -> None:
-        self._decoder = LowStateDecoder(layout_for(msgtype, None, KINDS[msgtype].ros1))
+        # CDR whichever package defines it: a live topic is ROS 2 (unitree_legged_msgs, a ROS 1
+        # package, reaches it through a bridge); its ROS 1 layout is for ROS 1 bags only
+        self._decoder = LowStateDecoder(layout_for(msgtype, None, ros1=False))
         self._clock = clock
         self.names = list(MOTOR_NAMES)
         self.imu: ImuFields | None = None

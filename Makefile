@@ -41,7 +41,7 @@ VENV_LOCK := $(or $(TMPDIR),/tmp)/a1_leg_fk-venv-$(shell echo '$(abspath $(VENV)
 .PHONY: help venv venv-unlocked demo lint test accept bench soak fuzz clean distclean
 
 help:
-	@sed -n '3,12p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
+	@sed -n '3,13p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
 
 venv:
 	@flock '$(VENV_LOCK)' $(MAKE) --no-print-directory venv-unlocked

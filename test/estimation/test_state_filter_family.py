@@ -49,7 +49,9 @@ CONFIGS = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
 """(sensors, efforts) of each run's four estimates."""
 UNMET: dict[str, str] = {
     "a1_trot_soft": "on soft ground (contact stiffness 3e4 N/m) the reported velocity sigma is "
-    "too small: the error within 3 sigma on 76-77 % of the samples clean",
+    "too small: the error within 3 sigma on 76-81 % of the samples (goal 95 %)",
+    "go2_trot_fast": "clean, the reported velocity sigma is too large: 9.4x the actual RMS error "
+    "(0.0046 m/s; goal <= 5x), 1.4x with noise",
 }
 """Runs whose goals are not met yet, with why (strict xfail: a run that meets them must say so)."""
 
@@ -150,24 +152,23 @@ def test_held_out_other_conditions_meet_the_goals(name: str, scores) -> None:
 
 
 def test_each_goal_names_its_runs(scores) -> None:
-    """Per goal, the runs (every estimate of them) it is met on and missed on, by group; the
+    """Per goal, the runs it is met on (every estimate of the run) and missed on, by group; the
     misses are exactly the runs :data:`UNMET` names."""
-    met: dict[str, dict[str, list[str]]] = {}
-    for group, members in GROUPS:
+    verdicts: dict[str, dict[str, bool]] = {}
+    for _, members in GROUPS:
         for name in members:
             for label, e in scores[name]:
                 for goal, ok, _ in _goals(name, label, e):
-                    runs = met.setdefault(goal, {}).setdefault(
-                        f"{group} {'met' if ok else 'MISSED'}", []
-                    )
-                    if name not in runs:
-                        runs.append(name)
-    for goal, groups in met.items():
+                    runs = verdicts.setdefault(goal, {})
+                    runs[name] = runs.get(name, True) and ok
+    for goal, runs in verdicts.items():
         print(f"{goal}:")
-        for key, names in groups.items():
-            print(f"  {key}: {', '.join(names)}")
-    missed = {name for groups in met.values() for key, names in groups.items()
-              if key.endswith("MISSED") for name in names}  # fmt: skip
+        for group, members in GROUPS:
+            for verdict, word in ((True, "met"), (False, "MISSED")):
+                names = [name for name in members if runs.get(name) is verdict]
+                if names:
+                    print(f"  {group} {word}: {', '.join(names)}")
+    missed = {name for runs in verdicts.values() for name, ok in runs.items() if not ok}
     assert missed == set(UNMET)
 
 

@@ -9,7 +9,8 @@ The filter's settings were tuned on :data:`TUNED` (``a1_flying_trot`` and ``a1_t
 them: the touchdown, scatter and doubt terms came from their coverage diagnosis); :data:`HELD_OUT`
 (long runs at the tuned gaits' other speeds and a turn) and :data:`HELD_OUT_OTHER` (short runs of
 the contact family no filter setting was ever looked at on: soft ground, the Go2's walk and fast
-trot, with another noise seed, :data:`HELD_OUT_NOISE_SEED`) are scored with the same defaults.
+trot) are scored with the same defaults, their noisy twins with another noise seed
+(:data:`HELD_OUT_NOISE_SEED`).
 :func:`test_each_goal_names_its_runs` prints the runs each goal is met and missed on.
 
 Goals (issue 27), on every run: velocity RMSE <= 0.03 m/s clean, <= 0.05 m/s noisy; no 0.1 s
@@ -44,7 +45,7 @@ HELD_OUT = ("a1_trot_fast_long", "a1_turn_long")
 HELD_OUT_OTHER = ("a1_trot_soft", "go2_walk", "go2_trot_fast")
 """Other conditions and gaits (10.5 s each, test/contact_gaits.py ``SPECS``): never tuned on."""
 HELD_OUT_NOISE_SEED = 40
-"""The noise seed of :data:`HELD_OUT_OTHER`'s noisy twins (the others': ``FAMILY_NOISE_SEED``)."""
+"""The noise seed of the held-out runs' noisy twins (the tuned runs': ``FAMILY_NOISE_SEED``)."""
 CONFIGS = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
 """(sensors, efforts) of each run's four estimates."""
 UNMET: dict[str, str] = {
@@ -57,8 +58,8 @@ UNMET: dict[str, str] = {
 
 
 def _score(name: str) -> list[tuple[str, Any]]:
-    """A worker: the four estimates of one run, scored (row label, Errors); the noisy twin's
-    seed :data:`HELD_OUT_NOISE_SEED` for :data:`HELD_OUT_OTHER`."""
+    """A worker: the four estimates of one run, scored (row label, Errors); a held-out run's
+    noisy twin with its own seed, :data:`HELD_OUT_NOISE_SEED`."""
     from contact_runs import contact_runs, with_noise
     from odometry_scoring import errors, estimate
 
@@ -66,7 +67,7 @@ def _score(name: str) -> list[tuple[str, Any]]:
 
     run = contact_runs(family_folder(), (name,))[name]
     quadruped = Quadruped.from_urdf(run.urdf_path)
-    noisy = with_noise(run, HELD_OUT_NOISE_SEED if name in HELD_OUT_OTHER else FAMILY_NOISE_SEED)
+    noisy = with_noise(run, FAMILY_NOISE_SEED if name in TUNED else HELD_OUT_NOISE_SEED)
     scored = []
     for sensors, efforts in CONFIGS:
         fed = run if sensors == "clean" else noisy

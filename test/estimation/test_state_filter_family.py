@@ -29,9 +29,10 @@ import numpy as np
 import pytest
 from conftest import FAMILY_NOISE_SEED, family_folder
 
-pytestmark = pytest.mark.timeout(900)
+pytestmark = [pytest.mark.timeout(900), pytest.mark.accept]
 """The module's fixture simulates the twelve runs (two at a time) and scores 48 estimates, once
-per session: minutes, more than the suite's per-test bound."""
+per session: minutes, more than the suite's per-test bound; an acceptance run (``accept``): no
+``make mutate`` mutation needs it to die (test/mutations.py)."""
 TUNED = (
     "a1_trot_long",
     "a1_walk_long",

@@ -197,11 +197,16 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--list", action="store_true", help="list the mutations and exit")
     parser.add_argument("--tests", nargs="+", default=FAST_SUBSET, help="another test subset")
     args = parser.parse_args(argv)
+    unknown = sorted(set(args.only) - {m.name for m in MUTATIONS})
+    if unknown:
+        print(f"mutations.py: no mutation named {unknown[0]!r} (--list names them)",
+              file=sys.stderr)  # fmt: skip
+        return 2
     mutations = tuple(m for m in MUTATIONS if not args.only or m.name in args.only)
-    if args.list or not mutations:
+    if args.list:
         for mutation in MUTATIONS:
             print(f"{mutation.path}: {mutation.name}")
-        return 0 if mutations else 2
+        return 0
     problems = check(mutations, ROOT)
     if problems:
         print("\n".join(problems), file=sys.stderr)
@@ -243,4 +248,7 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except KeyboardInterrupt:  # the scratch copies are removed on the way out
+        sys.exit(130)

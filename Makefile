@@ -10,6 +10,7 @@
 #   make soak       bench/soak.py
 #   make fuzz       bench/fuzz_recordings.py: 4000 damaged recordings through bag, gait and odom;
 #                   bench/fuzz_nodes.py: 2000 damaged messages on every input topic of every node
+#   make mutate     test/mutations.py: curated bugs in the estimation code, each must fail the fast tests
 #   make clean      build outputs and caches (keeps $(VENV));  make distclean: $(VENV) too
 
 SHELL := bash
@@ -38,10 +39,10 @@ PACKAGE_STAMP := $(VENV)/.a1_leg_fk-editable.stamp
 # Two `make test` started together (several people share a tree) must not both install.
 VENV_LOCK := $(or $(TMPDIR),/tmp)/a1_leg_fk-venv-$(shell echo '$(abspath $(VENV))' | sha256sum | cut -c1-16).lock
 
-.PHONY: help venv venv-unlocked demo lint test accept bench soak fuzz clean distclean
+.PHONY: help venv venv-unlocked demo lint test accept bench soak fuzz mutate clean distclean
 
 help:
-	@sed -n '3,13p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
+	@sed -n '3,14p' $(firstword $(MAKEFILE_LIST)) | sed 's/^# \{0,1\}//'
 
 venv:
 	@flock '$(VENV_LOCK)' $(MAKE) --no-print-directory venv-unlocked
@@ -118,6 +119,11 @@ FUZZ_NODES_ARGS ?=
 fuzz: venv
 	$(BIN)/python bench/fuzz_recordings.py $(FUZZ_ARGS)
 	$(BIN)/python bench/fuzz_nodes.py $(FUZZ_NODES_ARGS)
+
+# MUTATE_ARGS: e.g. --jobs 1, or --only 'NAME' to rerun one mutation the table printed.
+MUTATE_ARGS ?=
+mutate: venv
+	$(BIN)/python test/mutations.py $(MUTATE_ARGS)
 
 clean:
 	rm -rf build install log dist .pytest_cache .hypothesis .coverage .coverage.* htmlcov \

@@ -58,12 +58,16 @@ def test_csv_plot_and_truth(run, bag, tmp_path: Path, capsys: pytest.CaptureFixt
     angle = np.degrees(2.0 * np.arccos(cosine))
     print(f"orientation error: max {angle.max():.3f} deg")
     assert angle.max() < 1.0
-    # honest velocity variances: the error within 3 sigma (after the drop from the spawn height)
+    # honest velocity variances, both sides (issue 27's goals): the error within 3 sigma, and
+    # sigma at most 5x the actual RMS error (after the drop from the spawn height)
     walking = run.stamps_s >= LANDED_S
     error = np.abs(values[:, 8:11] - run.body_velocities)[walking]
-    inside = (error <= 3.0 * np.sqrt(values[walking, 14:17])).all(axis=1).mean()
-    print(f"velocity error within 3 sigma on {100 * inside:.1f} % of the samples")
-    assert (values[:, 14:17] > 0).all() and inside >= 0.95
+    sigma = np.sqrt(values[walking, 14:17])
+    inside = (error <= 3.0 * sigma).all(axis=1).mean()
+    ratio = (sigma.mean(axis=0) / np.sqrt((error**2).mean(axis=0))).max()
+    print(f"velocity error within 3 sigma on {100 * inside:.1f} % of the samples; sigma / RMS "
+          f"error at most {ratio:.2f}")  # fmt: skip
+    assert (values[:, 14:17] > 0).all() and inside >= 0.95 and ratio <= 5.0
     # the summary's numbers, recomputed from the CSV and the simulation
     moved = run.base_positions[-1] - run.base_positions[0]
     # odom and the truth share the IMU's yaw: no turn between them

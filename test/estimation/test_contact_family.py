@@ -55,21 +55,44 @@ def test_fused_contacts_agree_with_pybullet(scores, names) -> None:
         assert np.abs(fused.duty - fused.true_duty).max() <= 0.03, run
 
 
-@pytest.mark.xfail(
+KINEMATIC_GOALS = (97.0, 0.03)
+"""The contact issue's goals for kinematic evidence alone: agreement [%], duty error."""
+KINEMATIC_TODAY = (89.0, 0.12)
+"""What kinematic evidence alone meets today on every run, as a regression guard (94.2-97.2 %
+and 0.033-0.082 measured when this was written)."""
+KINEMATIC_MISS = pytest.mark.xfail(
     strict=True,
-    reason="kinematic evidence alone reaches 94.2-97.2 %, not the 97 % goal: a foot unloads "
-    "while it still rests on the ground and moves measurably only ~10 ms later (0.8 mm and "
-    "0.19 m/s 2 ms after liftoff on the fast trot), which no height or speed threshold sees",
+    reason="kinematic evidence alone reaches 94.2-97.2 %, duty errors 0.033-0.082, not the goals "
+    "(97 %, 0.03): a foot unloads while it still rests on the ground and moves measurably only "
+    "~10 ms later (0.8 mm and 0.19 m/s 2 ms after liftoff on the fast trot), which no height or "
+    "speed threshold sees",
 )
+
+
 @pytest.mark.parametrize("names", [TUNED, HELD_OUT], ids=["tuned", "held_out"])
-def test_kinematic_contacts_agree_with_pybullet(scores, names) -> None:
+def test_kinematic_contacts_regression_guard(scores, names) -> None:
     for run in runs_of(names):
         kinematic = scores[run, KINEMATIC]
-        assert kinematic.agree_pct >= 97.0, run
-        assert np.abs(kinematic.duty - kinematic.true_duty).max() <= 0.03, run
+        assert kinematic.agree_pct >= KINEMATIC_TODAY[0], run
+        assert np.abs(kinematic.duty - kinematic.true_duty).max() <= KINEMATIC_TODAY[1], run
+
+
+@pytest.mark.parametrize(
+    "run", [pytest.param(run, marks=KINEMATIC_MISS) for run in runs_of(TUNED + HELD_OUT)]
+)
+def test_kinematic_contacts_meet_the_goals(scores, run) -> None:
+    """The goal, per run (a strict expected failure on each: a run that meets it must say so)."""
+    kinematic = scores[run, KINEMATIC]
+    assert kinematic.agree_pct >= KINEMATIC_GOALS[0]
+    assert np.abs(kinematic.duty - kinematic.true_duty).max() <= KINEMATIC_GOALS[1]
 
 
 def test_the_old_rule_fails_where_the_new_one_holds(scores) -> None:
-    """The quasi-static threshold rule on the same runs: the reason for all of this."""
-    worst = min(scores[run, OLD_RULE].agree_pct for run in runs_of(TUNED + HELD_OUT))
-    assert worst < 95.0
+    """The quasi-static threshold rule on the same runs: the reason for all of this. Where it
+    misses the goal (98.5 %) the fused estimate meets it, on the same run."""
+    runs = runs_of(TUNED + HELD_OUT)
+    failed = [run for run in runs if scores[run, OLD_RULE].agree_pct < 98.5]
+    print(f"the old rule misses 98.5 % on {len(failed)} of {len(runs)} runs")
+    assert min(scores[run, OLD_RULE].agree_pct for run in failed) < 95.0
+    for run in failed:
+        assert scores[run, FORCE].agree_pct >= 98.5, run

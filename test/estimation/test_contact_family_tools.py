@@ -26,6 +26,8 @@ CONTACT_COLUMNS = [f"{leg}_contact" for leg in ("FR", "FL", "RR", "RL")]
 
 @pytest.mark.parametrize("name", RUNS)
 def test_bag_tool_gives_the_pipelines_contacts(family, name, tmp_path: Path) -> None:
+    """The tool's contacts are the pipeline's (plumbing), and they agree with PyBullet's on the
+    contact issue's 98.5 % of the gait's samples (the judgement)."""
     run = family[name]
     bag = write_run_bag(tmp_path / "in", run)
     out = tmp_path / "feet.csv"
@@ -37,21 +39,16 @@ def test_bag_tool_gives_the_pipelines_contacts(family, name, tmp_path: Path) -> 
     expected, _ = estimate(run, robot_of(run), FORCE)
     # the bag's stamps are the run's rounded to whole nanoseconds: dt differs by < 1e-9 s
     np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-7)
+    agree = float(((ours > 0.5) == run.contacts)[run.gait].mean())
+    print(f"{name}: the bag tool's contacts agree with PyBullet's on {100 * agree:.2f} %")
+    assert agree >= 0.985
 
 
-KINEMATIC_DUTY = pytest.mark.xfail(
-    strict=True,
-    reason="kinematic contacts (the gait tool's, from heights and speeds in the world) come out "
-    "0.04-0.05 above PyBullet's duty factors on the fast trots: a foot unloads before it moves",
-)
-
-
-@pytest.mark.parametrize("name", RUNS)
-@pytest.mark.parametrize("contacts", ["force", pytest.param("kinematic", marks=KINEMATIC_DUTY)])
-def test_gait_tool_duty_factors(family, name, contacts, tmp_path: Path) -> None:
+def duty_error(family, name: str, contacts: str, folder: Path) -> float:
+    """``a1-leg-fk gait``'s largest duty factor error against PyBullet's, one run."""
     run = family[name]
-    bag = write_run_bag(tmp_path / "in", run)
-    report = tmp_path / "gait.json"
+    bag = write_run_bag(folder / "in", run)
+    report = folder / "gait.json"
     arguments = ["gait", str(bag), "--topic", "/joint_states", "--base-pose", "/base_pose"]
     arguments += ["--urdf", run.urdf_path, "--contacts", contacts, "--json", str(report)]
     arguments += ["--quiet"] + (["--imu", "/imu"] if contacts == "force" else [])
@@ -62,7 +59,47 @@ def test_gait_tool_duty_factors(family, name, contacts, tmp_path: Path) -> None:
     true_duty = run.contacts[run.gait].mean(axis=0)
     print(f"{name} {contacts}: duty {duty.round(3)} true {true_duty.round(3)}")
     assert not any(math.isnan(d) for d in duty)
-    assert np.abs(duty - true_duty).max() <= 0.03
+    return float(np.abs(duty - true_duty).max())
+
+
+@pytest.fixture(scope="module")
+def kinematic_duty_errors(family, tmp_path_factory: pytest.TempPathFactory) -> dict[str, float]:
+    """Per run the gait tool's duty error with kinematic contacts."""
+    return {name: duty_error(family, name, "kinematic", tmp_path_factory.mktemp("kinematic"))
+            for name in RUNS}  # fmt: skip
+
+
+DUTY_GOAL = 0.03
+"""The issue's goal: each leg's duty factor within 0.03 of PyBullet's."""
+
+
+@pytest.mark.parametrize("name", RUNS)
+def test_gait_tool_duty_factors_with_forces(family, name, tmp_path: Path) -> None:
+    assert duty_error(family, name, "force", tmp_path) <= DUTY_GOAL
+
+
+@pytest.mark.parametrize("name", RUNS)
+def test_gait_tool_kinematic_duty_regression_guard(kinematic_duty_errors, name) -> None:
+    """What kinematic contacts meet today (0.046-0.058 when this was written), guarded at 0.08."""
+    assert kinematic_duty_errors[name] <= 0.08
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(
+            name,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="kinematic contacts (heights and speeds in the world) come out 0.046-0.058 "
+                "above PyBullet's duty factors on the fast trots: a foot unloads before it moves",
+            ),
+        )
+        for name in RUNS
+    ],
+)
+def test_gait_tool_kinematic_duty_goal(kinematic_duty_errors, name) -> None:
+    assert kinematic_duty_errors[name] <= DUTY_GOAL
 
 
 def test_gait_tool_reports_the_blips(family, tmp_path: Path, capsys) -> None:

@@ -96,10 +96,12 @@ def test_the_walk_is_what_the_issue_asks_for(walk) -> None:
     assert abs(yaw[-1] - yaw[0]) >= math.radians(45)
 
 
-def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
-    """The issue's goals with contacts from the joint efforts' foot forces (the motor torques in
-    the joint states: the feed's default, contacts auto); PyBullet's own normal forces through the
-    contact hook, kinematic contacts, no IMU and no rolling reported and bounded."""
+@pytest.fixture(scope="module")
+def walk_results(walk, quadruped) -> dict[str, tuple[float, float, float]]:
+    """Per way of feeding the walk: (velocity RMSE [m/s], final position error [% of the
+    distance], horizontally [%]): the efforts' force contacts (the feed's default, contacts
+    auto), PyBullet's own normal forces through the contact hook, kinematic contacts; with the
+    IMU, without its accelerometer (the legs alone, averaged), without an IMU; feet as points."""
     results = {}
     cases: dict[str, dict[str, Any]] = {
         "efforts' force contacts + IMU": {"efforts": True},
@@ -123,18 +125,38 @@ def test_walking_and_turning_in_pybullet(walk, quadruped) -> None:
             f"the distance ({horizontal:.2f} % horizontally); no-stance samples "
             f"{counts.no_stance}"
         )
-    rmse, drift, horizontal = results["efforts' force contacts + IMU"]
-    assert rmse <= 0.05
-    assert drift <= 2.0
-    assert horizontal <= 2.0
-    assert results["efforts' force contacts, no IMU"][1] <= 8.0
-    rmse, drift, horizontal = results["force contacts + IMU"]  # PyBullet's: the same goals
-    assert rmse <= 0.05 and drift <= 2.0 and horizontal <= 2.0
-    assert results["force contacts + IMU, feet as points"][2] > 2 * horizontal  # rolling matters
-    assert results["kinematic contacts + IMU"][0] <= 0.06
-    assert results["kinematic contacts + IMU"][1] <= 4.0
-    assert results["force contacts, no IMU"][1] <= 10.0
-    assert results["kinematic contacts, no IMU"][1] <= 15.0
+    return results
+
+
+FILTER_GOALS = (0.03, 1.0)
+"""Issue 27's goals for the state filter (an IMU with an accelerometer), clean sensors: velocity
+RMSE [m/s], drift [% of the distance]."""
+LEGS_ALONE_GOALS = (0.05, 2.0)
+"""The legs-alone estimate's goals (no accelerometer): velocity RMSE [m/s], horizontal drift [%
+of the distance]."""
+
+
+def test_walking_and_turning_in_pybullet_meets_the_goals(walk_results) -> None:
+    """With an accelerometer (the state filter), whatever the contacts' evidence: issue 27's
+    goals; without one (the legs alone, the IMU's orientation only): the legs-alone goals;
+    the rolling foot matters."""
+    rmse_goal, drift_goal = FILTER_GOALS
+    for name in ("efforts' force contacts + IMU", "force contacts + IMU",
+                 "kinematic contacts + IMU"):  # fmt: skip
+        rmse, drift, horizontal = walk_results[name]
+        assert rmse <= rmse_goal and drift <= drift_goal and horizontal <= drift_goal, name
+    rmse, _, horizontal = walk_results["efforts' force contacts + IMU without accelerometer"]
+    assert rmse <= LEGS_ALONE_GOALS[0] and horizontal <= LEGS_ALONE_GOALS[1]
+    points = walk_results["force contacts + IMU, feet as points"][2]
+    assert points > 2 * walk_results["force contacts + IMU"][2]  # rolling matters
+
+
+def test_walking_without_an_imu_regression_guard(walk_results) -> None:
+    """No goal without an IMU (the heading is the feet's alone): a guard against regressions,
+    at about 1.5 times the drift measured when it was written (6.9, 7.5 and 9.6 %)."""
+    assert walk_results["efforts' force contacts, no IMU"][1] <= 10.0
+    assert walk_results["force contacts, no IMU"][1] <= 11.0
+    assert walk_results["kinematic contacts, no IMU"][1] <= 15.0
 
 
 def test_rolling_foot_centre_moves_contact_point_does_not(quadruped) -> None:

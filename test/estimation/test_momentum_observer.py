@@ -1,7 +1,9 @@
 """The momentum observer judged by PyBullet: an A1 thrown spinning into the air, its legs swinging
 fast under torque control, touches nothing, so every foot force must be zero; the quasi-static
 estimate reads the legs' swing as tens of newtons, and the observer without the IMU's gyro and
-accelerometer (an inertial base) reads the fall as load. At rest, the observer is the statics.
+accelerometer (an inertial base) reads the fall as load. A standing A1 loaded by a step of force:
+the observer follows PyBullet's contact forces through its gain's first-order lag. At rest, the
+observer is the statics.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import numpy as np
 import pybullet
 import pybullet_data
 import pytest
+from pybullet_sim import A1_FEET, A1_JOINTS, A1_URDF, STAND, QuadrupedSim, SimRun
 
 from a1_leg_fk.estimation.momentum_observer import MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import FootForces
@@ -128,6 +131,8 @@ def test_without_the_imu_the_fall_reads_as_load(flight: dict[str, np.ndarray]) -
 
 
 def test_at_rest_the_observer_is_the_statics() -> None:
+    """A consistency check (any gain gives it: no rates, no change): the observer reduces to the
+    statics; PyBullet judges the standing robot's forces in the step-of-load test below."""
     rng = np.random.default_rng(2)
     angles = np.tile([0.05, 0.8, -1.5], 4) + rng.uniform(-0.2, 0.2, 12)
     efforts = rng.uniform(-10.0, 10.0, 12)
@@ -168,3 +173,77 @@ def test_an_absurd_effort_gives_no_force_and_the_next_sample_the_statics(
         )
     static = FootForces(A1).estimate(angles, efforts, gravity).forces
     assert not any(missing) and np.abs(np.array(out) - static).max() < 1e-9
+
+
+LOAD_GAIN_PER_S = 50.0
+"""A gain slow enough to see: the observer's lag 1 / K = 20 ms, ten physics steps."""
+LOAD_N = 150.0
+"""The step of load pushed down on the base [N]."""
+
+
+@pytest.fixture(scope="module")
+def loaded() -> SimRun:
+    """The A1 standing on PyBullet's plane under PD motors, 1 s settled; then a step of
+    :data:`LOAD_N` pushed down on its base for 0.4 s."""
+    with QuadrupedSim(A1_URDF, A1_JOINTS, A1_FEET, spawn_height_m=0.3,
+                      inertia_from_file=True) as sim:  # fmt: skip
+        targets = list(STAND) * 4
+        sim.place((0.0, 0.0, 0.3), (0.0, 0.0, 0.0, 1.0), targets)
+        samples = []
+        for step in range(round(1.4 / STEP_S)):
+            if step * STEP_S >= 1.0:
+                sim.push((0.0, 0.0, -LOAD_N))
+            samples.append(sim.step_pd(targets, (80.0, 2.0), 33.5))
+    return SimRun.of(A1_JOINTS, samples)
+
+
+def lagged(values: np.ndarray, gain_per_s: float) -> np.ndarray:
+    """``values`` (one per physics step) through a first-order lag of time constant
+    ``1 / gain_per_s``, exact for an input held over each step, started at the first value."""
+    keep = math.exp(-gain_per_s * STEP_S)
+    out = np.empty_like(values)
+    out[0] = values[0]
+    for k in range(1, len(values)):
+        out[k] = keep * out[k - 1] + (1.0 - keep) * values[k]
+    return out
+
+
+def test_a_step_of_load_is_followed_with_the_gains_time_constant(loaded: SimRun) -> None:
+    """The observer's total vertical foot force (world) against PyBullet's contact forces: the
+    ground's force through a first-order lag of 1 / K (the observer's response; a step reaches
+    1 - 1/e at t = 1/K), not the force itself nor a ten times slower lag."""
+    run = loaded
+    observer = MomentumObserver(A1, gain_per_s=LOAD_GAIN_PER_S)
+    rotations = run.rotations
+    estimate = observer.step_batch(
+        run.stamps_s,
+        (run.angles, run.rates, run.torques),
+        np.einsum("nji,j->ni", rotations, GRAVITY),
+        run.specific_force,
+        run.gyro,
+    )
+    world = np.einsum("nij,nkj->nki", rotations, estimate.forces)
+    start = round(0.9 / STEP_S)  # settled, 0.1 s before the load
+    standing = np.abs(world - run.contact_forces)[start : start + 50]
+    print(f"standing, before the load: each foot's force within {standing.max():.2f} N")
+    assert standing.max() <= 0.05 * LOAD_N  # every foot, every axis: the statics at rest
+    observed, truth = world[:, :, 2].sum(axis=1), run.contact_forces[:, :, 2].sum(axis=1)
+    window = slice(round(1.0 / STEP_S) - start, round(1.15 / STEP_S) - start)
+    observed, truth = observed[start:], truth[start:]
+    differences = {
+        name: float(np.sqrt(np.mean((observed - reference)[window] ** 2)))
+        for name, reference in (
+            ("lag 1/K", lagged(truth, LOAD_GAIN_PER_S)),
+            ("no lag", truth),
+            ("lag 10/K", lagged(truth, LOAD_GAIN_PER_S / 10.0)),
+        )
+    }
+    step = float(truth[-50:].mean() - truth[:50].mean())
+    print(f"load step {step:.1f} N; observer against the truth, RMS over 0.15 s: " +
+          ", ".join(f"{name} {value:.2f} N" for name, value in differences.items()))  # fmt: skip
+    assert step > 0.8 * LOAD_N  # the feet carry the load
+    assert differences["lag 1/K"] <= 0.05 * step
+    assert differences["no lag"] >= 3.0 * differences["lag 1/K"]
+    assert differences["lag 10/K"] >= 3.0 * differences["lag 1/K"]
+    settled = observed[-50:].mean() - truth[-50:].mean()
+    assert abs(settled) <= 0.05 * step

@@ -1,12 +1,20 @@
 """The state filter (a1_leg_fk.estimation.state_filter through the odometry feed) on the long runs
 of the simulated family (test/contact_runs.py, ``LONG_SPECS``: >= 60 s and >= 20 m each; trots,
-a walk, flying trots, ice patches with sideways pushes, the A1 and the Go2-like robot), clean and
-with the contact issue's sensor noise, with efforts (force evidence for the contacts) and without
-(kinematic evidence). PyBullet's root motion is the truth.
+a walk, flying trots, ice patches with sideways pushes, the A1 and the Go2-like robot) and three
+short ones (``SPECS``), clean and with the contact issue's sensor noise, with efforts (force
+evidence for the contacts) and without (kinematic evidence). PyBullet's root motion is the
+truth.
 
-The filter's settings were tuned on :data:`TUNED` only; :data:`HELD_OUT` are scored with the same
-defaults. Goals (issue 27), on every run: velocity RMSE <= 0.03 m/s clean, <= 0.05 m/s noisy; no
-0.1 s window with a mean error above 0.2 m/s; horizontal drift <= 1 % of the distance (1.5 % with
+The filter's settings were tuned on :data:`TUNED` (``a1_flying_trot`` and ``a1_trot_slips`` among
+them: the touchdown, scatter and doubt terms came from their coverage diagnosis); :data:`HELD_OUT`
+(long runs at the tuned gaits' other speeds and a turn) and :data:`HELD_OUT_OTHER` (short runs of
+the contact family no filter setting was ever looked at on: soft ground, the Go2's walk and fast
+trot) are scored with the same defaults, their noisy twins with another noise seed
+(:data:`HELD_OUT_NOISE_SEED`).
+:func:`test_each_goal_names_its_runs` prints the runs each goal is met and missed on.
+
+Goals (issue 27), on every run: velocity RMSE <= 0.03 m/s clean, <= 0.05 m/s noisy; no 0.1 s
+window with a mean error above 0.2 m/s; horizontal drift <= 1 % of the distance (1.5 % with
 slips), vertical <= 0.5 %; the error within the reported 3 sigma on >= 95 % of the samples and the
 reported sigma at most 5x the actual RMS error.
 """
@@ -20,17 +28,35 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import FAMILY_NOISE_SEED, family_folder
-from odometry_scoring import CONFIGS, HELD_OUT, TUNED, missed, xfail_params
+from odometry_scoring import (
+    CONFIGS,
+    HELD_OUT,
+    HELD_OUT_NOISE_SEED,
+    HELD_OUT_OTHER,
+    TUNED,
+    xfail_params,
+)
 
 pytestmark = pytest.mark.timeout(900)
-"""The module's fixture simulates the nine long runs (two at a time) and scores 36 estimates, once
-per session: minutes, more than the suite's per-test bound."""
-UNMET: dict[str, str] = {}
+"""The module's fixture simulates the runs its selected tests name (two at a time) and scores four
+estimates of each, once per session: minutes for the whole family (``make accept``), more than
+the suite's per-test bound."""
+ACCEPT = pytest.mark.accept
+REPRESENTATIVE = ("a1_trot_long", "go2_walk")
+"""The runs ``make test`` scores, one tuned and one held out of another robot and gait; every
+other run is marked ``accept`` (no ``make mutate`` mutation needs them to die)."""
+UNMET: dict[str, str] = {
+    "a1_trot_soft": "on soft ground (contact stiffness 3e4 N/m) the reported velocity sigma is "
+    "too small: the error within 3 sigma on 76-81 % of the samples (goal 95 %)",
+    "go2_trot_fast": "clean, the reported velocity sigma is too large: 9.4x the actual RMS error "
+    "(0.0046 m/s; goal <= 5x), 1.4x with noise",
+}
 """Runs whose goals are not met yet, with why (strict xfail: a run that meets them must say so)."""
 
 
 def _score(name: str) -> list[tuple[str, Any]]:
-    """A worker: the four estimates of one run, scored (row label, Errors)."""
+    """A worker: the four estimates of one run, scored (row label, Errors); a held-out run's
+    noisy twin with its own seed, :data:`HELD_OUT_NOISE_SEED`."""
     from contact_runs import contact_runs, with_noise
     from odometry_scoring import errors, estimate
 
@@ -38,7 +64,7 @@ def _score(name: str) -> list[tuple[str, Any]]:
 
     run = contact_runs(family_folder(), (name,))[name]
     quadruped = Quadruped.from_urdf(run.urdf_path)
-    noisy = with_noise(run, FAMILY_NOISE_SEED)
+    noisy = with_noise(run, FAMILY_NOISE_SEED if name in TUNED else HELD_OUT_NOISE_SEED)
     scored = []
     for sensors, efforts in CONFIGS:
         fed = run if sensors == "clean" else noisy
@@ -48,44 +74,66 @@ def _score(name: str) -> list[tuple[str, Any]]:
 
 
 @pytest.fixture(scope="module")
-def scores() -> dict[str, list[tuple[str, Any]]]:
-    """Every run's four scores, computed in one worker per core (the runs simulated first, once
-    per machine)."""
+def scores(request: pytest.FixtureRequest) -> dict[str, list[tuple[str, Any]]]:
+    """The four scores of each run the session's tests of this module name (every run if one of
+    them reads them all), computed in one worker per core (the runs simulated first, once per
+    machine)."""
     from contact_runs import simulate_missing
     from odometry_scoring import HEADER
 
-    names = TUNED + HELD_OUT
+    selected = [item for item in request.session.items if item.module is request.module]
+    wanted = {item.callspec.params["name"] for item in selected if hasattr(item, "callspec")}
+    if any("scores" in item.fixturenames and not hasattr(item, "callspec") for item in selected):
+        wanted = set(ALL)
+    names = tuple(name for name in ALL if name in wanted)
     workers = min(2, os.cpu_count() or 1)
     simulate_missing(family_folder(), names, workers)
     with ProcessPoolExecutor(max_workers=workers) as pool:
         results = dict(zip(names, pool.map(_score, names)))
     print("\n" + HEADER)
-    for group, members in (("tuned", TUNED), ("held out", HELD_OUT)):
+    for group, members in GROUPS:
         print(f"-- {group}")
         for name in members:
-            for label, result in results[name]:
+            for label, result in results.get(name, []):
                 print(result.row(label))
     return results
 
 
+GROUPS = (("tuned", TUNED), ("held out", HELD_OUT), ("held out, other", HELD_OUT_OTHER))
+ALL = TUNED + HELD_OUT + HELD_OUT_OTHER
+
+
+def _params(names: tuple[str, ...]) -> list[Any]:
+    """:func:`xfail_params` of ``names`` (:data:`UNMET`), each but :data:`REPRESENTATIVE` also
+    marked ``accept``."""
+    params = []
+    for name, param in zip(names, xfail_params(names, UNMET)):
+        marks = [*getattr(param, "marks", ()), *([] if name in REPRESENTATIVE else [ACCEPT])]
+        params.append(pytest.param(name, marks=marks))
+    return params
+
+
+def _goals(name: str, label: str, e: Any) -> list[tuple[str, bool, str]]:
+    """Each goal of one estimate: (goal, met, the figure in words)."""
+    drift = 1.5 if "slips" in name else 1.0
+    rmse = 0.03 if " clean " in label else 0.05
+    return [
+        (f"RMSE <= {rmse}", e.rmse <= rmse, f"RMSE {e.rmse:.4f}"),
+        ("burst <= 0.2", e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
+        (f"horizontal drift <= {drift} %", e.horizontal_pct <= drift,
+         f"horizontal drift {e.horizontal_pct:.2f} %"),
+        ("vertical drift <= 0.5 %", e.vertical_pct <= 0.5,
+         f"vertical drift {e.vertical_pct:.2f} %"),
+        ("within 3 sigma >= 95 %", e.within_3sigma >= 0.95,
+         f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
+        ("sigma / error <= 5", e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.2f}"),
+    ]  # fmt: skip
+
+
 def _misses(name: str, scored: list[tuple[str, Any]]) -> list[str]:
     """The goals a run's four estimates miss, in words."""
-    drift = 1.5 if "slips" in name else 1.0
-    misses = []
-    for label, e in scored:
-        rmse = 0.03 if " clean " in label else 0.05
-        misses += missed(
-            label,
-            (
-                (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
-                (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
-                (e.horizontal_pct <= drift, f"horizontal drift {e.horizontal_pct:.2f} %"),
-                (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
-                (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
-                (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
-            ),
-        )
-    return misses
+    return [f"{label}: {figure}" for label, e in scored
+            for _, met, figure in _goals(name, label, e) if not met]  # fmt: skip
 
 
 def _check(name: str, scores: dict[str, list[tuple[str, Any]]]) -> None:
@@ -93,16 +141,44 @@ def _check(name: str, scores: dict[str, list[tuple[str, Any]]]) -> None:
     assert not misses, "\n".join(misses)
 
 
-@pytest.mark.parametrize("name", xfail_params(TUNED, UNMET))
+@pytest.mark.parametrize("name", _params(TUNED))
 def test_tuned_runs_meet_the_goals(name: str, scores) -> None:
     _check(name, scores)
 
 
-@pytest.mark.parametrize("name", xfail_params(HELD_OUT, UNMET))
+@pytest.mark.parametrize("name", _params(HELD_OUT))
 def test_held_out_runs_meet_the_goals(name: str, scores) -> None:
     _check(name, scores)
 
 
+@pytest.mark.parametrize("name", _params(HELD_OUT_OTHER))
+def test_held_out_other_conditions_meet_the_goals(name: str, scores) -> None:
+    _check(name, scores)
+
+
+@ACCEPT
+def test_each_goal_names_its_runs(scores) -> None:
+    """Per goal, the runs it is met on (every estimate of the run) and missed on, by group; the
+    misses are exactly the runs :data:`UNMET` names."""
+    verdicts: dict[str, dict[str, bool]] = {}
+    for _, members in GROUPS:
+        for name in members:
+            for label, e in scores[name]:
+                for goal, ok, _ in _goals(name, label, e):
+                    runs = verdicts.setdefault(goal, {})
+                    runs[name] = runs.get(name, True) and ok
+    for goal, runs in verdicts.items():
+        print(f"{goal}:")
+        for group, members in GROUPS:
+            for verdict, word in ((True, "met"), (False, "MISSED")):
+                names = [name for name in members if runs.get(name) is verdict]
+                if names:
+                    print(f"  {group} {word}: {', '.join(names)}")
+    missed = {name for runs in verdicts.values() for name, ok in runs.items() if not ok}
+    assert missed == set(UNMET)
+
+
+@ACCEPT
 def test_the_runs_are_what_the_issue_asks_for() -> None:
     """Every run >= 60 s and >= 20 m; at least three gaits, one with flight phases; turning and
     straight; both robots; slips of 2-5 cm."""
@@ -112,7 +188,7 @@ def test_the_runs_are_what_the_issue_asks_for() -> None:
 
     from a1_leg_fk.kinematics.quadruped import Quadruped
 
-    runs = contact_runs(family_folder(), TUNED + HELD_OUT)
+    runs = contact_runs(family_folder(), TUNED + HELD_OUT)  # the long ones
     for name, run in runs.items():
         gait = run.gait
         path = run.base_positions[gait]

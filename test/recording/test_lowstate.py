@@ -68,6 +68,24 @@ def test_layout_decodes_what_rosbags_serializes(run: ContactRun, msgtype: str, r
     np.testing.assert_array_equal(rows.foot_force[2], sensor_counts(run, 599))
 
 
+@pytest.mark.parametrize("msgtype", [GO_LOW_STATE, LEGGED_LOW_STATE])
+@pytest.mark.parametrize("ros1", [False, True], ids=["cdr", "ros1"])
+def test_the_imu_quaternion_is_read_w_first(msgtype: str, ros1: bool):
+    """A rotation no reordering of its quaternion's components gives (each component distinct,
+    scipy's), written w first as Unitree's definitions say: read back as (x, y, z, w)."""
+    from scipy.spatial.transform import Rotation
+
+    register_unitree_types()
+    x, y, z, w = Rotation.from_euler("xyz", (0.3, -0.5, 1.1)).as_quat()
+    message = zeroed(msgtype)
+    (message.imu_state if msgtype == GO_LOW_STATE else message.imu).quaternion[:] = [w, x, y, z]
+    cdr = TYPESTORE.serialize_cdr(message, msgtype)
+    raw = bytes(TYPESTORE.cdr_to_ros1(cdr, msgtype) if ros1 else cdr)
+    rows, problem = LowStateDecoder(layout_for(msgtype, None, ros1)).rows([raw])
+    assert problem is None
+    np.testing.assert_allclose(rows.orientations[0], (x, y, z, w), atol=1e-7)  # float32
+
+
 def _message(run: ContactRun, row: int, msgtype: str) -> Any:
     from lowstate_bags import lowstate_message
 

@@ -1,0 +1,254 @@
+"""``make mutate``: plausible bugs put into the estimation and kinematics code one at a time, each
+in a scratch copy of the tree, the fast test subset (:data:`FAST_SUBSET`) run after each; a
+mutation the subset does not fail *survives*. Prints the kill table (mutation, the first test
+that failed, seconds) and exits 1 if any survives, 2 if the tree itself fails the subset or a
+mutation's text is not found exactly once (a refactor must not silently make one a no-op).
+
+    python test/mutations.py [--jobs N] [--only NAME ...] [--list]
+
+The tree is copied (without ``.git``, virtual environments and caches) once per job into a
+temporary folder; each mutation is applied there, the subset run with ``PYTHONPATH`` the copy,
+and the file restored. The real files are never touched.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from queue import Queue
+
+ROOT = Path(__file__).resolve().parent.parent
+FAST_SUBSET = (
+    "test/estimation/test_state_filter.py",
+    "test/estimation/test_state_filter_motion.py",
+    "test/estimation/test_filter_model.py",
+    "test/estimation/test_momentum_observer.py",
+    "test/estimation/test_contact_filter.py",
+    "test/estimation/test_contact_estimator.py",
+    "test/estimation/test_leg_odometry.py",
+    "test/estimation/test_leg_order.py",
+    "test/recording/test_lowstate.py::test_the_imu_quaternion_is_read_w_first",
+)
+"""The tests every mutation must fail (about a minute on two idle cores): no simulated family,
+no ROS nodes."""
+RUN_TIMEOUT_S = 600.0
+"""[s] A subset run longer than this (a mutation that hangs a loop) counts as killed by it."""
+IGNORED = shutil.ignore_patterns(
+    ".git", ".venv", "venv", "__pycache__", ".mypy_cache", ".ruff_cache", ".pytest_cache",
+    "build", "install", "log", "*.egg-info", "bench",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Mutation:
+    """One bug: in ``path`` (relative to the tree) the text ``old``, found exactly once,
+    replaced by ``new``."""
+
+    name: str
+    path: str
+    old: str
+    new: str
+
+
+MUTATIONS = (
+    Mutation(
+        "gyro sign flipped in the filter's propagation",
+        "a1_leg_fk/estimation/state_filter.py",
+        "((gyro[0] - bx) * dt, (gyro[1] - by) * dt, (gyro[2] - bz) * dt)",
+        "((bx - gyro[0]) * dt, (by - gyro[1]) * dt, (bz - gyro[2]) * dt)",
+    ),
+    Mutation(
+        "accelerometer bias dropped from the propagation",
+        "a1_leg_fk/estimation/state_filter.py",
+        "specific_force[0] - cx, specific_force[1] - cy, specific_force[2] - cz",
+        "specific_force[0], specific_force[1], specific_force[2]",
+    ),
+    Mutation(
+        "rolling radius 0 in the stance foot's velocity",
+        "a1_leg_fk/estimation/leg_motion.py",
+        "cx, cy, cz = radius * down[0], radius * down[1], radius * down[2]",
+        "cx, cy, cz = 0.0, 0.0, 0.0",
+    ),
+    Mutation(
+        "contact filter's force evidence x 0",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "odds += _clip(force, limit, limit)",
+        "odds += _clip(0.0 * force, limit, limit)",
+    ),
+    Mutation(
+        "FR <-> FL Jacobian products swapped in the odometry feed",
+        "a1_leg_fk/estimation/odometry_feed.py",
+        "c = self._jacobians[leg](",
+        "c = self._jacobians[(1, 0, 2, 3)[leg]](",
+    ),
+    Mutation(
+        "the gate accepts every foot",
+        "a1_leg_fk/estimation/foot_gate.py",
+        "if value <= s.gate_chi2]",
+        "if value <= s.gate_chi2 or True]",
+    ),
+    Mutation(
+        "reported velocity variance x 100",
+        "a1_leg_fk/estimation/state_filter.py",
+        "variances[0] + dx,\n                variances[1] + dy,\n"
+        "                variances[2] + dz,",
+        "100.0 * variances[0] + dx,\n                100.0 * variances[1] + dy,\n"
+        "                100.0 * variances[2] + dz,",
+    ),
+    Mutation(
+        "momentum observer gain / 10",
+        "a1_leg_fk/estimation/momentum_observer.py",
+        "keep = exp(-gain * dt)",
+        "keep = exp(-gain / 10.0 * dt)",
+    ),
+    Mutation(
+        "FR <-> FL swapped in the tracker's feet",
+        "a1_leg_fk/tracking.py",
+        "out[foot.leg_slot] = (",
+        "out[(1, 0, 2, 3)[foot.leg_slot]] = (",
+    ),
+    Mutation(
+        "sign of the momentum observer's Coriolis term",
+        "a1_leg_fk/estimation/momentum_observer.py",
+        "e0, e1, e2 = t0 - g0 + k0, t1 - g1 + k1, t2 - g2 + k2",
+        "e0, e1, e2 = t0 - g0 - k0, t1 - g1 - k1, t2 - g2 - k2",
+    ),
+    Mutation(
+        "the IMU quaternion read x-first",
+        "a1_leg_fk/wire/lowstate.py",
+        "quaternion[:, [1, 2, 3, 0]],",
+        "quaternion[:, [0, 1, 2, 3]],",
+    ),
+    Mutation(
+        "gravity left unrotated (level) in the force output",
+        "a1_leg_fk/estimation/contact_estimator.py",
+        "gravity = LEVEL_GRAVITY if imu.gravity is None else imu.gravity",
+        "gravity = LEVEL_GRAVITY",
+    ),
+    Mutation(
+        "the touchdown term dropped",
+        "a1_leg_fk/estimation/state_filter.py",
+        "touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9)",
+        "0.0",
+    ),
+    Mutation(
+        "the flat-ground row's sign",
+        "a1_leg_fk/estimation/filter_stack.py",
+        "rows += (ry * uz - rz * uy, rz * ux - rx * uz, rx * uy - ry * ux, 1.0)",
+        "rows += (rz * uy - ry * uz, rx * uz - rz * ux, ry * ux - rx * uy, -1.0)",
+    ),
+)
+
+
+def check(mutations: tuple[Mutation, ...], root: Path) -> list[str]:
+    """The mutations whose old text is not found exactly once in ``root``, in words."""
+    problems = []
+    for mutation in mutations:
+        count = (root / mutation.path).read_text().count(mutation.old)
+        if count != 1:
+            problems.append(f"{mutation.name}: its text is found {count} times in {mutation.path}")
+    return problems
+
+
+def run_subset(copy: Path, tests: tuple[str, ...] = FAST_SUBSET) -> tuple[str | None, float]:
+    """Run ``tests`` in ``copy``: the first failing test (None: all passed), seconds."""
+    env = {**os.environ, "PYTHONPATH": str(copy), "PYTHONDONTWRITEBYTECODE": "1"}
+    command = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-rfE",
+               "--timeout=300", *tests]  # fmt: skip
+    start = time.monotonic()
+    try:
+        done = subprocess.run(
+            command, cwd=copy, env=env, capture_output=True, text=True, timeout=RUN_TIMEOUT_S,
+            check=False,
+        )  # fmt: skip
+    except subprocess.TimeoutExpired:
+        return "(timeout)", time.monotonic() - start
+    seconds = time.monotonic() - start
+    if done.returncode == 0:
+        return None, seconds
+    failed = re.findall(r"^(?:FAILED|ERROR) (\S+)", done.stdout, re.MULTILINE)
+    return (failed[0] if failed else f"(exit {done.returncode})"), seconds
+
+
+def mutated(copy: Path, mutation: Mutation, tests: tuple[str, ...]) -> tuple[str | None, float]:
+    """Apply ``mutation`` in ``copy``, run the subset, restore the file."""
+    path = copy / mutation.path
+    original = path.read_text()
+    path.write_text(original.replace(mutation.old, mutation.new, 1))
+    try:
+        return run_subset(copy, tests)
+    finally:
+        path.write_text(original)
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--jobs", type=int, default=2, help="mutations run at once (default 2)")
+    parser.add_argument("--only", nargs="*", default=(), help="run the mutations named so")
+    parser.add_argument("--list", action="store_true", help="list the mutations and exit")
+    parser.add_argument("--tests", nargs="+", default=FAST_SUBSET, help="another test subset")
+    args = parser.parse_args(argv)
+    unknown = sorted(set(args.only) - {m.name for m in MUTATIONS})
+    if unknown:
+        print(f"mutations.py: no mutation named {unknown[0]!r} (--list names them)",
+              file=sys.stderr)  # fmt: skip
+        return 2
+    mutations = tuple(m for m in MUTATIONS if not args.only or m.name in args.only)
+    if args.list:
+        for mutation in MUTATIONS:
+            print(f"{mutation.path}: {mutation.name}")
+        return 0
+    problems = check(mutations, ROOT)
+    if problems:
+        print("\n".join(problems), file=sys.stderr)
+        return 2
+    jobs = max(1, min(args.jobs, len(mutations)))
+    with tempfile.TemporaryDirectory(prefix="a1_leg_fk-mutate-") as scratch:
+        copies: Queue[Path] = Queue()
+        for job in range(jobs):
+            copy = Path(scratch) / f"tree{job}"
+            shutil.copytree(ROOT, copy, ignore=IGNORED)
+            copies.put(copy)
+        start = time.monotonic()
+        tests = tuple(args.tests)
+        baseline, seconds = run_subset(copies.queue[0], tests)
+        print(f"the fast subset, unmutated: {seconds:.1f} s", flush=True)
+        if baseline is not None:
+            print(f"the tree fails its own fast subset: {baseline}", file=sys.stderr)
+            return 2
+
+        def one(mutation: Mutation) -> tuple[str | None, float]:
+            copy = copies.get()
+            try:
+                return mutated(copy, mutation, tests)
+            finally:
+                copies.put(copy)
+
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            results = list(pool.map(one, mutations))
+    width = max(len(m.name) for m in mutations)
+    print(f"\n{'mutation':<{width}}  {'seconds':>7}  killed by")
+    for mutation, (killer, seconds) in zip(mutations, results, strict=True):
+        print(f"{mutation.name:<{width}}  {seconds:7.1f}  {killer or 'SURVIVED'}")
+    survivors = sum(killer is None for killer, _ in results)
+    print(
+        f"\n{len(mutations) - survivors} of {len(mutations)} killed, {survivors} survived "
+        f"({time.monotonic() - start:.0f} s in all)"
+    )
+    return 1 if survivors else 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except KeyboardInterrupt:  # the scratch copies are removed on the way out
+        sys.exit(130)

@@ -81,9 +81,12 @@ def scores(request: pytest.FixtureRequest) -> dict[str, list[tuple[str, Any]]]:
     from contact_runs import simulate_missing
     from odometry_scoring import HEADER
 
-    selected = [item for item in request.session.items if item.module is request.module]
+    selected = [i for i in request.session.items if getattr(i, "module", None) is request.module]
     wanted = {item.callspec.params["name"] for item in selected if hasattr(item, "callspec")}
-    if any("scores" in item.fixturenames and not hasattr(item, "callspec") for item in selected):
+    if any(
+        "scores" in getattr(item, "fixturenames", ()) and not hasattr(item, "callspec")
+        for item in selected
+    ):
         wanted = set(ALL)
     names = tuple(name for name in ALL if name in wanted)
     workers = min(2, os.cpu_count() or 1)

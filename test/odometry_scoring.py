@@ -11,6 +11,7 @@ import numpy as np
 from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
+from a1_leg_fk.estimation.ground import GroundPlane
 from a1_leg_fk.estimation.odometry import ImuReading, OdometrySample
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.kinematics.quadruped import Quadruped
@@ -70,11 +71,13 @@ def feed_samples(
     efforts: np.ndarray | None = None,
     contacts: np.ndarray | None = None,
     accelerometer: bool = True,
+    planes: list[GroundPlane | None] | None = None,
 ) -> list[OdometrySample]:
     """Feed every sample of a simulated ``run`` (its ``stamps_s``, ``angles``, ``rates``,
     ``gyro`` and ``specific_force``; the base's ``quaternions`` x, y, z, w) to ``feed``: the
     IMU first, then the joint state with ``efforts`` [N m] and ``contacts`` (N, 4) from
-    elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples."""
+    elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples;
+    ``planes``, when given, gets the feed's local ground after each (live, as a node has it)."""
     rows = len(run.stamps_s)
     feet = quadruped.fk_batch(run.angles).tolist()
     speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
@@ -105,6 +108,8 @@ def feed_samples(
         )
         assert sample is not None
         samples.append(sample)
+        if planes is not None:
+            planes.append(feed.ground_plane(sample))
     return samples
 
 

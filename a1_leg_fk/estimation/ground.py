@@ -22,6 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.kinematics.frames import Quaternion, rotate
+
 Point = tuple[float, float, float]
 
 DEFAULT_WINDOW_S = 2.0
@@ -76,7 +78,14 @@ def fit_plane(
     """
     if not points:
         return None
-    data = np.asarray(points, dtype=float)
+    solution, covariance = _fit(np.asarray(points, dtype=float), at, slope_prior, min_sigma_m)
+    return _plane(solution, covariance, len(points))
+
+
+def _fit(
+    data: np.ndarray, at: tuple[float, float], slope_prior: float, min_sigma_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b, c) of the plane through (n, 3) ``data`` about ``at`` and their covariance."""
     design = np.column_stack([np.ones(len(data)), data[:, 0] - at[0], data[:, 1] - at[1]])
     heights = data[:, 2]
     prior = np.diag([0.0, 1.0, 1.0]) / slope_prior**2
@@ -87,8 +96,7 @@ def fit_plane(
         residual = heights - design @ solution
         freedom = max(len(data) - 3, 1)
         sigma2 = max(float(residual @ residual) / freedom, min_sigma_m**2)
-    covariance = np.linalg.inv(design.T @ design / sigma2 + prior)
-    return _plane(solution, covariance, len(data))
+    return solution, np.linalg.inv(design.T @ design / sigma2 + prior)
 
 
 def _plane(solution: np.ndarray, covariance: np.ndarray, count: int) -> GroundPlane:
@@ -118,7 +126,12 @@ def _plane(solution: np.ndarray, covariance: np.ndarray, count: int) -> GroundPl
 
 
 class LocalGround:
-    """The footholds of the recent stances and the plane through them (see the module text)."""
+    """The footholds of the recent stances and the plane through them (see the module text).
+
+    A standing foot counts at its touchdown point until it lifts, then at its stance's mean: the
+    points change only at touchdowns, liftoffs and expiries, and the plane is fitted again only
+    then (about the points' centre), and moved to the point asked for by :meth:`plane`.
+    """
 
     def __init__(
         self,
@@ -134,8 +147,11 @@ class LocalGround:
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
         """The ended stances, oldest first."""
-        self._open: dict[int, tuple[Point, int]] = {}
-        """Per standing leg: the sum of its contact points [m] and their count."""
+        self._open: dict[int, tuple[Point, list[float], int]] = {}
+        """Per standing leg: its touchdown point [m], the sum of its contact points and count."""
+        self._fit: tuple[tuple[float, float], np.ndarray, np.ndarray, int] | None = None
+        """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
+        self._changed = False
 
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
@@ -143,47 +159,93 @@ class LocalGround:
         """
         standing = dict(contacts)
         for leg in [leg for leg in self._open if leg not in standing]:
-            total, count = self._open.pop(leg)
+            _, total, count = self._open.pop(leg)
             mean = (total[0] / count, total[1] / count, total[2] / count)
             self.footholds.append(Foothold(mean, count, stamp_s))
+            self._changed = True
         for leg, point in standing.items():
-            total, count = self._open.get(leg, ((0.0, 0.0, 0.0), 0))
-            summed = (total[0] + point[0], total[1] + point[1], total[2] + point[2])
-            self._open[leg] = (summed, count + 1)
+            opened = self._open.get(leg)
+            if opened is None:
+                self._open[leg] = (point, [point[0], point[1], point[2]], 1)
+                self._changed = True
+            else:
+                total = opened[1]
+                total[0] += point[0]
+                total[1] += point[1]
+                total[2] += point[2]
+                self._open[leg] = (opened[0], total, opened[2] + 1)
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
+            self._changed = True
 
     def points(self) -> list[Point]:
-        """The footholds kept and the standing feet's (their mean so far) [m, odom]."""
-        standing = [
-            (total[0] / count, total[1] / count, total[2] / count)
-            for total, count in self._open.values()
-        ]
+        """The footholds kept and the standing feet's touchdown points [m, odom]."""
+        standing = [touchdown for touchdown, _, _ in self._open.values()]
         return [foothold.point for foothold in self.footholds] + standing
 
     def plane(self, x: float, y: float) -> GroundPlane | None:
         """The plane at (x, y) [m, odom]; None before the first stance."""
-        return fit_plane(self.points(), (x, y), self.slope_prior, self.min_sigma_m)
+        if self._changed or self._fit is None:
+            self._changed = False
+            points = self.points()
+            if not points:
+                self._fit = None
+                return None
+            data = np.asarray(points, dtype=float)
+            centre = (float(data[:, 0].mean()), float(data[:, 1].mean()))
+            solution, covariance = _fit(data, centre, self.slope_prior, self.min_sigma_m)
+            self._fit = (centre, solution, covariance, len(points))
+        centre, solution, covariance, count = self._fit
+        dx, dy = x - centre[0], y - centre[1]
+        shift = np.array([[1.0, dx, dy], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        return _plane(shift @ solution, shift @ covariance @ shift.T, count)
 
 
 def contact_points(
     position: Point,
-    rotation: Sequence[Sequence[float]],
-    feet: Sequence[Point | None],
+    orientation: Quaternion,
+    feet: Sequence[Sequence[float] | None],
     radii: Sequence[float],
     legs: Iterable[int],
 ) -> list[tuple[int, Point]]:
     """The contact points [m, odom] of the feet of ``legs``: the base at ``position`` [m] turned
-    by ``rotation`` (3×3, base to odom), each foot's centre ``feet[leg]`` [m, base frame] less
-    its rolling radius ``radii[leg]`` [m] straight down; legs without a foot are left out.
+    by ``orientation`` (x, y, z, w: base to odom), each foot's centre ``feet[leg]`` [m, base
+    frame] less its rolling radius ``radii[leg]`` [m] straight down; legs without a foot are
+    left out.
     """
     points = []
     for leg in legs:
         foot = feet[leg]
         if foot is None:
             continue
-        world = [
-            position[row] + sum(rotation[row][k] * foot[k] for k in range(3)) for row in range(3)
-        ]
-        points.append((leg, (world[0], world[1], world[2] - radii[leg])))
+        x, y, z = rotate(orientation, (foot[0], foot[1], foot[2]))
+        points.append((leg, (position[0] + x, position[1] + y, position[2] + z - radii[leg])))
     return points
+
+
+GROUND_COLUMNS = (
+    "ground_height_m",
+    "ground_normal_x",
+    "ground_normal_y",
+    "ground_normal_z",
+    "ground_var_height",
+    "ground_var_roll",
+    "ground_var_pitch",
+)
+"""The local ground's values as the odom CSV names them (:func:`ground_values`)."""
+
+
+def ground_values(plane: GroundPlane | None) -> tuple[float, ...]:
+    """``plane`` as :data:`GROUND_COLUMNS`: its height [m, odom], unit normal and the variances
+    of the height [m²], roll and pitch [rad²]; NaN each before the first stance (None).
+    """
+    if plane is None:
+        return (math.nan,) * len(GROUND_COLUMNS)
+    covariance = plane.covariance
+    return (
+        plane.height_m,
+        *plane.normal,
+        covariance[0][0],
+        covariance[1][1],
+        covariance[2][2],
+    )

@@ -96,9 +96,10 @@ def test_footholds_are_stances_kept_for_the_window() -> None:
     assert ground.plane(0.0, 0.0) is None
     ground.update(0.0, [(0, (0.1, 0.1, 0.0)), (3, (-0.1, -0.1, 0.0))])
     ground.update(0.1, [(0, (0.1, 0.1, 0.02)), (3, (-0.1, -0.1, 0.0))])
-    assert np.allclose(ground.points(), [(0.1, 0.1, 0.01), (-0.1, -0.1, 0.0)])
+    assert np.allclose(ground.points(), [(0.1, 0.1, 0.0), (-0.1, -0.1, 0.0)])  # touchdowns
     ground.update(0.2, [(1, (0.1, -0.1, 0.0))])  # 0 and 3 lift: two footholds
     assert [foothold.samples for foothold in ground.footholds] == [2, 2]
+    assert np.allclose(ground.footholds[0].point, (0.1, 0.1, 0.01))  # the stance's mean
     assert len(ground.points()) == 3
     ground.update(1.25, [(1, (0.1, -0.1, 0.0))])  # 0.2 + 1.0 < 1.25: both expired
     assert len(ground.footholds) == 0 and len(ground.points()) == 1
@@ -108,14 +109,29 @@ def test_footholds_are_stances_kept_for_the_window() -> None:
 
 
 def test_contact_points_turn_the_feet_into_odom_and_drop_the_radius() -> None:
-    yaw = math.radians(90.0)
-    rotation = [[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0],
-                [0.0, 0.0, 1.0]]  # fmt: skip
+    half = math.radians(90.0) / 2.0  # yaw 90°: base x is odom y
+    orientation = (0.0, 0.0, math.sin(half), math.cos(half))
     feet = [(0.2, -0.1, -0.3), None, (-0.2, -0.1, -0.3), (-0.2, 0.1, -0.3)]
-    points = contact_points((1.0, 2.0, 0.3), rotation, feet, [0.02] * 4, [0, 1, 3])
+    points = contact_points((1.0, 2.0, 0.3), orientation, feet, [0.02] * 4, [0, 1, 3])
     assert [leg for leg, _ in points] == [0, 3]
     assert points[0][1] == pytest.approx((1.1, 2.2, -0.02))
     assert points[1][1] == pytest.approx((0.9, 1.8, -0.02))
+
+
+def test_the_kept_fit_moved_to_the_base_is_the_fit_about_the_base() -> None:
+    """LocalGround fits once about its footholds' centre and moves the plane to the point asked
+    for: the same numbers as a fit about that point."""
+    rng = np.random.default_rng(5)
+    points = _on_plane(0.2, 0.12, -0.07, rng.normal(0.0, 0.01, 8))
+    ground = LocalGround(max_footholds=8)
+    for stamp, point in enumerate(points):
+        ground.update(stamp * 0.1, [(stamp % 4, point)])
+    ground.update(0.8, [])
+    direct = fit_plane(points, (0.7, -0.3))
+    moved = ground.plane(0.7, -0.3)
+    assert direct is not None and moved is not None
+    assert moved.height_m == pytest.approx(direct.height_m, abs=1e-9)
+    assert np.allclose(moved.covariance, direct.covariance, rtol=1e-6, atol=1e-12)
 
 
 def test_bad_settings_are_refused() -> None:

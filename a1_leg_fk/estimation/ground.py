@@ -152,6 +152,9 @@ class LocalGround:
         self._fit: tuple[tuple[float, float], np.ndarray, np.ndarray, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
+        self.revision = 0
+        """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
+        only with it, and with the point asked for."""
 
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
@@ -163,11 +166,13 @@ class LocalGround:
             mean = (total[0] / count, total[1] / count, total[2] / count)
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
+            self.revision += 1
         for leg, point in standing.items():
             opened = self._open.get(leg)
             if opened is None:
                 self._open[leg] = (point, [point[0], point[1], point[2]], 1)
                 self._changed = True
+                self.revision += 1
             else:
                 total = opened[1]
                 total[0] += point[0]
@@ -177,6 +182,7 @@ class LocalGround:
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
             self._changed = True
+            self.revision += 1
 
     def points(self) -> list[Point]:
         """The footholds kept and the standing feet's touchdown points [m, odom]."""
@@ -249,3 +255,26 @@ def ground_values(plane: GroundPlane | None) -> tuple[float, ...]:
         covariance[1][1],
         covariance[2][2],
     )
+
+
+def plane_pose(
+    plane: GroundPlane, x: float, y: float
+) -> tuple[Point, tuple[float, float, float, float], list[float]]:
+    """``plane`` at (x, y) [m, odom] as a pose with covariance (geometry_msgs'): the point on it
+    there [m], the tilt as a quaternion (x, y, z, w; R = Ry(pitch) Rx(roll), no yaw) and the
+    6×6 covariance, row-major (x, y, z, rotation about x, y, z): the height's and the tilt's,
+    zero for x, y and yaw (the point is under the base by construction, a plane has no yaw).
+    """
+    half_roll, half_pitch = plane.roll / 2.0, plane.pitch / 2.0
+    cr, sr, cp, sp = (
+        math.cos(half_roll),
+        math.sin(half_roll),
+        math.cos(half_pitch),
+        math.sin(half_pitch),
+    )
+    quaternion = (cp * sr, sp * cr, -sp * sr, cp * cr)  # qy(pitch) ⊗ qx(roll)
+    covariance = [0.0] * 36
+    for row, axis in enumerate((2, 3, 4)):  # z, roll, pitch
+        for column, other in enumerate((2, 3, 4)):
+            covariance[6 * axis + other] = plane.covariance[row][column]
+    return (x, y, plane.height_m), quaternion, covariance

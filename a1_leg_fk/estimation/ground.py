@@ -84,7 +84,7 @@ def fit_plane(
 
 def _fit(
     data: np.ndarray, at: tuple[float, float], slope_prior: float, min_sigma_m: float
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[tuple[float, float, float], Covariance]:
     """(a, b, c) of the plane through (n, 3) ``data`` about ``at`` and their covariance."""
     design = np.column_stack([np.ones(len(data)), data[:, 0] - at[0], data[:, 1] - at[1]])
     heights = data[:, 2]
@@ -96,33 +96,47 @@ def _fit(
         residual = heights - design @ solution
         freedom = max(len(data) - 3, 1)
         sigma2 = max(float(residual @ residual) / freedom, min_sigma_m**2)
-    return solution, np.linalg.inv(design.T @ design / sigma2 + prior)
-
-
-def _plane(solution: np.ndarray, covariance: np.ndarray, count: int) -> GroundPlane:
-    """The :class:`GroundPlane` of (a, b, c) and their covariance."""
+    covariance = np.linalg.inv(design.T @ design / sigma2 + prior)
     a, b, c = (float(value) for value in solution)
-    norm = math.sqrt(1.0 + b * b + c * c)
-    along = math.sqrt(1.0 + b * b)
-    roll, pitch = math.atan2(c, along), -math.atan(b)
-    # d(height, roll, pitch) / d(a, b, c)
-    jacobian = np.array(
-        [
-            [1.0, 0.0, 0.0],
-            [0.0, -b * c / (norm * norm * along), along / (norm * norm)],
-            [0.0, -1.0 / (1.0 + b * b), 0.0],
-        ]
-    )
-    tilted = jacobian @ covariance @ jacobian.T
+    return (a, b, c), tuple((float(r[0]), float(r[1]), float(r[2])) for r in covariance)
+
+
+Covariance = tuple[tuple[float, float, float], ...]
+
+
+def _plane(solution: Sequence[float], covariance: Covariance, count: int) -> GroundPlane:
+    """The :class:`GroundPlane` of (a, b, c) and their 3×3 covariance (plain floats: the bag
+    tool asks for one per row).
+    """
+    a, b, c = solution
+    norm2 = 1.0 + b * b + c * c
+    norm, along = math.sqrt(norm2), math.sqrt(1.0 + b * b)
+    # d(height, roll, pitch) / d(a, b, c): rows (1, 0, 0), (0, j11, j12), (0, j21, 0)
+    j11, j12, j21 = -b * c / (norm2 * along), along / norm2, -1.0 / (1.0 + b * b)
+    (s00, s01, s02), (_, s11, s12), (_, _, s22) = covariance
+    t01, t02 = j11 * s01 + j12 * s02, j21 * s01
+    t11 = j11 * j11 * s11 + 2.0 * j11 * j12 * s12 + j12 * j12 * s22
+    t12, t22 = j21 * (j11 * s11 + j12 * s12), j21 * j21 * s11
     return GroundPlane(
         a,
         (b, c),
         (-b / norm, -c / norm, 1.0 / norm),
-        roll,
-        pitch,
-        tuple((float(row[0]), float(row[1]), float(row[2])) for row in tilted),
+        math.atan2(c, along),
+        -math.atan(b),
+        ((s00, t01, t02), (t01, t11, t12), (t02, t12, t22)),
         count,
     )
+
+
+def _moved(
+    solution: Sequence[float], covariance: Covariance, dx: float, dy: float
+) -> tuple[tuple[float, float, float], Covariance]:
+    """(a, b, c) and their covariance of the same plane about a point (dx, dy) [m] away."""
+    a, b, c = solution
+    (s00, s01, s02), (_, s11, s12), (_, _, s22) = covariance
+    m01, m02 = s01 + dx * s11 + dy * s12, s02 + dx * s12 + dy * s22
+    m00 = s00 + dx * (s01 + m01) + dy * (s02 + m02)
+    return (a + b * dx + c * dy, b, c), ((m00, m01, m02), (m01, s11, s12), (m02, s12, s22))
 
 
 class LocalGround:
@@ -149,7 +163,7 @@ class LocalGround:
         """The ended stances, oldest first."""
         self._open: dict[int, tuple[Point, list[float], int]] = {}
         """Per standing leg: its touchdown point [m], the sum of its contact points and count."""
-        self._fit: tuple[tuple[float, float], np.ndarray, np.ndarray, int] | None = None
+        self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
         self.revision = 0
@@ -202,9 +216,8 @@ class LocalGround:
             solution, covariance = _fit(data, centre, self.slope_prior, self.min_sigma_m)
             self._fit = (centre, solution, covariance, len(points))
         centre, solution, covariance, count = self._fit
-        dx, dy = x - centre[0], y - centre[1]
-        shift = np.array([[1.0, dx, dy], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-        return _plane(shift @ solution, shift @ covariance @ shift.T, count)
+        moved, spread = _moved(solution, covariance, x - centre[0], y - centre[1])
+        return _plane(moved, spread, count)
 
 
 def contact_points(

@@ -69,8 +69,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--ground",
         choices=GROUND_MODELS,
         default=FLAT,
-        help="flat (default): the stance feet's heights anchor the height; none: they do not "
-        "(stairs, slopes)",
+        help="flat (default): the stance feet's heights anchor the height; none: they do not; "
+        "local: each stance foot's height is held to the local ground under it (slopes, stairs)",
     )
     odom.add_argument(
         "--truth",

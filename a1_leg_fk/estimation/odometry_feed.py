@@ -30,6 +30,7 @@ from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, 
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     LEGS,
+    LOCAL,
     MAX_BASE_SPEED_MPS,
     FilterSettings,
     LegMeasurement,
@@ -122,6 +123,7 @@ class OdometryFeed:
         self._position: tuple[float, float, float] | None = None
         self.ground = LocalGround()
         """The recent footholds and the local ground's plane through them."""
+        self._last: OdometrySample | None = None
 
     @property
     def counts(self) -> EvidenceCounts:
@@ -174,6 +176,7 @@ class OdometryFeed:
             stamp_ns * 1e-9,
             contact_points(position, sample.orientation, centres, self.motion.radii, sample.used),
         )
+        self._last = sample
         if self._position is not None:
             last = self._position
             self.distance_m += math.dist(position, last)
@@ -205,9 +208,30 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
-        used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
+        grounds = self._grounds(feet) if self.filter.ground == LOCAL else None
+        used = self.filter.update(
+            stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
+        )
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
         return self.filter.sample(stamp_ns, stance, used)
+
+    def _grounds(self, feet: Sequence[Foot | None]) -> list[tuple[float, float] | None] | None:
+        """Per leg, the local ground's height [m, odom] under its foot and its variance [m²]
+        (None: no foot, or no ground yet), the feet placed by the last estimate's pose.
+        """
+        last = self._last
+        if last is None:
+            return None
+        centres = [None if foot is None else foot[0] for foot in feet]
+        grounds: list[tuple[float, float] | None] = [None] * len(feet)
+        legs = range(len(feet))
+        for leg, (x, y, _) in contact_points(
+            last.position, last.orientation, centres, self.motion.radii, legs
+        ):
+            plane = self.ground.plane(x, y)
+            if plane is not None:
+                grounds[leg] = (plane.height_m, plane.covariance[0][0])
+        return grounds
 
     def _contacts(
         self,

@@ -193,7 +193,7 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("contacts", value="x")]
         )
-    with pytest.raises(LegFkError, match="parameter ground must be flat, none: 'stairs'"):
+    with pytest.raises(LegFkError, match="parameter ground must be flat, none, local: 'stairs'"):
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("ground", value="stairs")]
         )

@@ -142,6 +142,25 @@ HEADER = (
 )
 
 
+def misses(label: str, e: Errors, rmse: float, drift: float = 1.0) -> list[str]:
+    """The odometry goals (issues 27 and 34) ``e`` misses, in words prefixed by ``label``:
+    velocity RMSE <= ``rmse`` [m/s], no 0.1 s window above 0.2 m/s, horizontal drift <=
+    ``drift`` %, vertical <= 0.5 %, >= 95 % of the samples within 3 sigma, sigma <= 5x the RMS
+    error."""
+    return [
+        f"{label}: {what}"
+        for ok, what in (
+            (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
+            (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
+            (e.horizontal_pct <= drift, f"horizontal drift {e.horizontal_pct:.2f} %"),
+            (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
+            (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
+            (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
+        )
+        if not ok
+    ]
+
+
 def errors(truth: ContactRun, result: Estimate) -> Errors:
     """``result``'s errors against the clean run ``truth`` (its root motion), over the gait."""
     gait = truth.gait

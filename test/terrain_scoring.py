@@ -6,14 +6,20 @@ with efforts and without, every estimator at its default settings.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
+import numpy as np
 from contact_scoring import FORCE, KINEMATIC, Score, estimate, score
-from odometry_scoring import Errors, errors
+from odometry_scoring import Errors, errors, feed_samples
 from odometry_scoring import estimate as odometry
+from odometry_scoring import misses as odometry_misses
 from sensor_noise import with_noise
 from terrain_runs import TerrainRun
 
+from a1_leg_fk.estimation.ground import GroundPlane
+from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.kinematics.quadruped import Quadruped
@@ -92,15 +98,58 @@ def misses(scores: TerrainScores) -> list[str]:
             found.append(what)
     for (sensors, efforts), e in scores.odometry.items():
         label = f"{sensors} {'efforts' if efforts else 'kinematic'}"
-        rmse = 0.03 if sensors == "clean" else 0.05
-        for ok, what in (
-            (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
-            (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
-            (e.horizontal_pct <= 1.0, f"horizontal drift {e.horizontal_pct:.2f} %"),
-            (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
-            (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
-            (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
-        ):
-            if not ok:
-                found.append(f"{label}: {what}")
+        found += odometry_misses(label, e, 0.03 if sensors == "clean" else 0.05)
     return found
+
+
+@dataclass(frozen=True)
+class GroundErrors:
+    """The live local ground against the truth's (``TerrainRun``: the plane through rays about
+    the root), after the first stride: the worst and the 95th-percentile angle between the
+    normals [deg], and of the error of the base's height above the ground [m]; the share of
+    samples with a plane."""
+
+    worst_deg: float
+    p95_deg: float
+    worst_height_m: float
+    p95_height_m: float
+    coverage: float
+
+    def row(self, name: str) -> str:
+        return (
+            f"{name:<18} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
+            f"{100 * self.worst_height_m:7.2f} {100 * self.p95_height_m:7.2f} "
+            f"{100 * self.coverage:6.1f}"
+        )
+
+
+GROUND_HEADER = f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6}"
+
+
+def ground_errors(terrain: TerrainRun, after_s: float, **options: Any) -> GroundErrors:
+    """The odometry feed's local ground (efforts, clean sensors; ``options``: the feed's) on a run,
+    from ``after_s`` [s] after the gait's start on."""
+    run = terrain.run
+    quadruped = Quadruped.from_urdf(run.urdf_path)
+    feed = OdometryFeed(quadruped, **options)
+    planes: list[GroundPlane | None] = []
+    samples = feed_samples(feed, quadruped, run, run.quaternions, run.torques, planes=planes)
+    scored = run.stamps_s >= run.gait_start_s + after_s
+    angles, heights = [], []
+    true_normals = np.column_stack([-terrain.plane_gradients, np.ones(len(run.stamps_s))])
+    true_normals /= np.linalg.norm(true_normals, axis=1, keepdims=True)
+    true_above = run.base_positions[:, 2] - terrain.plane_heights
+    for row in np.flatnonzero(scored):
+        plane = planes[row]
+        if plane is None:
+            continue
+        cosine = float(np.clip(np.dot(plane.normal, true_normals[row]), -1.0, 1.0))
+        angles.append(math.degrees(math.acos(cosine)))
+        heights.append(abs(samples[row].position[2] - plane.height_m - true_above[row]))
+    return GroundErrors(
+        max(angles),
+        float(np.percentile(angles, 95)),
+        max(heights),
+        float(np.percentile(heights, 95)),
+        len(angles) / int(scored.sum()),
+    )

@@ -79,21 +79,13 @@ def scores() -> dict[str, list[tuple[str, Any]]]:
 
 def _misses(name: str, scored: list[tuple[str, Any]]) -> list[str]:
     """The goals a run's four estimates miss, in words."""
+    from odometry_scoring import misses
+
     drift = 1.5 if "slips" in name else 1.0
-    misses = []
+    found = []
     for label, e in scored:
-        rmse = 0.03 if " clean " in label else 0.05
-        for ok, what in (
-            (e.rmse <= rmse, f"RMSE {e.rmse:.4f} > {rmse}"),
-            (e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
-            (e.horizontal_pct <= drift, f"horizontal drift {e.horizontal_pct:.2f} %"),
-            (e.vertical_pct <= 0.5, f"vertical drift {e.vertical_pct:.2f} %"),
-            (e.within_3sigma >= 0.95, f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
-            (e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.1f}"),
-        ):
-            if not ok:
-                misses.append(f"{label}: {what}")
-    return misses
+        found += misses(label, e, 0.03 if " clean " in label else 0.05, drift)
+    return found
 
 
 def _check(name: str, scores: dict[str, list[tuple[str, Any]]]) -> None:

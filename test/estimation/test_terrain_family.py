@@ -57,7 +57,15 @@ GROUND_UNMET = {
     "go2_stairs_down_6cm": "slope off by up to 7.42°, height 6.0 cm",
 }
 """Slope and stair runs whose local ground misses its goal today (strict xfail)."""
-LOCAL_UNMET: dict[str, str] = {}
+LOCAL_UNMET = {
+    "a1_slope_up_5": "vertical drift 0.53 %",
+    "go2_slope_up_5": "sigma / error 5.4",
+    "a1_slope_down_10": "vertical drift 0.76 %",
+    "go2_slope_down_8": "vertical drift 0.96 %",
+    "a1_stairs_up_3cm": "ground 4.61° off the treads' plane",
+    "a1_stairs_down_4cm": "vertical drift 0.61 %; ground 7.28°, 2.1 cm",
+    "go2_stairs_down_6cm": "vertical drift 0.68 %; ground 8.42°, 3.2 cm",
+}
 """Slope and stair runs that ``ground: local`` leaves short of a goal (strict xfail)."""
 STRIDE_S = 0.4
 """[s] the first stride (both robots' trot period), not scored for the ground."""

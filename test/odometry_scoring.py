@@ -11,6 +11,7 @@ import numpy as np
 from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
+from a1_leg_fk.estimation.ground import GroundPlane
 from a1_leg_fk.estimation.odometry import ImuReading, OdometrySample
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother
@@ -124,12 +125,14 @@ def feed_samples(
     accelerometer: bool = True,
     smoother: OdometrySmoother | None = None,
     causal: list[OdometrySample] | None = None,
+    planes: list[GroundPlane | None] | None = None,
 ) -> list[OdometrySample]:
     """Feed every sample of a simulated ``run`` (its ``stamps_s``, ``angles``, ``rates``,
     ``gyro`` and ``specific_force``; the base's ``quaternions`` x, y, z, w) to ``feed``: the
     IMU first, then the joint state with ``efforts`` [N m] and ``contacts`` (N, 4) from
     elsewhere (None: none); ``accelerometer`` false: the IMU has none. The feed's samples (with
-    a ``smoother``: its samples, smoothed, the feed's own appended to ``causal``)."""
+    a ``smoother``: its samples, smoothed, the feed's own appended to ``causal``); ``planes``,
+    when given, gets the feed's local ground after each (live, as a node has it)."""
     rows = len(run.stamps_s)
     feet = quadruped.fk_batch(run.angles).tolist()
     speeds = quadruped.foot_velocities_batch(run.angles, run.rates).tolist()
@@ -159,6 +162,8 @@ def feed_samples(
             torques[row],
         )
         assert sample is not None
+        if planes is not None:
+            planes.append(feed.ground_plane(sample))
         if smoother is None:
             samples.append(sample)
         else:
@@ -195,6 +200,29 @@ HEADER = (
     f"{'run':<34} {'rmse':>7} {'burst':>7} {'hor%':>6} {'ver%':>6} {'dist':>6} {'in3s':>6} "
     f"{'s/err':>6}"
 )
+
+
+def goals(e: Errors, rmse: float, drift: float = 1.0) -> list[tuple[str, bool, str]]:
+    """The odometry goals (issues 27 and 34), each as (goal, met by ``e``, the figure in words):
+    velocity RMSE <= ``rmse`` [m/s], no 0.1 s window above 0.2 m/s, horizontal drift <=
+    ``drift`` %, vertical <= 0.5 %, >= 95 % of the samples within 3 sigma, sigma <= 5x the RMS
+    error."""
+    return [
+        (f"RMSE <= {rmse}", e.rmse <= rmse, f"RMSE {e.rmse:.4f}"),
+        ("burst <= 0.2", e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
+        (f"horizontal drift <= {drift} %", e.horizontal_pct <= drift,
+         f"horizontal drift {e.horizontal_pct:.2f} %"),
+        ("vertical drift <= 0.5 %", e.vertical_pct <= 0.5,
+         f"vertical drift {e.vertical_pct:.2f} %"),
+        ("within 3 sigma >= 95 %", e.within_3sigma >= 0.95,
+         f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
+        ("sigma / error <= 5", e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.2f}"),
+    ]  # fmt: skip
+
+
+def misses(label: str, e: Errors, rmse: float, drift: float = 1.0) -> list[str]:
+    """The :func:`goals` ``e`` misses, in words prefixed by ``label``."""
+    return [f"{label}: {figure}" for _, met, figure in goals(e, rmse, drift) if not met]
 
 
 def errors(truth: ContactRun, result: Estimate) -> Errors:

@@ -26,6 +26,7 @@ from a1_leg_fk.cli.common import (
     non_negative,
 )
 from a1_leg_fk.estimation.filter_model import FLAT, GROUND_MODELS
+from a1_leg_fk.estimation.ground import GROUND_COLUMNS
 from a1_leg_fk.estimation.odometry_feed import CONTACT_SOURCES
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -34,7 +35,11 @@ if TYPE_CHECKING:  # the bag side is imported when the command runs
     from a1_leg_fk.recording.odometry import OdometryTrack
     from a1_leg_fk.recording.outputs import OutputTarget
 
-CSV_HEADER = "stamp_ns,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,cov_vx,cov_vy,cov_vz\n"
+CSV_HEADER = (
+    "stamp_ns,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,cov_vx,cov_vy,cov_vz,"
+    + ",".join(GROUND_COLUMNS)
+    + "\n"
+)
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -64,8 +69,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--ground",
         choices=GROUND_MODELS,
         default=FLAT,
-        help="flat (default): the stance feet's heights anchor the height; none: they do not "
-        "(stairs, slopes)",
+        help="flat (default): the stance feet's heights anchor the height; none: they do not; "
+        "local: each stance foot's height is held to the local ground under it (slopes, stairs)",
     )
     odom.add_argument(
         "--causal",
@@ -164,6 +169,7 @@ def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]
                     track.linear,
                     track.angular,
                     track.twist_variances[:, :3],
+                    track.grounds,
                 ]
             )
             with open(targets["--csv"].temporary, "wb") as file:

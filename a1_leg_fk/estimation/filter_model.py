@@ -14,9 +14,12 @@ from a1_leg_fk.estimation.odometry import require_non_negative
 
 LEGS = 4
 STATE = 15
-FLAT, NO_GROUND = "flat", "none"
-GROUND_MODELS = (FLAT, NO_GROUND)
-"""``flat``: the stance feet's heights anchor z; ``none``: they do not (stairs, slopes)."""
+FLAT, NO_GROUND, LOCAL = "flat", "none", "local"
+GROUND_MODELS = (FLAT, NO_GROUND, LOCAL)
+"""``flat``: the stance feet's heights anchor z at the first feet's; ``none``: they do not;
+``local``: each stance foot's height is held to the local ground under it (the plane through the
+recent footholds, :mod:`a1_leg_fk.estimation.ground`), with that plane's variance (slopes,
+stairs, rough ground)."""
 MAX_BASE_SPEED_MPS = 1e3
 """[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
 rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from

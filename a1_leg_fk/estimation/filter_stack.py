@@ -7,7 +7,8 @@ stacked, the rows of ``H``, the residuals and the block-diagonal noise, in this 
   ``[[Rᵀv]x, Rᵀ, 0, [r]x, 0]``, noise :func:`~a1_leg_fk.estimation.filter_model.foot_noise`
   with its horizontal part scaled by the feet's noise scale;
 - on flat ground with a known ground, each foot's contact point's height ``p_z + R₃·r`` (1 row:
-  ``r x R₃`` on dθ, 1 on p_z);
+  ``r x R₃`` on dθ, 1 on p_z); with the local ground, against the ground's height under that
+  foot, its variance added to the noise;
 - the zero-velocity update (3 rows: ``Rᵀ v = 0``).
 
 The values are written out in floats and set in one call per array, at flat indices computed
@@ -85,7 +86,8 @@ class Point(NamedTuple):
     """The state one update linearises about: the rows of the rotation base -> world, the
     base's velocity in its own frame ``Rᵀ v`` [m/s], the gyro's last sample and bias [rad/s]
     (base frame), the base's height ``p_z`` and the ground's [m] (None: not known yet), the
-    feet's horizontal and vertical noise scales.
+    feet's horizontal and vertical noise scales; ``grounds``: per stacked foot, the local
+    ground's height [m] under it and its variance [m²] (None: the one ``ground`` for all).
     """
 
     rows: list[list[float]]
@@ -95,6 +97,7 @@ class Point(NamedTuple):
     height: float
     ground: float | None
     noise_scales: tuple[float, float]
+    grounds: list[tuple[float, float]] | None = None
 
 
 class Stack:
@@ -196,16 +199,22 @@ class Stack:
         settings: FilterSettings,
         into: tuple[list[float], list[float], list[float]],
     ) -> None:
-        """Append each foot's height row (``r x R₃`` on dθ, 1 on p_z), noise and residual (the
-        ground's height less the contact point's) to ``into``.
+        """Append each foot's height row (``r x R₃`` on dθ, 1 on p_z), noise (the ground's
+        variance added) and residual (the ground's height less the contact point's) to ``into``.
         """
         rows, noise, residual = into
-        assert point.ground is not None
+        grounds = point.grounds
+        if grounds is None:
+            assert point.ground is not None
+            grounds = [(point.ground, 0.0)] * len(self.foot_heights)
         ux, uy, uz = self.up
-        for (rx, ry, rz), height in zip(self._contact_points, self.foot_heights):
+        floor = settings.height_noise_m**2
+        for (rx, ry, rz), height, (ground, variance) in zip(
+            self._contact_points, self.foot_heights, grounds
+        ):
             rows += (ry * uz - rz * uy, rz * ux - rx * uz, rx * uy - ry * ux, 1.0)
-            residual.append(point.ground - height)
-        noise += (settings.height_noise_m**2,) * len(self.foot_heights)
+            residual.append(ground - height)
+            noise.append(floor + variance)
 
     def keep(self, accepted: list[int]) -> np.ndarray:
         """The rows left when only the feet at positions ``accepted`` (of the stacked feet) are

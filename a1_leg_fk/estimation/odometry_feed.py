@@ -10,6 +10,9 @@ tool (:class:`OdometryFeed`).
   see :data:`CONTACT_SOURCES`); each
   standing foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`) and Jacobian; then
   the filter's update, gated per foot.
+- The standing feet the estimate used, at their contact points in odom, feed the local ground
+  (:class:`~a1_leg_fk.estimation.ground.LocalGround`: the plane through the recent footholds,
+  :meth:`OdometryFeed.ground_plane`).
 - Without an IMU sample with an accelerometer paired with the joint state (no IMU, ``use_imu``
   false, or an IMU without one), the legs alone: the averaging estimate of
   :class:`~a1_leg_fk.estimation.odometry.LegOdometry`, as before the filter.
@@ -27,12 +30,14 @@ from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, 
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     LEGS,
+    LOCAL,
     MAX_BASE_SPEED_MPS,
     FilterSettings,
     LegMeasurement,
     stands,
 )
 from a1_leg_fk.estimation.force_pass import ForcePass
+from a1_leg_fk.estimation.ground import GroundPlane, LocalGround, contact_points
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.odometry import (
@@ -116,6 +121,9 @@ class OdometryFeed:
         )
         """The contact estimate's feet's motions are this feed's (the same rolling radii)."""
         self._position: tuple[float, float, float] | None = None
+        self.ground = LocalGround()
+        """The recent footholds and the local ground's plane through them."""
+        self._last: OdometrySample | None = None
 
     @property
     def counts(self) -> EvidenceCounts:
@@ -163,11 +171,24 @@ class OdometryFeed:
             self.samples_filtered += 1
             sample = self._filtered(joint, (contacts, motions), imu, down)
         position = sample.position
+        centres = [None if foot is None else foot[0] for foot in feet]
+        self.ground.update(
+            stamp_ns * 1e-9,
+            contact_points(position, sample.orientation, centres, self.motion.radii, sample.used),
+        )
+        self._last = sample
         if self._position is not None:
             last = self._position
             self.distance_m += math.dist(position, last)
         self._position = position
         return sample
+
+    def ground_plane(self, sample: OdometrySample) -> GroundPlane | None:
+        """The local ground under the base of ``sample`` (:meth:`step`'s; None before a foot
+        stood): its height [m, odom], normal, tilt and their covariance.
+        """
+        position = sample.position
+        return self.ground.plane(position[0], position[1])
 
     def _filtered(
         self,
@@ -187,9 +208,30 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
-        used = self.filter.update(stamp_ns, legs, imu.orientation, imu.orientation_variance)
+        grounds = self._grounds(feet) if self.filter.ground == LOCAL else None
+        used = self.filter.update(
+            stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
+        )
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
         return self.filter.sample(stamp_ns, stance, used)
+
+    def _grounds(self, feet: Sequence[Foot | None]) -> list[tuple[float, float] | None] | None:
+        """Per leg, the local ground's height [m, odom] under its foot and its variance [m²]
+        (None: no foot, or no ground yet), the feet placed by the last estimate's pose.
+        """
+        last = self._last
+        if last is None:
+            return None
+        centres = [None if foot is None else foot[0] for foot in feet]
+        grounds: list[tuple[float, float] | None] = [None] * len(feet)
+        legs = range(len(feet))
+        for leg, (x, y, _) in contact_points(
+            last.position, last.orientation, centres, self.motion.radii, legs
+        ):
+            plane = self.ground.plane(x, y)
+            if plane is not None:
+                grounds[leg] = (plane.height_m, plane.covariance[0][0])
+        return grounds
 
     def _contacts(
         self,

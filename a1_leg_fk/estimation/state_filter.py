@@ -47,6 +47,7 @@ from a1_leg_fk.estimation.filter_model import (
     FLAT,
     GROUND_MODELS,
     LEGS,
+    LOCAL,
     STATE,
     FilterCounts,
     FilterSettings,
@@ -193,9 +194,12 @@ class StateFilter:
         legs: Sequence[LegMeasurement | None],
         orientation: Quaternion | None = None,
         orientation_variance: Vector | None = None,
+        grounds: Sequence[tuple[float, float] | None] | None = None,
     ) -> list[int]:
         """Correct the state with one joint state's standing feet (None: a foot that does not
         stand, or unknown) and the IMU's orientation (None: none); the legs used (the gate's).
+        ``grounds`` (``ground="local"``): per leg, the local ground's height [m] under its foot
+        and its variance [m²] (None: unknown; the heights count when every standing foot has one).
 
         One stacked update (:class:`~a1_leg_fk.estimation.filter_stack.Stack`: the orientation,
         every standing foot, their heights, the zero-velocity update); the feet's gate reads its
@@ -208,9 +212,14 @@ class StateFilter:
         self.doubt = NO_DOUBT
         if orientation is None and not candidates and not still:
             return []
-        heights = self.ground == FLAT and self.ground_z is not None
+        local = None
+        if self.ground == LOCAL and grounds is not None:
+            under = [grounds[leg] for leg in candidates]
+            local = [ground for ground in under if ground is not None]
+            local = local if len(local) == len(candidates) else None
+        heights = local is not None or (self.ground == FLAT and self.ground_z is not None)
         stack = Stack(
-            self._point(),
+            self._point(local),
             self.settings,
             None if orientation is None else (orientation, orientation_variance),
             feet,
@@ -309,10 +318,13 @@ class StateFilter:
         """
         return floats_of(self.rotation, self._nominal)
 
-    def _point(self) -> Point:
-        """The state an update linearises about (a :class:`Point`)."""
+    def _point(self, grounds: list[tuple[float, float]] | None = None) -> Point:
+        """The state an update linearises about (a :class:`Point`), with the local ground under
+        each standing foot (``grounds``, None: the flat ground's, if any).
+        """
         rows, local, (_, _, _, _, _, pz, bx, by, bz) = self._floats()
-        return Point(rows, local, self._gyro, (bx, by, bz), pz, self.ground_z, self.gate.scales)
+        scales = self.gate.scales
+        return Point(rows, local, self._gyro, (bx, by, bz), pz, self.ground_z, scales, grounds)
 
     @property
     def gyro(self) -> Vector:

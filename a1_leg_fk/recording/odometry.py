@@ -19,6 +19,7 @@ import numpy as np
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
+from a1_leg_fk.estimation.ground import GROUND_COLUMNS, ground_values
 from a1_leg_fk.estimation.imu import imu_reading
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
@@ -71,6 +72,7 @@ class OdometryTrack:
     twist_variances: np.ndarray
     stance: np.ndarray
     used: np.ndarray
+    grounds: np.ndarray
     planar: bool
     smoothed: bool
     base_frame: str
@@ -144,6 +146,7 @@ def odometry_track(
             raise LegFkError(f"--contacts force: {feed.note}")
         stats, samples, next_imu = BlockStats(), [], 0
         smoother = OdometrySmoother(feed.filter) if smoothed else None
+        grounds: list[tuple[float, ...]] = []
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
             usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
@@ -171,6 +174,7 @@ def odometry_track(
                 sample = feed.step(stamp, feet, angles, rates, efforts=effort)
                 if sample is None:
                     continue
+                grounds.append(ground_values(feed.ground_plane(sample)))  # live, as the node's
                 if smoother is None:
                     samples.append(sample)
                 else:
@@ -183,6 +187,7 @@ def odometry_track(
     return _track(
         samples,
         smoothed,
+        grounds,
         recording.quadruped.base_frame,
         imu_connection,
         len(imu),
@@ -196,6 +201,7 @@ def odometry_track(
 def _track(
     samples: Sequence[OdometrySample],
     smoothed: bool,
+    grounds: Sequence[tuple[float, ...]],
     base_frame: str,
     imu_connection: Connection | None,
     imu_samples: int,
@@ -217,6 +223,7 @@ def _track(
         twist_variances=column("twist_variance", 6),
         stance=_mask([s.stance for s in samples]),
         used=_mask([s.used for s in samples]),
+        grounds=np.array(grounds, dtype=float).reshape(-1, len(GROUND_COLUMNS)),
         planar=bool(samples[-1].planar) if samples else True,
         smoothed=smoothed,
         base_frame=base_frame,

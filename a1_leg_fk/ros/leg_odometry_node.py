@@ -1,4 +1,5 @@
-"""``leg_odometry_node``: sensor_msgs/JointState (+ sensor_msgs/Imu) in, nav_msgs/Odometry out.
+"""``leg_odometry_node``: sensor_msgs/JointState (+ sensor_msgs/Imu) in, nav_msgs/Odometry out,
+and the local ground under the base (geometry_msgs/PoseWithCovarianceStamped on ``ground``).
 
 Thin ROS glue over :mod:`a1_leg_fk.estimation.odometry_feed`, the pipeline ``a1-leg-fk odom``
 runs on bags. The robot comes from :class:`~a1_leg_fk.ros.robot_source.RobotSource` and joint
@@ -21,6 +22,7 @@ from collections.abc import Sequence
 from typing import Unpack
 
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -29,6 +31,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import Imu
 
 from a1_leg_fk.estimation.filter_model import GROUND_MODELS
+from a1_leg_fk.estimation.ground import plane_pose
 from a1_leg_fk.estimation.imu import MAX_ANGULAR_RATE_RADPS, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (
@@ -85,6 +88,8 @@ class LegOdometryNode(Node):
             )
         self._start(self._robot.config)
         self._publisher = self.create_publisher(Odometry, "leg_odometry", OUTPUT_QOS)
+        self._ground_pub = self.create_publisher(PoseWithCovarianceStamped, "ground", OUTPUT_QOS)
+        self._ground_msg = PoseWithCovarianceStamped()
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", OUTPUT_QOS)
         self._inputs.subscribe(
             message,
@@ -133,6 +138,7 @@ class LegOdometryNode(Node):
         if self._feed.note and self._contacts != KINEMATIC:
             self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
         self._no_stance_before = 0
+        self._ground_revision = 0
         self._apply_frames()
 
     # --- per message ---------------------------------------------------------------------
@@ -196,6 +202,27 @@ class LegOdometryNode(Node):
             )
             return
         self._publish(sample)
+        if self._feed.ground.revision != self._ground_revision:
+            self._ground_revision = self._feed.ground.revision
+            self._publish_ground(sample)
+
+    def _publish_ground(self, sample: OdometrySample) -> None:
+        """The local ground under the base on ``ground`` (in the odom frame, stamped as the
+        joint state): sent when its footholds change (a touchdown, a liftoff, an expiry).
+        """
+        plane = self._feed.ground_plane(sample)
+        if plane is None:
+            return
+        position, orientation, covariance = plane_pose(plane, *sample.position[:2])
+        msg = self._ground_msg
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(sample.stamp_ns, 1_000_000_000)
+        msg.header.frame_id = self._msg.header.frame_id
+        pose = msg.pose.pose
+        pose.position.x, pose.position.y, pose.position.z = position
+        o = pose.orientation
+        o.x, o.y, o.z, o.w = orientation
+        msg.pose.covariance = covariance
+        self._ground_pub.publish(msg)
 
     def _publish(self, sample: OdometrySample) -> None:
         values = self._values  # pose 7, its covariance 36, twist 6, its covariance 36

@@ -46,8 +46,8 @@ PARAMETERS = (
         "ground",
         FLAT,
         ParameterType.PARAMETER_STRING,
-        "flat: the stance feet's heights anchor the height (flat ground); none: they do not "
-        "(stairs, slopes)",
+        "flat: the stance feet's heights anchor the height (flat ground); none: they do not; "
+        "local: each stance foot's height is held to the local ground under it (slopes, stairs)",
         read_only=True,
     ),
     ParameterSpec(

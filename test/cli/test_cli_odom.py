@@ -68,6 +68,14 @@ def test_csv_plot_and_truth(run, bag, tmp_path: Path, capsys: pytest.CaptureFixt
     print(f"velocity error within 3 sigma on {100 * inside:.1f} % of the samples; sigma / RMS "
           f"error at most {ratio:.2f}")  # fmt: skip
     assert (values[:, 14:17] > 0).all() and inside >= 0.95 and ratio <= 5.0
+    # the local ground under the base: PyBullet's plane (z = 0), level, once a stride has stood
+    stood = run.stamps_s >= LANDED_S + 0.5
+    above = (values[:, 3] - values[:, 17])[stood]
+    tilt = np.degrees(np.arccos(values[stood, 20].clip(max=1.0)))
+    print(f"ground: base height error max {np.abs(above - run.base_positions[stood, 2]).max():.4f}"
+          f" m, tilt max {tilt.max():.3f} deg")  # fmt: skip
+    assert np.abs(above - run.base_positions[stood, 2]).max() <= 0.02 and tilt.max() <= 1.0
+    assert (values[stood, 21:24] > 0).all()
     # the summary's numbers, recomputed from the CSV and the simulation
     moved = run.base_positions[-1] - run.base_positions[0]
     # odom and the truth share the IMU's yaw: no turn between them

@@ -117,20 +117,11 @@ def _params(names: tuple[str, ...]) -> list[Any]:
 
 
 def _goals(name: str, label: str, e: Any) -> list[tuple[str, bool, str]]:
-    """Each goal of one estimate: (goal, met, the figure in words)."""
-    drift = 1.5 if "slips" in name else 1.0
-    rmse = 0.03 if " clean " in label else 0.05
-    return [
-        (f"RMSE <= {rmse}", e.rmse <= rmse, f"RMSE {e.rmse:.4f}"),
-        ("burst <= 0.2", e.worst_window <= 0.2, f"burst {e.worst_window:.3f} m/s"),
-        (f"horizontal drift <= {drift} %", e.horizontal_pct <= drift,
-         f"horizontal drift {e.horizontal_pct:.2f} %"),
-        ("vertical drift <= 0.5 %", e.vertical_pct <= 0.5,
-         f"vertical drift {e.vertical_pct:.2f} %"),
-        ("within 3 sigma >= 95 %", e.within_3sigma >= 0.95,
-         f"within 3 sigma {100 * e.within_3sigma:.1f} %"),
-        ("sigma / error <= 5", e.sigma_ratio <= 5.0, f"sigma / error {e.sigma_ratio:.2f}"),
-    ]  # fmt: skip
+    """Each goal of one estimate (:func:`odometry_scoring.goals`): 1.5 % horizontal drift with
+    slips, the RMSE goal of its sensors."""
+    from odometry_scoring import goals
+
+    return goals(e, 0.03 if " clean " in label else 0.05, 1.5 if "slips" in name else 1.0)
 
 
 def _misses(name: str, scored: list[tuple[str, Any]]) -> list[str]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from bag_factory import joint_state
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from node_harness import LEGS, Diagnostics, SensorStream
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
@@ -59,6 +60,10 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
     received: list[Odometry] = []
     ros.node.create_subscription(
         Odometry, "leg_odometry", received.append, QoSProfile(depth=10000)
+    )
+    grounds: list[PoseWithCovarianceStamped] = []
+    ros.node.create_subscription(
+        PoseWithCovarianceStamped, "ground", grounds.append, QoSProfile(depth=10000)
     )
     stream = SensorStream(ros, "leg_odometry")
     assert stream.ready, processes.output(node)
@@ -119,6 +124,32 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
     covariance = np.array(received[-1].pose.covariance).reshape(6, 6)
     assert (np.diag(covariance) > 0).all()
     assert (np.diag(np.array(received[-1].twist.covariance).reshape(6, 6)) > 0).all()
+    _check_ground(grounds, track)
+
+
+def _check_ground(grounds: list[PoseWithCovarianceStamped], track) -> None:
+    """The node's ground messages (one per change of the footholds: several per stride) are
+    the bag tool's local ground at their stamps: height, normal (the orientation's z axis) and
+    the height's variance; in odom, on PyBullet's level plane."""
+    assert len(grounds) >= 8  # a trot's touchdowns and liftoffs: several per stride over 2 s
+    rows = np.searchsorted(
+        track.stamps_ns,
+        [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in grounds],
+    )
+    assert (track.stamps_ns[rows] == [
+        m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for m in grounds
+    ]).all()  # fmt: skip
+    heights = np.array([m.pose.pose.position.z for m in grounds])
+    assert np.abs(heights - track.grounds[rows, 0]).max() < 1e-9
+    x, y, z, w = np.array([[m.pose.pose.orientation.x, m.pose.pose.orientation.y,
+                            m.pose.pose.orientation.z, m.pose.pose.orientation.w]
+                           for m in grounds]).T  # fmt: skip
+    normals = np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], 1)
+    assert np.abs(normals - track.grounds[rows, 1:4]).max() < 1e-9
+    variances = np.array([m.pose.covariance[14] for m in grounds])
+    assert np.abs(variances - track.grounds[rows, 4]).max() < 1e-15
+    assert grounds[0].header.frame_id == "odom"
+    assert (normals[:, 2] > np.cos(np.radians(2.0))).all()  # level ground, the first stance's too
 
 
 def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
@@ -162,7 +193,7 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("contacts", value="x")]
         )
-    with pytest.raises(LegFkError, match="parameter ground must be flat, none: 'stairs'"):
+    with pytest.raises(LegFkError, match="parameter ground must be flat, none, local: 'stairs'"):
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("ground", value="stairs")]
         )

@@ -1,0 +1,139 @@
+"""The local ground (a1_leg_fk.estimation.ground) against footholds built by hand: a known plane,
+noisy footholds (Monte Carlo against the reported covariance), feet in a line, too few feet, the
+window, and the contact points of a turned base."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from a1_leg_fk.estimation.ground import (
+    DEFAULT_MIN_SIGMA_M,
+    DEFAULT_SLOPE_PRIOR,
+    LocalGround,
+    contact_points,
+    fit_plane,
+)
+
+FOOTHOLDS = [(x, y) for x in (-0.2, -0.05, 0.1, 0.25) for y in (-0.13, 0.13)]
+"""[m] two strides of a trot's footholds about the base (odom x, y)."""
+
+
+def _on_plane(a: float, b: float, c: float, noise: np.ndarray | None = None) -> list:
+    heights = [a + b * x + c * y for x, y in FOOTHOLDS]
+    if noise is not None:
+        heights = list(np.add(heights, noise))
+    return [(x, y, z) for (x, y), z in zip(FOOTHOLDS, heights)]
+
+
+def _rx(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _ry(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def test_a_known_plane_is_found_with_its_normal_and_tilt() -> None:
+    b, c = math.tan(math.radians(10.0)), -math.tan(math.radians(4.0))  # 10° up x, 4° down y
+    plane = fit_plane(_on_plane(0.3, b, c), (0.5, -0.2))
+    assert plane is not None and plane.footholds == 8
+    assert plane.height_m == pytest.approx(0.3 + 0.5 * b - 0.2 * c, abs=1e-4)
+    assert plane.gradient == pytest.approx((b, c), abs=1e-3)
+    by_hand = np.array([-b, -c, 1.0]) / math.sqrt(1 + b * b + c * c)
+    assert plane.normal == pytest.approx(tuple(by_hand), abs=1e-3)
+    tilted = _ry(plane.pitch) @ _rx(plane.roll) @ [0.0, 0.0, 1.0]
+    assert tuple(tilted) == pytest.approx(tuple(by_hand), abs=1e-3)
+    assert plane.slope_deg == pytest.approx(math.degrees(math.acos(by_hand[2])), abs=0.05)
+    # exact footholds: the noise floor, not zero
+    assert math.sqrt(plane.covariance[0][0]) >= 0.3 * DEFAULT_MIN_SIGMA_M
+
+
+def test_the_reported_covariance_matches_the_scatter_of_noisy_fits() -> None:
+    """2,000 fits of footholds with 1 cm of noise: the height's and tilt's errors against the
+    true plane have the spread the fits report (within 25 %), and each lies within its 3 sigma
+    on >= 95 % of the fits (the residuals of 8 footholds estimate the noise: Student's t, 5
+    degrees of freedom, 97 %)."""
+    rng = np.random.default_rng(3)
+    b, c = 0.15, 0.05
+    errors, sigmas = [], []
+    truth = (0.1, -math.atan(b), math.atan2(c, math.sqrt(1 + b * b)))
+    for _ in range(2000):
+        plane = fit_plane(_on_plane(0.1, b, c, rng.normal(0.0, 0.01, 8)), (0.0, 0.0))
+        assert plane is not None
+        errors.append(np.subtract((plane.height_m, plane.pitch, plane.roll), truth))
+        cov = plane.covariance
+        sigmas.append(np.sqrt([cov[0][0], cov[2][2], cov[1][1]]))
+    spread, reported = np.std(errors, axis=0), np.sqrt(np.mean(np.square(sigmas), axis=0))
+    assert reported == pytest.approx(spread, rel=0.25)
+    inside = (np.abs(errors) <= 3 * np.array(sigmas)).mean(axis=0)
+    assert inside.min() >= 0.95, inside
+
+
+def test_feet_in_a_line_leave_the_slope_across_them_level_and_uncertain() -> None:
+    points = [(x, 0.0, 0.1 * x) for x in (-0.2, 0.0, 0.2, 0.4)]
+    plane = fit_plane(points, (0.0, 0.0))
+    assert plane is not None
+    assert plane.gradient == pytest.approx((0.1, 0.0), abs=1e-3)
+    assert plane.covariance[1][1] > 0.9 * DEFAULT_SLOPE_PRIOR**2  # roll: across the line
+    assert plane.covariance[2][2] < 1e-3  # pitch: along it
+
+
+def test_one_foothold_gives_its_height_and_no_slope() -> None:
+    plane = fit_plane([(1.0, 2.0, 0.25)], (1.0, 2.0))
+    assert plane is not None
+    assert plane.height_m == pytest.approx(0.25) and plane.gradient == (0.0, 0.0)
+    assert plane.covariance[2][2] == pytest.approx(DEFAULT_SLOPE_PRIOR**2, rel=0.01)
+    assert fit_plane([], (0.0, 0.0)) is None
+
+
+def test_footholds_are_stances_kept_for_the_window() -> None:
+    ground = LocalGround(window_s=1.0, max_footholds=3)
+    assert ground.plane(0.0, 0.0) is None
+    ground.update(0.0, [(0, (0.1, 0.1, 0.0)), (3, (-0.1, -0.1, 0.0))])
+    ground.update(0.1, [(0, (0.1, 0.1, 0.02)), (3, (-0.1, -0.1, 0.0))])
+    assert np.allclose(ground.points(), [(0.1, 0.1, 0.0), (-0.1, -0.1, 0.0)])  # touchdowns
+    ground.update(0.2, [(1, (0.1, -0.1, 0.0))])  # 0 and 3 lift: two footholds
+    assert [foothold.samples for foothold in ground.footholds] == [2, 2]
+    assert np.allclose(ground.footholds[0].point, (0.1, 0.1, 0.01))  # the stance's mean
+    assert len(ground.points()) == 3
+    ground.update(1.25, [(1, (0.1, -0.1, 0.0))])  # 0.2 + 1.0 < 1.25: both expired
+    assert len(ground.footholds) == 0 and len(ground.points()) == 1
+    for stamp in range(5):  # at most three kept
+        ground.update(2.0 + stamp / 10, [(stamp % 2 * 2, (0.0, 0.0, 0.0))])
+    assert len(ground.footholds) == 3
+
+
+def test_contact_points_turn_the_feet_into_odom_and_drop_the_radius() -> None:
+    half = math.radians(90.0) / 2.0  # yaw 90°: base x is odom y
+    orientation = (0.0, 0.0, math.sin(half), math.cos(half))
+    feet = [(0.2, -0.1, -0.3), None, (-0.2, -0.1, -0.3), (-0.2, 0.1, -0.3)]
+    points = contact_points((1.0, 2.0, 0.3), orientation, feet, [0.02] * 4, [0, 1, 3])
+    assert [leg for leg, _ in points] == [0, 3]
+    assert points[0][1] == pytest.approx((1.1, 2.2, -0.02))
+    assert points[1][1] == pytest.approx((0.9, 1.8, -0.02))
+
+
+def test_the_kept_fit_moved_to_the_base_is_the_fit_about_the_base() -> None:
+    """LocalGround fits once about its footholds' centre and moves the plane to the point asked
+    for: the same numbers as a fit about that point."""
+    rng = np.random.default_rng(5)
+    points = _on_plane(0.2, 0.12, -0.07, rng.normal(0.0, 0.01, 8))
+    ground = LocalGround(max_footholds=8)
+    for stamp, point in enumerate(points):
+        ground.update(stamp * 0.1, [(stamp % 4, point)])
+    ground.update(0.8, [])
+    direct = fit_plane(points, (0.7, -0.3))
+    moved = ground.plane(0.7, -0.3)
+    assert direct is not None and moved is not None
+    assert moved.height_m == pytest.approx(direct.height_m, abs=1e-9)
+    assert np.allclose(moved.covariance, direct.covariance, rtol=1e-6, atol=1e-12)
+
+
+def test_bad_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="window_s"):
+        LocalGround(window_s=0.0)

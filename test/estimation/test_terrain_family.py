@@ -1,0 +1,236 @@
+"""The contact estimate and the state filter on ground nobody tuned them on (issue 34): the
+terrain family (test/terrain_runs.py: slopes, staircases, rough and DeepLoco heightfields,
+mat-soft and rigid toes, POSITION_CONTROL motors; the A1 and the Go2-like robot), every estimator
+at its default settings, judged on the live (causal) estimate against PyBullet.
+
+:data:`terrain_runs.TUNED` are the conditions one may tune on, :data:`terrain_runs.HELD_OUT`
+whole conditions held out. Goals (issue 34), on every run: contacts with efforts >= 98.5 % and
+<= 1 % of swing samples called stance, without efforts >= 95 %; odometry RMSE <= 0.03 m/s clean
+(0.05 noisy), no 0.1 s window above 0.2 m/s, drift <= 1 % horizontal and <= 0.5 % vertical, the
+error inside 3 sigma on >= 95 % of the samples and sigma <= 5x the RMS error; the local ground's
+slope within 1° and the base's height above it within 2 cm after the first stride on slopes and
+stairs. Where today's defaults miss, the run is a strict xfail naming the measured numbers.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.timeout(900)
+"""The module's fixture simulates the family (two at a time, about a minute of wall time per
+run on a loaded 2-core machine) once per machine and scores it: minutes."""
+
+SLOPE = "contacts {} % with efforts, {} % without; vertical drift {} % (ground: flat)"
+UNMET = {
+    "a1_slope_up_5": SLOPE.format(93.37, 75.92, "6.8-7.3") + "; sigma / error 5.5 kinematic",
+    "a1_slope_down_5": SLOPE.format(91.84, 75.22, "8.2-8.4"),
+    "a1_rough_2cm": "contacts without efforts 92.84 %",
+    "a1_mat_toes": "within 3 sigma 44-47 %; RMSE 0.031 m/s clean",
+    "go2_slope_up_5": SLOPE.format(90.68, 74.06, "7.3-7.6") + "; sigma / error 5.1-7.1 clean",
+    "go2_rough_1cm": "contacts without efforts 94.32 %",
+    "a1_slope_down_10": SLOPE.format(90.07, 69.32, "16.5-16.8") + "; sigma / error 6.5 kinematic",
+    "go2_slope_down_8": SLOPE.format(86.95, 68.70, "13.0-13.3"),
+    "a1_stairs_up_3cm": SLOPE.format(95.26, 87.95, "4.5-4.8"),
+    "a1_stairs_down_4cm": SLOPE.format(91.64, 78.01, "8.3-8.4"),
+    "go2_stairs_down_6cm": SLOPE.format(92.54, 85.00, "10.2"),
+    "a1_heightmap": "contacts without efforts 93.47 %",
+    "a1_position_flat": "contacts 96.69 % with efforts (3.28 % swing called stance), 85.70 % "
+    "without; within 3 sigma 87-91 %; kinematic clean: RMSE 0.037, burst 0.204 m/s, 2.2 % drift",
+    "go2_position_flat": "contacts 98.34 % with efforts (1.65 % swing called stance), 88.68 % "
+    "without; within 3 sigma 89-92 % kinematic",
+}
+"""Runs whose goals today's defaults miss, with the numbers (strict xfail): every run but
+a1_rigid_toes."""
+GROUND_UNMET = {
+    "a1_slope_up_5": "slope off by up to 1.02° (ground: flat flattens the footholds)",
+    "a1_slope_down_5": "slope off by up to 1.30°",
+    "go2_slope_up_5": "slope off by up to 1.05°",
+    "a1_slope_down_10": "slope off by up to 4.68°, height 2.4 cm",
+    "go2_slope_down_8": "slope off by up to 4.11°",
+    "a1_stairs_up_3cm": "slope off by up to 5.19° (footholds on two or three treads)",
+    "a1_stairs_down_4cm": "slope off by up to 7.49°, height 3.3 cm",
+    "go2_stairs_down_6cm": "slope off by up to 7.42°, height 6.0 cm",
+}
+"""Slope and stair runs whose local ground misses its goal today (strict xfail)."""
+LOCAL_UNMET = {
+    "a1_slope_up_5": "vertical drift 0.53 %",
+    "go2_slope_up_5": "sigma / error 5.4",
+    "a1_slope_down_10": "vertical drift 0.76 %",
+    "go2_slope_down_8": "vertical drift 0.96 %",
+    "a1_stairs_up_3cm": "ground 4.61° off the treads' plane",
+    "a1_stairs_down_4cm": "vertical drift 0.61 %; ground 7.28°, 2.1 cm",
+    "go2_stairs_down_6cm": "vertical drift 0.68 %; ground 8.42°, 3.2 cm",
+}
+"""Slope and stair runs that ``ground: local`` leaves short of a goal (strict xfail)."""
+STRIDE_S = 0.4
+"""[s] the first stride (both robots' trot period), not scored for the ground."""
+
+
+def _score(name: str) -> Any:
+    """A worker: one run, simulated or loaded, scored."""
+    from terrain_runs import terrain_runs
+    from terrain_scoring import ground_errors, score_run
+
+    run = terrain_runs((name,))[name]
+    ground = ground_errors(run, STRIDE_S) if run.terrain.kind in ("slope", "stairs") else None
+    return score_run(run), ground
+
+
+@pytest.fixture(scope="module")
+def scores() -> dict[str, Any]:
+    """Every run's scores (and its ground's on slopes and stairs), one worker per core."""
+    from terrain_runs import HELD_OUT, TUNED
+    from terrain_scoring import GROUND_HEADER, HEADER, rows
+
+    names = TUNED + HELD_OUT
+    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        results = dict(zip(names, pool.map(_score, names)))
+    print("\n" + HEADER)
+    for group, members in (("tuned", TUNED), ("held out", HELD_OUT)):
+        print(f"-- {group}")
+        for name in members:
+            print("\n".join(rows(name, results[name][0])))
+    print("\n" + GROUND_HEADER)
+    for name in names:
+        if results[name][1] is not None:
+            print(results[name][1].row(name))
+    return results
+
+
+def _params(names: tuple[str, ...], unmet: dict[str, str]) -> list[Any]:
+    return [
+        pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=unmet[name]))
+        if name in unmet
+        else name
+        for name in names
+    ]
+
+
+def _names(held_out: bool) -> tuple[str, ...]:
+    from terrain_runs import HELD_OUT, TUNED
+
+    return HELD_OUT if held_out else TUNED
+
+
+@pytest.mark.accept
+@pytest.mark.parametrize("name", _params(_names(False), UNMET))
+def test_tuned_terrain_runs_meet_the_goals(name: str, scores) -> None:
+    from terrain_scoring import misses
+
+    missed = misses(scores[name][0])
+    assert not missed, "\n".join(missed)
+
+
+@pytest.mark.accept
+@pytest.mark.parametrize("name", _params(_names(True), UNMET))
+def test_held_out_terrain_runs_meet_the_goals(name: str, scores) -> None:
+    from terrain_scoring import misses
+
+    missed = misses(scores[name][0])
+    assert not missed, "\n".join(missed)
+
+
+def _ground_runs() -> tuple[str, ...]:
+    from terrain_runs import SPECS
+
+    return tuple(n for n, s in SPECS.items() if s.terrain.kind in ("slope", "stairs"))
+
+
+@pytest.mark.accept
+@pytest.mark.parametrize("name", _params(_ground_runs(), GROUND_UNMET))
+def test_the_local_ground_holds_on_slopes_and_stairs(name: str, scores) -> None:
+    ground = scores[name][1]
+    assert ground.worst_deg <= 1.0 and ground.worst_height_m <= 0.02, ground
+
+
+def _local(name: str) -> Any:
+    """A worker: one run's odometry (clean, efforts) and local ground with ``ground="local"``."""
+    from odometry_scoring import errors, estimate
+    from terrain_runs import terrain_runs
+    from terrain_scoring import ground_errors
+
+    run = terrain_runs((name,))[name]
+    return errors(run.run, estimate(run.run, True, ground="local")), ground_errors(
+        run, STRIDE_S, ground="local"
+    )
+
+
+@pytest.fixture(scope="module")
+def local_scores() -> dict[str, Any]:
+    """The slope and stair runs with ``ground: local`` (the first step of terrain in the state)."""
+    from odometry_scoring import HEADER
+
+    names = _ground_runs()
+    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        results = dict(zip(names, pool.map(_local, names)))
+    print("\nground: local\n" + HEADER)
+    for name, (odometry, ground) in results.items():
+        print(
+            odometry.row(name)
+            + f" | ground {ground.worst_deg:.2f} deg {ground.worst_height_m:.4f} m"
+        )
+    return results
+
+
+@pytest.mark.accept
+@pytest.mark.parametrize("name", _params(_ground_runs(), LOCAL_UNMET))
+def test_ground_local_holds_the_height_on_slopes_and_stairs(name: str, local_scores) -> None:
+    """``ground: local``: every odometry goal (clean, efforts; vertical drift <= 0.5 %), and the
+    local ground's."""
+    from odometry_scoring import misses
+
+    odometry, ground = local_scores[name]
+    missed = misses("clean efforts", odometry, 0.03)
+    if ground.worst_deg > 1.0 or ground.worst_height_m > 0.02:
+        missed.append(f"ground {ground.worst_deg:.2f} deg, {100 * ground.worst_height_m:.1f} cm")
+    assert not missed, "\n".join(missed)
+
+
+@pytest.mark.accept
+def test_the_terrain_runs_are_what_the_issue_asks_for() -> None:
+    """Slopes of their angle, staircases that descend their steps, bumps of their height; both
+    robots, both motor kinds, soft and rigid toes; the feet, not other links, carry the robot."""
+    from terrain_runs import HELD_OUT, SPECS, TUNED, terrain_runs
+
+    assert set(TUNED).isdisjoint(HELD_OUT) and set(TUNED) | set(HELD_OUT) == set(SPECS)
+    assert {spec.robot for spec in SPECS.values()} == {"a1", "go2"}
+    assert any(spec.motors is None for spec in SPECS.values())
+    for name, run in terrain_runs().items():
+        terrain, gait = run.terrain, run.run.gait
+        if terrain.kind == "slope":
+            assert np.allclose(run.plane_slopes_deg[gait], abs(terrain.slope_deg), atol=0.05)
+        if terrain.kind == "stairs":
+            steps = abs(run.ground_heights[gait][-1] - run.ground_heights[gait][0])
+            assert steps >= 3 * abs(terrain.rise_m) - 1e-6, name  # at least three steps walked
+        if terrain.kind in ("rough", "heightmap"):
+            bumps = run.ground_heights[gait] - run.plane_heights[gait]
+            assert 0.002 < np.abs(bumps).max() < 0.05, name
+        assert run.run.other_contacts[gait].mean() < 0.05, name
+        assert run.run.contacts[gait].any(axis=0).all(), name
+
+
+def test_a_slope_run_and_its_live_ground() -> None:
+    """The family's representative in ``make test`` (a1_slope_up_5, about 5 s to simulate): the
+    truth is a 5° slope the robot climbs on its feet, and the feed's live local ground keeps the
+    base's height above it within the goal's 2 cm from the first stride on (its slope: the
+    accept family, strict xfail while ``ground: flat`` bends it by 1.02°); with ``ground:
+    local`` the slope too is within the goal's 1°."""
+    from terrain_runs import terrain_runs
+    from terrain_scoring import ground_errors
+
+    run = terrain_runs(("a1_slope_up_5",))["a1_slope_up_5"]
+    gait = run.run.gait
+    assert np.allclose(run.plane_slopes_deg[gait], 5.0, atol=0.05)
+    climb = run.ground_heights[gait][-1] - run.ground_heights[gait][0]
+    assert climb > 0.1 and run.run.other_contacts[gait].mean() < 0.01
+    ground = ground_errors(run, STRIDE_S)
+    print(ground)
+    assert ground.coverage == 1.0 and ground.worst_height_m <= 0.02
+    local = ground_errors(run, STRIDE_S, ground="local")  # the footholds not pulled level
+    print(local)
+    assert local.worst_deg <= 1.0 and local.worst_height_m <= 0.02

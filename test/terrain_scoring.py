@@ -1,0 +1,155 @@
+"""Today's estimators on the terrain family (:mod:`terrain_runs`), scored as the contact and
+odometry families are (:mod:`contact_scoring`, :mod:`odometry_scoring`): the contacts with efforts
+(force evidence) and without (kinematic), the odometry clean and with the family's sensor noise,
+with efforts and without, every estimator at its default settings.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from contact_scoring import FORCE, KINEMATIC, Score, estimate, score
+from odometry_scoring import Errors, errors, feed_samples
+from odometry_scoring import estimate as odometry
+from odometry_scoring import misses as odometry_misses
+from sensor_noise import with_noise
+from terrain_runs import TerrainRun
+
+from a1_leg_fk.estimation.ground import GroundPlane
+from a1_leg_fk.estimation.odometry_feed import OdometryFeed
+from a1_leg_fk.kinematics.foot_forces import FootForces
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
+from a1_leg_fk.kinematics.quadruped import Quadruped
+
+NOISE_SEED = 7
+"""The family's sensor noise (conftest.FAMILY_NOISE_SEED)."""
+ODOMETRY = (("clean", True), ("clean", False), ("noise", True), ("noise", False))
+"""(sensors, efforts) of each run's four odometry estimates."""
+
+
+@dataclass(frozen=True)
+class TerrainScores:
+    """One run's contact scores by evidence and odometry errors by (sensors, efforts)."""
+
+    contacts: dict[str, Score]
+    odometry: dict[tuple[str, bool], Errors]
+
+
+def score_run(terrain: TerrainRun) -> TerrainScores:
+    """Every estimate of one run, scored against its truth."""
+    run = terrain.run
+    quadruped = Quadruped.from_urdf(run.urdf_path)
+    weight = FootForces(quadruped).total_mass_kg * STANDARD_GRAVITY
+    contacts = {}
+    for evidence in (FORCE, KINEMATIC):
+        probabilities, normals = estimate(run, quadruped, evidence)
+        contacts[evidence] = score(run, probabilities, normals, weight)
+    noisy = with_noise(run, NOISE_SEED)
+    scored = {
+        (sensors, efforts): errors(
+            run, odometry(run if sensors == "clean" else noisy, efforts, quadruped)
+        )
+        for sensors, efforts in ODOMETRY
+    }
+    return TerrainScores(contacts, scored)
+
+
+HEADER = (
+    f"{'run':<18} {'F agree':>7} {'sw>st':>5} {'K agree':>7} {'sw>st':>5} | {'odometry':<15} "
+    f"{'rmse':>6} {'burst':>5} {'hor%':>5} {'ver%':>6} {'in3s%':>5} {'s/err':>5}"
+)
+
+
+def rows(name: str, scores: TerrainScores) -> list[str]:
+    """The run's table lines: its contacts on the first, one odometry estimate on each."""
+    force, kinematic = scores.contacts[FORCE], scores.contacts[KINEMATIC]
+    head = (
+        f"{name:<18} {force.agree_pct:7.2f} {force.swing_as_stance_pct:5.2f} "
+        f"{kinematic.agree_pct:7.2f} {kinematic.swing_as_stance_pct:5.2f}"
+    )
+    lines: list[str] = []
+    for (sensors, efforts), e in scores.odometry.items():
+        label = f"{sensors} {'efforts' if efforts else 'kinematic'}"
+        lines.append(
+            f"{head if not lines else '':<46} | {label:<15} {e.rmse:6.4f} {e.worst_window:5.3f} "
+            f"{e.horizontal_pct:5.2f} {e.vertical_pct:6.2f} {100 * e.within_3sigma:5.1f} "
+            f"{e.sigma_ratio:5.2f}"
+        )
+    return lines
+
+
+def misses(scores: TerrainScores) -> list[str]:
+    """The issue's goals a run misses, in words (vertical drift is judged on every run: the
+    family's runs are slopes, stairs and bumps, or flat)."""
+    found = []
+    force, kinematic = scores.contacts[FORCE], scores.contacts[KINEMATIC]
+    for ok, what in (
+        (force.agree_pct >= 98.5, f"contacts with efforts {force.agree_pct:.2f} %"),
+        (
+            force.swing_as_stance_pct <= 1.0,
+            f"swing called stance {force.swing_as_stance_pct:.2f} %",
+        ),
+        (kinematic.agree_pct >= 95.0, f"contacts without efforts {kinematic.agree_pct:.2f} %"),
+    ):
+        if not ok:
+            found.append(what)
+    for (sensors, efforts), e in scores.odometry.items():
+        label = f"{sensors} {'efforts' if efforts else 'kinematic'}"
+        found += odometry_misses(label, e, 0.03 if sensors == "clean" else 0.05)
+    return found
+
+
+@dataclass(frozen=True)
+class GroundErrors:
+    """The live local ground against the truth's (``TerrainRun``: the plane through rays about
+    the root), after the first stride: the worst and the 95th-percentile angle between the
+    normals [deg], and of the error of the base's height above the ground [m]; the share of
+    samples with a plane."""
+
+    worst_deg: float
+    p95_deg: float
+    worst_height_m: float
+    p95_height_m: float
+    coverage: float
+
+    def row(self, name: str) -> str:
+        return (
+            f"{name:<18} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
+            f"{100 * self.worst_height_m:7.2f} {100 * self.p95_height_m:7.2f} "
+            f"{100 * self.coverage:6.1f}"
+        )
+
+
+GROUND_HEADER = f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6}"
+
+
+def ground_errors(terrain: TerrainRun, after_s: float, **options: Any) -> GroundErrors:
+    """The odometry feed's local ground (efforts, clean sensors; ``options``: the feed's) on a run,
+    from ``after_s`` [s] after the gait's start on."""
+    run = terrain.run
+    quadruped = Quadruped.from_urdf(run.urdf_path)
+    feed = OdometryFeed(quadruped, **options)
+    planes: list[GroundPlane | None] = []
+    samples = feed_samples(feed, quadruped, run, run.quaternions, run.torques, planes=planes)
+    scored = run.stamps_s >= run.gait_start_s + after_s
+    angles, heights = [], []
+    true_normals = np.column_stack([-terrain.plane_gradients, np.ones(len(run.stamps_s))])
+    true_normals /= np.linalg.norm(true_normals, axis=1, keepdims=True)
+    true_above = run.base_positions[:, 2] - terrain.plane_heights
+    for row in np.flatnonzero(scored):
+        plane = planes[row]
+        if plane is None:
+            continue
+        cosine = float(np.clip(np.dot(plane.normal, true_normals[row]), -1.0, 1.0))
+        angles.append(math.degrees(math.acos(cosine)))
+        heights.append(abs(samples[row].position[2] - plane.height_m - true_above[row]))
+    return GroundErrors(
+        max(angles),
+        float(np.percentile(angles, 95)),
+        max(heights),
+        float(np.percentile(heights, 95)),
+        len(angles) / int(scored.sum()),
+    )

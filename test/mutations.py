@@ -98,11 +98,10 @@ MUTATIONS = (
     ),
     Mutation(
         "reported velocity variance x 100",
-        "a1_leg_fk/estimation/state_filter.py",
-        "variances[0] + dx,\n                variances[1] + dy,\n"
-        "                variances[2] + dz,",
-        "100.0 * variances[0] + dx,\n                100.0 * variances[1] + dy,\n"
-        "                100.0 * variances[2] + dz,",
+        "a1_leg_fk/estimation/state_sample.py",
+        "variances[0] + dx,\n            variances[1] + dy,\n            variances[2] + dz,",
+        "100.0 * variances[0] + dx,\n            100.0 * variances[1] + dy,\n"
+        "            100.0 * variances[2] + dz,",
     ),
     Mutation(
         "momentum observer gain / 10",

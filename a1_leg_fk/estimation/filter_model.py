@@ -14,6 +14,9 @@ from a1_leg_fk.estimation.odometry import require_non_negative
 
 LEGS = 4
 STATE = 15
+THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, STATE, 3))
+"""The error state's blocks: attitude [rad], velocity [m/s], position [m], gyro and accelerometer
+biases (odom frame, biases in the base frame)."""
 FLAT, NO_GROUND, LOCAL = "flat", "none", "local"
 GROUND_MODELS = (FLAT, NO_GROUND, LOCAL)
 """``flat``: the stance feet's heights anchor z at the first feet's; ``none``: they do not;

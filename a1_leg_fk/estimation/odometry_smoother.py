@@ -18,7 +18,8 @@ from typing import NamedTuple
 import numpy as np
 
 from a1_leg_fk.estimation.odometry import OdometrySample
-from a1_leg_fk.estimation.state_filter import StateFilter, state_sample
+from a1_leg_fk.estimation.state_filter import StateFilter
+from a1_leg_fk.estimation.state_sample import state_sample
 from a1_leg_fk.estimation.state_smoother import smooth
 from a1_leg_fk.kinematics.frames import Vector
 

@@ -106,7 +106,7 @@ def test_causal_is_the_filters_own_estimate(bag, tmp_path: Path, capsys) -> None
     track = odometry_track(bag)
     floats = np.hstack(
         [track.positions, track.orientations, track.linear, track.angular,
-         track.twist_variances[:, :3]]
+         track.twist_variances[:, :3], track.grounds]
     )  # fmt: skip
     expected = CSV_HEADER.encode() + format_rows(track.stamps_ns[:, None], floats)
     assert causal.read_bytes() == expected

@@ -1,16 +1,14 @@
-"""The nodes and their input topics under fuzz (issue 38; the harness: test/node_fuzz.py)."""
+"""The nodes and their input topics under fuzz (issue 38; the harness: test/node_fuzz.py); with
+``input: unitree_lowstate``, ``foot_fk_node`` on ``lowstate`` (:func:`lowstate_node`: needs
+Unitree's message package built, test/unitree_workspace.py)."""
 
 from __future__ import annotations
 
 import random
 
-from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
-from hostile_values import SPECIAL_VALUES
-from nav_msgs.msg import Odometry
-from node_fuzz import (
+import numpy as np
+from fuzz_messages import (
     ABSURD_DESCRIPTIONS,
-    FuzzedNode,
-    InputTopic,
     absurd_joint_state,
     frame_stamp,
     imu_bytes,
@@ -18,14 +16,22 @@ from node_fuzz import (
     point_bytes,
     string_bytes,
 )
+from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
+from hostile_values import SPECIAL_VALUES
+from lowstate_bags import lowstate_cdr
+from nav_msgs.msg import Odometry
+from node_fuzz import FuzzedNode, InputTopic
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from sensor_msgs.msg import Imu, JointState
-from shared import LEGS, ik_node_command, node_command, odometry_node_command
+from shared import LEGS, STANDING, ik_node_command, node_command, odometry_node_command
 from std_msgs.msg import String
 
+from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.ros.guarded_input import message_reader, read_imu
 from a1_leg_fk.wire.joint_state import JointStateDecoder
+from a1_leg_fk.wire.lowstate import LowStateJointStates
+from a1_leg_fk.wire.unitree_types import GO_LOW_STATE, LEGGED_LOW_STATE
 
 # --- the nodes ------------------------------------------------------------------------------
 
@@ -73,11 +79,16 @@ def target_topic(leg: str) -> InputTopic:
     )
 
 
+def foot_outputs() -> dict[str, type]:
+    """foot_fk_node's outputs, by topic."""
+    feet: dict[str, type] = {f"foot_positions/{leg}": PointStamped for leg in LEGS}
+    feet |= {f"foot_velocities/{leg}": Vector3Stamped for leg in LEGS}
+    return feet | {f"foot_forces/{leg}": WrenchStamped for leg in LEGS}
+
+
 def fuzzed_nodes(urdf: str) -> dict[str, FuzzedNode]:
     """Every node and all of its inputs (``urdf``: the good robot_description)."""
-    feet = {f"foot_positions/{leg}": PointStamped for leg in LEGS}
-    feet |= {f"foot_velocities/{leg}": Vector3Stamped for leg in LEGS}
-    feet |= {f"foot_forces/{leg}": WrenchStamped for leg in LEGS}
+    feet = foot_outputs()
     return {
         "foot_fk_node": FuzzedNode(
             "foot_fk_node",
@@ -127,3 +138,73 @@ def gait_phase_topic() -> InputTopic:
         return serialize_message(msg)
 
     return InputTopic("gait_phase", JointState, good, absurd, JointStateDecoder().fields)
+
+
+# --- a LowState input (either layout) ------------------------------------------------------
+
+
+def lowstate_topic(msgtype: str, message: type = object) -> InputTopic:
+    """``lowstate`` carrying ``msgtype`` (``message``: its class, for a publisher): a LowState of
+    the A1 standing, level, at rest; absurd values in the motors and the IMU; the other layout's
+    LowState as another type's bytes. No length field: the message has a fixed size.
+    """
+    (other,) = (kind for kind in (GO_LOW_STATE, LEGGED_LOW_STATE) if kind != msgtype)
+    good = lowstate_cdr(msgtype)
+
+    def absurd(_stamp: int, rng: random.Random) -> bytes:
+        def pick(count: int, extra: tuple[float, ...] = ()) -> list[float]:
+            return [rng.choice([*SPECIAL_VALUES, *extra]) for _ in range(count)]
+
+        imu = (pick(4, (0.0,)), pick(3, (1e6,)), pick(3, (1e6, -1e6)))
+        return lowstate_cdr(msgtype, pick(12), pick(12), pick(12, (1e30, 0.0)), imu)
+
+    return InputTopic(
+        "lowstate",
+        message,
+        lambda _stamp: good,
+        absurd,
+        LowStateJointStates(msgtype, lambda: 0).fields,
+        length_offsets=(),
+        other=lambda _stamp, rng: lowstate_cdr(other)[: rng.choice([None, -4, 600])],
+    )
+
+
+def foot_key(xyz: tuple[float, float, float]) -> tuple[int, ...]:
+    """A foot position [m] to 0.1 um: what identifies a drive's answer."""
+    return tuple(round(value * 1e7) for value in xyz)
+
+
+def lowstate_node(msgtype: str, message: type, env: dict[str, str]) -> FuzzedNode:
+    """``foot_fk_node`` with ``input: unitree_lowstate`` reading ``msgtype`` (``message``: its
+    class, ``env``: its package's environment). A LowState has no header (its answer is stamped
+    with the receive time), so each drive carries its own FR calf angle (from its stamp) and is
+    answered by the FR foot this pose's forward kinematics gives.
+    """
+    model = Quadruped.from_urdf()
+
+    def pose(stamp_ns: int) -> list[float]:
+        angles = [float(angle) for angle in STANDING]
+        angles[2] += (1 + stamp_ns // 1_000_000 % 500) * 2e-4  # [rad]: another per millisecond
+        return angles
+
+    def expected(stamp_ns: int) -> object:
+        as_sent = np.asarray(pose(stamp_ns), np.float32).astype(float).tolist()
+        return foot_key(model.fk(as_sent)[0])
+
+    def answer_key(msg: object) -> object:
+        point = msg.point  # type: ignore[attr-defined]
+        return foot_key((point.x, point.y, point.z))
+
+    return FuzzedNode(
+        f"foot_fk_node ({msgtype.split('/', maxsplit=1)[0]})",
+        node_command("-p", "input:=unitree_lowstate"),
+        [lowstate_topic(msgtype, message)],
+        "foot kinematics",
+        "lowstate",
+        lambda stamp: lowstate_cdr(msgtype, pose(stamp)),
+        ("foot_positions/FR", PointStamped),
+        foot_outputs(),
+        env=env,
+        answer_key=answer_key,
+        expected=expected,
+    )

@@ -18,6 +18,7 @@ from bag_factory import ROS1_TYPESTORE, TYPESTORE, BagSpec, JointStateMsg, T, he
 from contact_bags import stamp_of
 from contact_runs import ContactRun
 from rosbags.typesys import get_types_from_msg
+from shared import STANDING
 
 from a1_leg_fk.wire.unitree_types import DEFINITIONS, GO_LOW_STATE, LEGGED_LOW_STATE
 
@@ -144,3 +145,31 @@ def write_reference_bag(path: Path, run: ContactRun, rows: int, names=None) -> P
 
 
 __all__ = ["LEGGED_LOW_STATE", "write_lowstate_bag", "write_reference_bag"]
+
+
+def lowstate_cdr(
+    msgtype: str,
+    angles: Any = STANDING,
+    rates: Any = (0.0,) * 12,
+    torques: Any = (0.0,) * 12,
+    imu: tuple[Any, Any, Any] = ((1.0, 0.0, 0.0, 0.0), (0.0,) * 3, (0.0, 0.0, 9.81)),
+) -> bytes:
+    """A LowState of ``msgtype`` as CDR (a ROS 2 topic carries it so, whichever package defines
+    it): motors 0-11 at ``angles`` [rad], ``rates`` [rad/s], ``torques`` [N m]; the IMU's
+    quaternion (w first), gyroscope [rad/s], accelerometer [m/s^2] (level, at rest by default).
+    Every value as float32 (an overflow becomes an infinity, as a float32 field holds it).
+    """
+    register_unitree_types()
+    go = msgtype == GO_LOW_STATE
+    message = zeroed(msgtype)
+    motors = message.motor_state if go else message.motorState
+    with np.errstate(over="ignore"):
+        values = np.asarray([angles, rates, torques], dtype=np.float32)
+        sensors = [np.asarray(part, dtype=np.float32) for part in imu]
+    for index in range(12):
+        motor = motors[index]
+        motor.q, motor.dq = values[0, index], values[1, index]
+        setattr(motor, "tau_est" if go else "tauEst", values[2, index])
+    state = message.imu_state if go else message.imu
+    state.quaternion[:], state.gyroscope[:], state.accelerometer[:] = sensors
+    return bytes(TYPESTORE.serialize_cdr(message, msgtype))

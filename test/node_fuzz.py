@@ -24,17 +24,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from diagnostic_msgs.msg import DiagnosticArray
+from fuzz_messages import imu_bytes, joint_state_bytes, point_bytes, string_bytes
 from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
-from hostile_values import SPECIAL_VALUES
 from nav_msgs.msg import Odometry
 from rclpy.qos import QoSProfile
-from rclpy.serialization import deserialize_message, serialize_message
-from sensor_msgs.msg import Imu, JointState
-from shared import (
-    PYBULLET_NAMES,
-    STANDING,
-)
-from std_msgs.msg import String
+from sensor_msgs.msg import JointState
 
 TRUNCATED, ABSURD_LENGTH, EXTENDED, ABSURD_VALUES = (
     "truncated",
@@ -59,69 +53,6 @@ BATCH = 25
 """Damaged messages between two good inputs (well under the nodes' queue of 100)."""
 
 
-def frame_stamp(msg: object, stamp_ns: int) -> None:
-    """Set ``msg.header.stamp`` to ``stamp_ns`` [ns]."""
-    stamp = msg.header.stamp  # type: ignore[attr-defined]
-    stamp.sec, stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
-
-
-def joint_state_bytes(stamp_ns: int, values: Sequence[float] = STANDING) -> bytes:
-    """A JointState of the A1 (PyBullet's names), velocities and efforts included."""
-    msg = JointState(name=list(PYBULLET_NAMES), position=[float(v) for v in values])
-    msg.velocity = [0.1] * 12
-    msg.effort = [2.0] * 12
-    frame_stamp(msg, stamp_ns)
-    return serialize_message(msg)
-
-
-def imu_bytes(stamp_ns: int, rng: random.Random | None = None) -> bytes:
-    """An Imu level and at rest, or (``rng``) one of well-formed absurd values."""
-    msg = Imu()
-    msg.orientation.w = 1.0
-    msg.linear_acceleration.z = 9.81
-    if rng is not None:
-        pick = rng.choice
-        q = msg.orientation
-        q.x, q.y, q.z, q.w = (pick([*SPECIAL_VALUES, 0.0]) for _ in range(4))
-        w, a = msg.angular_velocity, msg.linear_acceleration
-        w.x, w.y, w.z = (pick(SPECIAL_VALUES) for _ in range(3))
-        a.x, a.y, a.z = (pick([*SPECIAL_VALUES, 1e6, -1e6]) for _ in range(3))
-        msg.orientation_covariance[0] = pick([-1.0, 0.0, math.nan, 1e300])
-        msg.angular_velocity_covariance[0] = pick([-1.0, 0.0, math.inf])
-    frame_stamp(msg, stamp_ns)
-    return serialize_message(msg)
-
-
-def absurd_joint_state(stamp_ns: int, rng: random.Random) -> bytes:
-    """A JointState of the A1's names with absurd values and array lengths."""
-    values = [rng.choice(SPECIAL_VALUES) for _ in range(12)]
-    msg = JointState(name=list(PYBULLET_NAMES), position=values)
-    msg.velocity = [rng.choice(SPECIAL_VALUES) for _ in range(rng.choice([0, 11, 12, 13]))]
-    msg.effort = [rng.choice([1e300, -1e6, math.nan]) for _ in range(rng.choice([0, 12, 40]))]
-    frame_stamp(msg, stamp_ns)
-    return serialize_message(msg)
-
-
-def point_bytes(stamp_ns: int, xyz: Sequence[float]) -> bytes:
-    msg = PointStamped()
-    msg.point.x, msg.point.y, msg.point.z = (float(v) for v in xyz)
-    frame_stamp(msg, stamp_ns)
-    return serialize_message(msg)
-
-
-def string_bytes(text: str) -> bytes:
-    return serialize_message(String(data=text))
-
-
-ABSURD_DESCRIPTIONS = (
-    "",
-    "hello robot",
-    "<robot name='x'/>",
-    "<robot name='x'><link name='a'>",
-    "\u0000" * 3 + "\U0001f9bf" * 50,
-)
-
-
 @dataclass
 class InputTopic:
     """One input topic of a node: its type, a good message and a well-formed absurd one, the
@@ -137,18 +68,37 @@ class InputTopic:
     qos: QoSProfile = field(default_factory=lambda: QoSProfile(depth=1000))
     pause_s: float = 0.0  # between messages (a keep-last-1 reader keeps only the latest)
     good_each_batch: bool = True  # False: the good message only once, when connecting
+    other: Callable[[int, random.Random], bytes] | None = None  # a like type's bytes (a layout)
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The damage it can be sent: a fixed-size type (no length field, ``length_offsets``
+        empty) has no length to make absurd, and Fast DDS refuses to publish more bytes than
+        its size ("cannot publish data"), so none appended."""
+        fixed = () if self.length_offsets else (ABSURD_LENGTH, EXTENDED)
+        return tuple(kind for kind in KNOWN + UNKNOWN if kind not in fixed)
+
+    @property
+    def unreadable(self) -> tuple[str, ...]:
+        """Its damage unreadable by construction."""
+        return tuple(kind for kind in UNREADABLE if kind in self.kinds)
+
+    @property
+    def readable(self) -> tuple[str, ...]:
+        """Its damage readable by construction."""
+        return tuple(kind for kind in READABLE if kind in self.kinds)
 
 
-def data_length(raw: bytes, message: type) -> int:
-    """The bytes of ``raw`` its fields take: rclpy's serializer may leave a few bytes after
-    them, which a reader never looks at (so cutting them off leaves a readable message).
+def data_length(raw: bytes, read: Callable[[bytes], object]) -> int:
+    """The bytes of ``raw`` its fields take, for the node's reader ``read``: rclpy's serializer
+    may leave a few bytes after them, which a reader never looks at.
     """
-    low, high = 4, len(raw)  # deserialize_message(raw[:high]) works, raw[:low] does not
+    low, high = 4, len(raw)  # read(raw[:high]) works, read(raw[:low]) does not
     while high - low > 1:
         middle = (low + high) // 2
         try:
-            deserialize_message(raw[:middle], message)
-        except Exception:  # noqa: BLE001 (rclpy's RMWError: too short)
+            read(raw[:middle])
+        except Exception:  # noqa: BLE001 (whatever the reader raises: too short)
             low = middle
         else:
             high = middle
@@ -159,7 +109,7 @@ def damaged(kind: str, topic: InputTopic, stamp_ns: int, rng: random.Random) -> 
     """One message of ``topic`` damaged as ``kind`` says."""
     good = topic.good(stamp_ns)
     if kind == TRUNCATED:
-        return good[: rng.randrange(8, data_length(good, topic.message) - 3)]  # see TRUNCATED
+        return good[: rng.randrange(8, data_length(good, topic.read) - 3)]  # see TRUNCATED
     if kind == ABSURD_LENGTH:
         data = bytearray(good)
         struct.pack_into("<I", data, rng.choice(topic.length_offsets), rng.choice(ABSURD_LENGTHS))
@@ -179,25 +129,33 @@ def damaged(kind: str, topic: InputTopic, stamp_ns: int, rng: random.Random) -> 
         point_bytes(stamp_ns, (0.1, 0.2, -0.3)),
         string_bytes("<robot/>"),
         rng.randbytes(rng.randrange(0, 400)),
+        *([topic.other(stamp_ns, rng)] if topic.other else []),
     ]
-    return rng.choice(others)
+    return rng.choice([raw for raw in others if topic.length_offsets or len(raw) <= len(good)])
 
 
 @dataclass
 class Tally:
     """What was sent to one topic."""
 
+    unreadable_kinds: tuple[str, ...] = UNREADABLE
     sent: dict[str, int] = field(default_factory=lambda: dict.fromkeys(KNOWN + UNKNOWN, 0))
     asked: int = 0  # good inputs sent after a batch of this topic's damage
     answered: int = 0  # and answered
 
     @property
     def unreadable(self) -> int:
-        return sum(self.sent[kind] for kind in UNREADABLE)
+        return sum(self.sent[kind] for kind in self.unreadable_kinds)
 
     @property
     def unknown(self) -> int:
         return sum(self.sent[kind] for kind in UNKNOWN)
+
+
+def header_stamp(msg: object) -> object:
+    """An output's header stamp [ns]: what answers a drive stamped so."""
+    stamp = msg.header.stamp  # type: ignore[attr-defined]
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 @dataclass
@@ -215,6 +173,9 @@ class FuzzedNode:
     drive: Callable[[int], bytes]
     answer: tuple[str, type]
     outputs: dict[str, type]
+    env: dict[str, str] = field(default_factory=dict)  # for the node's process
+    answer_key: Callable[[object], object] = header_stamp  # of an answer
+    expected: Callable[[int], object] = int  # the key answering the drive of a stamp [ns]
 
 
 def all_values(msg: object) -> list[float]:
@@ -254,8 +215,8 @@ class NodeFuzz:
             self.publishers[node.drive_topic] = probe.node.create_publisher(
                 JointState, node.drive_topic, QoSProfile(depth=1000)
             )
-        self.tallies = {topic.topic: Tally() for topic in node.inputs}
-        self.answered: set[int] = set()
+        self.tallies = {topic.topic: Tally(topic.unreadable) for topic in node.inputs}
+        self.answered: set[object] = set()
         self.non_finite: list[str] = []
         self.outputs = 0
         answer_topic = node.answer[0]
@@ -276,8 +237,7 @@ class NodeFuzz:
             if not all(math.isfinite(v) for v in values):
                 self.non_finite.append(f"{topic}: {values}")
             if answers:
-                stamp = msg.header.stamp  # type: ignore[attr-defined]
-                self.answered.add(stamp.sec * 1_000_000_000 + stamp.nanosec)
+                self.answered.add(self.node.answer_key(msg))
 
         return on_output
 
@@ -300,16 +260,19 @@ class NodeFuzz:
         self.probe.spin_for(0.01)
         stamp = self.now_ns()
         self.publishers[self.node.drive_topic].publish(self.node.drive(stamp))
-        return self.probe.spin_until(lambda: stamp in self.answered, timeout_s)
+        wanted = self.node.expected(stamp)
+        return self.probe.spin_until(lambda: wanted in self.answered, timeout_s)
 
     def wait_connected(self, timeout_s: float = 30.0) -> bool:
         """Drive the node until it answers (discovery done both ways) with the robot of the
-        good robot_description (its /diagnostics ``model``).
+        good robot_description (its /diagnostics ``model``), if it is one of its inputs.
         """
+        fuzzed = {topic.topic for topic in self.node.inputs}
+        model = "robot_description" if "robot_description" in fuzzed else ""
         return self.probe.spin_until(
             lambda: (
                 self.good_input_answered(0.5, every=True)
-                and "robot_description" in self.diagnostics.get("model", "")
+                and model in self.diagnostics.get("model", "")
             ),
             timeout_s,
         )
@@ -331,6 +294,7 @@ class NodeFuzz:
     def send_only(self, topic: InputTopic, kinds: Sequence[str], count: int) -> None:
         """``count`` damaged messages of ``kinds`` on ``topic``, nothing else."""
         publisher, tally = self.publishers[topic.topic], self.tallies[topic.topic]
+        kinds = [kind for kind in kinds if kind in topic.kinds]
         for _ in range(count):
             kind = self.rng.choice(kinds)
             publisher.publish(damaged(kind, topic, self.now_ns(), self.rng))

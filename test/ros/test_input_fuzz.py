@@ -14,13 +14,11 @@ from __future__ import annotations
 
 import pytest
 from fuzzed_nodes import fuzzed_nodes
-from node_fuzz_run import HEADER, Counts, run_node
+from node_fuzz_run import CI_COUNTS, HEADER, run_node
 from pybullet_reference import A1_URDF
 
 pytestmark = pytest.mark.slow
 
-CI_COUNTS = Counts(known=120, unknown=50, exact=20)
-"""Damaged messages per input topic in CI (robot_description: a fifth, paced)."""
 NODES = fuzzed_nodes(A1_URDF.read_text())
 
 

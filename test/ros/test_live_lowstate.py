@@ -11,8 +11,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from bag_factory import TYPESTORE
-from lowstate_bags import register_unitree_types, zeroed
+from lowstate_bags import lowstate_cdr
 from rclpy.serialization import serialize_message
 from sensor_msgs.msg import Imu, JointState
 from shared import STANDING
@@ -24,25 +23,15 @@ from a1_leg_fk.wire.unitree_types import GO_LOW_STATE, LEGGED_LOW_STATE
 LAYOUTS = (GO_LOW_STATE, LEGGED_LOW_STATE)
 
 
-def lowstate_bytes(msgtype: str) -> bytes:
-    """A LowState of ``msgtype`` with the motors at the A1's standing pose, as CDR."""
-    register_unitree_types()
-    message = zeroed(msgtype)
-    motors = message.motor_state if msgtype == GO_LOW_STATE else message.motorState
-    for index, angle in enumerate(STANDING):
-        motors[index].q = angle
-    return bytes(TYPESTORE.serialize_cdr(message, msgtype))
-
-
 @pytest.mark.parametrize("msgtype", LAYOUTS)
 def test_each_layout_reads_its_own_lowstate_and_nothing_else(msgtype: str) -> None:
     reader = LowStateJointStates(msgtype, lambda: 123)
-    fields = reader.fields(lowstate_bytes(msgtype))
+    fields = reader.fields(lowstate_cdr(msgtype))
     angles = doubles(fields.positions, fields.order)
     assert fields.stamp_ns == 123
     assert all(math.isclose(a, float(b), rel_tol=1e-6) for a, b in zip(angles, STANDING))
     (other,) = (t for t in LAYOUTS if t != msgtype)
-    wrong = [lowstate_bytes(other), serialize_message(Imu()), serialize_message(JointState())]
+    wrong = [lowstate_cdr(other), serialize_message(Imu()), serialize_message(JointState())]
     for raw in wrong:
         with pytest.raises(WireError, match=f"{len(raw)} bytes"):
             reader.fields(raw)

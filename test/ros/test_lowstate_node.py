@@ -2,91 +2,35 @@
 built with colcon from the published field lists (ament_cmake and the rosidl generators as
 wheels, requirements-msgs.txt), as a user's workspace builds it; a process with that install
 publishes LowState messages of the A1 standing, and ``foot_fk_node`` answers with the FR foot the
-JointState path gives, ``leg_odometry_node`` with odometry. Without the package: one line naming
-it, exit 2.
+JointState path gives, ``leg_odometry_node`` with odometry; ``foot_fk_node`` survives damaged
+LowStates of both layouts (issue 38, about 15 s beyond the build). Without the package: one line
+naming it, exit 2.
 """
 
 from __future__ import annotations
 
 import math
-import os
-import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import BIN
 from shared import ROOT, STANDING
+from unitree_workspace import build, load_here
 
 from a1_leg_fk.kinematics.quadruped import Quadruped
-from a1_leg_fk.wire.unitree_types import UNITREE_GO
+from a1_leg_fk.wire.unitree_types import GO_LOW_STATE
 
-PYTHON_DIR = f"python{sys.version_info.major}.{sys.version_info.minor}"
 WAIT_S = 30.0
-CMAKE = f"""cmake_minimum_required(VERSION 3.8)
-project(unitree_go)
-find_package(ament_cmake REQUIRED)
-find_package(rosidl_default_generators REQUIRED)
-rosidl_generate_interfaces(${{PROJECT_NAME}} {" ".join(
-    f'"msg/{name.split("/")[-1]}.msg"' for name in UNITREE_GO)})
-ament_export_dependencies(rosidl_default_runtime)
-ament_package()
-"""  # fmt: skip
-PACKAGE_XML = """<?xml version="1.0"?>
-<package format="3">
-  <name>unitree_go</name>
-  <version>0.0.0</version>
-  <description>Unitree's unitree_go messages, from their published field lists</description>
-  <maintainer email="tests@example.com">tests</maintainer>
-  <license>BSD-3-Clause</license>
-  <buildtool_depend>ament_cmake</buildtool_depend>
-  <buildtool_depend>rosidl_default_generators</buildtool_depend>
-  <exec_depend>rosidl_default_runtime</exec_depend>
-  <member_of_group>rosidl_interface_packages</member_of_group>
-  <export><build_type>ament_cmake</build_type></export>
-</package>
-"""
 
 
 @pytest.fixture(scope="module")
 def unitree_go(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     """Builds unitree_go with colcon; the environment a process needs to use it (as sourcing
     the install's setup.bash gives)."""
-    workspace = tmp_path_factory.mktemp("unitree_ws")
-    source = workspace / "src" / "unitree_go"
-    (source / "msg").mkdir(parents=True)
-    for msgtype, text in UNITREE_GO.items():
-        (source / "msg" / f"{msgtype.split('/')[-1]}.msg").write_text(text.lstrip())
-    (source / "CMakeLists.txt").write_text(CMAKE)
-    (source / "package.xml").write_text(PACKAGE_XML)
-    venv = Path(sys.prefix)
-    environment = {
-        **{key: value for key, value in os.environ.items() if "PREFIX_PATH" not in key},
-        "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}",
-        "CMAKE_PREFIX_PATH": str(venv),
-        "AMENT_PREFIX_PATH": str(venv),
-        "COLCON_HOME": str(workspace / "colcon_home"),
-    }
-    assert shutil.which("cmake"), "cmake is needed to build a message package"
-    result = subprocess.run(
-        [str(BIN / "colcon"), "build", "--executor", "sequential", "--event-handlers",
-         "console_cohesion+"],
-        cwd=workspace, env=environment, capture_output=True, text=True, timeout=600, check=False,
-    )  # fmt: skip
-    assert result.returncode == 0, f"colcon build failed:\n{result.stdout}\n{result.stderr}"
-    prefix = workspace / "install" / "unitree_go"
-    return {
-        "PYTHONPATH": os.pathsep.join(
-            [str(prefix / "lib" / PYTHON_DIR / "site-packages"), str(ROOT / "test")]
-        ),
-        "LD_LIBRARY_PATH": os.pathsep.join(
-            part for part in (str(prefix / "lib"), os.environ.get("LD_LIBRARY_PATH", "")) if part
-        ),
-        "AMENT_PREFIX_PATH": os.pathsep.join([str(prefix), str(venv)]),
-    }
+    return build(tmp_path_factory.mktemp("unitree_ws"), ("unitree_go",))["unitree_go"]
 
 
 @pytest.mark.slow
@@ -150,3 +94,25 @@ def test_leg_odometry_node_reads_lowstate(unitree_go: dict[str, str], processes,
     assert math.hypot(position.x, position.y) < 0.01  # standing still [m]
     assert "lowstate" in processes.output(node)
     assert processes.interrupt(node, timeout_s=10.0) == 0, processes.output(node)
+
+
+@pytest.mark.slow
+def test_foot_fk_node_survives_damaged_lowstate_of_both_layouts(
+    unitree_go: dict[str, str], processes, ros
+) -> None:
+    """Issue 38 on ``lowstate``: damaged unitree_go LowStates and unitree_legged_msgs ones (CDR,
+    the other layout) published raw from this process (the built package loaded into it), with
+    the checks of every other input topic (test/node_fuzz_run.py)."""
+    from fuzzed_nodes import lowstate_node
+    from node_fuzz_run import CI_COUNTS, HEADER, run_node
+
+    load_here(unitree_go)
+    from unitree_go.msg import LowState  # type: ignore[import-not-found]  # built above
+
+    node = lowstate_node(GO_LOW_STATE, LowState, unitree_go)
+    run = run_node(processes, ros, node, CI_COUNTS, seed=38)
+    print("\n" + "\n".join([HEADER, *run.lines()]))
+    assert not run.failures, (run.failures, run.output[-3000:])
+    (row,) = run.rows
+    assert row.asked and row.answered == row.asked, row
+    assert row.unreadable >= row.sent // 4, row

@@ -57,7 +57,8 @@ class OdometryTrack:
     evidence, ``contacts_note`` why there are no foot forces for this robot ("" when there are).
     ``filtered``: the rows the state filter gave (the others: the legs alone, without an
     accelerometer), ``filter_counts``, its final biases (gyro [rad/s], accelerometer [m/s^2])
-    and the feet's noise scale.
+    and the feet's noise scale; ``filter_history`` (N, 11) the filter's running counts after
+    each row: NIS sum, NIS count, feet used (4), feet rejected by the gate (4), gate resets.
     """
 
     stamps_ns: np.ndarray
@@ -86,6 +87,7 @@ class OdometryTrack:
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
+    filter_history: np.ndarray
 
 
 def odometry_track(
@@ -135,7 +137,7 @@ def odometry_track(
         )
         if contacts == FORCE and feed.note:
             raise LegFkError(f"--contacts force: {feed.note}")
-        stats, samples, next_imu = BlockStats(), [], 0
+        stats, samples, history, next_imu = BlockStats(), [], [], 0
         for block in iter_foot_blocks(recording, progress=progress):
             stats.add(block)
             usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
@@ -163,6 +165,7 @@ def odometry_track(
                 sample = feed.step(stamp, feet, angles, rates, efforts=effort)
                 if sample is not None:
                     samples.append(sample)
+                    history.append(_running_counts(feed.filter.counts))
         summary = stats.summary(recording)
     finally:
         close_recording(recording)
@@ -175,7 +178,13 @@ def odometry_track(
         recording.base_pose_topic,
         recording.base_pose,
         summary,
+        np.array(history, dtype=float).reshape(-1, 11),
     )
+
+
+def _running_counts(counts: FilterCounts) -> tuple[float, ...]:
+    """The filter's running counts as :attr:`OdometryTrack.filter_history` keeps a row."""
+    return (counts.nis_sum, counts.nis_count, *counts.used, *counts.rejected, counts.gate_resets)
 
 
 def _track(
@@ -187,6 +196,7 @@ def _track(
     truth_topic: str | None,
     truth: BasePoses | None,
     summary: RecordingSummary,
+    filter_history: np.ndarray,
 ) -> OdometryTrack:
     def column(name: str, width: int, dtype: type = float) -> np.ndarray:
         return np.array([getattr(s, name) for s in samples], dtype=dtype).reshape(-1, width)
@@ -218,6 +228,7 @@ def _track(
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,
+        filter_history=filter_history,
     )
 
 

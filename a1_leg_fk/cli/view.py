@@ -64,8 +64,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     except ImportError:
         print(RERUN_HINT, file=sys.stderr)
         return EXIT_BAD_INPUT
-    from a1_leg_fk.cli.odom import summary_lines
-    from a1_leg_fk.recording.odometry import odometry_track
+    from a1_leg_fk.cli.odom import summary_lines, track_of
     from a1_leg_fk.recording.outputs import checked_targets
     from a1_leg_fk.recording.trajectories import read_foot_trajectories
     from a1_leg_fk.view.recording import write_view
@@ -78,19 +77,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         feet = read_foot_trajectories(source, progress=show_progress(options), **choices)
         if not len(feet.stamps_ns):
             raise LegFkError(f"{source}: no joint states to draw")
-        track = None
-        if feet.velocities is not None:
-            track = odometry_track(
-                source,
-                imu_topic=options.imu,
-                use_imu=not options.no_imu,
-                base_pose=options.truth,
-                progress=show_progress(options),
-                topic=options.topic,
-                urdf=options.urdf,
-                foot_links=options.foot_links,
-                joint_aliases=options.joint_aliases,
-            )
+        track = track_of(options) if feet.velocities is not None else None
         summary = feet.summary.lines()
         if track is not None:  # odom's lines after its recording's (the same as feet's)
             summary += summary_lines(track)[len(track.summary.lines()) :]

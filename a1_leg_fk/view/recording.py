@@ -1,6 +1,7 @@
-"""One recorded run as a Rerun recording (``.rrd``): the robot (:mod:`.robot`), the feet, paths
-and time series (:mod:`.columns`) and the summary as a text document; written under a temporary
-name and renamed when complete, so a failed or interrupted run leaves no partial ``.rrd``.
+"""One recorded run as a Rerun recording (``.rrd``): the robot, the feet and the odometry's rows
+(:class:`~a1_leg_fk.view.scene.Scene`), the paths, gait and filter of the odometry
+(:mod:`.columns`) and the summary as a text document; written under a temporary name and renamed
+when complete, so a failed or interrupted run leaves no partial ``.rrd``.
 """
 
 from __future__ import annotations
@@ -13,14 +14,13 @@ import rerun as rr
 from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError, default_urdf_path, read_urdf_text
 from a1_leg_fk.recording.odometry import OdometryTrack
+from a1_leg_fk.recording.odometry_truth import truth_body_velocities
 from a1_leg_fk.recording.outputs import OutputTarget
 from a1_leg_fk.recording.trajectories import FootTrajectories
 from a1_leg_fk.view import columns
-from a1_leg_fk.view.robot import log_description, send_base_columns, send_joint_columns
+from a1_leg_fk.view.columns import BaseRows, FeetRows
+from a1_leg_fk.view.scene import APPLICATION_ID, Scene
 
-APPLICATION_ID = "a1_leg_fk"
-SUMMARY = "summary"
-"""The entity of the summary ``bag``/``odom`` print (a text document)."""
 URDF_COPY = "robot.urdf"
 
 
@@ -36,57 +36,39 @@ def write_view(
     was read with), ``--foot-links`` and ``--joint-aliases``. :class:`LegFkError` when the
     description cannot be loaded.
     """
+    urdf, foot_links, joint_aliases = robot
+    quadruped = load_robot(feet.urdf_xml, "", foot_links, joint_aliases).quadruped
     target.prepare()
+    recording = rr.RecordingStream(APPLICATION_ID, send_properties=False)
     try:
-        note = _write(target, feet, track, robot, summary)
+        recording.save(str(target.temporary))
+        scene = Scene(recording, _urdf_path(target, feet, urdf), quadruped)
+        if track is None:
+            scene.send(FeetRows.of(feet), None)
+        else:
+            _send_with_odometry(scene, FeetRows.of(feet), track)
+        scene.log_summary(summary)
+        recording.flush()
+        recording.disconnect()
         (target.folder / URDF_COPY).unlink(missing_ok=True)
         target.commit()
     except BaseException:
+        recording.disconnect()
         target.discard()
         raise
-    return note
+    return scene.note
 
 
-def _write(
-    target: OutputTarget,
-    feet: FootTrajectories,
-    track: OdometryTrack | None,
-    robot: tuple[str | None, Sequence[str], Sequence[str]],
-    summary: Sequence[str],
-) -> str:
-    urdf, foot_links, joint_aliases = robot
-    quadruped = load_robot(feet.urdf_xml, "", foot_links, joint_aliases).quadruped
-    recording = rr.RecordingStream(APPLICATION_ID, send_properties=False)
-    recording.save(str(target.temporary))
-    try:
-        tree, note = log_description(recording, _urdf_path(target, feet, urdf), quadruped.model)
-        if feet.angles is not None:
-            send_joint_columns(
-                recording,
-                tree,
-                quadruped.model,
-                quadruped.joint_names,
-                feet.stamps_ns,
-                feet.angles,
-            )
-        if track is not None:
-            send_base_columns(
-                recording,
-                quadruped.base_frame,
-                track.stamps_ns,
-                track.positions,
-                track.orientations,
-            )
-            columns.send_paths(recording, feet, track)
-            columns.send_odometry_plots(recording, track)
-        columns.send_feet(recording, feet)
-        columns.send_feet_plots(recording, feet, quadruped.joint_names)
-        text = "\n".join([*summary, *([f"view:      {note}"] if note else [])])
-        recording.log(SUMMARY, rr.TextDocument(text), static=True)
-        recording.flush()
-    finally:
-        recording.disconnect()
-    return note
+def _send_with_odometry(scene: Scene, rows: FeetRows, track: OdometryTrack) -> None:
+    """The rows with the odometry's, the truth's velocity and path (``--truth``), the feet's
+    trails, the odometry's gait diagram and its filter's NIS and gate counts.
+    """
+    base, truth, recording = BaseRows.of(track), track.truth, scene.recording
+    stamps = base.stamps_ns
+    scene.send(rows, base, truth_body_velocities(truth, stamps) if truth is not None else None)
+    columns.send_paths(recording, rows, base, truth.at(stamps)[0] if truth is not None else None)
+    columns.send_gait(recording, stamps, track.stance)
+    columns.send_filter(recording, stamps, track.filter_history)
 
 
 def _urdf_path(target: OutputTarget, feet: FootTrajectories, urdf: str | None) -> Path:

@@ -77,22 +77,31 @@ def _log_skeleton(recording: rr.RecordingStream, model: RobotModel) -> None:
         )
 
 
+def log_fixed_transforms(
+    recording: rr.RecordingStream, tree: Any, model: RobotModel, movable: Sequence[str], root: str
+) -> None:
+    """What stays put (static): the transform of every joint not in ``movable`` (at its zero),
+    and the root link's parent, odom (its pose: :func:`send_base_columns`).
+    """
+    for name in model.joints:
+        if name not in movable:
+            joint = tree.get_joint_by_name(name)
+            recording.log(f"{JOINTS}/{name}", joint.compute_transform(0.0), static=True)
+    recording.log(
+        BASE_POSE, rr.Transform3D(parent_frame=ODOM_FRAME, child_frame=root), static=True
+    )
+
+
 def send_joint_columns(
     recording: rr.RecordingStream,
     tree: Any,
-    model: RobotModel,
     movable: Sequence[str],
     time: np.ndarray,
     angles: np.ndarray,
 ) -> None:
-    """The joints' transforms: every joint not in ``movable`` once (at its zero), and each of
-    ``movable`` (the columns of ``angles`` (N, len(movable)) [rad]) at the rows of ``time``
-    (N,) [ns] where its angle is known.
+    """The transforms of ``movable``'s joints (the columns of ``angles`` (N, len(movable))
+    [rad]) at the rows of ``time`` (N,) [ns] where each angle is known.
     """
-    for name in model.joints:
-        joint = tree.get_joint_by_name(name)
-        if name not in movable:
-            recording.log(f"{JOINTS}/{name}", joint.compute_transform(0.0), static=True)
     for slot, name in enumerate(movable):
         known = np.isfinite(angles[:, slot])
         if not known.any():
@@ -107,24 +116,21 @@ def send_joint_columns(
 
 def send_base_columns(
     recording: rr.RecordingStream,
-    root: str,
     time: np.ndarray,
     positions: np.ndarray,
     orientations: np.ndarray,
 ) -> None:
     """The root link's pose in odom at ``time`` (N,) [ns]: ``positions`` (N, 3) [m],
-    ``orientations`` (N, 4) x, y, z, w.
+    ``orientations`` (N, 4) x, y, z, w; rows with NaN are left out.
     """
-    recording.log(
-        BASE_POSE,
-        rr.Transform3D(parent_frame=ODOM_FRAME, child_frame=root),
-        static=True,
-    )
-    if len(time):
+    known = np.isfinite(positions).all(axis=1) & np.isfinite(orientations).all(axis=1)
+    if known.any():
         recording.send_columns(
             BASE_POSE,
-            indexes=[time_column(time)],
-            columns=rr.Transform3D.columns(translation=positions, quaternion=orientations),
+            indexes=[time_column(time[known])],
+            columns=rr.Transform3D.columns(
+                translation=positions[known], quaternion=orientations[known]
+            ),
         )
 
 

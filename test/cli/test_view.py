@@ -16,6 +16,7 @@ from bag_factory import BagSpec, write_bag
 from exported_urdf import exported_quadruped
 from odometry_bags import IMU_TOPIC, TRUTH_TOPIC, imu_message, write_sim_bag
 from pybullet_sim import simulate, walking_targets
+from rrd_reader import read_rrd, series
 
 from a1_leg_fk import cli
 
@@ -43,30 +44,6 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     table = {name: values[:, i] for i, name in enumerate(rows[0])}
     table["stamp_ns"] = np.array([int(row[0]) for row in rows[1:]], dtype=np.int64)
     return table
-
-
-def read_rrd(path: Path) -> dict[str, dict[str, list]]:
-    """Entity -> column name -> values (time columns as int64 ns), temporal chunks concatenated
-    in time order; static chunks under the key ``static:<entity>``."""
-    entities: dict[str, dict[str, list]] = {}
-    for chunk in rr.chunk.RrdReader(path).stream():
-        batch = chunk.to_record_batch()
-        key = ("static:" if chunk.is_static else "") + chunk.entity_path
-        columns = entities.setdefault(key, {})
-        for name, column in zip(batch.schema.names, batch.columns):
-            values = column.cast("int64").to_pylist() if name == "stamp" else column.to_pylist()
-            columns.setdefault(name, []).extend(values)
-    for columns in entities.values():
-        if "stamp" in columns:
-            order = np.argsort(columns["stamp"], kind="stable")
-            for name in columns:
-                columns[name] = [columns[name][i] for i in order]
-    return entities
-
-
-def series(entities, entity: str) -> tuple[np.ndarray, np.ndarray]:
-    columns = entities["/" + entity]
-    return np.array(columns["stamp"]), np.array([v[0] for v in columns["Scalars:scalars"]])
 
 
 @pytest.fixture(scope="module")

@@ -7,14 +7,18 @@ rrd=$1 out=$2
 python=${PYTHON:-.venv/bin/python}
 if ! command -v chromium >/dev/null; then echo "view_screenshot: no chromium, skipped"; exit 0; fi
 export RERUN_ANALYTICS=0
+set -m  # the server in its own process group: `python -m rerun` runs the viewer as a child
 "$python" -m rerun --web-viewer --web-viewer-port 9192 --port 9893 "$rrd" >/dev/null 2>&1 &
 server=$!
-trap 'kill "$server" 2>/dev/null || true' EXIT
-sleep 4
-timeout 150 chromium --headless=new --no-sandbox --ignore-gpu-blocklist --enable-webgl \
+trap 'kill -- -"$server" 2>/dev/null || true' EXIT
+for _ in $(seq 60); do  # the web server up (at most 30 s)
+  (exec 3<>/dev/tcp/127.0.0.1/9192) 2>/dev/null && break
+  sleep 0.5
+done
+timeout 280 chromium --headless=new --no-sandbox --ignore-gpu-blocklist --enable-webgl \
   --use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking \
   --disable-component-update --disable-sync --no-first-run --user-data-dir="$(mktemp -d)" \
-  --virtual-time-budget=90000 --run-all-compositor-stages-before-draw --screenshot="$out" \
+  --virtual-time-budget=180000 --run-all-compositor-stages-before-draw --screenshot="$out" \
   --window-size=1400,900 \
   "http://127.0.0.1:9192?url=rerun%2Bhttp%3A%2F%2Flocalhost%3A9893%2Fproxy" >/dev/null 2>&1
 echo "view_screenshot: wrote $out"

@@ -15,6 +15,7 @@ import subprocess
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from a1_leg_fk.cli.bag import add_recording_arguments, recording_options, show_progress
 from a1_leg_fk.cli.common import (
@@ -25,6 +26,10 @@ from a1_leg_fk.cli.common import (
     input_error,
 )
 from a1_leg_fk.model.urdf import LegFkError
+
+if TYPE_CHECKING:  # the bag side is imported when the command runs
+    from a1_leg_fk.recording.odometry import OdometryTrack
+    from a1_leg_fk.recording.trajectories import FootTrajectories
 
 RERUN_HINT = (
     "a1-leg-fk view needs rerun-sdk: pip install 'a1_leg_fk[view]' (or pip install "
@@ -64,25 +69,18 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     except ImportError:
         print(RERUN_HINT, file=sys.stderr)
         return EXIT_BAD_INPUT
-    from a1_leg_fk.cli.odom import summary_lines, track_of
+    from a1_leg_fk.cli.odom import track_of
     from a1_leg_fk.recording.outputs import checked_targets
-    from a1_leg_fk.recording.trajectories import read_foot_trajectories
     from a1_leg_fk.view.recording import write_view
 
     source = Path(options.input)
     try:
         rrd = options.rrd or str(source.with_name(source.name.rstrip("/") + ".rrd"))
         target = checked_targets(source, {"--rrd": rrd}, options.force)["--rrd"]
-        choices = recording_options(options, contacts=True)  # forces too where efforts are
-        feet = read_foot_trajectories(source, progress=show_progress(options), **choices)
-        if not len(feet.stamps_ns):
-            raise LegFkError(f"{source}: no joint states to draw")
+        feet = feet_pass(options)
         track = track_of(options) if feet.velocities is not None else None
-        summary = feet.summary.lines()
-        if track is not None:  # odom's lines after its recording's (the same as feet's)
-            summary += summary_lines(track)[len(track.summary.lines()) :]
-        robot = (options.urdf, options.foot_links, options.joint_aliases)
-        note = write_view(target, feet, track, robot, summary)
+        summary = summary_of(feet, track)
+        note = write_view(target, feet, track, robot_options(options), summary)
     except (LegFkError, OSError) as error:
         return input_error("a1-leg-fk view", error)
     except KeyboardInterrupt:
@@ -99,6 +97,34 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         print(f"a1-leg-fk view: {source}: stopped early: {feet.summary.stopped}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
+
+
+def feet_pass(options: argparse.Namespace) -> FootTrajectories:
+    """``bag``'s pipeline over ``options.input`` as ``view`` runs it: contacts, and the foot
+    forces where the joint states have efforts. :class:`LegFkError` without joint states.
+    """
+    from a1_leg_fk.recording.trajectories import read_foot_trajectories
+
+    choices = recording_options(options, contacts=True)  # forces too where efforts are
+    feet = read_foot_trajectories(options.input, progress=show_progress(options), **choices)
+    if not len(feet.stamps_ns):
+        raise LegFkError(f"{options.input}: no joint states to draw")
+    return feet
+
+
+def summary_of(feet: FootTrajectories, track: OdometryTrack | None) -> list[str]:
+    """What ``bag`` prints, then ``odom``'s lines after its recording's (the same as feet's)."""
+    from a1_leg_fk.cli.odom import summary_lines
+
+    summary = feet.summary.lines()
+    if track is not None:
+        summary += summary_lines(track)[len(track.summary.lines()) :]
+    return summary
+
+
+def robot_options(options: argparse.Namespace) -> tuple[str | None, list[str], list[str]]:
+    """``--urdf``, ``--foot-links`` and ``--joint-aliases``: the description to draw."""
+    return (options.urdf, options.foot_links, options.joint_aliases)
 
 
 def _open_viewer(path: Path) -> None:

@@ -1,7 +1,7 @@
 """The robot in a Rerun recording: its description (Rerun's own URDF loader: meshes where they
 resolve, the collision shapes), a line from each link's origin to each child joint, the links'
-axes, and the transforms that pose it: the fixed joints once, the movable joints and the base's
-pose in odom as columns over the recording's timeline.
+axes, and the transforms that pose it: the fixed joints once, the movable joints' rotations and
+the base's pose in odom as columns over the recording's timeline.
 
 Frames are Rerun's named frames: each link's name (as in the URDF), and ``tf#/odom``, the
 implicit frame of the entity :data:`ODOM`, which the odom-frame things (trails, paths) share.
@@ -18,7 +18,9 @@ from xml.etree import ElementTree
 import numpy as np
 import rerun as rr
 
-from a1_leg_fk.model.urdf import LegFkError, RobotModel
+from a1_leg_fk.estimation.so3 import quaternion_of
+from a1_leg_fk.kinematics.leg_stages import rpy_matrix
+from a1_leg_fk.model.urdf import Joint, LegFkError, RobotModel
 
 ROBOT = "robot"
 """The entity under which the description is logged."""
@@ -80,13 +82,19 @@ def _log_skeleton(recording: rr.RecordingStream, model: RobotModel) -> None:
 def log_fixed_transforms(
     recording: rr.RecordingStream, tree: Any, model: RobotModel, movable: Sequence[str], root: str
 ) -> None:
-    """What stays put (static): the transform of every joint not in ``movable`` (at its zero),
-    and the root link's parent, odom (its pose: :func:`send_base_columns`).
+    """What stays put (static): the transform of every joint not in ``movable`` (Rerun's, at
+    its zero); of each joint in ``movable`` its frames and translation (its rotation per row:
+    :func:`send_joint_columns`); and the root link's parent, odom (its pose:
+    :func:`send_base_columns`).
     """
-    for name in model.joints:
-        if name not in movable:
-            joint = tree.get_joint_by_name(name)
-            recording.log(f"{JOINTS}/{name}", joint.compute_transform(0.0), static=True)
+    for name, joint in model.joints.items():
+        if name in movable:
+            transform = rr.Transform3D(
+                translation=joint.origin_xyz, parent_frame=joint.parent, child_frame=joint.child
+            )
+        else:
+            transform = tree.get_joint_by_name(name).compute_transform(0.0)
+        recording.log(f"{JOINTS}/{name}", transform, static=True)
     recording.log(
         BASE_POSE, rr.Transform3D(parent_frame=ODOM_FRAME, child_frame=root), static=True
     )
@@ -94,24 +102,38 @@ def log_fixed_transforms(
 
 def send_joint_columns(
     recording: rr.RecordingStream,
-    tree: Any,
+    model: RobotModel,
     movable: Sequence[str],
     time: np.ndarray,
     angles: np.ndarray,
 ) -> None:
-    """The transforms of ``movable``'s joints (the columns of ``angles`` (N, len(movable))
-    [rad]) at the rows of ``time`` (N,) [ns] where each angle is known.
+    """The rotations of ``movable``'s joints (the columns of ``angles`` (N, len(movable))
+    [rad]) at the rows of ``time`` (N,) [ns] where each angle is known: one quaternion per row,
+    the frames and translation being static (:func:`log_fixed_transforms`).
     """
     for slot, name in enumerate(movable):
         known = np.isfinite(angles[:, slot])
-        if not known.any():
-            continue
-        joint = tree.get_joint_by_name(name)
-        recording.send_columns(
-            f"{JOINTS}/{name}",
-            indexes=[time_column(time[known])],
-            columns=joint.compute_transform_columns(angles[known, slot], clamp=False),
-        )
+        if known.any():
+            recording.send_columns(
+                f"{JOINTS}/{name}",
+                indexes=[time_column(time[known])],
+                columns=rr.Transform3D.columns(
+                    quaternion=joint_quaternions(model.joints[name], angles[known, slot])
+                ),
+            )
+
+
+def joint_quaternions(joint: Joint, angles: np.ndarray) -> np.ndarray:
+    """(N, 4) x, y, z, w: the child link's rotation in the parent's frame at ``angles`` (N,)
+    [rad] of a revolute or continuous ``joint``: its origin's rpy, then the turn about its axis
+    (q0 * q_axis).
+    """
+    x, y, z, w = quaternion_of(rpy_matrix(joint.origin_rpy).tolist())
+    origin, axis = np.array([x, y, z]), np.asarray(joint.axis, float)
+    sine, cosine = np.sin(angles / 2)[:, None], np.cos(angles / 2)[:, None]
+    vector = w * sine * axis + cosine * origin + sine * np.cross(origin, axis)
+    scalar = w * cosine - sine * float(origin @ axis)
+    return np.hstack([vector, scalar])
 
 
 def send_base_columns(

@@ -39,6 +39,7 @@ class Scene:
     ) -> None:
         self.recording = recording
         self.joints = quadruped.joint_names
+        self.model = quadruped.model
         self.tree, self.note = log_description(recording, urdf_path, quadruped.model)
         log_fixed_transforms(
             recording, self.tree, quadruped.model, self.joints, quadruped.base_frame
@@ -54,7 +55,7 @@ class Scene:
         """
         recording = self.recording
         if feet.angles is not None:
-            send_joint_columns(recording, self.tree, self.joints, feet.stamps_ns, feet.angles)
+            send_joint_columns(recording, self.model, self.joints, feet.stamps_ns, feet.angles)
         columns.send_feet(recording, feet)
         columns.send_feet_plots(recording, feet, self.joints)
         if base is not None:

@@ -111,25 +111,28 @@ def _pose(translation, quaternion) -> np.ndarray:
 
 
 def test_logged_transforms_compose_to_the_feet(outputs) -> None:
-    """The joints' transforms as logged (parent and child frames, translation, quaternion),
-    composed here from the root to each foot link, give the feet of ``bag``'s CSV."""
+    """The joints' transforms as logged (parent and child frames, translation, quaternion: static,
+    or per row where the joint moves; a row's component overrides nothing static, as Rerun reads
+    them), composed here from the root to each foot link, give the feet of ``bag``'s CSV."""
     feet, _, entities = outputs
-    static: dict[str, tuple[str, list]] = {}
-    moving: dict[str, tuple[str, list]] = {}
-    for key, columns in entities.items():
-        if "/robot/joints/" not in key:
+    joints: dict[str, tuple[str, list]] = {}  # child link -> (parent link, poses: 1 or per row)
+    for key in entities:
+        if not key.startswith("static:/robot/joints/"):
             continue
-        child = columns["Transform3D:child_frame"][0][0]
-        parent = columns["Transform3D:parent_frame"][0][0]
-        poses = [
-            _pose(t[0], q[0])
-            for t, q in zip(columns["Transform3D:translation"], columns["Transform3D:quaternion"])
-        ]
-        (static if key.startswith("static:") else moving)[child] = (parent, poses)
+        fixed, moving = entities[key], entities.get(key.removeprefix("static:"), {})
+        translations, quaternions = (
+            fixed.get(name) or moving[name]
+            for name in ("Transform3D:translation", "Transform3D:quaternion")
+        )
+        if len(translations) == 1:
+            translations = translations * len(quaternions)
+        child = fixed["Transform3D:child_frame"][0][0]
+        parent = fixed["Transform3D:parent_frame"][0][0]
+        joints[child] = (parent, [_pose(t[0], q[0]) for t, q in zip(translations, quaternions)])
     for leg in ("FR", "FL", "RR", "RL"):
         link, chain = f"{leg}_toe", []
-        while link in static or link in moving:
-            parent, poses = (moving if link in moving else static)[link]
+        while link in joints:
+            parent, poses = joints[link]
             chain.append(poses)
             link = parent
         assert link == "trunk" and len(chain) == 4

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,10 @@ def read_rrd(path: Path) -> dict[str, dict[str, list]]:
     import rerun as rr  # here: a test without rerun-sdk skips (importorskip) before it is needed
 
     entities: dict[str, dict[str, list]] = {}
-    for chunk in rr.chunk.RrdReader(path).stream():
+    with warnings.catch_warnings():  # a streamed file (rerun --save) has no footer: scanned whole
+        warnings.filterwarnings("ignore", "RRD file has no footer", rr.error_utils.RerunWarning)
+        reader = rr.chunk.RrdReader(path)
+    for chunk in reader.stream():
         batch = chunk.to_record_batch()
         key = ("static:" if chunk.is_static else "") + chunk.entity_path
         columns = entities.setdefault(key, {})

@@ -21,7 +21,7 @@ from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.recording.base_pose import rotation_matrices
 from a1_leg_fk.recording.odometry import OdometryTrack
 from a1_leg_fk.recording.trajectories import FootTrajectories
-from a1_leg_fk.view.robot import ODOM, time_column
+from a1_leg_fk.view.robot import ODOM, send_known
 
 FEET = "feet"
 """Per leg, in the base frame: ``feet/<leg>`` the foot, ``feet/<leg>/force`` its force arrow."""
@@ -41,12 +41,9 @@ def send_scalars(
 ) -> None:
     """``values`` (N,) at ``stamps_ns`` (N,) [ns], the rows where they are finite."""
     known = np.isfinite(values)
-    if known.any():
-        recording.send_columns(
-            entity,
-            indexes=[time_column(stamps_ns[known])],
-            columns=rr.Scalars.columns(scalars=values[known]),
-        )
+    send_known(
+        recording, entity, stamps_ns, known, lambda: rr.Scalars.columns(scalars=values[known])
+    )
 
 
 def stance_colors(probabilities: np.ndarray | None, rows: int) -> np.ndarray:
@@ -125,16 +122,16 @@ def send_feet(recording: rr.RecordingStream, rows: FeetRows) -> None:
     for slot, leg in enumerate(LEG_NAMES):
         position = rows.positions[:, slot]
         known = np.isfinite(position).all(axis=1)
-        if not known.any():
-            continue
         contacts = rows.contacts[:, slot] if rows.contacts is not None else None
-        recording.send_columns(
+        send_known(
+            recording,
             f"{FEET}/{leg}",
-            indexes=[time_column(rows.stamps_ns[known])],
-            columns=rr.Points3D.columns(
-                positions=position[known],
-                colors=stance_colors(contacts, len(position))[known],
-                radii=np.full(int(known.sum()), FOOT_RADIUS_M, np.float32),
+            rows.stamps_ns,
+            known,
+            lambda: rr.Points3D.columns(
+                positions=position[known],  # noqa: B023 (called at once)
+                colors=stance_colors(contacts, len(position))[known],  # noqa: B023
+                radii=np.full(int(known.sum()), FOOT_RADIUS_M, np.float32),  # noqa: B023
             ),
         )
         if rows.forces is not None:
@@ -150,14 +147,15 @@ def _send_arrows(
 ) -> None:
     """``leg``'s force arrows: ``force`` (N, 3) [N] from ``position`` (N, 3) [m], base frame."""
     known = np.isfinite(position).all(axis=1) & np.isfinite(force).all(axis=1)
-    if known.any():
-        recording.send_columns(
-            f"{FEET}/{leg}/force",
-            indexes=[time_column(stamps_ns[known])],
-            columns=rr.Arrows3D.columns(
-                origins=position[known], vectors=force[known] * FORCE_ARROW_M_PER_N
-            ),
-        )
+    send_known(
+        recording,
+        f"{FEET}/{leg}/force",
+        stamps_ns,
+        known,
+        lambda: rr.Arrows3D.columns(
+            origins=position[known], vectors=force[known] * FORCE_ARROW_M_PER_N
+        ),
+    )
 
 
 def send_feet_plots(recording: rr.RecordingStream, rows: FeetRows, joints: Sequence[str]) -> None:

@@ -10,7 +10,7 @@ implicit frame of the entity :data:`ODOM`, which the odom-frame things (trails, 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
@@ -113,14 +113,15 @@ def send_joint_columns(
     """
     for slot, name in enumerate(movable):
         known = np.isfinite(angles[:, slot])
-        if known.any():
-            recording.send_columns(
-                f"{JOINTS}/{name}",
-                indexes=[time_column(time[known])],
-                columns=rr.Transform3D.columns(
-                    quaternion=joint_quaternions(model.joints[name], angles[known, slot])
-                ),
-            )
+        send_known(
+            recording,
+            f"{JOINTS}/{name}",
+            time,
+            known,
+            lambda: rr.Transform3D.columns(
+                quaternion=joint_quaternions(model.joints[name], angles[known, slot])  # noqa: B023
+            ),
+        )
 
 
 def joint_quaternions(joint: Joint, angles: np.ndarray) -> np.ndarray:
@@ -146,14 +147,29 @@ def send_base_columns(
     ``orientations`` (N, 4) x, y, z, w; rows with NaN are left out.
     """
     known = np.isfinite(positions).all(axis=1) & np.isfinite(orientations).all(axis=1)
+    send_known(
+        recording,
+        BASE_POSE,
+        time,
+        known,
+        lambda: rr.Transform3D.columns(
+            translation=positions[known], quaternion=orientations[known]
+        ),
+    )
+
+
+def send_known(
+    recording: rr.RecordingStream,
+    entity: str,
+    time: np.ndarray,
+    known: np.ndarray,
+    columns: Callable[[], Any],
+) -> None:
+    """``columns()`` (the ``known`` rows' values) to ``entity`` at those rows of ``time`` (N,)
+    [ns]; nothing when no row is known.
+    """
     if known.any():
-        recording.send_columns(
-            BASE_POSE,
-            indexes=[time_column(time[known])],
-            columns=rr.Transform3D.columns(
-                translation=positions[known], quaternion=orientations[known]
-            ),
-        )
+        recording.send_columns(entity, indexes=[time_column(time[known])], columns=columns())
 
 
 def time_column(stamps_ns: np.ndarray) -> rr.TimeColumn:

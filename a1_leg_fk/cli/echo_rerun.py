@@ -89,12 +89,13 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         if options.connect:
             recording.connect_grpc(options.connect)
         else:
-            recording.spawn()
+            rr.spawn(recording=recording, executable_path=_viewer_executable())
         scene = Scene(recording, Path(options.urdf or default_urdf_path()), quadruped)
         _flushed(recording, CONNECT_TIMEOUT_S, options.connect or "the spawned viewer")
     except (LegFkError, OSError, ValueError, RuntimeError) as error:
         recording.disconnect()
-        return input_error(f"{PROG} echo", error)
+        first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
+        return input_error(f"{PROG} echo", type(error)(first_line))
     live = LiveView(scene)
     target = options.connect or "a spawned viewer"
     print(f"streaming {options.namespace or '.'}/ to {target} (Ctrl-C to stop)", flush=True)
@@ -117,6 +118,18 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     )
     print(f"streamed:  {live.sent} rows{span} to {target}")
     return EXIT_OK
+
+
+def _viewer_executable() -> str | None:
+    """The viewer that came with rerun-sdk (its ``rerun_cli`` package), else None: ``rerun`` on
+    the PATH (a virtualenv's bin folder is not on it when its python is run directly).
+    """
+    try:
+        import rerun_cli  # type: ignore[import-untyped,unused-ignore]
+    except ImportError:
+        return None
+    binary = Path(rerun_cli.__file__).with_name("rerun")
+    return str(binary) if binary.is_file() else None
 
 
 def _flushed(recording: Any, timeout_s: float, target: str) -> None:

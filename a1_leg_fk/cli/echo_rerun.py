@@ -28,7 +28,6 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     PROG,
     Ros,
-    input_error,
     prefixed,
     with_ros,
 )
@@ -94,8 +93,9 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         _flushed(recording, CONNECT_TIMEOUT_S, options.connect or "the spawned viewer")
     except (LegFkError, OSError, ValueError, RuntimeError) as error:
         recording.disconnect()
-        first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
-        return input_error(f"{PROG} echo", type(error)(first_line))
+        lines = str(error).strip().splitlines() or [repr(error)]  # Rerun's span several
+        print(f"{PROG} echo: {lines[0]}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     live = LiveView(scene)
     target = options.connect or "a spawned viewer"
     print(f"streaming {options.namespace or '.'}/ to {target} (Ctrl-C to stop)", flush=True)

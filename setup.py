@@ -32,7 +32,11 @@ setup(
     # Only setuptools: rclpy and the message packages come from the ROS install (apt, rosdep) or
     # from requirements.txt (PyPI wheels); an apt Jazzy install has no pip metadata for them.
     install_requires=["setuptools"],
-    extras_require={"test": ["pytest", "hypothesis"]},
+    extras_require={
+        "test": ["pytest", "hypothesis"],
+        # a1-leg-fk view: the Rerun SDK (its viewer inside the wheel, about 170 MB)
+        "view": ["rerun-sdk==0.41.0"],
+    },
     zip_safe=True,
     maintainer="a1_leg_fk maintainers",
     maintainer_email="maintainer@example.com",

@@ -51,6 +51,7 @@ __all__ = [
     "package_root",
     "parse_tokens",
     "stamp_ns",
+    "to_ros",
 ]
 
 
@@ -263,3 +264,24 @@ class SensorStream:
                 probe.spin_for(delay)
             behind = row - ahead
             probe.spin_until(lambda: answered() >= behind, 10.0)  # noqa: B023 (used at once)
+
+
+def to_ros(message, kind):
+    """A rosbags message (bag_factory's) as the rclpy message of the same type."""
+    out = kind()
+    out.header.stamp.sec = message.header.stamp.sec
+    out.header.stamp.nanosec = message.header.stamp.nanosec
+    out.header.frame_id = message.header.frame_id
+    if kind is JointState:
+        out.name = list(message.name)
+        out.position = message.position.tolist()
+        out.velocity = message.velocity.tolist()
+        out.effort = message.effort.tolist()
+        return out
+    for field in ("orientation", "angular_velocity", "linear_acceleration"):
+        source, target = getattr(message, field), getattr(out, field)
+        for axis in ("x", "y", "z", "w")[: 4 if field == "orientation" else 3]:
+            setattr(target, axis, float(getattr(source, axis)))
+    for field in ("orientation", "angular_velocity", "linear_acceleration"):
+        setattr(out, f"{field}_covariance", getattr(message, f"{field}_covariance").tolist())
+    return out

@@ -26,6 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "a1_leg_fk.plots",
         "a1_leg_fk.odometry_plot",
     ),
+    ("a1_leg_fk.view",),  # the Rerun recording of the bag and odom pipelines' outputs
     ("a1_leg_fk.ros", "a1_leg_fk.cli"),
     ("a1_leg_fk",),  # the package's own __init__: the public API, re-exported lazily
 )

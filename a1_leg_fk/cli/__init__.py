@@ -26,7 +26,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from a1_leg_fk.cli import bag, demo, echo, gait, ik, odom, plot, verify
+from a1_leg_fk.cli import bag, demo, echo, gait, ik, odom, plot, verify, view
 from a1_leg_fk.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -39,7 +39,7 @@ from a1_leg_fk.cli.common import (
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
 """The exit code when stdout's reader went away, as a shell reports a process ended by SIGPIPE."""
 
-COMMANDS = (echo, verify, plot, demo, bag, odom, gait, ik)
+COMMANDS = (echo, verify, plot, demo, bag, odom, gait, ik, view)
 """The sub-command modules, in the order ``--help`` lists them."""
 
 

@@ -1,4 +1,5 @@
-"""``a1-leg-fk echo``: a live table of the four feet (foot_positions/<leg>) and each topic's rate.
+"""``a1-leg-fk echo``: a live table of the four feet (foot_positions/<leg>) and each topic's rate;
+with ``--rerun``, everything the nodes publish streamed to a Rerun viewer (:mod:`.echo_rerun`).
 
 The table, its writer and the spin loop are shared with ``a1-leg-fk demo``.
 """
@@ -14,6 +15,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, TextIO
 
+from a1_leg_fk.cli import echo_rerun
 from a1_leg_fk.cli.common import (
     EXIT_NO_ANSWER,
     EXIT_OK,
@@ -70,6 +72,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="stop after S seconds (default: run until Ctrl-C)",
     )
     add_interval_argument(echo)
+    echo_rerun.add_arguments(echo)
     echo.add_argument(
         "--timeout",
         type=positive,
@@ -276,6 +279,8 @@ def echo_loop(
 
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk echo``; ``argv``: the whole command line, for ``rclpy.init``."""
+    if options.rerun:
+        return echo_rerun.run(options, argv)
 
     def watch(ros: Ros, stop: threading.Event) -> tuple[str, FootTable]:
         table = subscribe_feet(ros, options.namespace)

@@ -13,7 +13,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -107,32 +107,20 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk odom``: see the module docstring for exit codes."""
     from a1_leg_fk.plots import pyplot
-    from a1_leg_fk.recording.odometry import odometry_track
     from a1_leg_fk.recording.outputs import checked_targets
 
     del argv  # no ROS here
     try:
-        if options.no_imu and options.imu:
-            raise LegFkError("--imu and --no-imu contradict each other")
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         targets = checked_targets(
             Path(options.input), {"--csv": options.csv, "--plot": options.plot}, options.force
         )
-        track = odometry_track(
-            options.input,
-            imu_topic=options.imu,
-            use_imu=not options.no_imu,
-            base_pose=options.truth,
+        track = track_of(
+            options,
             radius_m=options.foot_radius,
             contacts=options.contacts,
             ground=options.ground,
-            smoothed=not options.causal,
-            progress=show_progress(options),
-            topic=options.topic,
-            urdf=options.urdf,
-            foot_links=options.foot_links,
-            joint_aliases=options.joint_aliases,
         )
         written = _write(track, targets)
     except (LegFkError, OSError) as error:
@@ -184,6 +172,32 @@ def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]
             target.discard()
         raise
     return [target.final for target in targets.values()]
+
+
+def track_of(options: argparse.Namespace, **settings: Any) -> OdometryTrack:
+    """The odometry over ``options.input`` with the options ``odom`` and ``view`` share
+    (``--imu``, ``--no-imu``, ``--truth``, ``--topic``, ``--urdf``, ``--foot-links``,
+    ``--joint-aliases``, ``--quiet``, ``--causal``: else smoothed); ``settings``: more of
+    :func:`~a1_leg_fk.recording.odometry.odometry_track`'s (``odom``'s ``radius_m``,
+    ``contacts``, ``ground``). :class:`LegFkError` for contradicting options.
+    """
+    from a1_leg_fk.recording.odometry import odometry_track
+
+    if options.no_imu and options.imu:
+        raise LegFkError("--imu and --no-imu contradict each other")
+    return odometry_track(
+        options.input,
+        imu_topic=options.imu,
+        use_imu=not options.no_imu,
+        base_pose=options.truth,
+        progress=show_progress(options),
+        topic=options.topic,
+        urdf=options.urdf,
+        foot_links=options.foot_links,
+        joint_aliases=options.joint_aliases,
+        smoothed=not options.causal,
+        **settings,
+    )
 
 
 def summary_lines(track: OdometryTrack) -> list[str]:

@@ -98,7 +98,7 @@ class BasePoses:
             self.positions[upper] - self.positions[lower]
         )
         quaternion = _slerp(self.quaternions[lower], self.quaternions[upper], alpha)
-        rotation = _rotation_matrices(quaternion)
+        rotation = rotation_matrices(quaternion)
         position[~inside] = math.nan
         rotation[~inside] = math.nan
         return position, rotation
@@ -144,7 +144,7 @@ def _slerp(q0: np.ndarray, q1: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     return unit
 
 
-def _rotation_matrices(q: np.ndarray) -> np.ndarray:
+def rotation_matrices(q: np.ndarray) -> np.ndarray:
     """(N, 3, 3) rotation matrices of unit quaternions (N, 4) x, y, z, w."""
     x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
     return np.stack(

@@ -59,8 +59,9 @@ class OdometryTrack:
     evidence, ``contacts_note`` why there are no foot forces for this robot ("" when there are).
     ``filtered``: the rows the state filter gave (the others: the legs alone, without an
     accelerometer), ``filter_counts``, its final biases (gyro [rad/s], accelerometer [m/s^2])
-    and the feet's noise scale. ``smoothed``: the filter's rows smoothed over the recording
-    (else the filter's own, causal).
+    and the feet's noise scale; ``filter_history`` (N, 11) the filter's running counts after
+    each row: NIS sum, NIS count, feet used (4), feet rejected by the gate (4), gate resets.
+    ``smoothed``: the filter's rows smoothed over the recording (else the filter's own, causal).
     """
 
     stamps_ns: np.ndarray
@@ -91,6 +92,7 @@ class OdometryTrack:
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
+    filter_history: np.ndarray
 
 
 def odometry_track(
@@ -144,7 +146,7 @@ def odometry_track(
         )
         if contacts == FORCE and feed.note:
             raise LegFkError(f"--contacts force: {feed.note}")
-        stats, samples, next_imu = BlockStats(), [], 0
+        stats, samples, history, next_imu = BlockStats(), [], [], 0
         smoother = OdometrySmoother(feed.filter) if smoothed else None
         grounds: list[tuple[float, ...]] = []
         for block in iter_foot_blocks(recording, progress=progress):
@@ -179,6 +181,7 @@ def odometry_track(
                     samples.append(sample)
                 else:
                     samples += smoother.add(sample, feed.samples_filtered)
+                history.append(_running_counts(feed.filter.counts))  # live, as the node's
         if smoother is not None:
             samples += smoother.finish()
         summary = stats.summary(recording)
@@ -195,7 +198,13 @@ def odometry_track(
         recording.base_pose_topic,
         recording.base_pose,
         summary,
+        np.array(history, dtype=float).reshape(-1, 11),
     )
+
+
+def _running_counts(counts: FilterCounts) -> tuple[float, ...]:
+    """The filter's running counts as :attr:`OdometryTrack.filter_history` keeps a row."""
+    return (counts.nis_sum, counts.nis_count, *counts.used, *counts.rejected, counts.gate_resets)
 
 
 def _track(
@@ -209,6 +218,7 @@ def _track(
     truth_topic: str | None,
     truth: BasePoses | None,
     summary: RecordingSummary,
+    filter_history: np.ndarray,
 ) -> OdometryTrack:
     def column(name: str, width: int, dtype: type = float) -> np.ndarray:
         return np.array([getattr(s, name) for s in samples], dtype=dtype).reshape(-1, width)
@@ -242,6 +252,7 @@ def _track(
         truth=truth,
         truth_topic=truth_topic,
         summary=summary,
+        filter_history=filter_history,
     )
 
 

@@ -84,6 +84,7 @@ class Recording:
     lowstate: LowStateInput | None = None  # the joint states are a Unitree LowState's motors
     sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS  # [counts] a LowState foot sensor's
     sport: SportFeet | None = None  # a LowState robot's own feet (SportModeState), if recorded
+    urdf_xml: str = ""  # the URDF text the model was read from
 
     @property
     def stopped(self) -> str:
@@ -199,6 +200,7 @@ def open_recording(
             lowstate=lowstate,
             sensor_threshold=sensor_threshold,
             sport=SportFeet.read(reads) if lowstate is not None else None,
+            urdf_xml=robot.urdf_xml,
         )
     except BaseException:
         _close_reader(reader)

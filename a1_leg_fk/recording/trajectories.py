@@ -151,6 +151,8 @@ class FootTrajectories:
     normal_forces: np.ndarray | None = None  # (N, 4) [N] along minus gravity, NaN where none
     contacts: np.ndarray | None = None  # (N, 4) contact probabilities, NaN where none
     sensor: np.ndarray | None = None  # (N, 4) a LowState's foot sensors [raw counts]
+    angles: np.ndarray | None = None  # (N, joints) [rad] the merged joint angles, NaN unknown
+    urdf_xml: str = ""  # the URDF text the model was read from
 
 
 class BlockStats:
@@ -271,6 +273,8 @@ def collected(
         normal_forces=joined("normal_forces", (LEGS,)) if recording.forces is not None else None,
         contacts=joined("contacts", (LEGS,)) if recording.forces is not None else None,
         sensor=joined("sensor", (LEGS,)) if recording.lowstate is not None else None,
+        angles=joined("angles", (len(recording.quadruped.joint_names),)),
+        urdf_xml=recording.urdf_xml,
     )
 
 

@@ -9,7 +9,7 @@ import pytest
 from bag_factory import joint_state
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
-from node_harness import LEGS, Diagnostics, SensorStream
+from node_harness import LEGS, Diagnostics, SensorStream, to_ros
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
 from pybullet_sim import simulate, walking_targets
 from rclpy.qos import QoSProfile
@@ -26,27 +26,6 @@ AHEAD = 40  # samples the stream may run ahead of the node's answers (its queues
 @pytest.fixture(scope="module")
 def run():
     return simulate(walking_targets(start_s=0.3), SIM_S)
-
-
-def to_ros(message, kind):
-    """A rosbags message (bag_factory's) as the rclpy message of the same type."""
-    out = kind()
-    out.header.stamp.sec = message.header.stamp.sec
-    out.header.stamp.nanosec = message.header.stamp.nanosec
-    out.header.frame_id = message.header.frame_id
-    if kind is JointState:
-        out.name = list(message.name)
-        out.position = message.position.tolist()
-        out.velocity = message.velocity.tolist()
-        out.effort = message.effort.tolist()
-        return out
-    for field in ("orientation", "angular_velocity", "linear_acceleration"):
-        source, target = getattr(message, field), getattr(out, field)
-        for axis in ("x", "y", "z", "w")[: 4 if field == "orientation" else 3]:
-            setattr(target, axis, float(getattr(source, axis)))
-    for field in ("orientation", "angular_velocity", "linear_acceleration"):
-        setattr(out, f"{field}_covariance", getattr(message, f"{field}_covariance").tolist())
-    return out
 
 
 @pytest.mark.parametrize("efforts", [False, True], ids=["kinematic", "force_contacts"])

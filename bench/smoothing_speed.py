@@ -2,9 +2,8 @@
 (``odom --causal``) on a 1 kHz recording, in one run.
 
 Run: ``.venv/bin/python bench/smoothing_speed.py [--seconds S]`` (a few minutes for the default
-60 s). Generates bags of JointStates (bag_speed.py's trot-like motion, positions and velocities,
-no efforts) and Imu messages (level, turning at 0.1 rad/s, the accelerometer feeling gravity:
-the state filter runs), both at 1 kHz, of ``S / 3`` and ``S`` seconds; runs ``odom --csv`` on
+60 s). Generates bags of JointStates and Imu messages at 1 kHz (test/synthetic_odometry.py, shared
+with the memory test), of ``S / 3`` and ``S`` seconds; runs ``odom --csv`` on
 each, causal and smoothed, each in its own process; prints
 
 - the speed as a multiple of real time (recording seconds per CPU second of the process: one
@@ -12,61 +11,18 @@ each, causal and smoothed, each in its own process; prints
 - the process's peak RSS [MB], and per bag the smoothed run's extra over the causal one: the
   smoother's history (one 8 s window and its 2 s overlap, 2.9 kB a step) and its pending
   samples, which must not grow with the recording;
-- the peak's growth per recorded minute (both runs: the track of every row, as ``odom`` keeps
-  it to write its CSV and plot), extrapolated to one hour.
+- the peak's growth per recorded minute (``odom`` streams: its IMU read in the joint states'
+  pass, its rows written as they become final; it must not grow), extrapolated to one hour.
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 import tempfile
 from pathlib import Path
 
 from common import machine, measured_cli
-
-from a1_leg_fk.kinematics.quadruped import Quadruped
-
-T0 = 1_700_000_000_000_000_000
-PERIOD_NS = 1_000_000
-
-
-def generate(path: Path, seconds: float) -> Path:
-    """A bag of JointStates and Imu messages at 1 kHz for ``seconds``."""
-    import numpy as np
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
-
-    typestore = get_typestore(Stores.ROS2_JAZZY)
-    t = typestore.types
-    names = list(Quadruped.from_urdf().joint_names)
-    base = np.array([0.05, 0.8, -1.5] * 4)
-    phase = np.array([0.0] * 3 + [math.pi] * 6 + [0.0] * 3)
-    joint_type, imu_type = "sensor_msgs/msg/JointState", "sensor_msgs/msg/Imu"
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection("/joint_states", joint_type, typestore=typestore)
-        imu = writer.add_connection("/imu", imu_type, typestore=typestore)
-        for index in range(round(seconds * 1000)):
-            stamp = T0 + index * PERIOD_NS
-            time_msg = t["builtin_interfaces/msg/Time"](stamp // 10**9, stamp % 10**9)
-            header = t["std_msgs/msg/Header"](time_msg, "base")
-            yaw = 0.1 * index / 1000.0
-            quaternion = t["geometry_msgs/msg/Quaternion"](
-                0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)
-            )
-            vector = t["geometry_msgs/msg/Vector3"]
-            covariance = np.zeros(9)
-            message = t[imu_type](
-                header, quaternion, covariance, vector(0.0, 0.0, 0.1), covariance,
-                vector(0.0, 0.0, 9.80665), covariance,
-            )  # fmt: skip
-            writer.write(imu, stamp, typestore.serialize_cdr(message, imu_type))
-            angle = 2 * math.pi * 2.0 * index / 1000.0 + phase
-            positions = base + np.array([0.0, 0.3, 0.4] * 4) * np.sin(angle)
-            velocities = np.array([0.0, 0.3, 0.4] * 4) * 2 * math.pi * 2.0 * np.cos(angle)
-            message = t[joint_type](header, names, positions, velocities, np.zeros(0))
-            writer.write(joints, stamp, typestore.serialize_cdr(message, joint_type))
-    return path
+from synthetic_odometry import write_turning_trot
 
 
 def measured(bag: Path, out: Path, causal: bool) -> tuple[float, float, float]:
@@ -88,7 +44,7 @@ def main() -> None:
         )
         lengths = (options.seconds / 3.0, options.seconds)
         for seconds in lengths:
-            bag = generate(Path(folder) / f"bag{seconds:g}", seconds)
+            bag = write_turning_trot(Path(folder) / f"bag{seconds:g}", seconds)
             for causal in (True, False):
                 wall, cpu, peak = measured(bag, Path(folder) / "out.csv", causal)
                 peaks[seconds, causal] = peak

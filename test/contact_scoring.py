@@ -18,7 +18,7 @@ from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
-from a1_leg_fk.estimation.contact_smoother import EvidenceRows, smooth
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, force_liftoffs, smooth
 from a1_leg_fk.estimation.contact_smoother import probabilities as stance_probabilities
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
 from a1_leg_fk.kinematics.foot_forces import FootForces
@@ -98,7 +98,8 @@ def estimate(
     if smoothed:
         switch, kinematic, forced, total = (np.array(c) for c in zip(*kept, strict=True))
         rows = EvidenceRows(run.stamps_s, switch, kinematic, forced, total)
-        probabilities = stance_probabilities(smooth(rows, np.zeros(4))[0])
+        smoothed_odds, filtered = smooth(rows, np.zeros(4))
+        probabilities = stance_probabilities(force_liftoffs(smoothed_odds, filtered, forced))
     return probabilities, normals
 
 

@@ -32,7 +32,14 @@ from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # the bag side is imported when the command runs
-    from a1_leg_fk.recording.odometry import OdometryTrack
+    from a1_leg_fk.recording.odometry import (
+        OdometryOptions,
+        OdometryStream,
+        OdometryTrack,
+        TrackInfo,
+    )
+    from a1_leg_fk.recording.odometry_kept import KeptRows
+    from a1_leg_fk.recording.odometry_rows import TrackRows
     from a1_leg_fk.recording.outputs import OutputTarget
 
 CSV_HEADER = (
@@ -69,8 +76,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--ground",
         choices=GROUND_MODELS,
         default=FLAT,
-        help="flat (default): the stance feet's heights anchor the height; none: they do not; "
-        "local: each stance foot's height is held to the local ground under it (slopes, stairs)",
+        help="flat (default): the stance feet's heights anchor the height; none: they do not "
+        "(stairs, slopes)",
     )
     odom.add_argument(
         "--causal",
@@ -107,123 +114,152 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk odom``: see the module docstring for exit codes."""
     from a1_leg_fk.plots import pyplot
+    from a1_leg_fk.recording.odometry import odometry_stream
     from a1_leg_fk.recording.outputs import checked_targets
 
     del argv  # no ROS here
     try:
+        odometry, choices = odometry_inputs(
+            options, radius_m=options.foot_radius, contacts=options.contacts, ground=options.ground
+        )
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
         targets = checked_targets(
             Path(options.input), {"--csv": options.csv, "--plot": options.plot}, options.force
         )
-        track = track_of(
-            options,
-            radius_m=options.foot_radius,
-            contacts=options.contacts,
-            ground=options.ground,
-        )
-        written = _write(track, targets)
+        stream = odometry_stream(options.input, odometry, **choices)
+        info, kept = _write(stream, targets, truth=options.truth is not None)
     except (LegFkError, OSError) as error:
         return input_error("a1-leg-fk odom", error)
     except KeyboardInterrupt:
         print("a1-leg-fk odom: interrupted; no output written", file=sys.stderr)
         return EXIT_INTERRUPTED
-    for line in summary_lines(track):
+    for line in summary_lines(info, kept):
         print(line)
-    for path in written:
-        print(f"wrote:     {path}")
-    if track.summary.stopped:
+    for path in targets.values():
+        print(f"wrote:     {path.final}")
+    if info.summary.stopped:
         print(
-            f"a1-leg-fk odom: {options.input}: stopped early: {track.summary.stopped}",
+            f"a1-leg-fk odom: {options.input}: stopped early: {info.summary.stopped}",
             file=sys.stderr,
         )
         return EXIT_FAILED
     return EXIT_OK
 
 
-def _write(track: OdometryTrack, targets: dict[str, OutputTarget]) -> list[Path]:
-    """Write the requested outputs under temporary names, then move them into place."""
+def _write(
+    stream: OdometryStream, targets: dict[str, OutputTarget], truth: bool
+) -> tuple[TrackInfo, KeptRows]:
+    """Run ``stream``: its rows written to the CSV as they come, what the summary and the plot
+    need of them kept (``truth``: the comparison's columns); the outputs written under
+    temporary names, then moved into place.
+    """
     from a1_leg_fk.odometry_plot import plot_odometry
-    from a1_leg_fk.recording.csv_text import format_rows
+    from a1_leg_fk.recording.odometry import OdometryTrack
+    from a1_leg_fk.recording.odometry_kept import KeptRows
 
+    kept = KeptRows(truth, plot="--plot" in targets)
+    csv = None
     try:
         for target in targets.values():
             target.prepare()
         if "--csv" in targets:
-            floats = np.hstack(
-                [
-                    track.positions,
-                    track.orientations,
-                    track.linear,
-                    track.angular,
-                    track.twist_variances[:, :3],
-                    track.grounds,
-                ]
-            )
-            with open(targets["--csv"].temporary, "wb") as file:
-                file.write(CSV_HEADER.encode())
-                file.write(format_rows(track.stamps_ns[:, None], floats))
+            csv = open(targets["--csv"].temporary, "wb")  # noqa: SIM115 (closed below)
+            csv.write(CSV_HEADER.encode())
+        for rows in stream:
+            if csv is not None:
+                csv.write(_csv_rows(rows))
+            kept.add(rows)
+        if csv is not None:
+            csv.close()
+        info = stream.info
+        assert info is not None  # the stream was run to its end
         if "--plot" in targets:
-            plot_odometry(track, targets["--plot"].temporary)
+            plot_odometry(OdometryTrack.of_rows(kept.plotted(), info), targets["--plot"].temporary)
         for target in targets.values():
             target.commit()
     except BaseException:
+        if csv is not None:
+            csv.close()
         for target in targets.values():
             target.discard()
         raise
-    return [target.final for target in targets.values()]
+    return info, kept
 
 
-def track_of(options: argparse.Namespace, **settings: Any) -> OdometryTrack:
-    """The odometry over ``options.input`` with the options ``odom`` and ``view`` share
-    (``--imu``, ``--no-imu``, ``--truth``, ``--topic``, ``--urdf``, ``--foot-links``,
-    ``--joint-aliases``, ``--quiet``, ``--causal``: else smoothed); ``settings``: more of
-    :func:`~a1_leg_fk.recording.odometry.odometry_track`'s (``odom``'s ``radius_m``,
+def _csv_rows(rows: TrackRows) -> bytes:
+    """The CSV lines of ``rows`` (:data:`CSV_HEADER`'s columns)."""
+    from a1_leg_fk.recording.csv_text import format_rows
+
+    floats = np.hstack(
+        [rows.positions, rows.orientations, rows.linear, rows.angular, rows.twist_variances[:, :3],
+         rows.grounds]
+    )  # fmt: skip
+    return format_rows(rows.stamps_ns[:, None], floats)
+
+
+def odometry_inputs(
+    options: argparse.Namespace, **settings: Any
+) -> tuple[OdometryOptions, dict[str, Any]]:
+    """The odometry's options and the recording's choices that ``odom`` and ``view`` share
+    (``--imu``, ``--no-imu``, ``--causal``: else smoothed, ``--quiet``; ``--truth``, ``--topic``,
+    ``--urdf``, ``--foot-links``, ``--joint-aliases``); ``settings``: more of
+    :class:`~a1_leg_fk.recording.odometry.OdometryOptions` (``odom``'s ``radius_m``,
     ``contacts``, ``ground``). :class:`LegFkError` for contradicting options.
     """
-    from a1_leg_fk.recording.odometry import odometry_track
+    from a1_leg_fk.recording.odometry import OdometryOptions
 
     if options.no_imu and options.imu:
         raise LegFkError("--imu and --no-imu contradict each other")
-    return odometry_track(
-        options.input,
+    odometry = OdometryOptions(
         imu_topic=options.imu,
         use_imu=not options.no_imu,
-        base_pose=options.truth,
-        progress=show_progress(options),
-        topic=options.topic,
-        urdf=options.urdf,
-        foot_links=options.foot_links,
-        joint_aliases=options.joint_aliases,
         smoothed=not options.causal,
+        progress=show_progress(options),
         **settings,
     )
+    choices = {
+        "base_pose": options.truth,
+        "topic": options.topic,
+        "urdf": options.urdf,
+        "foot_links": options.foot_links,
+        "joint_aliases": options.joint_aliases,
+    }
+    return odometry, choices
 
 
-def summary_lines(track: OdometryTrack) -> list[str]:
-    """The human summary of an odometry track, one fact per line."""
-    from a1_leg_fk.recording.odometry_truth import compare_with_truth
+def track_of(options: argparse.Namespace) -> OdometryTrack:
+    """The whole odometry track over ``options.input`` (:func:`odometry_inputs`), for ``view``."""
+    from a1_leg_fk.recording.odometry import odometry_track
 
-    summary, counts = track.summary, track.counts
+    odometry, choices = odometry_inputs(options)
+    return odometry_track(options.input, odometry, **choices)
+
+
+def summary_lines(info: TrackInfo, kept: KeptRows) -> list[str]:
+    """The human summary of an odometry run (``kept``: what it kept of its rows), one fact per
+    line.
+    """
+    summary, counts = info.summary, info.counts
     lines = summary.lines()
     imu = (
-        f"{track.imu_topic} ({track.imu_samples} samples; {track.rows_with_imu} of "
-        f"{len(track.stamps_ns)} rows had one)"
-        if track.imu_topic
+        f"{info.imu_topic} ({info.imu_samples} samples; {info.rows_with_imu} of "
+        f"{kept.rows} rows had one)"
+        if info.imu_topic
         else "none (legs alone: planar pose, yaw from the feet)"
     )
     final = (
-        f"; final position {np.round(track.positions[-1], 3).tolist()} m in odom"
-        if len(track.stamps_ns)
+        f"; final position {np.round(kept.last, 3).tolist()} m in odom"
+        if kept.last is not None
         else ""
     )
-    contacts = f"{track.contacts} ({track.contact_counts.line()})" + (
-        f" (no foot forces for this robot: {track.contacts_note})" if track.contacts_note else ""
+    contacts = f"{info.contacts} ({info.contact_counts.line()})" + (
+        f" (no foot forces for this robot: {info.contacts_note})" if info.contacts_note else ""
     )
-    radii = sorted(set(track.radii))
+    radii = sorted(set(info.radii))
     lines += [f"imu:       {imu}", f"contacts:  {contacts}"]
-    if track.filtered:
-        lines.append(_filter_line(track))
+    if info.filtered:
+        lines.append(_filter_line(info))
     if counts.samples:
         slips = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.slips))
         lines.append(
@@ -232,25 +268,18 @@ def summary_lines(track: OdometryTrack) -> list[str]:
         )
     lines += [
         f"feet:      rolling radius {', '.join(f'{r:g}' for r in radii)} m",
-        f"distance:  {_distance(track.positions):.3f} m travelled{final}",
+        f"distance:  {kept.distance_m:.3f} m travelled{final}",
     ]
-    if track.truth is not None:
-        comparison = compare_with_truth(
-            track.stamps_ns,
-            track.positions,
-            track.orientations,
-            track.linear,
-            track.planar,
-            track.truth,
-        )
+    if info.truth is not None:
+        comparison = kept.comparison(info.planar, info.truth)
         lines.append(
-            f"truth:     {track.truth_topic}: "
+            f"truth:     {info.truth_topic}: "
             + (comparison.line() if comparison else "fewer than two rows with a pose")
         )
     return lines
 
 
-def _filter_line(track: OdometryTrack) -> str:
+def _filter_line(track: TrackInfo) -> str:
     """The state filter's line of the summary: rows, the gate's feet, NIS, biases."""
     counts = track.filter_counts
     used = ", ".join(f"{leg} {n}" for leg, n in zip(LEG_NAMES, counts.used))
@@ -264,11 +293,4 @@ def _filter_line(track: OdometryTrack) -> str:
         f"{counts.mean_nis:.2f}; gyro bias {gyro} rad/s; accelerometer bias {accel} m/s^2; "
         f"feet noise scales {track.noise_scales[0]:.3f} horizontal, {track.noise_scales[1]:.3f} "
         "vertical"
-    )
-
-
-def _distance(positions: np.ndarray) -> float:
-    """The path length [m] of (N, 3) positions."""
-    return (
-        float(np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()) if len(positions) else 0.0
     )

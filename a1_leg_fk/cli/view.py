@@ -115,10 +115,13 @@ def feet_pass(options: argparse.Namespace) -> FootTrajectories:
 def summary_of(feet: FootTrajectories, track: OdometryTrack | None) -> list[str]:
     """What ``bag`` prints, then ``odom``'s lines after its recording's (the same as feet's)."""
     from a1_leg_fk.cli.odom import summary_lines
+    from a1_leg_fk.recording.odometry_kept import KeptRows
 
     summary = feet.summary.lines()
     if track is not None:
-        summary += summary_lines(track)[len(track.summary.lines()) :]
+        kept = KeptRows(truth=track.truth is not None, plot=False)
+        kept.add(track)
+        summary += summary_lines(track, kept)[len(track.summary.lines()) :]
     return summary
 
 

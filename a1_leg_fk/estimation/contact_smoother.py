@@ -17,6 +17,14 @@ evidence of swing (:data:`CLEAR_SWING`) ``lead_s`` later also counts as evidence
 (the smaller of the two kinematic log-ratios); a touchdown, where the foot stops as it lands,
 is left where the evidence puts it.
 
+Where a foot's force is evidence, a liftoff is not placed before the filter's own
+(:func:`force_liftoffs`): the force's log-ratio is at even odds at 3 % of the weight
+(:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), and the forward-backward
+places a liftoff there, a few ms before the force reaches zero, where the foot still stands; the
+filter, which needs the evidence of swing to outweigh its stance, places it later, nearer the
+zero. Such a foot stands while either says so (tuned on the contact family's tuned runs,
+docs/forces.md).
+
 :class:`FixedLagSmoother` runs this over a stream of rows in windows: a row is final once the
 rows after it cover ``lag_s`` (the backward message from further on is taken as flat; see
 :data:`LAG_S`), so memory is bounded by a block plus the lag, whatever the recording's length.
@@ -126,6 +134,14 @@ def smooth(
     return filtered + np.array(backward).reshape(count, LEGS), filtered
 
 
+def force_liftoffs(smoothed: np.ndarray, filtered: np.ndarray, forced: np.ndarray) -> np.ndarray:
+    """(N, 4) log-odds of stance: ``smoothed``, but where the foot's force was evidence
+    (``forced``) the larger of ``smoothed`` and the filter's ``filtered`` (the module text).
+    """
+    result: np.ndarray = np.where(forced, np.maximum(smoothed, filtered), smoothed)
+    return result
+
+
 def _carried(m: float, stay: float, move: float) -> float:
     """Log-odds ``m`` carried across one step of the symmetric transition, ``stay`` = log(1 - s)
     and ``move`` = log(s): ``log(((1 - s) e^m + s) / (s e^m + 1 - s))``, finite for any ``m``.
@@ -188,6 +204,7 @@ class FixedLagSmoother:
         if count <= 0:
             return np.empty((0, LEGS))
         smoothed, filtered = smooth(self.pending, self.start, self.lead_s)
+        stance = force_liftoffs(smoothed[:count], filtered[:count], self.pending.forced[:count])
         self.start = filtered[count - 1]
         self.pending = self.pending[count:]
-        return probabilities(smoothed[:count])
+        return probabilities(stance)

@@ -9,7 +9,7 @@ with the open bag.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -44,9 +44,11 @@ def iter_foot_blocks(
     *,
     progress: bool = False,
     on_message: Callable[[Connection, int, bytes], None] | None = None,
+    others: Sequence[Connection] | None = None,
 ) -> Iterator[FootBlock]:
     """The feet, block by block, in bag order. ``on_message(connection, bag_time_ns, raw)`` is
-    called for every message of every topic (with it, the whole bag is read, e.g. to copy it).
+    called for every message read: of every topic (the whole bag is read, e.g. to copy it), or
+    with ``others``, of the joint states and those topics alone (e.g. an IMU's, read in step).
     Contacts smoothed over the recording when ``recording.forces.smoothed``
     (:func:`~a1_leg_fk.recording.contact_smoothing.smoothed_blocks`: the blocks then come a
     lag later, cut where the smoothed rows end).
@@ -57,7 +59,7 @@ def iter_foot_blocks(
     model's legs (a bag of another robot): then every row (there are none) and output would be
     empty.
     """
-    blocks = _foot_blocks(recording, progress, on_message)
+    blocks = _foot_blocks(recording, progress, on_message, others)
     forces = recording.forces
     return smoothed_blocks(blocks) if forces is not None and forces.smoothed else blocks
 
@@ -66,6 +68,7 @@ def _foot_blocks(
     recording: Recording,
     progress: bool,
     on_message: Callable[[Connection, int, bytes], None] | None,
+    others: Sequence[Connection] | None,
 ) -> Iterator[FootBlock]:
     """The pass of :func:`iter_foot_blocks`, with the filter's own (causal) contacts."""
     reader, joint_states = recording.reader, recording.joint_states
@@ -73,13 +76,14 @@ def _foot_blocks(
     if recording.forces is not None:
         recording.forces.restart()
     recording.has_velocities = False  # this pass's
-    connections = [] if on_message else [joint_states]
-    total = sum(c.msgcount for c in reader.connections) if on_message else joint_states.msgcount
+    every = on_message is not None and others is None  # every topic: the whole bag
+    connections = [] if every else [joint_states, *(c for c in others or () if c != joint_states)]
+    total = sum(c.msgcount for c in (reader.connections if every else connections))
     bar = _progress_bar(total, progress)
     kind = _Batch if recording.lowstate is None else _LowStateBatch
     batch = kind(recording, tracker, JointStateDecoder(ros1=recording.ros1))
     read = shown = 0
-    messages = recording.reads.messages(connections, "the bag" if on_message else "")
+    messages = recording.reads.messages(connections, "the bag" if every else "")
     try:
         for connection, bag_time, raw in messages:
             read += 1

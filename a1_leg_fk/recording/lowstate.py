@@ -135,23 +135,26 @@ class LowStateInput:
             reads,
         )
 
-    def imu_samples(self, reads: RecordingReads) -> list[tuple[int, int, ImuReading | None]]:
-        """(bag time [ns], stamp [ns], reading) of every message's IMU (orientation, gyro and
-        accelerometer), as the odometry takes an Imu topic's (the stamp is the bag time).
+    @staticmethod
+    def imu_samples(
+        times: list[int], rows: LowStateRows
+    ) -> list[tuple[int, int, ImuReading | None]]:
+        """(bag time [ns], stamp [ns], reading) of each decoded message's IMU (orientation, gyro
+        and accelerometer), as the odometry takes an Imu topic's (the stamp is the bag time):
+        ``rows`` decoded from the messages at ``times`` (the first ``len(rows.tick)``).
         """
         samples = []
-        for times, rows in self.blocks(reads):
-            for bag_time, quaternion, gyro, force in zip(
-                times.tolist(),
-                rows.orientations.tolist(),
-                rows.gyro.tolist(),
-                rows.accelerometer.tolist(),
-                strict=True,
-            ):
-                reading = imu_reading(
-                    quaternion, NO_COVARIANCE, gyro, NO_COVARIANCE, force, NO_COVARIANCE
-                )
-                samples.append((bag_time, bag_time, reading))
+        for bag_time, quaternion, gyro, force in zip(
+            times[: len(rows.tick)],
+            rows.orientations.tolist(),
+            rows.gyro.tolist(),
+            rows.accelerometer.tolist(),
+            strict=True,
+        ):
+            reading = imu_reading(
+                quaternion, NO_COVARIANCE, gyro, NO_COVARIANCE, force, NO_COVARIANCE
+            )
+            samples.append((bag_time, bag_time, reading))
         return samples
 
 

@@ -5,28 +5,35 @@ would have received them. No ROS install: the bag is read with ``rosbags``
 ``a1-leg-fk bag`` (:mod:`a1_leg_fk.recording.blocks`); the stance from the merged joint efforts'
 contacts from the merged joint efforts' foot forces and the feet's kinematics, or the kinematics
 alone, as the node decides it (:data:`~a1_leg_fk.estimation.odometry_feed.CONTACT_SOURCES`).
+
+It streams (:func:`odometry_stream`): the IMU is read in the same pass as the joint states, and
+the rows come in blocks as they become final (at once, or a smoother's window later), so a pass
+keeps no more of the recording than a block and the smoother's window, whatever its length.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections import deque
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from itertools import repeat
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Unpack
+from typing import TYPE_CHECKING, Unpack
 
 import numpy as np
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
-from a1_leg_fk.estimation.ground import GROUND_COLUMNS, ground_values
-from a1_leg_fk.estimation.imu import imu_reading
+from a1_leg_fk.estimation.ground import ground_values
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
 from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother
 from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.foot_block import FootBlock
 from a1_leg_fk.recording.forces import check_has_efforts
-from a1_leg_fk.recording.reader import pick_topic
+from a1_leg_fk.recording.imu_stream import ImuStream
+from a1_leg_fk.recording.odometry_rows import LiveRow, TrackRows, running_counts
+from a1_leg_fk.recording.reader import Recording, pick_topic
 from a1_leg_fk.recording.trajectories import (
     BasePoses,
     BlockStats,
@@ -41,39 +48,45 @@ if TYPE_CHECKING:
     from rosbags.highlevel import AnyReader
     from rosbags.interfaces import Connection
 
-    from a1_leg_fk.estimation.odometry import ImuReading
-    from a1_leg_fk.recording.reads import RecordingReads
-
 IMU_TYPE = "sensor_msgs/msg/Imu"
+BLOCK_ROWS = 4096
+"""Rows the stream gives at a time (:func:`odometry_stream`)."""
 
 
 @dataclass(frozen=True)
-class OdometryTrack:
-    """The odometry over a recording, one row per accepted JointState with joint velocities (N):
-    ``stamps_ns`` (N,);
-    pose in odom: ``positions`` (N, 3) [m], ``orientations`` (N, 4) x, y, z, w; twist in the base
-    frame: ``linear`` (N, 3) [m/s], ``angular`` (N, 3) [rad/s]; covariance diagonals
-    ``pose_variances`` and ``twist_variances`` (N, 6); ``stance`` and ``used`` (N, 4) bool.
-    ``truth``: the base's recorded pose (``--truth``), else None. ``contacts``: the contacts'
-    source asked for (auto, force, kinematic), ``contact_counts`` the samples with each
-    evidence, ``contacts_note`` why there are no foot forces for this robot ("" when there are).
-    ``filtered``: the rows the state filter gave (the others: the legs alone, without an
-    accelerometer), ``filter_counts``, its final biases (gyro [rad/s], accelerometer [m/s^2])
-    and the feet's noise scale; ``filter_history`` (N, 11) the filter's running counts after
-    each row: NIS sum, NIS count, feet used (4), feet rejected by the gate (4), gate resets.
-    ``smoothed``: the filter's rows smoothed over the recording (else the filter's own, causal).
+class OdometryOptions:
+    """How the odometry runs. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
+    one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
+    ``contacts``: the contacts' source (``auto``, ``force``: a bag without efforts is bad input,
+    ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``smoothed``: the
+    filter's states smoothed over the recording (:class:`~a1_leg_fk.estimation.
+    odometry_smoother.OdometrySmoother`), else the filter's own, as the node has them;
+    ``progress``: a progress bar.
     """
 
-    stamps_ns: np.ndarray
-    positions: np.ndarray
-    orientations: np.ndarray
-    linear: np.ndarray
-    angular: np.ndarray
-    pose_variances: np.ndarray
-    twist_variances: np.ndarray
-    stance: np.ndarray
-    used: np.ndarray
-    grounds: np.ndarray
+    imu_topic: str | None = None
+    use_imu: bool = True
+    radius_m: float | None = None
+    settings: OdometrySettings | None = None
+    contacts: str = AUTO
+    filter_settings: FilterSettings | None = None
+    ground: str = FLAT
+    smoothed: bool = False
+    progress: bool = False
+
+
+@dataclass(frozen=True)
+class TrackInfo:
+    """What the odometry over a recording found besides its rows. ``planar``: the last row's
+    pose is planar (legs alone); ``smoothed``: the filter's rows smoothed over the recording
+    (else the filter's own, causal). ``truth``: the base's recorded pose (``--truth``), else
+    None. ``contacts``: the contacts' source asked for (auto, force, kinematic),
+    ``contact_counts`` the samples with each evidence, ``contacts_note`` why there are no foot
+    forces for this robot ("" when there are). ``filtered``: the rows the state filter gave (the
+    others: the legs alone, without an accelerometer), ``filter_counts``, its final biases (gyro
+    [rad/s], accelerometer [m/s^2]) and the feet's noise scale.
+    """
+
     planar: bool
     smoothed: bool
     base_frame: str
@@ -92,152 +105,107 @@ class OdometryTrack:
     truth: BasePoses | None
     truth_topic: str | None
     summary: RecordingSummary
-    filter_history: np.ndarray
+
+
+@dataclass(frozen=True)
+class OdometryTrack(TrackRows, TrackInfo):
+    """The odometry over a recording, whole: its rows, one per accepted JointState with joint
+    velocities (:class:`~a1_leg_fk.recording.odometry_rows.TrackRows`), and :class:`TrackInfo`.
+    """
+
+    @classmethod
+    def of_rows(cls, rows: TrackRows, info: TrackInfo) -> OdometryTrack:
+        """The track of ``rows`` and ``info``."""
+        return cls(**vars(rows), **vars(info))
+
+
+class OdometryStream:
+    """The odometry's rows as they become final, in blocks (:class:`TrackRows`): iterate once;
+    ``info`` is set when the last block has been given.
+    """
+
+    def __init__(self, blocks: Generator[TrackRows, None, TrackInfo]) -> None:
+        self._blocks = blocks
+        self.info: TrackInfo | None = None
+
+    def __iter__(self) -> Iterator[TrackRows]:
+        self.info = yield from self._blocks
 
 
 def odometry_track(
     path: str | Path,
-    *,
-    imu_topic: str | None = None,
-    use_imu: bool = True,
-    radius_m: float | None = None,
-    settings: OdometrySettings | None = None,
-    contacts: str = AUTO,
-    filter_settings: FilterSettings | None = None,
-    ground: str = FLAT,
-    smoothed: bool = False,
-    progress: bool = False,
+    options: OdometryOptions | None = None,
     **choices: Unpack[RecordingChoices],
 ) -> OdometryTrack:
-    """The leg odometry of a bag. ``imu_topic``: its sensor_msgs/msg/Imu topic (default: the only
-    one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
-    ``contacts``: the contacts' source (``auto``, ``force``: a bag without efforts is bad input,
-    ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``smoothed``: the
-    filter's states smoothed over the recording (:class:`~a1_leg_fk.estimation.
-    odometry_smoother.OdometrySmoother`), else the filter's own, as the node has them;
-    ``choices`` as
-    :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
-    whose ``base_pose`` is the truth to compare with. :class:`LegFkError` for bad input.
+    """The leg odometry of a bag, whole (:func:`odometry_stream`'s rows joined)."""
+    stream = odometry_stream(path, options, **choices)
+    rows = TrackRows.joined(list(stream))
+    assert stream.info is not None
+    return OdometryTrack.of_rows(rows, stream.info)
+
+
+def odometry_stream(
+    path: str | Path,
+    options: OdometryOptions | None = None,
+    block_rows: int = BLOCK_ROWS,
+    **choices: Unpack[RecordingChoices],
+) -> OdometryStream:
+    """The leg odometry of a bag as it streams: blocks of ``block_rows`` final rows (the last
+    block shorter), the IMU read in the same pass as the joint states
+    (:class:`~a1_leg_fk.recording.imu_stream.ImuStream`). ``choices`` as
+    :func:`~a1_leg_fk.recording.trajectories.open_recording`'s, whose ``base_pose`` is the truth
+    to compare with. :class:`LegFkError` for bad input, when iterated.
     """
+    return OdometryStream(_blocks(Path(path), options or OdometryOptions(), block_rows, choices))
+
+
+def _blocks(
+    path: Path, options: OdometryOptions, block_rows: int, choices: RecordingChoices
+) -> Generator[TrackRows, None, TrackInfo]:
+    """The pass of :func:`odometry_stream`."""
     recording = open_recording(path, **choices)
     try:
-        recording.efforts = contacts != KINEMATIC
-        lowstate = recording.lowstate  # a LowState carries its motors' torques and its IMU
-        if contacts == FORCE and lowstate is None:
-            check_has_efforts(
-                recording.reads, recording.joint_states, recording.ros1, "--contacts force"
-            )
-        if lowstate is not None and imu_topic:
-            raise LegFkError(f"--imu: {lowstate.connection.topic} is a LowState, with its IMU")
-        if lowstate is not None:
-            imu_connection = lowstate.connection if use_imu else None
-            imu = lowstate.imu_samples(recording.reads) if use_imu else []
-        else:
-            imu_connection = _imu_connection(recording.reader, Path(path), imu_topic, use_imu)
-            imu = _imu_samples(recording.reads, imu_connection) if imu_connection else []
-        feed = OdometryFeed(
-            recording.quadruped,
-            settings,
-            radius_m,
-            use_imu=use_imu,
-            contacts=contacts,
-            filter_settings=filter_settings,
-            ground=ground,
+        feed, imu = _inputs(recording, path, options)
+        stats, samples, planar = BlockStats(), [], True
+        pending: deque[LiveRow] = deque()  # the live values of the rows not final yet
+        live: list[LiveRow] = []
+        smoother = OdometrySmoother(feed.filter) if options.smoothed else None
+        blocks = iter_foot_blocks(
+            recording,
+            progress=options.progress,
+            on_message=imu.add if imu else None,
+            others=[imu.connection] if imu else None,
         )
-        if contacts == FORCE and feed.note:
-            raise LegFkError(f"--contacts force: {feed.note}")
-        stats, samples, history, next_imu = BlockStats(), [], [], 0
-        smoother = OdometrySmoother(feed.filter) if smoothed else None
-        grounds: list[tuple[float, ...]] = []
-        for block in iter_foot_blocks(recording, progress=progress):
+        for block in blocks:
             stats.add(block)
-            usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(
-                axis=2
-            )
-            efforts = block.efforts.tolist() if block.efforts is not None else repeat(None)
-            rows = zip(
-                block.stamps_ns.tolist(),
-                block.bag_times_ns.tolist(),
-                block.positions.tolist(),
-                block.velocities.tolist(),
-                usable.tolist(),
-                block.angles.tolist(),
-                block.rates.tolist(),
-                efforts,
-            )
-            for stamp, bag_time, positions, velocities, known, angles, rates, effort in rows:
-                while next_imu < len(imu) and imu[next_imu][0] <= bag_time:
-                    feed.add_imu(imu[next_imu][1], imu[next_imu][2])
-                    next_imu += 1
-                feet = [
-                    (position, velocity) if ok else None
-                    for position, velocity, ok in zip(positions, velocities, known)
-                ]
-                sample = feed.step(stamp, feet, angles, rates, efforts=effort)
-                if sample is None:
-                    continue
-                grounds.append(ground_values(feed.ground_plane(sample)))  # live, as the node's
-                if smoother is None:
-                    samples.append(sample)
-                else:
-                    samples += smoother.add(sample, feed.samples_filtered)
-                history.append(_running_counts(feed.filter.counts))  # live, as the node's
+            for sample in _block_samples(block, feed, imu):
+                pending.append(
+                    (ground_values(feed.ground_plane(sample)), running_counts(feed.filter.counts))
+                )
+                final = (
+                    [sample] if smoother is None else smoother.add(sample, feed.samples_filtered)
+                )
+                samples += final
+                live += [pending.popleft() for _ in final]
+                if len(samples) >= block_rows:
+                    planar = samples[-1].planar
+                    yield TrackRows.of(samples, live)
+                    samples, live = [], []
         if smoother is not None:
             samples += smoother.finish()
+            live += pending
+        if samples:
+            planar = samples[-1].planar
+            yield TrackRows.of(samples, live)
         summary = stats.summary(recording)
+        imu_samples = imu.finish() if imu else 0
     finally:
         close_recording(recording)
-    return _track(
-        samples,
-        smoothed,
-        grounds,
-        recording.quadruped.base_frame,
-        imu_connection,
-        len(imu),
-        feed,
-        recording.base_pose_topic,
-        recording.base_pose,
-        summary,
-        np.array(history, dtype=float).reshape(-1, 11),
-    )
-
-
-def _running_counts(counts: FilterCounts) -> tuple[float, ...]:
-    """The filter's running counts as :attr:`OdometryTrack.filter_history` keeps a row."""
-    return (counts.nis_sum, counts.nis_count, *counts.used, *counts.rejected, counts.gate_resets)
-
-
-def _track(
-    samples: Sequence[OdometrySample],
-    smoothed: bool,
-    grounds: Sequence[tuple[float, ...]],
-    base_frame: str,
-    imu_connection: Connection | None,
-    imu_samples: int,
-    feed: OdometryFeed,
-    truth_topic: str | None,
-    truth: BasePoses | None,
-    summary: RecordingSummary,
-    filter_history: np.ndarray,
-) -> OdometryTrack:
-    def column(name: str, width: int, dtype: type = float) -> np.ndarray:
-        return np.array([getattr(s, name) for s in samples], dtype=dtype).reshape(-1, width)
-
-    return OdometryTrack(
-        stamps_ns=np.array([s.stamp_ns for s in samples], dtype=np.int64),
-        positions=column("position", 3),
-        orientations=column("orientation", 4),
-        linear=column("linear", 3),
-        angular=column("angular", 3),
-        pose_variances=column("pose_variance", 6),
-        twist_variances=column("twist_variance", 6),
-        stance=_mask([s.stance for s in samples]),
-        used=_mask([s.used for s in samples]),
-        grounds=np.array(grounds, dtype=float).reshape(-1, len(GROUND_COLUMNS)),
-        planar=bool(samples[-1].planar) if samples else True,
-        smoothed=smoothed,
-        base_frame=base_frame,
-        imu_topic=imu_connection.topic if imu_connection else None,
+    return TrackInfo(
+        planar=bool(planar),
+        smoothed=options.smoothed,
+        base_frame=recording.quadruped.base_frame,
+        imu_topic=imu.connection.topic if imu else None,
         imu_samples=imu_samples,
         rows_with_imu=feed.samples_with_imu,
         radii=feed.motion.radii,
@@ -249,19 +217,75 @@ def _track(
         filter_counts=feed.filter.counts,
         biases=(tuple(feed.filter.gyro_bias.tolist()), tuple(feed.filter.accel_bias.tolist())),
         noise_scales=feed.filter.gate.scales,
-        truth=truth,
-        truth_topic=truth_topic,
+        truth=recording.base_pose,
+        truth_topic=recording.base_pose_topic,
         summary=summary,
-        filter_history=filter_history,
     )
 
 
-def _mask(legs: Sequence[Sequence[int]]) -> np.ndarray:
-    """(N, 4) bool: row n has True at the legs ``legs[n]``."""
-    mask = np.zeros((len(legs), 4), dtype=bool)
-    for row, chosen in enumerate(legs):
-        mask[row, list(chosen)] = True
-    return mask
+def _inputs(
+    recording: Recording, path: Path, options: OdometryOptions
+) -> tuple[OdometryFeed, ImuStream | None]:
+    """The odometry's pipeline for ``recording`` and its IMU's stream (None: no IMU);
+    :class:`LegFkError` for bad input.
+    """
+    contacts, use_imu = options.contacts, options.use_imu
+    recording.efforts = contacts != KINEMATIC
+    lowstate = recording.lowstate  # a LowState carries its motors' torques and its IMU
+    if contacts == FORCE and lowstate is None:
+        check_has_efforts(
+            recording.reads, recording.joint_states, recording.ros1, "--contacts force"
+        )
+    if lowstate is not None and options.imu_topic:
+        raise LegFkError(f"--imu: {lowstate.connection.topic} is a LowState, with its IMU")
+    if lowstate is not None:
+        imu = ImuStream(recording.reads, lowstate.connection, lowstate) if use_imu else None
+    else:
+        connection = _imu_connection(recording.reader, path, options.imu_topic, use_imu)
+        imu = ImuStream(recording.reads, connection) if connection else None
+    feed = OdometryFeed(
+        recording.quadruped,
+        options.settings,
+        options.radius_m,
+        use_imu=use_imu,
+        contacts=contacts,
+        filter_settings=options.filter_settings,
+        ground=options.ground,
+    )
+    if contacts == FORCE and feed.note:
+        raise LegFkError(f"--contacts force: {feed.note}")
+    return feed, imu
+
+
+def _block_samples(
+    block: FootBlock, feed: OdometryFeed, imu: ImuStream | None
+) -> Iterator[OdometrySample]:
+    """The feed's causal samples of ``block``'s rows, each after the IMU's samples up to its
+    bag time.
+    """
+    usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(axis=2)
+    efforts = block.efforts.tolist() if block.efforts is not None else repeat(None)
+    rows = zip(
+        block.stamps_ns.tolist(),
+        block.bag_times_ns.tolist(),
+        block.positions.tolist(),
+        block.velocities.tolist(),
+        usable.tolist(),
+        block.angles.tolist(),
+        block.rates.tolist(),
+        efforts,
+    )
+    for stamp, bag_time, positions, velocities, known, angles, rates, effort in rows:
+        if imu is not None:
+            for _, imu_stamp, reading in imu.until(bag_time):
+                feed.add_imu(imu_stamp, reading)
+        feet = [
+            (position, velocity) if ok else None
+            for position, velocity, ok in zip(positions, velocities, known)
+        ]
+        sample = feed.step(stamp, feet, angles, rates, efforts=effort)
+        if sample is not None:
+            yield sample
 
 
 def _imu_connection(
@@ -273,26 +297,3 @@ def _imu_connection(
     if wanted is None and not any(c.msgtype == IMU_TYPE for c in reader.connections):
         return None
     return pick_topic(reader, path, wanted, (IMU_TYPE,), "--imu", "Imu")
-
-
-def _imu_samples(
-    reads: RecordingReads, connection: Connection
-) -> list[tuple[int, int, ImuReading | None]]:
-    """(bag time [ns], stamp [ns], reading) of every Imu message up to damage, in bag order (the
-    stamp is the bag time where the header's is zero, as for joint states).
-    """
-    samples = []
-    message: Any
-    for bag_time, message in reads.decoded(connection):
-        stamp = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-        q, w, a = message.orientation, message.angular_velocity, message.linear_acceleration
-        reading = imu_reading(
-            (q.x, q.y, q.z, q.w),
-            message.orientation_covariance,
-            (w.x, w.y, w.z),
-            message.angular_velocity_covariance,
-            (a.x, a.y, a.z),
-            message.linear_acceleration_covariance,
-        )
-        samples.append((bag_time, stamp or bag_time, reading))
-    return samples

@@ -111,3 +111,26 @@ def test_windows_give_the_whole_pass() -> None:
         assert len(smoother.pending) <= 137 + 251  # a block and the lag, never the recording
     parts.append(smoother.take(len(smoother.pending)))
     np.testing.assert_allclose(np.concatenate(parts), whole, rtol=0, atol=1e-6)
+
+
+def test_a_foot_with_force_evidence_lifts_off_where_the_filter_does() -> None:
+    """A foot standing 100 rows then swinging 100, its evidence symmetric: the forward-backward
+    puts the liftoff at the change itself, the filter a few rows later; with force evidence the
+    smoother's output keeps the filter's (force_liftoffs), without it the smoother's own."""
+    evidence = np.r_[np.full(100, 2.0), np.full(100, -2.0)][:, None].repeat(LEGS, axis=1)
+    switch = np.full(200, 1.0 - np.exp(-0.002 / 0.1))
+    forced = rows_of(evidence, switch)
+    smoothed, filtered = smooth(forced, np.zeros(LEGS))
+    liftoff = {
+        name: int(np.argmax(odds[:, 0] < 0.0))
+        for name, odds in (("smoothed", smoothed), ("filtered", filtered))
+    }
+    assert liftoff["smoothed"] == 100 and liftoff["filtered"] > 100, liftoff
+    smoother = FixedLagSmoother()
+    smoother.add(forced)
+    with_force = smoother.take(200)[:, 0] >= 0.5
+    assert int(np.argmin(with_force)) == liftoff["filtered"]
+    unforced = EvidenceRows(forced.stamps_s, switch, evidence, ~forced.forced, evidence)
+    smoother = FixedLagSmoother(lead_s=0.0)
+    smoother.add(unforced)
+    assert int(np.argmin(smoother.take(200)[:, 0] >= 0.5)) == liftoff["smoothed"]

@@ -27,7 +27,7 @@ from lowstate_bags import (
 )
 
 from a1_leg_fk import cli
-from a1_leg_fk.recording.odometry import odometry_track
+from a1_leg_fk.recording.odometry import OdometryOptions, odometry_track
 from a1_leg_fk.recording.trajectories import read_foot_trajectories
 from a1_leg_fk.wire.lowstate import LowStateDecoder, layout_for
 from a1_leg_fk.wire.unitree_types import GO_LOW_STATE, HUMANOID_LOW_STATE, LEGGED_LOW_STATE
@@ -130,7 +130,7 @@ def test_odometry_equals_the_joint_state_and_imu_path(
 ):
     bag = write_lowstate_bag(tmp_path / "lowstate", run, ROWS)
     ours = odometry_track(bag)
-    theirs = odometry_track(reference, imu_topic="/imu")
+    theirs = odometry_track(reference, OdometryOptions(imu_topic="/imu"))
     assert len(ours.stamps_ns) == len(theirs.stamps_ns) > ROWS // 2
     np.testing.assert_array_equal(ours.positions, theirs.positions)
     np.testing.assert_array_equal(ours.orientations, theirs.orientations)

@@ -39,12 +39,15 @@ from a1_leg_fk import cli
 FORMATS = ("mcap", "mcap-zstd", "sqlite3", "ros1")
 COMMANDS: dict[str, tuple[str, ...]] = {  # INPUT and OUTPUT are replaced by the paths
     "bag": ("bag", "INPUT", "--csv", "OUTPUT", "--quiet"),
-    "bag --forces": ("bag", "INPUT", "--forces", "--csv", "OUTPUT", "--quiet"),
+    "bag --forces --causal": ("bag", "INPUT", "--forces", "--causal", "--csv", "OUTPUT", "--quiet"),
     "gait": ("gait", "INPUT", "--base-pose", TRUTH_TOPIC, "--json", "OUTPUT", "--quiet"),
     "odom": ("odom", "INPUT", "--csv", "OUTPUT", "--quiet"),
+    "odom --causal": ("odom", "INPUT", "--causal", "--csv", "OUTPUT", "--quiet"),
 }
-PREFIX_COMMANDS = ("bag", "bag --forces", "odom")
-"""Commands whose CSV rows of a truncated recording must be a prefix of the undamaged ones."""
+PREFIX_COMMANDS = ("bag", "bag --forces --causal", "odom --causal")
+"""Commands whose CSV rows of a truncated recording must be a prefix of the undamaged ones: the
+live answers (``--causal``), each row from the rows before it; a smoothed row also reads the rows
+after it, which a truncated recording does not have."""
 SIM_S = 1.2  # 600 samples at 500 Hz of each topic
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from contact_runs import ContactRun
@@ -63,9 +64,10 @@ def robot_of(run: ContactRun) -> Quadruped:
 
 
 def estimate(
-    run: ContactRun, quadruped: Quadruped, evidence: str
+    run: ContactRun, quadruped: Quadruped, evidence: str, **options: Any
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run."""
+    """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run;
+    ``options``: the estimator's keywords."""
     rotations = rotation_matrices(run.quaternions)
     gravity = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -STANDARD_GRAVITY])
     if evidence == OLD_RULE:
@@ -75,7 +77,7 @@ def estimate(
         )
         rule = ContactRule(ContactThresholds.for_weight(statics.total_mass_kg * STANDARD_GRAVITY))
         return rule.update_batch(normal), normal
-    estimator = ContactEstimator(quadruped)
+    estimator = ContactEstimator(quadruped, **options)
     feet = quadruped.fk_batch(run.angles)
     velocities = quadruped.foot_velocities_batch(run.angles, run.rates)
     probabilities, normals = np.empty((len(run.stamps_s), 4)), np.empty((len(run.stamps_s), 4))

@@ -27,6 +27,12 @@ import numpy as np
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.model_corrections import (
+    MODEL_CORRECTIONS,
+    OFF,
+    ONLINE,
+    ModelCorrections,
+)
 from a1_leg_fk.estimation.momentum_observer import NO_ROTATION, MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -97,19 +103,24 @@ class ContactEstimator:
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
         thresholds: tuple[float | None, float | None] = (None, None),
+        model_corrections: str = OFF,
     ) -> None:
         """``force_model``: ``"dynamic"`` or ``"static"``; ``contact_rule``: ``"filter"`` (its
         scales :meth:`ContactModel.for_robot` of the URDF's weight and leg length) or
         ``"threshold"`` (touchdown and liftoff normal forces ``thresholds`` [N], None for
-        :meth:`ContactThresholds.for_weight`'s defaults).
+        :meth:`ContactThresholds.for_weight`'s defaults); ``model_corrections``: ``"online"``
+        learns and takes off the joints' friction and bias (:mod:`a1_leg_fk.estimation.
+        model_corrections`; the dynamic force model and the filter only), ``"off"``.
         """
         for name, value, choices in (
             ("force model", force_model, FORCE_MODELS),
             ("contact rule", contact_rule, CONTACT_RULES),
+            ("model corrections", model_corrections, MODEL_CORRECTIONS),
         ):
             if value not in choices:
                 raise LegFkError(f"{name} must be one of {', '.join(choices)}: {value!r}")
         self.force_model, self.contact_rule = force_model, contact_rule
+        self.model_corrections = model_corrections
         self.statics = FootForces(quadruped)
         self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
         self.motion = LegMotion(quadruped)
@@ -124,6 +135,8 @@ class ContactEstimator:
         """
         if self.observer is not None:
             self.observer.reset()
+            online = self.model_corrections == ONLINE and self.contact_rule == FILTER
+            self.observer.corrections = ModelCorrections() if online else None
         self.filter = ContactFilter(self.model)
         self.rule = ContactRule(self.rule.thresholds)
         self.counts = EvidenceCounts()
@@ -176,7 +189,15 @@ class ContactEstimator:
             normals if with_force else None,
             phase_prior,
         )
+        corrections = self.corrections
+        if corrections is not None and with_force:
+            corrections.learn(dt, probabilities, motions, self.model.height_half_m)
         return ContactStep(forces, normals, probabilities, missing, singular, motions)
+
+    @property
+    def corrections(self) -> ModelCorrections | None:
+        """The model's online corrections (None: off)."""
+        return None if self.observer is None else self.observer.corrections
 
     def _forces(
         self,

@@ -35,6 +35,7 @@ from a1_leg_fk.estimation.filter_model import (
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.model_corrections import OFF
 from a1_leg_fk.estimation.odometry import (
     ImuReading,
     LegOdometry,
@@ -77,7 +78,8 @@ class OdometryFeed:
     """The base's state for one robot. ``radii``: the feet's rolling radii [m] (default: the
     URDF's collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``
     one of :data:`CONTACT_SOURCES`; ``ground``: ``flat`` (the stance feet anchor the height) or
-    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`).
+    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`);
+    ``model_corrections``: the contact estimate's (:class:`ForcePass`).
     """
 
     def __init__(
@@ -90,6 +92,7 @@ class OdometryFeed:
         contacts: str = AUTO,
         filter_settings: FilterSettings | None = None,
         ground: str = FLAT,
+        model_corrections: str = OFF,
     ) -> None:
         if contacts not in CONTACT_SOURCES:
             raise LegFkError(f"contacts must be one of {', '.join(CONTACT_SOURCES)}: {contacts!r}")
@@ -99,7 +102,7 @@ class OdometryFeed:
         """Why there are no foot forces for this robot ("" when there are)."""
         self.contacts: ForcePass | None = None
         try:
-            self.contacts = ForcePass(quadruped)
+            self.contacts = ForcePass(quadruped, model_corrections=model_corrections)
         except LegFkError as error:  # a URDF without masses: the kinematic stance
             self.note = str(error)
         self.odometry = LegOdometry(settings)

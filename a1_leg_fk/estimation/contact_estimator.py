@@ -28,8 +28,8 @@ from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.model_corrections import (
+    DEFAULT_MODEL_CORRECTIONS,
     MODEL_CORRECTIONS,
-    OFF,
     ONLINE,
     ModelCorrections,
 )
@@ -103,7 +103,7 @@ class ContactEstimator:
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
         thresholds: tuple[float | None, float | None] = (None, None),
-        model_corrections: str = OFF,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         """``force_model``: ``"dynamic"`` or ``"static"``; ``contact_rule``: ``"filter"`` (its
         scales :meth:`ContactModel.for_robot` of the URDF's weight and leg length) or

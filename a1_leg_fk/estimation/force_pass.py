@@ -21,7 +21,7 @@ from a1_leg_fk.estimation.contact_estimator import (
     ContactStep,
     ImuSample,
 )
-from a1_leg_fk.estimation.model_corrections import OFF
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.model.legs import JOINT_COUNT
 
 if TYPE_CHECKING:
@@ -58,7 +58,7 @@ class ForcePass:
         thresholds: tuple[float | None, float | None] = (None, None),
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
-        model_corrections: str = OFF,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         """``thresholds``: touchdown and liftoff normal forces [N] of the ``"threshold"`` contact
         rule, ``None`` for the default (:meth:`ContactThresholds.for_weight` of the URDF's total

@@ -11,11 +11,16 @@ alone. Per joint it is fitted as
 
 (friction opposes motion: ``viscous`` [N m s/rad] and ``coulomb`` [N m] are at most 0; ``ε``
 [rad/s] the smooth sign's width) by recursive least squares with exponential forgetting
-(time constant ``forget_s`` of learning time), each parameter kept within its bound. It learns
-only while the foot is confidently in the air: the contact filter's probability of stance below
-``swing_probability`` and the foot higher than the filter's ``height_half_m`` above the lowest
-(the kinematic evidence agrees); it is frozen otherwise. ``c(q̇)`` is subtracted from every
-residual, stance included (friction acts there too).
+(time constant ``forget_s`` of learning time), left unconstrained (clipping a least squares'
+estimate breaks its covariance: on the first strides of an exact robot, with the rate of one
+sign, bias and Coulomb are collinear and a clipped viscous term drove them to their bounds).
+What is taken off is each estimate shrunk towards 0 by ``significance`` standard deviations
+(its covariance times the residual's variance about the fit, both learnt), then held to its bound
+and sign: a term the data do not show is 0, so an exact robot's residual is left as it is.
+It learns only while the foot is confidently in the air: the contact filter's probability of
+stance below ``swing_probability`` and the foot higher than the filter's ``height_half_m``
+above the lowest (the kinematic evidence agrees); it is frozen otherwise. ``c(q̇)`` is
+subtracted from every residual, stance included (friction acts there too).
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ from a1_leg_fk.model.urdf import LegFkError
 ONLINE, OFF = "online", "off"
 MODEL_CORRECTIONS = (ONLINE, OFF)
 """``model_corrections`` of the nodes, ``--corrections`` of the bag tools."""
+DEFAULT_MODEL_CORRECTIONS = ONLINE
+"""Measured: the exact robots of the mismatch and contact families lose nothing (their terms
+stay below significance), the mismatched ones gain up to 2.8 points (docs/forces.md)."""
 PARAMETERS = 3
 """Per joint: bias [N m], viscous [N m s/rad], Coulomb [N m]."""
 
@@ -50,23 +58,36 @@ class CorrectionSettings:
     forget_s: float = 10.0
     bounds: tuple[float, float, float] = (3.0, 0.5, 1.5)
     noise_nm: float = 0.5
+    significance: float = 3.0
 
     def __post_init__(self) -> None:
-        values = (self.swing_probability, self.smooth_rate, self.forget_s, self.noise_nm)
+        values = (
+            self.swing_probability,
+            self.smooth_rate,
+            self.forget_s,
+            self.noise_nm,
+            self.significance,
+        )
         if not all(math.isfinite(v) and v > 0.0 for v in (*values, *self.bounds)):
             raise LegFkError(f"model corrections need positive finite settings: {self}")
 
 
 class _Joint:
     """One joint's least squares: the parameters ``theta`` (bias [N m], viscous [N m s/rad],
-    Coulomb [N m]) and their covariance ``p`` (3x3, rows) over the residual's noise variance.
+    Coulomb [N m]; unconstrained) and their covariance ``p`` (3x3, rows) over the residual's
+    noise variance.
     """
 
-    __slots__ = ("p", "theta")
+    __slots__ = ("applied", "p", "theta", "variance")
 
-    def __init__(self, prior: Sequence[float]) -> None:
+    def __init__(self, prior: Sequence[float], variance: float) -> None:
         self.theta = [0.0] * PARAMETERS
         self.p = [[prior[i] if i == j else 0.0 for j in range(PARAMETERS)] for i in range(3)]
+        self.variance = variance
+        """The residual's noise variance [N² m²] about the fit: the a priori errors' squares,
+        averaged with forgetting from the prior ``noise_nm`` squared."""
+        self.applied = (0.0, 0.0, 0.0)
+        """The parameters taken off: each shrunk towards 0 by its significance margin."""
 
 
 class ModelCorrections:
@@ -76,7 +97,7 @@ class ModelCorrections:
         self.settings = settings or CorrectionSettings()
         noise = self.settings.noise_nm
         self._prior = [(bound / noise) ** 2 for bound in self.settings.bounds]
-        self._joints = [_Joint(self._prior) for _ in range(JOINT_COUNT)]
+        self._joints = [_Joint(self._prior, noise**2) for _ in range(JOINT_COUNT)]
         self._latest: list[tuple[float, float] | None] = [None] * JOINT_COUNT
         """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
         self.learnt_samples = 0
@@ -87,7 +108,7 @@ class ModelCorrections:
         off; the raw one kept for :meth:`learn`.
         """
         self._latest[joint] = (residual, rate)
-        bias, viscous, coulomb = self._joints[joint].theta
+        bias, viscous, coulomb = self._joints[joint].applied
         return residual - (
             bias + viscous * rate + coulomb * math.tanh(rate / self.settings.smooth_rate)
         )
@@ -122,7 +143,8 @@ class ModelCorrections:
 
     def _update(self, joint: int, residual: float, rate: float, forget: float) -> None:
         """One recursive least-squares step of ``joint`` with forgetting ``forget`` (< 1): the
-        parameters kept within the bounds, the covariance within the prior.
+        covariance kept within the prior, the residual's variance and the terms taken off
+        updated.
         """
         state, settings = self._joints[joint], self.settings
         phi = (1.0, rate, math.tanh(rate / settings.smooth_rate))
@@ -141,28 +163,70 @@ class ModelCorrections:
                 for j in range(3):
                     p[i][j] *= scale
                     p[j][i] *= scale
-        bias, viscous, coulomb = settings.bounds
-        theta[0] = min(bias, max(-bias, theta[0]))
-        theta[1] = min(0.0, max(-viscous, theta[1]))
-        theta[2] = min(0.0, max(-coulomb, theta[2]))
+        state.variance = forget * state.variance + (1.0 - forget) * error * error
+        state.applied = self._applied(theta, p, state.variance)
         self.learnt_samples += 1
+
+    def _applied(
+        self, theta: Sequence[float], p: Sequence[Sequence[float]], variance: float
+    ) -> tuple[float, float, float]:
+        """The parameters taken off: each estimate shrunk towards 0 by ``significance`` of its
+        standard deviation (``p``'s diagonal times the residual's ``variance`` [N² m²]), so a
+        term the data do not show stays 0, then held to its bound and its sign (friction
+        opposes motion: viscous and Coulomb at most 0). The fit itself is left unconstrained:
+        clipping it would break the least squares' covariance.
+        """
+        k, bounds = self.settings.significance, self.settings.bounds
+        shrunk = [
+            math.copysign(max(0.0, abs(theta[i]) - k * math.sqrt(p[i][i] * variance)), theta[i])
+            for i in range(PARAMETERS)
+        ]
+        return (
+            min(bounds[0], max(-bounds[0], shrunk[0])),
+            min(0.0, max(-bounds[1], shrunk[1])),
+            min(0.0, max(-bounds[2], shrunk[2])),
+        )
 
     @property
     def parameters(self) -> list[tuple[float, float, float]]:
-        """Per joint (slot order): bias [N m], viscous [N m s/rad] and Coulomb [N m] friction as
-        positive coefficients (the torque ``c(q̇) = bias - viscous q̇ - coulomb tanh(q̇/ε)``).
+        """Per joint (slot order), the terms taken off: bias [N m], viscous [N m s/rad] and
+        Coulomb [N m] friction as positive coefficients (the torque ``c(q̇) = bias - viscous q̇ -
+        coulomb tanh(q̇/ε)``).
+        """
+        return [(j.applied[0], -j.applied[1], -j.applied[2]) for j in self._joints]
+
+    @property
+    def fit(self) -> list[tuple[float, float, float]]:
+        """Per joint, the least squares' estimates before the significance and the bounds, as
+        :attr:`parameters` gives them.
         """
         return [(j.theta[0], -j.theta[1], -j.theta[2]) for j in self._joints]
 
-    def line(self) -> str:
-        """The corrections in words, per leg the mean over its joints (summaries, diagnostics)."""
-        parts = []
-        values = self.parameters
+    def values(self) -> dict[str, str]:
+        """The terms taken off, per leg (``model_corrections_FR``...: its three joints'
+        ``bias,viscous,coulomb`` [N m, N m s/rad, N m] joined by ``/``) and the joint samples
+        learnt from: the diagnostics' values and the summary's line.
+        """
+        out = {"model_corrections_learnt_samples": str(self.learnt_samples)}
+        terms = self.parameters
         for leg, name in enumerate(LEG_NAMES):
-            joints = values[leg * JOINTS_PER_LEG : (leg + 1) * JOINTS_PER_LEG]
-            text = "/".join(f"{b:+.2f},{v:.2f},{c:.2f}" for b, v, c in joints)
-            parts.append(f"{name} {text}")
+            joints = terms[leg * JOINTS_PER_LEG : (leg + 1) * JOINTS_PER_LEG]
+            text = "/".join(f"{b + 0.0:+.2f},{v + 0.0:.2f},{c + 0.0:.2f}" for b, v, c in joints)
+            out[f"model_corrections_{name}"] = text
+        return out
+
+    def line(self) -> str:
+        """The corrections in words (the bag tools' summaries)."""
+        values = self.values()
+        legs = "; ".join(f"{name} {values[f'model_corrections_{name}']}" for name in LEG_NAMES)
         return (
             f"model corrections: online, learnt from {self.learnt_samples} joint samples in "
-            f"swing; per joint bias [N m], viscous [N m s/rad], Coulomb [N m]: " + "; ".join(parts)
+            f"swing; per joint bias [N m], viscous [N m s/rad], Coulomb [N m]: {legs}"
         )
+
+
+def correction_values(corrections: ModelCorrections | None) -> dict[str, str]:
+    """The diagnostics' values of the corrections (None: off), for both nodes."""
+    if corrections is None:
+        return {"model_corrections": OFF}
+    return {"model_corrections": ONLINE, **corrections.values()}

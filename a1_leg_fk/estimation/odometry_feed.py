@@ -35,7 +35,7 @@ from a1_leg_fk.estimation.filter_model import (
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
-from a1_leg_fk.estimation.model_corrections import OFF
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, ModelCorrections
 from a1_leg_fk.estimation.odometry import (
     ImuReading,
     LegOdometry,
@@ -92,7 +92,7 @@ class OdometryFeed:
         contacts: str = AUTO,
         filter_settings: FilterSettings | None = None,
         ground: str = FLAT,
-        model_corrections: str = OFF,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         if contacts not in CONTACT_SOURCES:
             raise LegFkError(f"contacts must be one of {', '.join(CONTACT_SOURCES)}: {contacts!r}")
@@ -124,6 +124,11 @@ class OdometryFeed:
     def counts(self) -> EvidenceCounts:
         """The joint states whose contacts had force evidence, and kinematic evidence alone."""
         return self.contacts.estimator.counts if self.contacts is not None else EvidenceCounts()
+
+    @property
+    def corrections(self) -> ModelCorrections | None:
+        """The contact estimate's model corrections (None: off, or no foot forces)."""
+        return self.contacts.estimator.corrections if self.contacts is not None else None
 
     def add_imu(self, stamp_ns: int, reading: ImuReading | None) -> None:
         """One IMU sample (None: unusable, ignored); with an accelerometer it moves the filter."""

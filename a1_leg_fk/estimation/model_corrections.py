@@ -72,17 +72,35 @@ class CorrectionSettings:
             raise LegFkError(f"model corrections need positive finite settings: {self}")
 
 
+SOLVE_EVERY = 8
+"""A joint's least squares is solved once per this many samples learnt (its sums are kept every
+sample): the estimate lags by at most 16 ms at 500 Hz, against a forgetting of seconds."""
+
+
+def _shrunk(value: float, margin: float) -> float:
+    """``value`` moved towards 0 by ``margin`` (>= 0), 0 within it."""
+    if value > margin:
+        return value - margin
+    return value + margin if value < -margin else 0.0
+
+
 class _Joint:
-    """One joint's least squares: the parameters ``theta`` (bias [N m], viscous [N m s/rad],
-    Coulomb [N m]; unconstrained) and their covariance ``p`` (3x3, rows) over the residual's
-    noise variance.
+    """One joint's least squares in information form: ``info``, the regressors' information
+    (symmetric 3x3 by its upper triangle, i00 i01 i02 i11 i12 i22, over the residual's noise
+    variance, the prior's included) and ``moment``, the regressors times the residual [N m], both
+    forgotten alike; from them the parameters ``theta`` (bias [N m], viscous [N m s/rad],
+    Coulomb [N m]; unconstrained) and their covariance's ``diagonal``.
     """
 
-    __slots__ = ("applied", "p", "theta", "variance")
+    __slots__ = ("applied", "diagonal", "info", "moment", "pending", "theta", "variance")
 
     def __init__(self, prior: Sequence[float], variance: float) -> None:
-        self.theta = [0.0] * PARAMETERS
-        self.p = [[prior[i] if i == j else 0.0 for j in range(PARAMETERS)] for i in range(3)]
+        self.info = [1.0 / prior[0], 0.0, 0.0, 1.0 / prior[1], 0.0, 1.0 / prior[2]]
+        self.moment = [0.0, 0.0, 0.0]
+        self.pending = 0
+        """Samples learnt since the last solution."""
+        self.theta = (0.0, 0.0, 0.0)
+        self.diagonal = tuple(prior)
         self.variance = variance
         """The residual's noise variance [N² m²] about the fit: the a priori errors' squares,
         averaged with forgetting from the prior ``noise_nm`` squared."""
@@ -96,8 +114,10 @@ class ModelCorrections:
     def __init__(self, settings: CorrectionSettings | None = None) -> None:
         self.settings = settings or CorrectionSettings()
         noise = self.settings.noise_nm
-        self._prior = [(bound / noise) ** 2 for bound in self.settings.bounds]
-        self._joints = [_Joint(self._prior, noise**2) for _ in range(JOINT_COUNT)]
+        prior = [(bound / noise) ** 2 for bound in self.settings.bounds]
+        self._prior_info = (1.0 / prior[0], 1.0 / prior[1], 1.0 / prior[2])
+        """The prior's information per parameter (its variance over the noise's, inverted)."""
+        self._joints = [_Joint(prior, noise**2) for _ in range(JOINT_COUNT)]
         self._latest: list[tuple[float, float] | None] = [None] * JOINT_COUNT
         """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
         self.learnt_samples = 0
@@ -142,49 +162,72 @@ class ModelCorrections:
                 self._latest[joint] = None
 
     def _update(self, joint: int, residual: float, rate: float, forget: float) -> None:
-        """One recursive least-squares step of ``joint`` with forgetting ``forget`` (< 1): the
-        covariance kept within the prior, the residual's variance and the terms taken off
-        updated.
+        """One sample of ``joint`` into its least squares with forgetting ``forget`` (< 1; the
+        prior's information is kept: what forgetting takes from it, each sample gives back),
+        the residual's variance updated; solved every :data:`SOLVE_EVERY` samples. Written
+        out: the per-sample path.
         """
-        state, settings = self._joints[joint], self.settings
-        phi = (1.0, rate, math.tanh(rate / settings.smooth_rate))
-        p, theta = state.p, state.theta
-        pphi = [p[i][0] * phi[0] + p[i][1] * phi[1] + p[i][2] * phi[2] for i in range(3)]
-        gain_denominator = forget + phi[0] * pphi[0] + phi[1] * pphi[1] + phi[2] * pphi[2]
-        gain = [value / gain_denominator for value in pphi]
-        error = residual - (theta[0] * phi[0] + theta[1] * phi[1] + theta[2] * phi[2])
-        for i in range(3):
-            theta[i] += gain[i] * error
-            for j in range(3):
-                p[i][j] = (p[i][j] - gain[i] * pphi[j]) / forget
-        for i in range(3):  # the covariance never grows past the prior (no wind-up)
-            if p[i][i] > self._prior[i]:
-                scale = math.sqrt(self._prior[i] / p[i][i])
-                for j in range(3):
-                    p[i][j] *= scale
-                    p[j][i] *= scale
+        state = self._joints[joint]
+        s = math.tanh(rate / self.settings.smooth_rate)  # the regressors: (1, rate, s)
+        t0, t1, t2 = state.theta
+        error = residual - (t0 + t1 * rate + t2 * s)
         state.variance = forget * state.variance + (1.0 - forget) * error * error
-        state.applied = self._applied(theta, p, state.variance)
+        i, m, keep = state.info, state.moment, 1.0 - forget
+        p0, p1, p2 = self._prior_info
+        state.info = [
+            forget * i[0] + 1.0 + keep * p0,
+            forget * i[1] + rate,
+            forget * i[2] + s,
+            forget * i[3] + rate * rate + keep * p1,
+            forget * i[4] + rate * s,
+            forget * i[5] + s * s + keep * p2,
+        ]
+        state.moment = [
+            forget * m[0] + residual,
+            forget * m[1] + rate * residual,
+            forget * m[2] + s * residual,
+        ]
+        state.pending += 1
+        if state.pending >= SOLVE_EVERY:
+            self._solve(state)
         self.learnt_samples += 1
 
+    def _solve(self, state: _Joint) -> None:
+        """``state``'s parameters, their covariance's diagonal and the terms taken off, from its
+        sums (the symmetric 3x3 inverted by cofactors; the prior keeps it positive definite).
+        """
+        a00, a01, a02, a11, a12, a22 = state.info
+        c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+        c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+        scale = 1.0 / (a00 * c00 + a01 * c01 + a02 * c02)
+        m0, m1, m2 = state.moment
+        state.theta = (
+            (c00 * m0 + c01 * m1 + c02 * m2) * scale,
+            (c01 * m0 + c11 * m1 + c12 * m2) * scale,
+            (c02 * m0 + c12 * m1 + c22 * m2) * scale,
+        )
+        state.diagonal = (c00 * scale, c11 * scale, c22 * scale)
+        state.applied = self._applied(state.theta, state.diagonal, state.variance)
+        state.pending = 0
+
     def _applied(
-        self, theta: Sequence[float], p: Sequence[Sequence[float]], variance: float
+        self, theta: Sequence[float], diagonal: Sequence[float], variance: float
     ) -> tuple[float, float, float]:
         """The parameters taken off: each estimate shrunk towards 0 by ``significance`` of its
-        standard deviation (``p``'s diagonal times the residual's ``variance`` [N² m²]), so a
-        term the data do not show stays 0, then held to its bound and its sign (friction
-        opposes motion: viscous and Coulomb at most 0). The fit itself is left unconstrained:
-        clipping it would break the least squares' covariance.
+        standard deviation (the covariance's ``diagonal`` times the residual's ``variance``
+        [N² m²]), so a term the data do not show stays 0, then held to its bound and its sign
+        (friction opposes motion: viscous and Coulomb at most 0). The fit itself is left
+        unconstrained: clipping it would break the least squares' covariance.
         """
         k, bounds = self.settings.significance, self.settings.bounds
-        shrunk = [
-            math.copysign(max(0.0, abs(theta[i]) - k * math.sqrt(p[i][i] * variance)), theta[i])
-            for i in range(PARAMETERS)
-        ]
+        bias_bound, viscous_bound, coulomb_bound = bounds
+        bias = _shrunk(theta[0], k * math.sqrt(diagonal[0] * variance))
+        viscous = _shrunk(theta[1], k * math.sqrt(diagonal[1] * variance))
+        coulomb = _shrunk(theta[2], k * math.sqrt(diagonal[2] * variance))
         return (
-            min(bounds[0], max(-bounds[0], shrunk[0])),
-            min(0.0, max(-bounds[1], shrunk[1])),
-            min(0.0, max(-bounds[2], shrunk[2])),
+            min(bias_bound, max(-bias_bound, bias)),
+            min(0.0, max(-viscous_bound, viscous)),
+            min(0.0, max(-coulomb_bound, coulomb)),
         )
 
     @property

@@ -22,6 +22,7 @@ from a1_leg_fk.cli.common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    add_corrections_argument,
     input_error,
     non_negative,
 )
@@ -48,6 +49,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "bag could not be read to its end (what was read is written), 2 bad input.",
     )
     add_input_arguments(odom)
+    add_corrections_argument(odom)
     odom.add_argument(
         "--imu", metavar="TOPIC", help="the sensor_msgs/msg/Imu topic (default: the only one)"
     )
@@ -115,6 +117,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             radius_m=options.foot_radius,
             contacts=options.contacts,
             ground=options.ground,
+            model_corrections=options.corrections,
             progress=show_progress(options),
             topic=options.topic,
             urdf=options.urdf,

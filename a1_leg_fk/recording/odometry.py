@@ -20,6 +20,7 @@ import numpy as np
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.imu import imu_reading
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
 from a1_leg_fk.model.urdf import LegFkError
@@ -105,8 +106,8 @@ def odometry_track(
     one, if any; ``use_imu`` false: none); ``radius_m`` overrides the feet's URDF radius;
     ``contacts``: the contacts' source (``auto``, ``force``: a bag without efforts is bad input,
     ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``choices`` as
-    :func:`~a1_leg_fk.recording.trajectories.open_recording`'s,
-    whose ``base_pose`` is the truth to compare with. :class:`LegFkError` for bad input.
+    :func:`~a1_leg_fk.recording.trajectories.open_recording`'s, whose ``base_pose`` is the truth
+    to compare with and ``model_corrections`` the contacts'. :class:`LegFkError` for bad input.
     """
     recording = open_recording(path, **choices)
     try:
@@ -132,6 +133,7 @@ def odometry_track(
             contacts=contacts,
             filter_settings=filter_settings,
             ground=ground,
+            model_corrections=choices.get("model_corrections", DEFAULT_MODEL_CORRECTIONS),
         )
         if contacts == FORCE and feed.note:
             raise LegFkError(f"--contacts force: {feed.note}")

@@ -47,7 +47,7 @@ from a1_leg_fk.ros.joint_input import LOWSTATE_TOPIC, MissingMessages, joint_inp
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.ros.odometry_parameters import PARAMETERS
 from a1_leg_fk.ros.odometry_wire import SerializedOdometry, imu_message_fields
-from a1_leg_fk.ros.robot_source import RobotSource
+from a1_leg_fk.ros.robot_source import ParameterChoiceError, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
 from a1_leg_fk.wire.imu import ImuFields, imu_fields
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError, doubles
@@ -127,6 +127,7 @@ class LegOdometryNode(Node):
             use_imu=bool(self._setting("use_imu")),
             contacts=self._contacts,
             ground=self._ground,
+            model_corrections=str(self.get_parameter("model_corrections").value),
         )
         if self._feed.note and self._contacts != KINEMATIC:
             self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
@@ -273,6 +274,7 @@ class LegOdometryNode(Node):
                 contacts=self._contacts,
                 contact_counts=self._feed.counts,
                 contacts_note=self._feed.note,
+                corrections=self._feed.corrections,
                 filtered=self._feed.samples_filtered,
                 filter=self._feed.filter.counts,
                 biases=(
@@ -328,7 +330,9 @@ class LegOdometryNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args, (MissingMessages,))
+    return ros_glue.run_node(
+        "leg_odometry_node", LegOdometryNode, args, (MissingMessages, ParameterChoiceError)
+    )
 
 
 if __name__ == "__main__":

@@ -108,13 +108,16 @@ def non_negative(text: str) -> float:
 
 
 def add_corrections_argument(parser: argparse.ArgumentParser) -> None:
-    """``--corrections online|off``: the nodes' ``model_corrections`` (bag, gait, odom)."""
+    """``--corrections online|off|FILE``: the nodes' ``model_corrections`` (bag, gait, odom), or
+    a calibration's file.
+    """
     parser.add_argument(
         "--corrections",
-        choices=MODEL_CORRECTIONS,
         default=DEFAULT_MODEL_CORRECTIONS,
+        metavar="|".join((*MODEL_CORRECTIONS, "FILE")),
         help="the joints' friction and torque bias learnt in swing and taken off the foot "
-        "forces, each term once significant (online, the default), or not (off)",
+        "forces, each term once significant (online, the default), not (off), or those of a "
+        "calibration's FILE (a1-leg-fk calibrate)",
     )
 
 

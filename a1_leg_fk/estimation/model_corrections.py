@@ -92,11 +92,22 @@ class _Joint:
     Coulomb [N m]; unconstrained) and their covariance's ``diagonal``.
     """
 
-    __slots__ = ("applied", "diagonal", "info", "moment", "pending", "theta", "variance")
+    __slots__ = (
+        "applied",
+        "diagonal",
+        "info",
+        "moment",
+        "pending",
+        "squares",
+        "theta",
+        "variance",
+    )
 
     def __init__(self, prior: Sequence[float], variance: float) -> None:
         self.info = [1.0 / prior[0], 0.0, 0.0, 1.0 / prior[1], 0.0, 1.0 / prior[2]]
         self.moment = [0.0, 0.0, 0.0]
+        self.squares = [0.0, 0.0]
+        """The residual's squares [N² m²] and the samples, forgotten alike (the fit's residual)."""
         self.pending = 0
         """Samples learnt since the last solution."""
         self.theta = (0.0, 0.0, 0.0)
@@ -111,8 +122,17 @@ class _Joint:
 class ModelCorrections:
     """The twelve joints' corrections (slot order), learnt in swing and applied always."""
 
-    def __init__(self, settings: CorrectionSettings | None = None) -> None:
+    def __init__(
+        self,
+        settings: CorrectionSettings | None = None,
+        fixed: Sequence[tuple[float, float, float]] | None = None,
+    ) -> None:
+        """``fixed``: per joint (slot order) bias [N m], viscous [N m s/rad] and Coulomb [N m]
+        as :attr:`parameters` gives them, taken off as they are and never learnt (a
+        calibration's file); None: learnt online.
+        """
         self.settings = settings or CorrectionSettings()
+        self.fixed = fixed is not None
         noise = self.settings.noise_nm
         prior = [(bound / noise) ** 2 for bound in self.settings.bounds]
         self._prior_info = (1.0 / prior[0], 1.0 / prior[1], 1.0 / prior[2])
@@ -122,6 +142,8 @@ class ModelCorrections:
         """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
         self.learnt_samples = 0
         """Joint samples the least squares took."""
+        for state, (bias, viscous, coulomb) in zip(self._joints, fixed or (), strict=False):
+            state.applied = (bias, -viscous, -coulomb)
 
     def correct(self, joint: int, residual: float, rate: float) -> float:
         """The residual [N m] of slot ``joint`` with its correction at ``rate`` [rad/s] taken
@@ -146,7 +168,7 @@ class ModelCorrections:
         ``dt_s`` [s] since the previous sample sets the forgetting.
         """
         depths = [foot.depth for foot in feet if foot is not None]
-        if not depths or not dt_s > 0.0:
+        if self.fixed or not depths or not dt_s > 0.0:
             return
         lowest = max(depths)
         forget = math.exp(-min(dt_s, 1.0) / self.settings.forget_s)
@@ -187,6 +209,8 @@ class ModelCorrections:
             forget * m[1] + rate * residual,
             forget * m[2] + s * residual,
         ]
+        squares = state.squares
+        state.squares = [forget * squares[0] + residual * residual, forget * squares[1] + 1.0]
         state.pending += 1
         if state.pending >= SOLVE_EVERY:
             self._solve(state)
@@ -238,6 +262,43 @@ class ModelCorrections:
         """
         return [(j.applied[0], -j.applied[1], -j.applied[2]) for j in self._joints]
 
+    def fit_residuals(self) -> list[tuple[float, float, float]]:
+        """Per joint (slot order): the swing samples learnt (forgotten alike), the residual's RMS
+        [N m] in them before the fit and after it (the terms as fitted, before the shrinking).
+        """
+        out = []
+        for state in self._joints:
+            squares, samples = state.squares
+            if not samples > 0.0:
+                out.append((0.0, math.nan, math.nan))
+                continue
+            theta, moment = state.theta, state.moment
+            a00, a01, a02, a11, a12, a22 = state.info
+            p0, p1, p2 = self._prior_info  # the data's information alone
+            info = ((a00 - p0, a01, a02), (a01, a11 - p1, a12), (a02, a12, a22 - p2))
+            quadratic = sum(theta[i] * info[i][j] * theta[j] for i in range(3) for j in range(3))
+            left = squares - 2.0 * sum(t * m for t, m in zip(theta, moment, strict=True))
+            after = max(0.0, left + quadratic) / samples
+            out.append((samples, math.sqrt(squares / samples), math.sqrt(after)))
+        return out
+
+    def terms_at(self, variances: Sequence[float]) -> list[tuple[float, float, float]]:
+        """:attr:`parameters` with each joint's significance margin from ``variances`` [N² m²]
+        (slot order) instead of the running estimate: a whole recording's fit judged by its own
+        residual (:meth:`fit_residuals`).
+        """
+        out = []
+        for state, variance in zip(self._joints, variances, strict=True):
+            bias, viscous, coulomb = self._applied(state.theta, state.diagonal, variance)
+            out.append((bias, -viscous, -coulomb))
+        return out
+
+    def solve(self) -> None:
+        """Solve every joint's least squares now (the sums since the last solution taken in)."""
+        for state in self._joints:
+            if state.pending:
+                self._solve(state)
+
     @property
     def fit(self) -> list[tuple[float, float, float]]:
         """Per joint, the least squares' estimates before the significance and the bounds, as
@@ -262,9 +323,14 @@ class ModelCorrections:
         """The corrections in words (the bag tools' summaries)."""
         values = self.values()
         legs = "; ".join(f"{name} {values[f'model_corrections_{name}']}" for name in LEG_NAMES)
+        source = (
+            "from a calibration's file"
+            if self.fixed
+            else f"online, learnt from {self.learnt_samples} joint samples in swing"
+        )
         return (
-            f"model corrections: online, learnt from {self.learnt_samples} joint samples in "
-            f"swing; per joint bias [N m], viscous [N m s/rad], Coulomb [N m]: {legs}"
+            f"model corrections: {source}; per joint bias [N m], viscous [N m s/rad], "
+            f"Coulomb [N m]: {legs}"
         )
 
 
@@ -272,4 +338,4 @@ def correction_values(corrections: ModelCorrections | None) -> dict[str, str]:
     """The diagnostics' values of the corrections (None: off), for both nodes."""
     if corrections is None:
         return {"model_corrections": OFF}
-    return {"model_corrections": ONLINE, **corrections.values()}
+    return {"model_corrections": "file" if corrections.fixed else ONLINE, **corrections.values()}

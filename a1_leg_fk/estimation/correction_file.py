@@ -28,6 +28,10 @@ TERMS = ("bias_nm", "viscous_nms_per_rad", "coulomb_nm")
 MAX_FILE_BYTES = 1_000_000
 
 
+class CorrectionFileError(LegFkError):
+    """A calibration's file that cannot be read or does not match the robot."""
+
+
 @dataclass(frozen=True)
 class CorrectionFile:
     """A calibration: ``joints`` (slot order: the robot's joint names), ``terms`` per joint
@@ -68,7 +72,7 @@ def read_correction_file(
     path: str | Path, joints: Sequence[str], urdf_mass_kg: float
 ) -> CorrectionFile:
     """The calibration at ``path`` for a robot of ``joints`` (slot order) and ``urdf_mass_kg``
-    [kg]; :class:`LegFkError` (one line) if it cannot be read or does not match the robot.
+    [kg]; :class:`CorrectionFileError` (one line) if it cannot be read or does not match the robot.
     """
     where = f"corrections file {path}"
     try:
@@ -76,20 +80,24 @@ def read_correction_file(
             raw = file.read(MAX_FILE_BYTES + 1)
         document = json.loads(raw.decode("utf-8"))
     except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise LegFkError(f"{where}: cannot be read: {error}") from None
+        raise CorrectionFileError(f"{where}: cannot be read: {error}") from None
     if len(raw) > MAX_FILE_BYTES or not isinstance(document, dict):
-        raise LegFkError(f"{where}: not a calibration (a1-leg-fk calibrate writes one)")
+        raise CorrectionFileError(f"{where}: not a calibration (a1-leg-fk calibrate writes one)")
     if document.get("format") != FORMAT:
-        raise LegFkError(f"{where}: format is not {FORMAT!r}: {document.get('format')!r}")
+        raise CorrectionFileError(f"{where}: format is not {FORMAT!r}: {document.get('format')!r}")
     entries = document.get("joints")
     if not isinstance(entries, dict) or set(entries) != set(joints):
         named = sorted(entries) if isinstance(entries, dict) else entries
-        raise LegFkError(f"{where}: its joints {named} are not the robot's {sorted(joints)}")
+        raise CorrectionFileError(
+            f"{where}: its joints {named} are not the robot's {sorted(joints)}"
+        )
     terms = tuple(_terms(where, name, entries[name]) for name in joints)
     residuals = tuple(_residuals(where, name, entries[name]) for name in joints)
     payload = _number(where, "payload_kg", document.get("payload_kg"), 2.0 * urdf_mass_kg)
     if payload < -0.5 * urdf_mass_kg:
-        raise LegFkError(f"{where}: payload_kg {payload} is below half the URDF's mass, negated")
+        raise CorrectionFileError(
+            f"{where}: payload_kg {payload} is below half the URDF's mass, negated"
+        )
     standing = _number(where, "standing_s", document.get("standing_s"), math.inf)
     return CorrectionFile(
         tuple(joints),
@@ -104,15 +112,15 @@ def read_correction_file(
 def _terms(where: str, name: str, entry: object) -> tuple[float, float, float]:
     """One joint's bias, viscous and Coulomb terms, checked against the settings' bounds."""
     if not isinstance(entry, dict):
-        raise LegFkError(f"{where}: joint {name} is not a mapping of its terms")
+        raise CorrectionFileError(f"{where}: joint {name} is not a mapping of its terms")
     bounds = CorrectionSettings().bounds
     bias = _number(where, f"{name} bias_nm", entry.get("bias_nm"), bounds[0])
     if abs(bias) > bounds[0]:
-        raise LegFkError(f"{where}: {name} bias_nm {bias} is beyond +-{bounds[0]} N m")
+        raise CorrectionFileError(f"{where}: {name} bias_nm {bias} is beyond +-{bounds[0]} N m")
     viscous = _number(where, f"{name} viscous_nms_per_rad", entry.get(TERMS[1]), bounds[1])
     coulomb = _number(where, f"{name} coulomb_nm", entry.get(TERMS[2]), bounds[2])
     if viscous < 0.0 or coulomb < 0.0:
-        raise LegFkError(f"{where}: {name}'s friction is negative (it opposes motion)")
+        raise CorrectionFileError(f"{where}: {name}'s friction is negative (it opposes motion)")
     return bias, viscous, coulomb
 
 
@@ -128,10 +136,10 @@ def _residuals(where: str, name: str, entry: dict[str, object]) -> tuple[float, 
 def _number(where: str, name: str, value: object, most: float, nan_ok: bool = False) -> float:
     """``value`` as a finite float at most ``most`` (NaN allowed with ``nan_ok``)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LegFkError(f"{where}: {name} is not a number: {value!r}")
+        raise CorrectionFileError(f"{where}: {name} is not a number: {value!r}")
     number = float(value)
     if math.isnan(number) and nan_ok:
         return number
     if not math.isfinite(number) or number > most:
-        raise LegFkError(f"{where}: {name} {number} is absurd (at most {most:g})")
+        raise CorrectionFileError(f"{where}: {name} {number} is absurd (at most {most:g})")
     return number

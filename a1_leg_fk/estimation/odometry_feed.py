@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, ImuSample
+from a1_leg_fk.estimation.correction_file import CorrectionFileError
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     LEGS,
@@ -103,6 +104,8 @@ class OdometryFeed:
         self.contacts: ForcePass | None = None
         try:
             self.contacts = ForcePass(quadruped, model_corrections=model_corrections)
+        except CorrectionFileError:  # bad input, not a robot without forces
+            raise
         except LegFkError as error:  # a URDF without masses: the kinematic stance
             self.note = str(error)
         self.odometry = LegOdometry(settings)

@@ -391,3 +391,22 @@ def test_calibrate_refuses_what_a_recording_cannot_identify(
         error = capsys.readouterr().err
         assert error.count("\n") == 1 and reason in error, (name, error)
         assert not out.exists()
+
+
+def test_a_corrections_file_of_another_robot_is_refused_in_one_line(
+    tmp_path: Path, trot: dict[str, np.ndarray], capsys: pytest.CaptureFixture
+) -> None:
+    """bag, gait and odom: a calibration of other joints is bad input (exit 2, one line naming
+    the file), not a robot without forces."""
+    other = tmp_path / "other.yaml"
+    other.write_text(json.dumps({"format": "a1_leg_fk model corrections 1", "joints": {"k": {}}}))
+    bag = write_trot_bag(tmp_path / "in", trot, "mcap")
+    tail = ["--topic", "/joint_states", "--quiet", "--corrections", str(other)]
+    for command in (
+        ["bag", str(bag), "--forces", "--csv", str(tmp_path / "x.csv"), *tail],
+        ["gait", str(bag), "--base-pose", "/base_pose", "--contacts", "force", *tail],
+        ["odom", str(bag), *tail],
+    ):
+        assert cli.main(command) == 2, command[0]
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1 and f"corrections file {other}" in error, error

@@ -9,6 +9,9 @@ its stamp advancing 2 ms each call, median of interleaved runs:
   four legs, the whole per-input work (goal <= 40 us);
 - its parts: ``MomentumObserver.step_floats`` (the forces), ``ContactFilter.update`` with the
   feet's motion (``LegMotion.foot`` x 4);
+- the model corrections (:mod:`a1_leg_fk.estimation.model_corrections`, online by default):
+  ``ContactEstimator.step`` with them off, and their own work in a trot's worst case, two legs
+  surely in swing (12 residuals corrected, 6 joints learning);
 - the baselines: ``FootForces.estimate_floats`` (the quasi-static forces of the old rule) and
   ``Quadruped.fk`` (one FK of the four legs).
 """
@@ -18,6 +21,8 @@ from __future__ import annotations
 from common import machine, median_seconds_per_call
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
+from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.estimation.model_corrections import ModelCorrections
 from a1_leg_fk.estimation.momentum_observer import MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.quadruped import Quadruped
@@ -35,11 +40,25 @@ def main() -> None:
     feet, velocities = a1.fk(ANGLES), a1.foot_velocities(ANGLES, RATES)
     legs = [(feet[leg].tolist(), velocities[leg].tolist()) for leg in range(4)]
     estimator, observer, statics = ContactEstimator(a1), MomentumObserver(a1), FootForces(a1)
-    clock = {"estimator": 0.0, "observer": 0.0}
+    without = ContactEstimator(a1, model_corrections="off")
+    clock = {"estimator": 0.0, "observer": 0.0, "without": 0.0}
 
     def estimate() -> None:
         clock["estimator"] += STEP_S
         estimator.step(clock["estimator"], (ANGLES, RATES, EFFORTS), legs, IMU)
+
+    def estimate_without() -> None:
+        clock["without"] += STEP_S
+        without.step(clock["without"], (ANGLES, RATES, EFFORTS), legs, IMU)
+
+    corrections = ModelCorrections()
+    swing = [0.0, 1.0, 1.0, 0.0]  # FR and RL in the air, 0.1 m above the others
+    in_air = [FootMotion((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), d) for d in (0.2, 0.3, 0.3, 0.2)]
+
+    def correct_and_learn() -> None:
+        for joint in range(12):
+            corrections.correct(joint, EFFORTS[joint], RATES[joint])
+        corrections.learn(STEP_S, swing, in_air, 0.05)
 
     def observe() -> None:
         clock["observer"] += STEP_S
@@ -66,6 +85,8 @@ def main() -> None:
     runs = median_seconds_per_call(
         {
             "ContactEstimator.step": estimate,
+            "ContactEstimator.step, corrections off": estimate_without,
+            "ModelCorrections: 12 corrected, 6 learning": correct_and_learn,
             "MomentumObserver.step_floats": observe,
             "LegMotion.foot x4 + ContactFilter.update": fuse,
             "FootForces.estimate_floats": lambda: statics.estimate_floats(

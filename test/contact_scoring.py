@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from contact_runs import ContactRun
@@ -65,11 +66,16 @@ def robot_of(run: ContactRun) -> Quadruped:
 
 
 def estimate(
-    run: ContactRun, quadruped: Quadruped, evidence: str, smoothed: bool = False
+    run: ContactRun,
+    quadruped: Quadruped,
+    evidence: str,
+    smoothed: bool = False,
+    **options: Any,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run: the
     causal filter's, or ``smoothed`` over the whole run (the filter's evidence through
-    :func:`~a1_leg_fk.estimation.contact_smoother.smooth`, as ``a1-leg-fk bag`` does it).
+    :func:`~a1_leg_fk.estimation.contact_smoother.smooth`, as ``a1-leg-fk bag`` does it);
+    ``options``: the estimator's keywords.
     """
     rotations = rotation_matrices(run.quaternions)
     gravity = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -STANDARD_GRAVITY])
@@ -80,7 +86,7 @@ def estimate(
         )
         rule = ContactRule(ContactThresholds.for_weight(statics.total_mass_kg * STANDARD_GRAVITY))
         return rule.update_batch(normal), normal
-    estimator = ContactEstimator(quadruped)
+    estimator = ContactEstimator(quadruped, **options)
     feet = quadruped.fk_batch(run.angles)
     velocities = quadruped.foot_velocities_batch(run.angles, run.rates)
     probabilities, normals = np.empty((len(run.stamps_s), 4)), np.empty((len(run.stamps_s), 4))

@@ -39,7 +39,15 @@ from a1_leg_fk import cli
 FORMATS = ("mcap", "mcap-zstd", "sqlite3", "ros1")
 COMMANDS: dict[str, tuple[str, ...]] = {  # INPUT and OUTPUT are replaced by the paths
     "bag": ("bag", "INPUT", "--csv", "OUTPUT", "--quiet"),
-    "bag --forces --causal": ("bag", "INPUT", "--forces", "--causal", "--csv", "OUTPUT", "--quiet"),
+    "bag --forces --causal": (
+        "bag",
+        "INPUT",
+        "--forces",
+        "--causal",
+        "--csv",
+        "OUTPUT",
+        "--quiet",
+    ),
     "gait": ("gait", "INPUT", "--base-pose", TRUTH_TOPIC, "--json", "OUTPUT", "--quiet"),
     "odom": ("odom", "INPUT", "--csv", "OUTPUT", "--quiet"),
     "odom --causal": ("odom", "INPUT", "--causal", "--csv", "OUTPUT", "--quiet"),

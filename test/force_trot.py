@@ -5,8 +5,10 @@ test/ros/test_node_forces.py)."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
+from bag_factory import T0
 from pybullet_sim import A1_URDF, QuadrupedSim, record_trot
 from shared import STAND_LEG
 
@@ -16,6 +18,8 @@ A1 = Quadruped.from_urdf()
 NAMES = list(A1.joint_names)
 NAN_FL_ROW, SHORT_ROW, EMPTY_ROW = 100, 200, 300
 """Rows with FL's knee effort NaN, with 11 efforts, with none."""
+STEP_NS = 2_000_000
+"""[ns] between two rows (500 Hz)."""
 
 
 def a1_trot(seconds: float) -> dict[str, np.ndarray]:
@@ -35,3 +39,29 @@ def recorded_efforts(torques: np.ndarray) -> list[list[float]]:
     efforts[SHORT_ROW] = efforts[SHORT_ROW][:11]
     efforts[EMPTY_ROW] = []
     return efforts
+
+
+def joint_state(record: dict[str, np.ndarray], row: int, efforts: list[float]) -> Any:
+    """Row ``row`` of ``record`` as a sensor_msgs JointState with ``efforts`` (ROS imported
+    here: the bag tests need none)."""
+    from sensor_msgs.msg import JointState
+
+    msg = JointState(
+        name=NAMES,
+        position=record["angles"][row].tolist(),
+        velocity=record["rates"][row].tolist(),
+        effort=efforts,
+    )
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(T0 + STEP_NS * row, 1_000_000_000)
+    return msg
+
+
+def imu(record: dict[str, np.ndarray], row: int) -> Any:
+    """Row ``row``'s orientation as a sensor_msgs Imu (no gyro, no accelerometer)."""
+    from sensor_msgs.msg import Imu
+
+    msg = Imu()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(T0 + STEP_NS * row, 1_000_000_000)
+    q = msg.orientation
+    q.x, q.y, q.z, q.w = record["root_orientation"][row].tolist()
+    return msg

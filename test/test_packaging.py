@@ -74,6 +74,7 @@ SCALAR_DEFAULTS = {
     "contact_rule": "filter",
     "touchdown_force_n": 0.0,
     "liftoff_force_n": 0.0,
+    "model_corrections": "online",
     "gait_phase_timeout_s": 0.1,
 }
 STRING_ARRAYS = ("foot_links", "joint_aliases")

@@ -1,10 +1,10 @@
-"""``a1-leg-fk``: echo | verify | plot | demo | bag | odom | gait | ik, for installs without the
-ROS 2 command line tools.
+"""``a1-leg-fk``: echo | verify | plot | demo | bag | odom | gait | calibrate | ik, for installs
+without the ROS 2 command line tools.
 
 One module per command (:mod:`.echo`, :mod:`.verify`, :mod:`.plot`, :mod:`.demo`, :mod:`.bag`,
-:mod:`.odom`, :mod:`.gait`, :mod:`.ik`), each with ``add_parser(subparsers)`` and ``run(options,
-argv)``; the shared plumbing (exit codes, signals, this tool's ROS node, child processes) is
-:mod:`.common`.
+:mod:`.odom`, :mod:`.gait`, :mod:`.calibrate`, :mod:`.ik`), each with ``add_parser(subparsers)``
+and ``run(options, argv)``; the shared plumbing (exit codes, signals, this tool's ROS node, child
+processes) is :mod:`.common`.
 
 The ROS arguments (after ``--ros-args``, up to a lone ``--``) are found by rclpy's own
 ``remove_ros_args``; ``rclpy.init`` gets the whole command line, so ``--ros-args -r
@@ -26,7 +26,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from a1_leg_fk.cli import bag, demo, echo, gait, ik, odom, plot, verify, view
+from a1_leg_fk.cli import bag, calibrate, demo, echo, gait, ik, odom, plot, verify, view
 from a1_leg_fk.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -39,7 +39,7 @@ from a1_leg_fk.cli.common import (
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
 """The exit code when stdout's reader went away, as a shell reports a process ended by SIGPIPE."""
 
-COMMANDS = (echo, verify, plot, demo, bag, odom, gait, ik, view)
+COMMANDS = (echo, verify, plot, demo, bag, odom, gait, calibrate, ik, view)
 """The sub-command modules, in the order ``--help`` lists them."""
 
 

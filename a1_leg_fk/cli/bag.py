@@ -17,6 +17,7 @@ from a1_leg_fk.cli.common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    add_corrections_argument,
     input_error,
     non_negative,
 )
@@ -27,6 +28,7 @@ from a1_leg_fk.estimation.contact_estimator import (
     FORCE_MODELS,
     THRESHOLD,
 )
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.sensor_contacts import DEFAULT_SENSOR_THRESHOLD_COUNTS
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.recording.trajectories import (
@@ -96,6 +98,7 @@ def add_recording_arguments(parser: argparse.ArgumentParser) -> None:
         help="a Unitree LowState's foot sensor above this raw count is in contact (default "
         f"{DEFAULT_SENSOR_THRESHOLD_COUNTS:g}, as a controller run on real A1s takes it)",
     )
+    add_corrections_argument(parser)
     parser.add_argument(
         "--causal",
         action="store_true",
@@ -159,6 +162,7 @@ def recording_options(
         "contact_thresholds": (options.touchdown_force, options.liftoff_force),
         "force_model": options.force_model,
         "contact_rule": options.contact_rule,
+        "model_corrections": options.corrections,
         "sensor_threshold": getattr(options, "sensor_threshold", DEFAULT_SENSOR_THRESHOLD_COUNTS),
         "causal": options.causal,
     }
@@ -189,6 +193,7 @@ def check_force_options(options: argparse.Namespace, forces: bool, needs: str) -
         ("--imu", options.imu is not None),
         ("--force-model", options.force_model != DYNAMIC),
         ("--contact-rule", options.contact_rule != FILTER),
+        ("--corrections", options.corrections != DEFAULT_MODEL_CORRECTIONS),
         ("--touchdown-force", options.touchdown_force is not None),
         ("--liftoff-force", options.liftoff_force is not None),
         ("--causal", options.causal),

@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TypeVar
 
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, MODEL_CORRECTIONS
 from a1_leg_fk.stop_signals import StopSignals
 
 PROG = "a1-leg-fk"
@@ -104,6 +105,20 @@ def non_negative(text: str) -> float:
     if not value >= 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
     return value
+
+
+def add_corrections_argument(parser: argparse.ArgumentParser) -> None:
+    """``--corrections online|off|FILE``: the nodes' ``model_corrections`` (bag, gait, odom), or
+    a calibration's file.
+    """
+    parser.add_argument(
+        "--corrections",
+        default=DEFAULT_MODEL_CORRECTIONS,
+        metavar="|".join((*MODEL_CORRECTIONS, "FILE")),
+        help="the joints' friction and torque bias learnt in swing and taken off the foot "
+        "forces, each term once significant (online, the default), not (off), or those of a "
+        "calibration's FILE (a1-leg-fk calibrate)",
+    )
 
 
 def namespace_parent() -> argparse.ArgumentParser:

@@ -22,6 +22,7 @@ from a1_leg_fk.cli.common import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    add_corrections_argument,
     input_error,
     non_negative,
 )
@@ -60,6 +61,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "bag could not be read to its end (what was read is written), 2 bad input.",
     )
     add_input_arguments(odom)
+    add_corrections_argument(odom)
     odom.add_argument(
         "--imu", metavar="TOPIC", help="the sensor_msgs/msg/Imu topic (default: the only one)"
     )
@@ -203,7 +205,7 @@ def odometry_inputs(
 ) -> tuple[OdometryOptions, dict[str, Any]]:
     """The odometry's options and the recording's choices that ``odom`` and ``view`` share
     (``--imu``, ``--no-imu``, ``--causal``: else smoothed, ``--quiet``; ``--truth``, ``--topic``,
-    ``--urdf``, ``--foot-links``, ``--joint-aliases``); ``settings``: more of
+    ``--urdf``, ``--foot-links``, ``--joint-aliases``, ``--corrections``); ``settings``: more of
     :class:`~a1_leg_fk.recording.odometry.OdometryOptions` (``odom``'s ``radius_m``,
     ``contacts``, ``ground``). :class:`LegFkError` for contradicting options.
     """
@@ -224,6 +226,7 @@ def odometry_inputs(
         "urdf": options.urdf,
         "foot_links": options.foot_links,
         "joint_aliases": options.joint_aliases,
+        "model_corrections": options.corrections,
     }
     return odometry, choices
 

@@ -26,7 +26,15 @@ import numpy as np
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
+from a1_leg_fk.estimation.correction_file import read_correction_file
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.model_corrections import (
+    DEFAULT_MODEL_CORRECTIONS,
+    MODEL_CORRECTIONS,
+    ONLINE,
+    CorrectionSettings,
+    ModelCorrections,
+)
 from a1_leg_fk.estimation.momentum_observer import NO_ROTATION, MomentumObserver
 from a1_leg_fk.kinematics.foot_forces import LEVEL_GRAVITY, FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -97,11 +105,16 @@ class ContactEstimator:
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
         thresholds: tuple[float | None, float | None] = (None, None),
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         """``force_model``: ``"dynamic"`` or ``"static"``; ``contact_rule``: ``"filter"`` (its
         scales :meth:`ContactModel.for_robot` of the URDF's weight and leg length) or
         ``"threshold"`` (touchdown and liftoff normal forces ``thresholds`` [N], None for
-        :meth:`ContactThresholds.for_weight`'s defaults).
+        :meth:`ContactThresholds.for_weight`'s defaults); ``model_corrections``: ``"online"``
+        learns and takes off the joints' friction and bias (:mod:`a1_leg_fk.estimation.
+        model_corrections`; the dynamic force model and the filter only), ``"off"``, or the path
+        of a calibration's file (:mod:`a1_leg_fk.estimation.correction_file`: its terms taken
+        off as they are, its payload added to the URDF's weight).
         """
         for name, value, choices in (
             ("force model", force_model, FORCE_MODELS),
@@ -110,10 +123,23 @@ class ContactEstimator:
             if value not in choices:
                 raise LegFkError(f"{name} must be one of {', '.join(choices)}: {value!r}")
         self.force_model, self.contact_rule = force_model, contact_rule
+        self.model_corrections = model_corrections
         self.statics = FootForces(quadruped)
+        self.calibration = (
+            None
+            if model_corrections in MODEL_CORRECTIONS
+            else read_correction_file(
+                model_corrections, quadruped.joint_names, self.statics.total_mass_kg
+            )
+        )
+        """The calibration's file (None: online or off)."""
+        self.correction_settings: CorrectionSettings | None = None
+        """The online corrections' settings from the next :meth:`reset` (None: the defaults;
+        a calibration learns without forgetting)."""
         self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
         self.motion = LegMotion(quadruped)
-        weight = self.statics.total_mass_kg * STANDARD_GRAVITY
+        payload = self.calibration.payload_kg if self.calibration is not None else 0.0
+        weight = (self.statics.total_mass_kg + payload) * STANDARD_GRAVITY
         self.model = ContactModel.for_robot(weight, leg_length_m(quadruped))
         self.rule = ContactRule(ContactThresholds.for_weight(weight, *thresholds))
         self.reset()
@@ -124,6 +150,11 @@ class ContactEstimator:
         """
         if self.observer is not None:
             self.observer.reset()
+            self.observer.corrections = None
+            if self.calibration is not None:
+                self.observer.corrections = ModelCorrections(fixed=self.calibration.terms)
+            elif self.model_corrections == ONLINE and self.contact_rule == FILTER:
+                self.observer.corrections = ModelCorrections(self.correction_settings)
         self.filter = ContactFilter(self.model)
         self.rule = ContactRule(self.rule.thresholds)
         self.counts = EvidenceCounts()
@@ -176,7 +207,15 @@ class ContactEstimator:
             normals if with_force else None,
             phase_prior,
         )
+        corrections = self.corrections
+        if corrections is not None and with_force:
+            corrections.learn(dt, probabilities, motions, self.model.height_half_m)
         return ContactStep(forces, normals, probabilities, missing, singular, motions)
+
+    @property
+    def corrections(self) -> ModelCorrections | None:
+        """The model's online corrections (None: off)."""
+        return None if self.observer is None else self.observer.corrections
 
     def _forces(
         self,

@@ -21,6 +21,7 @@ from a1_leg_fk.estimation.contact_estimator import (
     ContactStep,
     ImuSample,
 )
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.model.legs import JOINT_COUNT
 
 if TYPE_CHECKING:
@@ -57,12 +58,16 @@ class ForcePass:
         thresholds: tuple[float | None, float | None] = (None, None),
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         """``thresholds``: touchdown and liftoff normal forces [N] of the ``"threshold"`` contact
         rule, ``None`` for the default (:meth:`ContactThresholds.for_weight` of the URDF's total
-        mass); ``force_model`` and ``contact_rule`` as the estimator takes them.
+        mass); ``force_model``, ``contact_rule`` and ``model_corrections`` as the estimator
+        takes them.
         """
-        self.estimator = ContactEstimator(quadruped, force_model, contact_rule, thresholds)
+        self.estimator = ContactEstimator(
+            quadruped, force_model, contact_rule, thresholds, model_corrections
+        )
         self.thresholds = self.estimator.rule.thresholds
         self.name_to_slot: Mapping[str, int] = quadruped.name_to_slot
         self.restart()
@@ -88,6 +93,8 @@ class ForcePass:
         lines = [self.counts.line()] if forces else []
         if estimator.contact_rule == FILTER:
             lines += [rule, estimator.counts.line()]
+            if estimator.corrections is not None:
+                lines.append(estimator.corrections.line())
         else:
             lines.append(rule)
         return "\n".join(lines)

@@ -39,6 +39,7 @@ from math import cos, exp, isfinite, sin
 import numpy as np
 from numpy.typing import ArrayLike
 
+from a1_leg_fk.estimation.model_corrections import ModelCorrections
 from a1_leg_fk.kinematics.foot_forces import (
     MIN_JACOBIAN_CONDITION,
     ForceEstimate,
@@ -107,6 +108,8 @@ class MomentumObserver:
         """Per leg its generated functions, looked up once (the per-sample path); without a gyro,
         the base taken as not turning, ``inertial_terms`` stand in for ``kinetic_terms``."""
         self._states = [_LegState() for _ in range(LEGS)]
+        self.corrections: ModelCorrections | None = None
+        """The model's corrections, taken off each residual with the leg's rates (None: none)."""
 
     def reset(self) -> None:
         """Forget the past: the next joint state starts every leg quasi-statically."""
@@ -173,6 +176,13 @@ class MomentumObserver:
                     state.residual = (r0, r1, r2)
                 if not isfinite(r0 + r1 + r2):  # absurd values: start again
                     states[slot] = _LegState()
+                elif self.corrections is not None:
+                    correct = self.corrections.correct
+                    r0, r1, r2 = (
+                        correct(first, r0, d0),
+                        correct(first + 1, r1, d1),
+                        correct(first + 2, r2, d2),
+                    )
             else:  # no rates: the quasi-static estimate
                 states[slot] = _LegState()
                 r0, r1, r2 = g0 - t0, g1 - t1, g2 - t2

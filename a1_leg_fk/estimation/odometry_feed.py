@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, ImuSample
+from a1_leg_fk.estimation.correction_file import CorrectionFileError
 from a1_leg_fk.estimation.filter_model import (
     FLAT,
     LEGS,
@@ -40,6 +41,7 @@ from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.ground import GroundPlane, LocalGround, contact_points
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, ModelCorrections
 from a1_leg_fk.estimation.odometry import (
     ImuReading,
     LegOdometry,
@@ -82,7 +84,8 @@ class OdometryFeed:
     """The base's state for one robot. ``radii``: the feet's rolling radii [m] (default: the
     URDF's collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``
     one of :data:`CONTACT_SOURCES`; ``ground``: ``flat`` (the stance feet anchor the height) or
-    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`).
+    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`);
+    ``model_corrections``: the contact estimate's (:class:`ForcePass`).
     """
 
     def __init__(
@@ -95,6 +98,7 @@ class OdometryFeed:
         contacts: str = AUTO,
         filter_settings: FilterSettings | None = None,
         ground: str = FLAT,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         if contacts not in CONTACT_SOURCES:
             raise LegFkError(f"contacts must be one of {', '.join(CONTACT_SOURCES)}: {contacts!r}")
@@ -104,7 +108,9 @@ class OdometryFeed:
         """Why there are no foot forces for this robot ("" when there are)."""
         self.contacts: ForcePass | None = None
         try:
-            self.contacts = ForcePass(quadruped)
+            self.contacts = ForcePass(quadruped, model_corrections=model_corrections)
+        except CorrectionFileError:  # bad input, not a robot without forces
+            raise
         except LegFkError as error:  # a URDF without masses: the kinematic stance
             self.note = str(error)
         self.odometry = LegOdometry(settings)
@@ -129,6 +135,11 @@ class OdometryFeed:
     def counts(self) -> EvidenceCounts:
         """The joint states whose contacts had force evidence, and kinematic evidence alone."""
         return self.contacts.estimator.counts if self.contacts is not None else EvidenceCounts()
+
+    @property
+    def corrections(self) -> ModelCorrections | None:
+        """The contact estimate's model corrections (None: off, or no foot forces)."""
+        return self.contacts.estimator.corrections if self.contacts is not None else None
 
     def add_imu(self, stamp_ns: int, reading: ImuReading | None) -> None:
         """One IMU sample (None: unusable, ignored); with an accelerometer it moves the filter."""

@@ -22,6 +22,7 @@ from a1_leg_fk.estimation.contact_filter import SampleEvidence
 from a1_leg_fk.estimation.contact_smoother import EvidenceRows, smoothing_line
 from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.estimation.imu import has_orientation, measured_vector
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.kinematics.frames import gravity_in_base
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.wire.joint_state import JointStateDecoder, WireError
@@ -162,8 +163,9 @@ class RecordingForces(ForcePass):
         thresholds: tuple[float | None, float | None] = (None, None),
         force_model: str = DYNAMIC,
         contact_rule: str = FILTER,
+        model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
-        super().__init__(quadruped, thresholds, force_model, contact_rule)
+        super().__init__(quadruped, thresholds, force_model, contact_rule, model_corrections)
         self.imu = imu
         self.smoothed = False
         """Keep the filter's evidence per row (:meth:`rows`), for contacts smoothed over the

@@ -25,6 +25,7 @@ import numpy as np
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.ground import ground_values
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
 from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother
@@ -154,7 +155,8 @@ def odometry_stream(
     block shorter), the IMU read in the same pass as the joint states
     (:class:`~a1_leg_fk.recording.imu_stream.ImuStream`). ``choices`` as
     :func:`~a1_leg_fk.recording.trajectories.open_recording`'s, whose ``base_pose`` is the truth
-    to compare with. :class:`LegFkError` for bad input, when iterated.
+    to compare with and ``model_corrections`` the contacts'. :class:`LegFkError` for bad input,
+    when iterated.
     """
     return OdometryStream(_blocks(Path(path), options or OdometryOptions(), block_rows, choices))
 
@@ -165,7 +167,8 @@ def _blocks(
     """The pass of :func:`odometry_stream`."""
     recording = open_recording(path, **choices)
     try:
-        feed, imu = _inputs(recording, path, options)
+        corrections = choices.get("model_corrections", DEFAULT_MODEL_CORRECTIONS)
+        feed, imu = _inputs(recording, path, options, corrections)
         stats, samples, planar = BlockStats(), [], True
         pending: deque[LiveRow] = deque()  # the live values of the rows not final yet
         live: list[LiveRow] = []
@@ -224,10 +227,10 @@ def _blocks(
 
 
 def _inputs(
-    recording: Recording, path: Path, options: OdometryOptions
+    recording: Recording, path: Path, options: OdometryOptions, corrections: str
 ) -> tuple[OdometryFeed, ImuStream | None]:
-    """The odometry's pipeline for ``recording`` and its IMU's stream (None: no IMU);
-    :class:`LegFkError` for bad input.
+    """The odometry's pipeline for ``recording`` (the contacts' ``corrections``: online, off or
+    a calibration file) and its IMU's stream (None: no IMU); :class:`LegFkError` for bad input.
     """
     contacts, use_imu = options.contacts, options.use_imu
     recording.efforts = contacts != KINEMATIC
@@ -251,6 +254,7 @@ def _inputs(
         contacts=contacts,
         filter_settings=options.filter_settings,
         ground=options.ground,
+        model_corrections=corrections,
     )
     if contacts == FORCE and feed.note:
         raise LegFkError(f"--contacts force: {feed.note}")

@@ -17,6 +17,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING, TypedDict
 
 from a1_leg_fk.estimation.contact_estimator import DYNAMIC, FILTER
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.sensor_contacts import DEFAULT_SENSOR_THRESHOLD_COUNTS
 from a1_leg_fk.kinematics.robot_config import load_robot
 from a1_leg_fk.model.urdf import LegFkError
@@ -55,6 +56,7 @@ class RecordingChoices(TypedDict, total=False):
     contact_thresholds: tuple[float | None, float | None]
     force_model: str
     contact_rule: str
+    model_corrections: str
     sensor_threshold: float
     causal: bool
 
@@ -116,6 +118,7 @@ def open_recording(
     contact_thresholds: tuple[float | None, float | None] = (None, None),
     force_model: str = DYNAMIC,
     contact_rule: str = FILTER,
+    model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     sensor_threshold: float = DEFAULT_SENSOR_THRESHOLD_COUNTS,
     causal: bool = False,
 ) -> Recording:
@@ -123,11 +126,12 @@ def open_recording(
     problem for bad input. Close with :func:`close_recording`. ``forces``: foot forces and
     contacts from the efforts (:mod:`a1_leg_fk.recording.forces`; the JointStates must carry
     efforts); ``estimate_contacts``: contacts with or without efforts; the IMU from the
-    ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule`` and
-    ``contact_thresholds`` (the threshold rule's touchdown and liftoff forces [N], ``None``: the
-    defaults for the robot's weight) as :class:`~a1_leg_fk.recording.forces.RecordingForces`
-    takes them; ``sensor_threshold`` [counts]: a LowState's foot sensor above it is in contact;
-    ``causal``: the filter's contacts as the node has them, else smoothed over the recording.
+    ``sensor_msgs/msg/Imu`` topic ``imu`` if given; ``force_model``, ``contact_rule``,
+    ``model_corrections`` and ``contact_thresholds`` (the threshold rule's touchdown and liftoff
+    forces [N], ``None``: the defaults for the robot's weight) as
+    :class:`~a1_leg_fk.recording.forces.RecordingForces` takes them; ``sensor_threshold``
+    [counts]: a LowState's foot sensor above it is in contact; ``causal``: the filter's contacts
+    as the node has them, else smoothed over the recording.
     """
     path = Path(path)
     reader, salvage_note, types = _open_reader(path)
@@ -178,7 +182,7 @@ def open_recording(
                 (joint_states, imu, lowstate),
                 robot.quadruped,
                 forces,
-                (contact_thresholds, force_model, contact_rule, causal),
+                (contact_thresholds, force_model, contact_rule, model_corrections, causal),
             )
             if forces or estimate_contacts
             else None
@@ -212,13 +216,14 @@ def _force_pass(
     where: tuple[Connection, str | None, LowStateInput | None],
     quadruped: Quadruped,
     needs_efforts: bool,
-    settings: tuple[tuple[float | None, float | None], str, str, bool],
+    settings: tuple[tuple[float | None, float | None], str, str, str, bool],
 ) -> RecordingForces:
     """The force and contact estimation of a pass over the JointStates of ``where`` (their
     connection, the IMU topic or None, the LowState input or None: its IMU is the IMU);
     :class:`LegFkError` if the JointStates carry no
     efforts while ``needs_efforts``, or the IMU topic gives no orientation. ``settings``: the
-    contact thresholds, the force model, the contact rule and whether causal (else smoothed).
+    contact thresholds, the force model, the contact rule, the model corrections and whether
+    causal (else smoothed).
     """
     from a1_leg_fk.recording.forces import IMU_TYPE, ImuTrack, RecordingForces, check_has_efforts
 
@@ -230,8 +235,8 @@ def _force_pass(
     if imu:
         connection = pick_topic(reads.reader, reads.path, imu, (IMU_TYPE,), "--imu", "IMU")
         track = ImuTrack.read(reads, connection)
-    thresholds, force_model, contact_rule, causal = settings
-    forces = RecordingForces(quadruped, track, thresholds, force_model, contact_rule)
+    thresholds, force_model, contact_rule, corrections, causal = settings
+    forces = RecordingForces(quadruped, track, thresholds, force_model, contact_rule, corrections)
     forces.smoothed = not causal and contact_rule == FILTER
     return forces
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from a1_leg_fk.estimation.contact_estimator import ImuSample
 from a1_leg_fk.estimation.force_pass import ForcePass
+from a1_leg_fk.estimation.model_corrections import correction_values
 from a1_leg_fk.tracking import REJECTIONS, TrackerCounts
 
 OK, WARN, ERROR = b"\x00", b"\x01", b"\x02"
@@ -133,7 +134,7 @@ def force_values(
     missing, not finite or of the wrong length; near-singular), the joint states whose contacts
     had force evidence and those with kinematic evidence alone, what the latest ``imu`` gave
     (gravity's direction, gyro, accelerometer), the ``gait_phase`` input's state and the
-    threshold rule's forces [N].
+    threshold rule's forces [N], the model corrections' terms.
     """
     if forces is None:
         return {"foot_forces": problem}
@@ -162,6 +163,7 @@ def force_values(
         "gait_phase": gait_phase,
         "touchdown_force_n": f"{thresholds.touchdown_n:.3f}",
         "liftoff_force_n": f"{thresholds.liftoff_n:.3f}",
+        **correction_values(estimator.corrections),
     }
 
 

@@ -47,7 +47,7 @@ from a1_leg_fk.ros.guarded_input import GuardedInputs, read_imu
 from a1_leg_fk.ros.joint_input import MissingMessages, joint_input
 from a1_leg_fk.ros.markers import foot_markers
 from a1_leg_fk.ros.odometry_wire import imu_sample
-from a1_leg_fk.ros.robot_source import RobotSource
+from a1_leg_fk.ros.robot_source import ParameterChoiceError, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker, leg_feet
 from a1_leg_fk.verify import PyBulletFeet
 from a1_leg_fk.wire.imu import ImuFields
@@ -354,7 +354,10 @@ class FootFkNode(Node):
         touchdown, liftoff = (
             self._float(name) or None for name in ("touchdown_force_n", "liftoff_force_n")
         )
-        choices = [self.get_parameter(name).value for name in ("force_model", "contact_rule")]
+        choices = [
+            self.get_parameter(name).value
+            for name in ("force_model", "contact_rule", "model_corrections")
+        ]
         try:
             self._forces = ForcePass(self._model.quadruped, (touchdown, liftoff), *choices)
         except LegFkError as error:
@@ -385,7 +388,9 @@ class FootFkNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk foot_fk_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("foot_fk_node", FootFkNode, args, (MissingMessages,))
+    return ros_glue.run_node(
+        "foot_fk_node", FootFkNode, args, (MissingMessages, ParameterChoiceError)
+    )
 
 
 if __name__ == "__main__":

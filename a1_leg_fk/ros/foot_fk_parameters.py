@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from rcl_interfaces.msg import ParameterType
 
+from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, MODEL_CORRECTIONS
 from a1_leg_fk.ros.joint_input import INPUT_PARAMETER
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 
@@ -24,6 +25,18 @@ FORCE_PARAMETERS = (
     "liftoff_force_n",
 )
 """The parameters whose change rebuilds the force and contact rules."""
+MODEL_CORRECTIONS_PARAMETER = ParameterSpec(
+    "model_corrections",
+    DEFAULT_MODEL_CORRECTIONS,
+    ParameterType.PARAMETER_STRING,
+    "The joints' friction and torque bias the URDF does not list, learnt while a foot is surely "
+    "in the air and taken off the momentum observer's torques, each term once it is "
+    "significant ('online'; force_model 'dynamic', contact_rule 'filter'), or not ('off'); "
+    "the terms in /diagnostics",
+    read_only=True,
+    choices=MODEL_CORRECTIONS,
+)
+"""``model_corrections`` of both nodes (foot_fk_node's forces, leg_odometry_node's contacts)."""
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
@@ -115,6 +128,7 @@ PARAMETERS = (
         f"{CONTACT_FORCE_RANGE_N}; 0 = 4 % of the robot's weight",
         value_range=CONTACT_FORCE_RANGE_N,
     ),
+    MODEL_CORRECTIONS_PARAMETER,
     ParameterSpec(
         "gait_phase_timeout_s",
         0.1,

@@ -51,7 +51,7 @@ from a1_leg_fk.ros.joint_input import LOWSTATE_TOPIC, MissingMessages, joint_inp
 from a1_leg_fk.ros.odometry_diagnostics import OdometryReport, odometry_status
 from a1_leg_fk.ros.odometry_parameters import PARAMETERS
 from a1_leg_fk.ros.odometry_wire import SerializedOdometry
-from a1_leg_fk.ros.robot_source import RobotSource
+from a1_leg_fk.ros.robot_source import ParameterChoiceError, RobotSource
 from a1_leg_fk.tracking import REJECTIONS, FootTracker
 from a1_leg_fk.wire.imu import ImuFields
 from a1_leg_fk.wire.joint_state import WireFields, doubles
@@ -134,6 +134,7 @@ class LegOdometryNode(Node):
             use_imu=bool(self._setting("use_imu")),
             contacts=self._contacts,
             ground=self._ground,
+            model_corrections=str(self.get_parameter("model_corrections").value),
         )
         if self._feed.note and self._contacts != KINEMATIC:
             self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
@@ -288,6 +289,7 @@ class LegOdometryNode(Node):
                 contacts=self._contacts,
                 contact_counts=self._feed.counts,
                 contacts_note=self._feed.note,
+                corrections=self._feed.corrections,
                 filtered=self._feed.samples_filtered,
                 filter=self._feed.filter.counts,
                 biases=(
@@ -345,7 +347,9 @@ class LegOdometryNode(Node):
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""
-    return ros_glue.run_node("leg_odometry_node", LegOdometryNode, args, (MissingMessages,))
+    return ros_glue.run_node(
+        "leg_odometry_node", LegOdometryNode, args, (MissingMessages, ParameterChoiceError)
+    )
 
 
 if __name__ == "__main__":

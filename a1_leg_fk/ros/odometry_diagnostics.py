@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import FilterCounts
+from a1_leg_fk.estimation.model_corrections import ModelCorrections, correction_values
 from a1_leg_fk.estimation.odometry import OdometryCounts
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.ros.diagnostics import (
@@ -47,6 +48,7 @@ class OdometryReport:
     contacts: str  # the contacts parameter: auto, force or kinematic
     contact_counts: EvidenceCounts
     contacts_note: str  # why there are no foot forces ("" when there are)
+    corrections: ModelCorrections | None  # the contacts' model corrections (None: off)
     filtered: int  # samples the state filter gave
     filter: FilterCounts
     biases: tuple[tuple[float, ...], tuple[float, ...]]  # gyro [rad/s], accelerometer [m/s^2]
@@ -102,6 +104,7 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "contacts": report.contacts,
         "samples_with_force_evidence": report.contact_counts.force,
         "samples_with_kinematic_evidence_only": report.contact_counts.kinematic,
+        **correction_values(report.corrections),
         **{f"feet_used_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.used)},
         **{f"feet_rejected_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.rejected)},
         "gate_resets": report.filter.gate_resets,

@@ -50,12 +50,18 @@ DESCRIPTION_QOS = QoSProfile(
 """robot_state_publisher's QoS for ``robot_description``: a late subscriber gets the latest one."""
 
 
+class ParameterChoiceError(Exception):
+    """A string parameter given at start outside its choices: a usage error (one line, exit 2)."""
+
+
 @dataclass(frozen=True)
 class ParameterSpec:
     """A parameter a node declares: name, default (``None``: a string array with no value until
     one is given, since ROS cannot type ``[]``), type, description, whether it is read-only, and
     for a double the inclusive ``(lowest, highest)`` range rclpy enforces on every value (NaN is
-    outside every range); the description should state the range.
+    outside every range); the description should state the range. A string's ``choices`` (none:
+    any) are checked when it is declared (:class:`ParameterChoiceError`); such a parameter is
+    read-only.
     """
 
     name: str
@@ -64,10 +70,12 @@ class ParameterSpec:
     description: str
     read_only: bool = False
     value_range: tuple[float, float] | None = None
+    choices: tuple[str, ...] = ()
 
     def declare(self, node: Node) -> None:
         """Declare the parameter on ``node``; a value given at start (``-p``, a params file) that
-        is out of range raises :class:`LegFkError` with rclpy's reason.
+        is out of range raises :class:`LegFkError` with rclpy's reason, one not among the
+        ``choices`` :class:`ParameterChoiceError`.
         """
         descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
         if self.value_range is not None:
@@ -79,10 +87,16 @@ class ParameterSpec:
             node.declare_parameter(self.name, Parameter.Type.STRING_ARRAY, descriptor)
             return
         descriptor.type = self.type
+        if self.choices:
+            descriptor.additional_constraints = f"one of {', '.join(self.choices)}"
         try:
-            node.declare_parameter(self.name, self.default, descriptor)
+            value = node.declare_parameter(self.name, self.default, descriptor).value
         except InvalidParameterValueException as error:
             raise LegFkError(f"parameter {self.name}: {error}") from error
+        if self.choices and value not in self.choices:
+            raise ParameterChoiceError(
+                f"parameter {self.name} must be one of {', '.join(self.choices)}: {value!r}"
+            )
 
 
 def parameter_value(node: Node, name: str) -> object:

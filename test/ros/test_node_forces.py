@@ -14,42 +14,32 @@ import numpy as np
 import pytest
 from bag_factory import T0, BagSpec, JointStateMsg, T, header, write_bag
 from builtin_interfaces.msg import Time
-from force_trot import A1, EMPTY_ROW, NAMES, NAN_FL_ROW, SHORT_ROW, a1_trot, recorded_efforts
+from force_trot import (
+    A1,
+    EMPTY_ROW,
+    NAMES,
+    NAN_FL_ROW,
+    SHORT_ROW,
+    STEP_NS,
+    a1_trot,
+    imu,
+    joint_state,
+    recorded_efforts,
+)
 from geometry_msgs.msg import WrenchStamped
 from node_harness import LEGS, STANDING, Diagnostics, SensorStream, node_command
 from rclpy.qos import QoSProfile
 from rosbags.highlevel import AnyReader
-from sensor_msgs.msg import Imu, JointState
+from sensor_msgs.msg import JointState
 
 from a1_leg_fk import cli
 from a1_leg_fk.ros.markers import COLOR_RGBA, STANCE_RGBA, foot_markers
-
-STEP_NS = 2_000_000  # 500 Hz
 
 
 @pytest.fixture(scope="module")
 def trot() -> dict[str, np.ndarray]:
     """1.6 s of the A1 in PyBullet (trotting from 0.5 s), 800 samples."""
     return a1_trot(1.6)
-
-
-def joint_state(record: dict[str, np.ndarray], row: int, efforts: list[float]) -> JointState:
-    msg = JointState(
-        name=NAMES,
-        position=record["angles"][row].tolist(),
-        velocity=record["rates"][row].tolist(),
-        effort=efforts,
-    )
-    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(T0 + STEP_NS * row, 1_000_000_000)
-    return msg
-
-
-def imu(record: dict[str, np.ndarray], row: int) -> Imu:
-    msg = Imu()
-    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(T0 + STEP_NS * row, 1_000_000_000)
-    q = msg.orientation
-    q.x, q.y, q.z, q.w = record["root_orientation"][row].tolist()
-    return msg
 
 
 def bag_tool_outputs(tmp_path: Path, record: dict[str, np.ndarray]) -> tuple[dict, dict]:

@@ -1,0 +1,145 @@
+"""A calibration's file of model corrections (``a1-leg-fk calibrate``, read by ``--corrections
+FILE``): per joint, by name, the bias [N m], viscous [N m s/rad] and Coulomb [N m] friction fitted
+over a recording's swing samples with the fit's residuals, and the payload [kg] its standing
+phase showed; without ROS.
+
+The file is YAML written in its JSON-compatible flow style (every YAML 1.2 reader reads it; the
+package reads it with the standard library). Reading it checks it against the robot: the same
+joints (by name, every one), finite values within :class:`CorrectionSettings`' bounds and signs
+(friction opposes motion), a payload between minus half and twice the URDF's mass; anything else
+is refused in one line naming the file and the culprit.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from a1_leg_fk.estimation.model_corrections import CorrectionSettings
+from a1_leg_fk.model.urdf import LegFkError
+
+FORMAT = "a1_leg_fk model corrections 1"
+"""The file's ``format`` entry."""
+TERMS = ("bias_nm", "viscous_nms_per_rad", "coulomb_nm")
+"""A joint's entries taken off (the fit's residuals beside them are for reading)."""
+MAX_FILE_BYTES = 1_000_000
+
+
+class CorrectionFileError(LegFkError):
+    """A calibration's file that cannot be read or does not match the robot."""
+
+
+@dataclass(frozen=True)
+class CorrectionFile:
+    """A calibration: ``joints`` (slot order: the robot's joint names), ``terms`` per joint
+    (bias [N m], viscous [N m s/rad], Coulomb [N m]), ``residuals`` per joint (swing samples,
+    the residual's RMS [N m] before and after the fit), ``payload_kg`` [kg] (the standing
+    phase's weight over the URDF's), ``standing_s`` [s] the standing phase used, ``source``.
+    """
+
+    joints: tuple[str, ...]
+    terms: tuple[tuple[float, float, float], ...]
+    residuals: tuple[tuple[float, float, float], ...]
+    payload_kg: float
+    standing_s: float
+    source: str
+
+    def text(self) -> str:
+        """The file's text."""
+        joints = {
+            name: {
+                **dict(zip(TERMS, (round(v, 4) + 0.0 for v in terms), strict=True)),
+                "swing_samples": round(residual[0]),
+                "residual_rms_nm": round(residual[1], 4),
+                "fitted_rms_nm": round(residual[2], 4),
+            }
+            for name, terms, residual in zip(self.joints, self.terms, self.residuals, strict=True)
+        }
+        document = {
+            "format": FORMAT,
+            "source": self.source,
+            "payload_kg": round(self.payload_kg, 3),
+            "standing_s": round(self.standing_s, 3),
+            "joints": joints,
+        }
+        return json.dumps(document, indent=2) + "\n"
+
+
+def read_correction_file(
+    path: str | Path, joints: Sequence[str], urdf_mass_kg: float
+) -> CorrectionFile:
+    """The calibration at ``path`` for a robot of ``joints`` (slot order) and ``urdf_mass_kg``
+    [kg]; :class:`CorrectionFileError` (one line) if it cannot be read or does not match the robot.
+    """
+    where = f"corrections file {path}"
+    try:
+        with Path(path).open("rb") as file:
+            raw = file.read(MAX_FILE_BYTES + 1)
+        document = json.loads(raw.decode("utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise CorrectionFileError(f"{where}: cannot be read: {error}") from None
+    if len(raw) > MAX_FILE_BYTES or not isinstance(document, dict):
+        raise CorrectionFileError(f"{where}: not a calibration (a1-leg-fk calibrate writes one)")
+    if document.get("format") != FORMAT:
+        raise CorrectionFileError(f"{where}: format is not {FORMAT!r}: {document.get('format')!r}")
+    entries = document.get("joints")
+    if not isinstance(entries, dict) or set(entries) != set(joints):
+        named = sorted(entries) if isinstance(entries, dict) else entries
+        raise CorrectionFileError(
+            f"{where}: its joints {named} are not the robot's {sorted(joints)}"
+        )
+    terms = tuple(_terms(where, name, entries[name]) for name in joints)
+    residuals = tuple(_residuals(where, name, entries[name]) for name in joints)
+    payload = _number(where, "payload_kg", document.get("payload_kg"), 2.0 * urdf_mass_kg)
+    if payload < -0.5 * urdf_mass_kg:
+        raise CorrectionFileError(
+            f"{where}: payload_kg {payload} is below half the URDF's mass, negated"
+        )
+    standing = _number(where, "standing_s", document.get("standing_s"), math.inf)
+    return CorrectionFile(
+        tuple(joints),
+        terms,
+        residuals,
+        payload,
+        standing,
+        str(document.get("source", "")),
+    )
+
+
+def _terms(where: str, name: str, entry: object) -> tuple[float, float, float]:
+    """One joint's bias, viscous and Coulomb terms, checked against the settings' bounds."""
+    if not isinstance(entry, dict):
+        raise CorrectionFileError(f"{where}: joint {name} is not a mapping of its terms")
+    bounds = CorrectionSettings().bounds
+    bias = _number(where, f"{name} bias_nm", entry.get("bias_nm"), bounds[0])
+    if abs(bias) > bounds[0]:
+        raise CorrectionFileError(f"{where}: {name} bias_nm {bias} is beyond +-{bounds[0]} N m")
+    viscous = _number(where, f"{name} viscous_nms_per_rad", entry.get(TERMS[1]), bounds[1])
+    coulomb = _number(where, f"{name} coulomb_nm", entry.get(TERMS[2]), bounds[2])
+    if viscous < 0.0 or coulomb < 0.0:
+        raise CorrectionFileError(f"{where}: {name}'s friction is negative (it opposes motion)")
+    return bias, viscous, coulomb
+
+
+def _residuals(where: str, name: str, entry: dict[str, object]) -> tuple[float, float, float]:
+    """One joint's fit residuals (swing samples, RMS before and after [N m]; NaN: none)."""
+    samples, before, after = (
+        _number(where, f"{name} {key}", entry.get(key, math.nan), math.inf, True)
+        for key in ("swing_samples", "residual_rms_nm", "fitted_rms_nm")
+    )
+    return samples, before, after
+
+
+def _number(where: str, name: str, value: object, most: float, nan_ok: bool = False) -> float:
+    """``value`` as a finite float at most ``most`` (NaN allowed with ``nan_ok``)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CorrectionFileError(f"{where}: {name} is not a number: {value!r}")
+    number = float(value)
+    if math.isnan(number) and nan_ok:
+        return number
+    if not math.isfinite(number) or number > most:
+        raise CorrectionFileError(f"{where}: {name} {number} is absurd (at most {most:g})")
+    return number

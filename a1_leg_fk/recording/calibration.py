@@ -1,0 +1,114 @@
+"""``a1-leg-fk calibrate``: the model corrections (:mod:`a1_leg_fk.estimation.model_corrections`)
+fitted over a whole recording, and the payload its standing phase shows; no ROS install.
+
+One pass of the force and contact pipeline (the bag tools' and the node's) with the corrections
+learning without forgetting: every joint's bias, viscous and Coulomb terms are the least squares
+over every sample in which its foot was surely in the air (each shrunk by three of its standard
+deviations, as online, with the variance of the fit's own residual), with the residual's RMS
+before and after the fit. The payload: while all
+four feet stand (the filter's probability of stance at least :data:`STANDING_PROBABILITY`) and
+are still (each foot slower than :data:`STILL_MPS` in the base frame), the normal forces' sum is
+the robot's weight; its mean over the URDF's weight, in kg. A recording that cannot identify
+something is refused in one line: no efforts, never a foot surely in the air, never
+:data:`MIN_STANDING_S` of standing still.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Unpack
+
+import numpy as np
+
+from a1_leg_fk.estimation.correction_file import CorrectionFile
+from a1_leg_fk.estimation.model_corrections import ONLINE, CorrectionSettings
+from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
+from a1_leg_fk.model.urdf import LegFkError
+from a1_leg_fk.recording.blocks import iter_foot_blocks
+from a1_leg_fk.recording.foot_block import FootBlock
+from a1_leg_fk.recording.reader import RecordingChoices, close_recording, open_recording
+
+CALIBRATION = CorrectionSettings(forget_s=1e9)
+"""The corrections' settings over a recording: no forgetting (1e9 s), the rest the online ones."""
+STANDING_PROBABILITY = 0.95
+STILL_MPS = 0.02
+"""[m/s] A foot slower than this relative to the base is still."""
+MIN_STANDING_S = 0.2
+"""[s] The least standing phase that gives a payload."""
+MAX_ROW_GAP_S = 0.05
+"""[s] Two standing rows further apart than this do not add their gap to the standing time."""
+
+
+class _Standing:
+    """The standing rows' normal-force sums [N] and their time [s]."""
+
+    def __init__(self) -> None:
+        self.sums: list[float] = []
+        self.seconds = 0.0
+        self._last_ns: int | None = None
+
+    def add(self, block: FootBlock) -> None:
+        """The rows of ``block`` in which all four feet stand still."""
+        if block.contacts is None or block.normal_forces is None:
+            return
+        speeds = np.linalg.norm(block.velocities, axis=2)
+        with np.errstate(invalid="ignore"):
+            standing = (block.contacts >= STANDING_PROBABILITY).all(axis=1)
+            standing &= (speeds < STILL_MPS).all(axis=1)
+        standing &= np.isfinite(block.normal_forces).all(axis=1)
+        for row in np.flatnonzero(standing).tolist():
+            stamp = int(block.stamps_ns[row])
+            if self._last_ns is not None and 0 < stamp - self._last_ns <= MAX_ROW_GAP_S * 1e9:
+                self.seconds += (stamp - self._last_ns) * 1e-9
+            self._last_ns = stamp
+            self.sums.append(float(block.normal_forces[row].sum()))
+        if not standing[-1]:
+            self._last_ns = None
+
+
+def calibrate_recording(
+    path: str | Path, *, progress: bool = False, **choices: Unpack[RecordingChoices]
+) -> CorrectionFile:
+    """The calibration of the recording at ``path`` (``choices`` as
+    :func:`~a1_leg_fk.recording.reader.open_recording`'s; forces always, the corrections
+    learning); :class:`LegFkError` (one line) for bad input or a recording that cannot identify
+    the terms or the payload.
+    """
+    choices["forces"], choices["model_corrections"] = True, ONLINE
+    recording = open_recording(path, **choices)
+    try:
+        forces = recording.forces
+        if forces is None or forces.estimator.observer is None:
+            raise LegFkError(f"{path}: no foot forces to calibrate from")
+        estimator = forces.estimator
+        estimator.correction_settings = CALIBRATION
+        standing = _Standing()
+        for block in iter_foot_blocks(recording, progress=progress):
+            standing.add(block)
+        corrections = estimator.corrections
+    finally:
+        close_recording(recording)
+    if corrections is None or corrections.learnt_samples == 0:
+        raise LegFkError(
+            f"{path}: never in swing: no foot was surely in the air (the contact filter's "
+            "stance below 5 % and the foot above the others), so no friction can be fitted; "
+            "record a few strides"
+        )
+    if standing.seconds < MIN_STANDING_S:
+        raise LegFkError(
+            f"{path}: never stood still ({standing.seconds:.2f} s with all four feet down and "
+            f"still, {MIN_STANDING_S:g} s needed), so no payload can be weighed; record a "
+            "standing phase"
+        )
+    corrections.solve()
+    urdf_mass = estimator.statics.total_mass_kg
+    weight_n = float(np.mean(standing.sums))
+    residuals = corrections.fit_residuals()
+    return CorrectionFile(
+        recording.quadruped.joint_names,
+        tuple(corrections.terms_at([after * after for _, _, after in residuals])),
+        tuple(residuals),
+        weight_n / STANDARD_GRAVITY - urdf_mass,
+        standing.seconds,
+        str(path),
+    )

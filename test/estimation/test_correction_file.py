@@ -1,0 +1,89 @@
+"""A calibration's file (a1_leg_fk/estimation/correction_file.py), by construction: written and
+read back, taken off as it is by the estimator, and refused in one line when it does not match
+the robot (other joints, absurd values, not a calibration)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from a1_leg_fk.estimation.contact_estimator import ContactEstimator
+from a1_leg_fk.estimation.correction_file import CorrectionFile, read_correction_file
+from a1_leg_fk.kinematics.quadruped import Quadruped
+from a1_leg_fk.model.urdf import LegFkError
+
+A1 = Quadruped.from_urdf()
+TERMS = tuple((round(0.1 * j, 4), round(0.01 * j, 4), round(0.05 * j, 4)) for j in range(12))
+"""Per joint: bias [N m], viscous [N m s/rad], Coulomb [N m], all within the bounds."""
+
+
+def written(tmp_path: Path, **changes: object) -> Path:
+    """A calibration of the A1 (:data:`TERMS`, 1.5 kg of payload) with ``changes`` made to its
+    document (``joint__NAME`` replaces one joint's entry)."""
+    calibration = CorrectionFile(
+        A1.joint_names, TERMS, tuple((100.0, 0.5, 0.1) for _ in TERMS), 1.5, 0.4, "a run"
+    )
+    document = json.loads(calibration.text())
+    for key, value in changes.items():
+        if key.startswith("joint__"):
+            document["joints"][key.removeprefix("joint__")] = value
+        else:
+            document[key] = value
+    path = tmp_path / "calibration.yaml"
+    path.write_text(json.dumps(document))
+    return path
+
+
+def test_a_calibration_is_read_back_and_taken_off_as_it_is(tmp_path: Path) -> None:
+    path = written(tmp_path)
+    calibration = read_correction_file(path, A1.joint_names, 12.0)
+    assert calibration.terms == TERMS and calibration.payload_kg == 1.5
+    estimator = ContactEstimator(A1, model_corrections=str(path))
+    corrections = estimator.corrections
+    assert corrections is not None and corrections.fixed
+    bias, viscous, coulomb = TERMS[5]
+    rate = 2.0  # rad/s: the smooth sign is tanh(20) = 1 to 1e-17
+    expected = 1.0 - (bias - viscous * rate - coulomb)
+    assert math.isclose(corrections.correct(5, 1.0, rate), expected, abs_tol=1e-12)
+    assert "from a calibration's file" in corrections.line()
+    weight = estimator.statics.total_mass_kg + 1.5  # the payload weighs on the filter's scales
+    assert math.isclose(estimator.rule.thresholds.touchdown_n / 9.80665, 0.08 * weight)
+
+
+@pytest.mark.parametrize(
+    ("changes", "reason"),
+    [
+        ({"joint__FR_hip_joint": None}, "not a mapping"),
+        ({"joints": {"knee": {}}}, "are not the robot's"),
+        ({"joint__FL_lower_joint": {"bias_nm": 50.0}}, "bias_nm 50.0 is absurd"),
+        (
+            {"joint__FL_lower_joint": {"bias_nm": 0.0, "viscous_nms_per_rad": -0.1}},
+            "coulomb_nm is not a number",
+        ),
+        ({"payload_kg": 1e3}, "payload_kg 1000.0 is absurd"),
+        ({"payload_kg": math.nan}, "payload_kg nan is absurd"),
+        ({"format": "something else"}, "format is not"),
+    ],
+)
+def test_a_file_that_does_not_match_the_robot_is_refused(
+    tmp_path: Path, changes: dict[str, object], reason: str
+) -> None:
+    path = written(tmp_path, **changes)
+    with pytest.raises(LegFkError, match=reason) as error:
+        ContactEstimator(A1, model_corrections=str(path))
+    assert "\n" not in str(error.value) and str(path) in str(error.value)
+
+
+def test_negative_friction_and_an_unreadable_file_are_refused(tmp_path: Path) -> None:
+    friction = {"bias_nm": 0.0, "viscous_nms_per_rad": -0.1, "coulomb_nm": 0.2}
+    path = written(tmp_path, joint__RR_upper_joint=friction)
+    with pytest.raises(LegFkError, match="RR_upper_joint's friction is negative"):
+        read_correction_file(path, A1.joint_names, 12.0)
+    with pytest.raises(LegFkError, match="cannot be read"):
+        read_correction_file(tmp_path / "missing.yaml", A1.joint_names, 12.0)
+    (tmp_path / "text.yaml").write_text("bias: [1, 2")
+    with pytest.raises(LegFkError, match="cannot be read"):
+        read_correction_file(tmp_path / "text.yaml", A1.joint_names, 12.0)

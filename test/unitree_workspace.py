@@ -101,10 +101,13 @@ def build(workspace: Path, packages: tuple[str, ...]) -> dict[str, dict[str, str
 
 
 def environment_of(prefix: Path) -> dict[str, str]:
-    """What a child process needs to use the package installed at ``prefix``."""
+    """What a child process needs to use the package installed at ``prefix`` (this process's
+    PYTHONPATH kept: a checkout run with ``PYTHONPATH=.`` runs its own nodes, not the installed
+    ones)."""
+    kept = [part for part in os.environ.get("PYTHONPATH", "").split(os.pathsep) if part]
     return {
         "PYTHONPATH": os.pathsep.join(
-            [str(prefix / "lib" / PYTHON_DIR / "site-packages"), str(ROOT / "test")]
+            [str(prefix / "lib" / PYTHON_DIR / "site-packages"), str(ROOT / "test"), *kept]
         ),
         "LD_LIBRARY_PATH": os.pathsep.join(
             part for part in (str(prefix / "lib"), os.environ.get("LD_LIBRARY_PATH", "")) if part

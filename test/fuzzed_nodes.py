@@ -1,6 +1,6 @@
 """The nodes and their input topics under fuzz (issue 38; the harness: test/node_fuzz.py); with
-``input: unitree_lowstate``, ``foot_fk_node`` on ``lowstate`` (:func:`lowstate_node`: needs
-Unitree's message package built, test/unitree_workspace.py)."""
+``input: unitree_lowstate``, ``foot_fk_node`` and ``leg_odometry_node`` on ``lowstate``
+(:data:`LOWSTATE_NODES`: need Unitree's message package built, test/unitree_workspace.py)."""
 
 from __future__ import annotations
 
@@ -196,7 +196,7 @@ def lowstate_node(msgtype: str, message: type, env: dict[str, str]) -> FuzzedNod
         return foot_key((point.x, point.y, point.z))
 
     return FuzzedNode(
-        f"foot_fk_node ({msgtype.split('/', maxsplit=1)[0]})",
+        lowstate_name("foot_fk_node", msgtype),
         node_command("-p", "input:=unitree_lowstate"),
         [lowstate_topic(msgtype, message)],
         "foot kinematics",
@@ -208,3 +208,37 @@ def lowstate_node(msgtype: str, message: type, env: dict[str, str]) -> FuzzedNod
         answer_key=answer_key,
         expected=expected,
     )
+
+
+ODOMETRY_DRIVES = 3
+"""Good LowStates per check of ``leg_odometry_node``, each owed one odometry message."""
+
+
+def lowstate_odometry_node(msgtype: str, message: type, env: dict[str, str]) -> FuzzedNode:
+    """``leg_odometry_node`` with ``input: unitree_lowstate`` reading ``msgtype`` (``message``:
+    its class, ``env``: its package's environment). Its odometry is stamped with the receive
+    time and carries no pose of the drive, so answers are counted: every good LowState (the A1
+    standing, at rest) owes one ``leg_odometry`` message (:attr:`FuzzedNode.counted`).
+    """
+    return FuzzedNode(
+        lowstate_name("leg_odometry_node", msgtype),
+        odometry_node_command("-p", "input:=unitree_lowstate"),
+        [lowstate_topic(msgtype, message)],
+        "leg odometry",
+        "lowstate",
+        lambda _stamp: lowstate_cdr(msgtype),
+        ("leg_odometry", Odometry),
+        {"leg_odometry": Odometry},
+        env=env,
+        counted=ODOMETRY_DRIVES,
+    )
+
+
+LOWSTATE_NODES = {"foot_fk_node": lowstate_node, "leg_odometry_node": lowstate_odometry_node}
+"""The nodes fuzzed on ``lowstate``, by executable: (msgtype, message class, environment) to
+the node."""
+
+
+def lowstate_name(executable: str, msgtype: str) -> str:
+    """A LowState run's name: the node and the package of the layout it reads."""
+    return f"{executable} ({msgtype.split('/', maxsplit=1)[0]})"

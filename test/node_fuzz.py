@@ -51,6 +51,8 @@ FRAME_ID_LENGTH = 12
 READABLE = (EXTENDED, ABSURD_VALUES)
 BATCH = 25
 """Damaged messages between two good inputs (well under the nodes' queue of 100)."""
+QUIET_S = 0.2
+"""How long no answer must come before drives whose answers are counted are sent [s]."""
 
 
 @dataclass
@@ -176,6 +178,9 @@ class FuzzedNode:
     env: dict[str, str] = field(default_factory=dict)  # for the node's process
     answer_key: Callable[[object], object] = header_stamp  # of an answer
     expected: Callable[[int], object] = int  # the key answering the drive of a stamp [ns]
+    counted: int = 0
+    """Above 0: its answers cannot be matched to drives (stamped with the receive time), so they
+    are counted: each check sends this many drives and wants at least as many more answers."""
 
 
 def all_values(msg: object) -> list[float]:
@@ -217,6 +222,7 @@ class NodeFuzz:
             )
         self.tallies = {topic.topic: Tally(topic.unreadable) for topic in node.inputs}
         self.answered: set[object] = set()
+        self.answers = 0  # messages on the answer topic
         self.non_finite: list[str] = []
         self.outputs = 0
         answer_topic = node.answer[0]
@@ -237,6 +243,7 @@ class NodeFuzz:
             if not all(math.isfinite(v) for v in values):
                 self.non_finite.append(f"{topic}: {values}")
             if answers:
+                self.answers += 1
                 self.answered.add(self.node.answer_key(msg))
 
         return on_output
@@ -258,10 +265,28 @@ class NodeFuzz:
             if topic.topic != self.node.drive_topic and (every or topic.good_each_batch):
                 self.publishers[topic.topic].publish(topic.good(self.now_ns()))
         self.probe.spin_for(0.01)
+        if self.node.counted:
+            return self.drives_counted(timeout_s)
         stamp = self.now_ns()
         self.publishers[self.node.drive_topic].publish(self.node.drive(stamp))
         wanted = self.node.expected(stamp)
         return self.probe.spin_until(lambda: wanted in self.answered, timeout_s)
+
+    def drives_counted(self, timeout_s: float) -> bool:
+        """Once no answer came for :data:`QUIET_S` (those of damaged messages still on their way
+        would count as the drives'), publish ``counted`` drives; True once at least as many
+        more answers arrived within ``timeout_s``.
+        """
+        wanted, seen = self.node.counted, -1
+        deadline = time.monotonic() + timeout_s
+        while self.answers != seen and time.monotonic() < deadline:
+            seen = self.answers
+            self.probe.spin_for(QUIET_S)
+        before = self.answers
+        for _ in range(wanted):
+            self.publishers[self.node.drive_topic].publish(self.node.drive(self.now_ns()))
+            self.probe.spin_for(0.002)
+        return self.probe.spin_until(lambda: self.answers >= before + wanted, timeout_s)
 
     def wait_connected(self, timeout_s: float = 30.0) -> bool:
         """Drive the node until it answers (discovery done both ways) with the robot of the

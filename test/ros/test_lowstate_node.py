@@ -2,8 +2,8 @@
 built with colcon from the published field lists (ament_cmake and the rosidl generators as
 wheels, requirements-msgs.txt), as a user's workspace builds it; a process with that install
 publishes LowState messages of the A1 standing, and ``foot_fk_node`` answers with the FR foot the
-JointState path gives, ``leg_odometry_node`` with odometry; ``foot_fk_node`` survives damaged
-LowStates of both layouts (issue 38, about 15 s beyond the build). Without the package: one line
+JointState path gives, ``leg_odometry_node`` with odometry; both survive damaged LowStates of
+both layouts (issue 38, about 15 s each beyond the build). Without the package: one line
 naming it, exit 2.
 """
 
@@ -97,19 +97,22 @@ def test_leg_odometry_node_reads_lowstate(unitree_go: dict[str, str], processes,
 
 
 @pytest.mark.slow
-def test_foot_fk_node_survives_damaged_lowstate_of_both_layouts(
-    unitree_go: dict[str, str], processes, ros
+@pytest.mark.parametrize("executable", ["foot_fk_node", "leg_odometry_node"])
+def test_survives_damaged_lowstate_of_both_layouts(
+    unitree_go: dict[str, str], processes, ros, executable: str
 ) -> None:
     """Issue 38 on ``lowstate``: damaged unitree_go LowStates and unitree_legged_msgs ones (CDR,
     the other layout) published raw from this process (the built package loaded into it), with
-    the checks of every other input topic (test/node_fuzz_run.py)."""
-    from fuzzed_nodes import lowstate_node
+    the checks of every other input topic (test/node_fuzz_run.py); ``foot_fk_node``'s answers
+    matched by the FR foot of the pose each drive carries, ``leg_odometry_node``'s counted (one
+    odometry message owed per good LowState)."""
+    from fuzzed_nodes import LOWSTATE_NODES
     from node_fuzz_run import CI_COUNTS, HEADER, run_node
 
     load_here(unitree_go)
     from unitree_go.msg import LowState  # type: ignore[import-not-found]  # built above
 
-    node = lowstate_node(GO_LOW_STATE, LowState, unitree_go)
+    node = LOWSTATE_NODES[executable](GO_LOW_STATE, LowState, unitree_go)
     run = run_node(processes, ros, node, CI_COUNTS, seed=38)
     print("\n" + "\n".join([HEADER, *run.lines()]))
     assert not run.failures, (run.failures, run.output[-3000:])

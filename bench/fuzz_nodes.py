@@ -2,12 +2,13 @@
 every input topic of ``foot_fk_node``, ``leg_odometry_node`` and ``foot_ik_node`` (joint_states,
 imu, gait_phase, robot_description, foot_targets/<leg>) gets 2,000 damaged messages (truncated,
 absurd lengths, bytes appended, absurd values, bit flips, another type's bytes), interleaved with
-good input, each node a real process over real DDS; and ``foot_fk_node`` with ``input:
-unitree_lowstate`` on ``lowstate``, once per Unitree layout (``unitree_go``, and
-``unitree_legged_msgs`` as a ROS 2 workspace defines it), each message package built with colcon
-first as the CI test builds it (test/unitree_workspace.py, about a minute per package); with the
-CI test's run and checks (test/node_fuzz_run.py, harness test/node_fuzz.py): every good input
-after a batch answered, the counts exact (a phase of unreadable messages only:
+good input, each node a real process over real DDS; and ``foot_fk_node`` and
+``leg_odometry_node`` with ``input: unitree_lowstate`` on ``lowstate``, once per Unitree layout
+(``unitree_go``, and ``unitree_legged_msgs`` as a ROS 2 workspace defines it), each message
+package built with colcon first as the CI test builds it (test/unitree_workspace.py, about a
+minute per package); with the CI test's run and checks (test/node_fuzz_run.py, harness
+test/node_fuzz.py): every good input after a batch answered (``leg_odometry_node`` on
+``lowstate``: as many odometry messages as good LowStates sent), the counts exact (a phase of unreadable messages only:
 ``rejected_<topic>_malformed`` grows by what ``received_<topic>`` grows; one of readable damage
 only: it does not grow), nothing non-finite published, exit 0 on SIGINT without a traceback.
 
@@ -28,7 +29,7 @@ from common import machine
 
 # conftest first: it claims a free ROS domain before rclpy is imported
 from conftest import Processes, RosProbe
-from fuzzed_nodes import fuzzed_nodes, lowstate_node
+from fuzzed_nodes import LOWSTATE_NODES, fuzzed_nodes, lowstate_name
 from node_fuzz import FuzzedNode
 from node_fuzz_run import HEADER, Counts, run_node
 from pybullet_reference import A1_URDF
@@ -36,9 +37,12 @@ from unitree_workspace import build, load_here
 
 from a1_leg_fk.wire.unitree_types import GO_LOW_STATE, LEGGED_LOW_STATE
 
-LOWSTATE_NODES = {f"foot_fk_node ({msgtype.split('/')[0]})": msgtype
-                  for msgtype in (GO_LOW_STATE, LEGGED_LOW_STATE)}  # fmt: skip
-"""The LowState runs, by name: the layout each reads."""
+LOWSTATE_RUNS = {
+    lowstate_name(executable, msgtype): (executable, msgtype)
+    for executable in LOWSTATE_NODES
+    for msgtype in (GO_LOW_STATE, LEGGED_LOW_STATE)
+}
+"""The LowState runs, by name: the node and the layout it reads."""
 
 
 def counts(per_topic: int) -> Counts:
@@ -53,17 +57,17 @@ def counts(per_topic: int) -> Counts:
 def lowstate_nodes(folder: Path, names: list[str]) -> dict[str, FuzzedNode]:
     """The LowState runs among ``names``, their message packages built in ``folder`` and loaded
     into this process (to publish their messages raw)."""
-    layouts = {name: LOWSTATE_NODES[name] for name in names if name in LOWSTATE_NODES}
-    packages = tuple(msgtype.split("/")[0] for msgtype in layouts.values())
+    runs = {name: LOWSTATE_RUNS[name] for name in names if name in LOWSTATE_RUNS}
+    packages = tuple(dict.fromkeys(msgtype.split("/")[0] for _, msgtype in runs.values()))
     if not packages:
         return {}
     environments = build(folder, packages)
     nodes = {}
-    for name, msgtype in layouts.items():
+    for name, (executable, msgtype) in runs.items():
         package = msgtype.split("/")[0]
         load_here(environments[package])
         message = importlib.import_module(f"{package}.msg").LowState
-        nodes[name] = lowstate_node(msgtype, message, environments[package])
+        nodes[name] = LOWSTATE_NODES[executable](msgtype, message, environments[package])
     return nodes
 
 
@@ -72,12 +76,12 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--per-topic", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=38)
-    parser.add_argument("--node", choices=sorted([*nodes, *LOWSTATE_NODES]), action="append")
+    parser.add_argument("--node", choices=sorted([*nodes, *LOWSTATE_RUNS]), action="append")
     options = parser.parse_args()
     print(machine())
     started, failed = time.perf_counter(), []
     lines = [HEADER]
-    names = options.node or [*nodes, *LOWSTATE_NODES]
+    names = options.node or [*nodes, *LOWSTATE_RUNS]
     with tempfile.TemporaryDirectory(prefix="a1_leg_fk_fuzz_nodes_") as folder:
         nodes |= lowstate_nodes(Path(folder), names)
         print(f"message packages built: {time.perf_counter() - started:.0f} s", flush=True)

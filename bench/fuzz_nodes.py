@@ -8,12 +8,13 @@ good input, each node a real process over real DDS; and ``foot_fk_node`` and
 package built with colcon first as the CI test builds it (test/unitree_workspace.py, about a
 minute per package); with the CI test's run and checks (test/node_fuzz_run.py, harness
 test/node_fuzz.py): every good input after a batch answered (``leg_odometry_node`` on
-``lowstate``: as many odometry messages as good LowStates sent), the counts exact (a phase of unreadable messages only:
-``rejected_<topic>_malformed`` grows by what ``received_<topic>`` grows; one of readable damage
-only: it does not grow), nothing non-finite published, exit 0 on SIGINT without a traceback.
+``lowstate``: as many odometry messages as good LowStates sent), the counts exact (a phase of
+unreadable messages only: ``rejected_<topic>_malformed`` grows by what ``received_<topic>``
+grows; one of readable damage only: it does not grow), nothing non-finite published, exit 0 on
+SIGINT without a traceback.
 
 Run: ``.venv/bin/python bench/fuzz_nodes.py [--per-topic 2000] [--seed 38] [--node NAME]``
-(about 7 minutes). Prints one row per node and topic; exit 1 if any check failed.
+(about 9 minutes). Prints one row per node and topic; exit 1 if any check failed.
 """
 
 from __future__ import annotations

@@ -60,11 +60,22 @@ def wait_for(condition, timeout_s: float) -> bool:
 
 
 def recorded_view(run, folder: Path) -> dict:
-    """``a1-leg-fk view`` of a bag of the same stream (the reference)."""
+    """``a1-leg-fk view`` of a bag of the same stream (the reference), ``--causal``: the nodes'
+    live answers, not smoothed over the recording."""
     bag = write_sim_bag(folder / "walk", run, truth=False, efforts=True)
     rrd = folder / "recorded.rrd"
     code = cli.main(
-        ["view", str(bag), "--imu", IMU_TOPIC, "--rrd", str(rrd), "--no-open", "--quiet"]
+        [
+            "view",
+            str(bag),
+            "--imu",
+            IMU_TOPIC,
+            "--rrd",
+            str(rrd),
+            "--no-open",
+            "--quiet",
+            "--causal",
+        ]
     )
     assert code == 0
     return read_rrd(rrd)

@@ -334,8 +334,11 @@ class ModelCorrections:
         )
 
 
-def correction_values(corrections: ModelCorrections | None) -> dict[str, str]:
-    """The diagnostics' values of the corrections (None: off), for both nodes."""
+def correction_values(corrections: ModelCorrections | None, refused: str = "") -> dict[str, str]:
+    """The diagnostics' values of the corrections (None: off), for both nodes; ``refused``: why
+    a calibration's file was refused ("" none).
+    """
+    out = {"model_corrections_refused": refused} if refused else {}
     if corrections is None:
-        return {"model_corrections": OFF}
+        return {"model_corrections": OFF, **out}
     return {"model_corrections": "file" if corrections.fixed else ONLINE, **corrections.values()}

@@ -111,4 +111,5 @@ def calibrate_recording(
         weight_n / STANDARD_GRAVITY - urdf_mass,
         standing.seconds,
         str(path),
+        urdf_mass,
     )

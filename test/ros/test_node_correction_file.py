@@ -1,8 +1,8 @@
 """``model_corrections_file`` on both nodes over real DDS: a calibration's file that matches the
 robot is applied as it is (its terms in /diagnostics); one that does not (other joints, an absurd
-value, unreadable, or ``file`` without one) is refused in ONE log line naming the file and the
-reason, and the node keeps running on the nominal model (``model_corrections: off`` and the
-refusal in /diagnostics, its joint states still answered).
+value, another robot's mass, unreadable, or ``file`` without one) is refused in ONE log line
+naming the file and the reason, and the node keeps running on the nominal model
+(``model_corrections: off`` and the refusal in /diagnostics, its joint states still answered).
 
 The files are written here by hand (the format ``a1-leg-fk calibrate`` documents), not by the
 package's writer; every case runs as its own node process (renamed ``-r __node:=CASE``) at once.
@@ -25,9 +25,12 @@ CALF_TERMS = (-0.5, 0.12, 0.3)
 """The good file's calves: bias [N m], viscous [N m s/rad], Coulomb [N m]; the rest 0."""
 
 
-def calibration(joints: list[str], bias: float = 0.0) -> dict[str, object]:
+def calibration(
+    joints: list[str], bias: float = 0.0, urdf_mass_kg: float = 12.458
+) -> dict[str, object]:
     """A calibration's document for ``joints`` (every calf :data:`CALF_TERMS`; ``bias`` [N m]
-    on the first joint)."""
+    on the first joint), made with a URDF of ``urdf_mass_kg`` [kg] (pybullet_data's A1's, the
+    sum of its links' masses by hand)."""
     entries = {}
     for index, name in enumerate(joints):
         terms = CALF_TERMS if index % 3 == 2 else (bias if index == 0 else 0.0, 0.0, 0.0)
@@ -42,6 +45,7 @@ def calibration(joints: list[str], bias: float = 0.0) -> dict[str, object]:
     return {
         "format": "a1_leg_fk model corrections 1",
         "source": "written by hand",
+        "urdf_mass_kg": urdf_mass_kg,
         "payload_kg": 0.0,
         "standing_s": 0.5,
         "joints": entries,
@@ -54,6 +58,7 @@ def cases(folder: Path) -> dict[str, tuple[str, str]]:
         "good": calibration(PYBULLET_NAMES),
         "other_joints": calibration([name.replace("_joint", "") for name in PYBULLET_NAMES]),
         "absurd": calibration(PYBULLET_NAMES, bias=1000.0),
+        "aliengo": calibration(PYBULLET_NAMES, urdf_mass_kg=20.638),  # its joints: the A1's
     }
     out = {}
     for name, document in files.items():
@@ -62,6 +67,7 @@ def cases(folder: Path) -> dict[str, tuple[str, str]]:
         out[name] = (str(path), "")
     out["other_joints"] = (out["other_joints"][0], "are not the robot's")
     out["absurd"] = (out["absurd"][0], "is absurd")
+    out["aliengo"] = (out["aliengo"][0], "made for a robot whose URDF weighs 20.638 kg")
     out["unreadable"] = (str(folder / "missing.yaml"), "cannot be read")
     out["no_file"] = ("", "without a model_corrections_file")
     return out

@@ -28,6 +28,9 @@ FORMAT = "a1_leg_fk model corrections 1"
 TERMS = ("bias_nm", "viscous_nms_per_rad", "coulomb_nm")
 """A joint's entries taken off (the fit's residuals beside them are for reading)."""
 MAX_FILE_BYTES = 1_000_000
+EFFORT_SCALES = (0.5, 2.0)
+EFFORT_LATENCIES_S = (0.0, 0.02)
+"""The efforts' scale and latency [s] a file may give (inclusive)."""
 MASS_TOLERANCE = 0.01
 """The largest relative difference between the URDF's mass a file was made with and the robot's."""
 
@@ -42,7 +45,10 @@ class CorrectionFile:
     (bias [N m], viscous [N m s/rad], Coulomb [N m]), ``residuals`` per joint (swing samples,
     the residual's RMS [N m] before and after the fit), ``payload_kg`` [kg] (the standing
     phase's weight over the URDF's), ``standing_s`` [s] the standing phase used, ``source``,
-    ``urdf_mass_kg`` [kg] the URDF's mass it was made with (NaN: unknown, a file without it).
+    ``urdf_mass_kg`` [kg] the URDF's mass it was made with (NaN: unknown, a file without it),
+    ``effort_scale`` (the efforts reported over the motors' torques) and ``effort_latency_s`` [s]
+    (how late they are): not fitted (calibrate writes 1 and 0), set by hand from what the
+    robot's maker or a bench test says (:mod:`a1_leg_fk.estimation.effort_timing`).
     """
 
     joints: tuple[str, ...]
@@ -52,6 +58,8 @@ class CorrectionFile:
     standing_s: float
     source: str
     urdf_mass_kg: float = math.nan
+    effort_scale: float = 1.0
+    effort_latency_s: float = 0.0
 
     def text(self) -> str:
         """The file's text."""
@@ -70,6 +78,8 @@ class CorrectionFile:
             "urdf_mass_kg": round(self.urdf_mass_kg, 4),
             "payload_kg": round(self.payload_kg, 3),
             "standing_s": round(self.standing_s, 3),
+            "effort_scale": self.effort_scale,
+            "effort_latency_s": self.effort_latency_s,
             "joints": joints,
         }
         return json.dumps(document, indent=2) + "\n"
@@ -120,7 +130,24 @@ def read_correction_file(
         standing,
         str(document.get("source", "")),
         made_for,
+        *_timing(where, document),
     )
+
+
+def _timing(where: str, document: dict[str, object]) -> tuple[float, float]:
+    """The file's effort scale (within :data:`EFFORT_SCALES`; 1 when absent) and latency [s]
+    (within :data:`EFFORT_LATENCIES_S`; 0 when absent).
+    """
+    values = []
+    for name, default, (least, most) in (
+        ("effort_scale", 1.0, EFFORT_SCALES),
+        ("effort_latency_s", 0.0, EFFORT_LATENCIES_S),
+    ):
+        value = _number(where, name, document.get(name, default), most)
+        if value < least:
+            raise CorrectionFileError(f"{where}: {name} {value} is absurd (at least {least:g})")
+        values.append(value)
+    return values[0], values[1]
 
 
 def _terms(where: str, name: str, entry: object) -> tuple[float, float, float]:

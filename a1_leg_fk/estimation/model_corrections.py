@@ -137,7 +137,9 @@ class ModelCorrections:
         self._taken = np.zeros(JOINT_COUNT)
         """Per joint, its learning clock when the sums were last taken in [s]."""
         self.learnt_samples = 0
-        """Joint samples the least squares took."""
+        """Joint samples the least squares took (kept or taken in)."""
+        self._taken_samples = 0
+        """Joint samples taken into the sums."""
         for joint, (bias, viscous, coulomb) in enumerate(fixed or ()):
             self._applied[joint] = (bias, -viscous, -coulomb)
 
@@ -171,6 +173,7 @@ class ModelCorrections:
         lowest, step = max(depths), min(dt_s, 1.0)
         latest, threshold = self._latest, self.settings.swing_probability
         kept, clock = self._kept, self._clock
+        before = len(kept)
         for leg, foot in enumerate(feet):
             if foot is None or not probabilities[leg] < threshold:
                 continue
@@ -182,8 +185,9 @@ class ModelCorrections:
                     clock[joint] += step
                     kept.extend((joint, sample[0], sample[1], clock[joint], step))
                 latest[joint] = None
+        self.learnt_samples += (len(kept) - before) // KEPT
         least, most = BATCH
-        if len(kept) >= KEPT * min(most, max(least, self.learnt_samples // 8)):
+        if len(kept) >= KEPT * min(most, max(least, self._taken_samples // 8)):
             self._take_in()
 
     def _take_in(self) -> None:
@@ -213,7 +217,7 @@ class ModelCorrections:
         self._taken = now
         self._sums = decay[:, None] * self._sums + sums[:10].T
         self._variance = decay * self._variance + sums[10]
-        self.learnt_samples += len(joint)
+        self._taken_samples += len(joint)
         self._solve(learnt.any(axis=0))
 
     def _solve(self, joints: np.ndarray) -> None:

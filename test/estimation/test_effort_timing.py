@@ -1,7 +1,7 @@
 """The efforts' scale and latency a calibration's file gives (estimation/effort_timing.py), by
 construction: a smooth torque reported ``k`` times and ``L`` late is put back to within the
 first-order prediction's error; a PyBullet trot's efforts scaled by 0.9 and 3 ms late give, with
-the file's scale and latency, the forces of the trot as it was."""
+the file's scale and latency, the forces of the trot as it was (in the typical sample)."""
 
 from __future__ import annotations
 
@@ -88,12 +88,13 @@ def test_the_file_gives_the_scale_and_latency_within_their_ranges(tmp_path: Path
 
 
 def test_the_file_puts_a_late_scaled_trot_back(tmp_path: Path) -> None:
-    """The mismatch family's exact slow A1 trot (PyBullet; 8 s of gait), its efforts 0.9 x and
-    3 ms late by construction (corrections off, so only the efforts differ): the normal forces'
-    median error against the trot's own is 2.4 % of the weight; with the file's scale and
-    latency, a twentieth of that. (Their RMS stays near 4 %: a touchdown's torque step cannot be
-    predicted 3 ms ahead by any causal rule, docs/forces.md.)"""
-    name = "a1_trot_slow=exact"
+    """The mismatch family's exact fast A1 trot (PyBullet; 8 s of gait; the run make test
+    simulates for test_mismatch_family), its efforts 0.9 x and 3 ms late by construction
+    (corrections off, so only the efforts differ): the normal forces' median error against the
+    trot's own is 2.9 % of the weight; with the file's scale and latency, under a fifteenth of
+    that (0.16 %). (Their RMS stays near 6 %: a touchdown's torque step cannot be predicted 3 ms
+    ahead by any causal rule, docs/forces.md.)"""
+    name = "a1_trot_fast=exact"
     run = mismatch_runs((name,))[name].run
     quadruped = Quadruped.from_urdf(run.urdf_path)
     reported = replace(run, torques=late(run.stamps_s, run.torques))
@@ -107,4 +108,4 @@ def test_the_file_puts_a_late_scaled_trot_back(tmp_path: Path) -> None:
     }
     off, back = error["off"], error[str(path)]
     assert off > 0.02, error
-    assert back < off / 20.0, error
+    assert back < off / 15.0, error

@@ -11,7 +11,10 @@ from a1_leg_fk.estimation.filter_model import FLAT
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S
 from a1_leg_fk.estimation.odometry import OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO
-from a1_leg_fk.ros.foot_fk_parameters import MODEL_CORRECTIONS_PARAMETER
+from a1_leg_fk.ros.foot_fk_parameters import (
+    MODEL_CORRECTIONS_FILE_PARAMETER,
+    MODEL_CORRECTIONS_PARAMETER,
+)
 from a1_leg_fk.ros.joint_input import INPUT_PARAMETER
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 
@@ -52,6 +55,7 @@ PARAMETERS = (
         read_only=True,
     ),
     MODEL_CORRECTIONS_PARAMETER,
+    MODEL_CORRECTIONS_FILE_PARAMETER,
     ParameterSpec(
         "imu_timeout_s",
         DEFAULT_IMU_TIMEOUT_S,

@@ -23,14 +23,10 @@ when it is near the ground and nearly still:
   thresholds).
 * **Minimum phase.** Interior stances and swings shorter than ``min_phase_s`` (blips) are removed,
   shortest first (:mod:`a1_leg_fk.gait.phases`: a stance blip dropped, a swing blip bridged).
-* **Edges** (:func:`fit_edges`). A foot unloads before it moves measurably and may slide while it
-  pushes off, so the speeds place edges late or early; the heights place them. Each stance's
-  edge samples higher than its median height + a tolerance are moved to swing, then each edge is
-  carried out over the neighbouring samples within the tolerance of the stance's level next to
-  that edge (the median of its heights within ``EDGE_REFERENCE_S``): the stance ends where the
-  foot starts to rise and begins where it stops coming down. The tolerance: three deviations of
-  the heights' noise (robust, from consecutive stance samples; at least 0.1 mm) plus the
-  stance's own drift beyond the noise (a soft foot sinking). An edge time is the midpoint
+* **Edges** (:func:`a1_leg_fk.gait.edges.fit_edges`). The speeds place edges late or early (a
+  foot unloads before it moves, may slide as it pushes off); the heights place them: a stance
+  ends where the foot starts to rise above the stance's level next to the edge and begins where
+  it stops coming down. An edge time is the midpoint
   between the last sample of one phase and the first of the next (unbiased on a sampling grid);
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
 
@@ -44,7 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, runs, segment_slices, stances_of
+from a1_leg_fk.gait.edges import fit_edges, stance_noise
+from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, segment_slices, stances_of
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -52,14 +49,6 @@ from a1_leg_fk.model.urdf import LegFkError
 MIN_SAMPLES = 5
 """Fewer valid rows than this cannot give a speed window and a phase on each side."""
 PLANE_REFITS = 3
-EDGE_NOISE_DEVIATIONS = 3.0
-EDGE_NOISE_FLOOR_M = 0.0001
-"""[m] A stance's edge tolerance is at least this (noise-free heights; chosen on the contact
-family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
-EDGE_REFERENCE_S = 0.02
-"""[s] A stance's level next to an edge is the median of its heights this close to it."""
-MAD_SIGMA = 1.4826
-"""A normal distribution's standard deviation per median absolute deviation."""
 SLOPE_RCOND = 0.01
 """Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set
 0)."""
@@ -213,77 +202,6 @@ def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) ->
     last = np.maximum.accumulate(np.where(enter | leave, np.arange(heights.size), -1))
     state: np.ndarray = np.where(last >= 0, enter[np.clip(last, 0, None)], leave[events[0]])
     return state.astype(bool)
-
-
-def stance_noise(heights: np.ndarray, stance: np.ndarray) -> float:
-    """[m] The noise of a foot's stance heights: robust, from the differences of consecutive
-    stance samples away from the edges (so that neither a stance's slow drift, nor the levels of
-    different stances, nor its touchdowns and liftoffs count); 0 without such samples.
-    """
-    interior = stance[1:-2] & stance[2:-1] & stance[:-3] & stance[3:]  # no edge sample
-    steps = np.diff(heights)[1:-1][interior]
-    if not steps.size:
-        return 0.0
-    return MAD_SIGMA * float(np.median(np.abs(steps - np.median(steps)))) / math.sqrt(2.0)
-
-
-def fit_edges(
-    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, noise_m: float
-) -> np.ndarray:
-    """``stance`` of one gap-free run (``times`` [s], ``heights`` [m], heights' ``noise_m``
-    [m]) with each stance's edges placed where the foot leaves the ground or reaches it: the
-    edge samples higher than the stance's median + its tolerance (:func:`edge_tolerance`) moved
-    to swing, then each edge carried out over the neighbouring samples no higher than the
-    median of the stance's heights within :data:`EDGE_REFERENCE_S` of the edge + the tolerance:
-    a foot still down (sliding, unloading, a soft foot rising as it unloads) stands, and its
-    stance ends where it rises.
-    """
-    fitted = stance.copy()
-    for first, last, value in runs(stance):
-        if not value:
-            continue
-        inside = slice(first, last + 1)
-        interior = np.abs(times[inside] - times[inside].mean()) < (
-            0.5 * (times[last] - times[first]) - EDGE_REFERENCE_S
-        )
-        tolerance = edge_tolerance(heights[inside][interior], noise_m)
-        low = np.flatnonzero(heights[inside] <= np.median(heights[inside]) + tolerance)
-        start, end = first + int(low[0]), first + int(low[-1])
-        while start > 0 and heights[start - 1] <= _reference(times, heights, start, 1) + tolerance:
-            start -= 1
-        while (
-            end < heights.size - 1
-            and heights[end + 1] <= _reference(times, heights, end, -1) + tolerance
-        ):
-            end += 1
-        fitted[first : last + 1] = False
-        fitted[start : end + 1] = True
-    return fitted
-
-
-def edge_tolerance(levels: np.ndarray, noise_m: float) -> float:
-    """[m] How far above a stance's level a foot still stands: :data:`EDGE_NOISE_DEVIATIONS` of
-    the heights' noise (at least :data:`EDGE_NOISE_FLOOR_M`) plus the stance's own drift beyond
-    that noise (the robust spread of its interior heights ``levels`` [m], those farther than
-    :data:`EDGE_REFERENCE_S` from its edges: a soft foot sinks and rises again); no drift from
-    fewer than three.
-    """
-    if levels.size < 3:
-        return max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)
-    spread = MAD_SIGMA * float(np.median(np.abs(levels - np.median(levels))))
-    drift = math.sqrt(max(spread**2 - noise_m**2, 0.0))
-    return max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M) + drift
-
-
-def _reference(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float:
-    """[m] The median height of the samples within :data:`EDGE_REFERENCE_S` of sample ``edge``
-    towards ``inward`` (1: later samples, -1: earlier), ``edge`` included.
-    """
-    if inward > 0:
-        stop = int(np.searchsorted(times, times[edge] + EDGE_REFERENCE_S, side="right"))
-        return float(np.median(heights[edge:stop]))
-    begin = int(np.searchsorted(times, times[edge] - EDGE_REFERENCE_S, side="left"))
-    return float(np.median(heights[begin : edge + 1]))
 
 
 def detect_contacts(

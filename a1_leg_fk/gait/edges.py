@@ -8,16 +8,22 @@ edges late or early; the heights place them (:func:`fit_edges`):
 * **Gross trim.** A stance's edge samples higher than its median height + the gross tolerance
   (the noise tolerance plus the stance's own spread beyond the noise: a stance may sink and
   bob) are moved to swing.
-* **Settle.** Each edge is then moved inwards while its sample stands higher than the stance's
-  level next to it (the median of the heights within :data:`EDGE_REFERENCE_S` inwards) + the
-  edge tolerance, and then outwards over the neighbours within that tolerance of the level: the
-  stance ends where the foot starts to rise and begins where it stops coming down. The edge
-  tolerance is the noise tolerance (:data:`EDGE_NOISE_DEVIATIONS` of the heights' noise, robust,
-  from consecutive stance samples; at least :data:`EDGE_NOISE_FLOOR_M`), plus the stance's drift
-  (its spread beyond the noise) only where its heights rise towards the edge (the median of
-  their steps within :data:`TREND_S`): a soft foot coming up out of the ground as it unloads
-  stands, while a stance that comes down to its edge (a bobbing body's) gets no allowance and
-  its first millimetres of swing are swing.
+* **Settle** (:func:`settle`). Each edge is then moved inwards while its sample stands higher
+  than the stance's level next to it (the median of the heights within :data:`EDGE_REFERENCE_S`
+  inwards) + the edge tolerance, and then outwards over the neighbours within that tolerance of
+  the level: the stance ends where the foot starts to rise and begins where it stops coming
+  down. The edge tolerance is the noise tolerance (:data:`EDGE_NOISE_DEVIATIONS` of the
+  heights' noise, robust, from consecutive stance samples; at least :data:`EDGE_NOISE_FLOOR_M`)
+  plus what the level lags a stance rising towards the edge by (its rise over the previous
+  :data:`EDGE_REFERENCE_S`, at most the drift): a stance that comes up to its edge faster than
+  the noise, standing above its median there (a soft foot unloading), is allowed its whole
+  drift; one that bobs up and comes down to its edge (the demo's) nothing, so its first
+  millimetres of swing are swing.
+* **Rise** (:func:`rise_start`). A liftoff is moved back to where the foot's rise starts: the
+  heights within :data:`RISE_S` after the stance, fitted as ``c (t - t0)^p`` (a foot that
+  leaves fast, ``p = 1``, or from rest, ``p = 2``), give ``t0``; at most :data:`BACK_S` back
+  (noise makes a foot rise three deviations before it is up; a walk's foot rises 0.1 mm only
+  some 6 ms after it left).
 """
 
 from __future__ import annotations
@@ -34,8 +40,12 @@ EDGE_NOISE_FLOOR_M = 0.0001
 family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
 EDGE_REFERENCE_S = 0.02
 """[s] A stance's level next to an edge is the median of its heights this close to it."""
-TREND_S = 0.04
-"""[s] Whether a stance rises towards an edge is judged over its heights this close to it."""
+RISE_S = 0.01
+"""[s] A liftoff's rise is fitted over the heights this long after the stance's last sample."""
+BACK_S = 0.01
+"""[s] A liftoff is moved back by its rise's fit at most this far (a soft foot's slow rise)."""
+RISE_POWERS = (1.0, 1.5, 2.0, 3.0)
+"""The shapes a liftoff's rise is fitted with, ``(t - t0)^p``."""
 MIN_WINDOW = 4
 """A level or a trend is taken over at least this many samples."""
 MAD_SIGMA = 1.4826
@@ -72,9 +82,10 @@ def fit_edges(
         slack = (base, drift(heights[inside][interior], noise_m))
         low = np.flatnonzero(heights[inside] <= np.median(heights[inside]) + sum(slack))
         start, end = first + int(low[0]), first + int(low[-1])
-        middle = (start + end) // 2
-        start = settle(times, heights, start, 1, slack, middle)
-        end = settle(times, heights, end, -1, slack, middle)
+        bounds = ((start + end) // 2, float(np.median(heights[inside])))
+        start = settle(times, heights, start, 1, slack, bounds)
+        end = settle(times, heights, end, -1, slack, bounds)
+        end = rise_start(times, heights, end, bounds[0], base)
         fitted[inside] = False
         fitted[start : end + 1] = True
     return fitted
@@ -91,54 +102,105 @@ def drift(levels: np.ndarray, noise_m: float) -> float:
     return math.sqrt(max(spread**2 - noise_m**2, 0.0))
 
 
+def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:
+    """A liftoff's last stance sample ``end`` moved back to where the foot's rise starts: a
+    parabola fitted to the heights above the level next to the edge within :data:`RISE_S`
+    after it (a foot that leaves fast or rises from rest) is extrapolated back to where it
+    last reaches the level, or comes closest to it; not more than :data:`BACK_S` back, nor
+    past ``limit``. Kept where the last sample already stands above the level + ``base_m``
+    [m] (a soft foot rising as it unloads: the level lags) and where fewer than three samples
+    follow within :data:`RISE_S` (a low rate).
+    """
+    stop = int(np.searchsorted(times, times[end] + RISE_S, side="right"))
+    after = np.arange(end + 1, stop)
+    ground = level(times, heights, end, -1)
+    if after.size < 3 or heights[end] > ground + base_m:
+        return end
+    lift = heights[after] - ground
+    if (lift <= 0.0).any():
+        return end
+    start = times[end] + max(rise_onset(times[after] - times[end], lift), -BACK_S)
+    return int(min(max(np.searchsorted(times, start, side="right") - 1, limit), end))
+
+
+def rise_onset(dt: np.ndarray, lift: np.ndarray) -> float:
+    """[s] When a rise ``lift`` [m] > 0 at times ``dt`` [s] started: the onset of the power law
+    ``c (t - t0)^p`` (``p`` among :data:`RISE_POWERS`) that fits it best (least squares in
+    height; ``p = 1``: a foot that leaves fast, ``p = 2``: from rest).
+    """
+    best = (math.inf, float(dt[0]))
+    for power in RISE_POWERS:
+        slope, intercept = np.polyfit(dt, lift ** (1.0 / power), 1)
+        if slope <= 0.0:
+            continue
+        onset = -intercept / slope
+        error = float(np.sum(((slope * np.clip(dt - onset, 0.0, None)) ** power - lift) ** 2))
+        best = min(best, (error, float(onset)))
+    return best[1]
+
+
 def settle(
     times: np.ndarray,
     heights: np.ndarray,
     edge: int,
     inward: int,
     slack: tuple[float, float],
-    limit: int,
+    bounds: tuple[int, float],
 ) -> int:
     """The stance edge sample from ``edge`` (``inward`` 1: a touchdown's, -1: a liftoff's):
     moved inwards (not past ``limit``) while it stands higher than :func:`ceiling`, then
     outwards over the neighbours no higher (``slack``: the noise tolerance and the stance's
-    drift [m]).
+    drift [m]; ``bounds``: the sample not to move past and the stance's median height [m]). A
+    stance that comes up towards ``edge`` (a soft foot as it unloads, faster and faster) is
+    allowed its whole drift at every step: its level there stands above its median and rose by
+    more than the noise tolerance over :data:`EDGE_REFERENCE_S` (a stance that bobs up and comes
+    down to its edge does not); so is any stance at a rate too low to tell.
     """
-    while edge != limit and heights[edge] > ceiling(times, heights, edge + inward, inward, slack):
+    noise_m, drift_m = slack
+    limit, median_m = bounds
+    rise = lag(times, heights, edge, inward)
+    soft = rise is None or (level(times, heights, edge, inward) > median_m and rise > noise_m)
+    allowance = (drift_m, drift_m) if soft else (0.0, drift_m)
+    while edge != limit and (
+        heights[edge] > ceiling(times, heights, edge + inward, inward, noise_m, allowance)
+    ):
         edge += inward
     outward = edge - inward
     while 0 <= outward < heights.size and (
-        heights[outward] <= ceiling(times, heights, edge, inward, slack)
+        heights[outward] <= ceiling(times, heights, edge, inward, noise_m, allowance)
     ):
         edge, outward = outward, outward - inward
     return edge
 
 
 def ceiling(
-    times: np.ndarray, heights: np.ndarray, edge: int, inward: int, slack: tuple[float, float]
+    times: np.ndarray,
+    heights: np.ndarray,
+    edge: int,
+    inward: int,
+    noise_m: float,
+    allowance: tuple[float, float],
 ) -> float:
     """[m] The highest a foot stands next to stance sample ``edge`` (on its side away from
-    ``inward``): the level there + the noise tolerance + the stance's drift if it rises towards
-    the edge (``slack``: those two [m]).
+    ``inward``): the level there + the noise tolerance ``noise_m`` [m] + what the level lags a
+    stance rising towards the edge by (:func:`lag`), within ``allowance`` (least, most [m]).
     """
-    noise_m, drift_m = slack
-    return (
-        level(times, heights, edge, inward)
-        + noise_m
-        + (
-            drift_m
-            if rises_towards(heights, _inwards(times, edge, inward, TREND_S), inward)
-            else 0.0
-        )
-    )
+    least, most = allowance
+    behind = min(max(lag(times, heights, edge, inward) or 0.0, least), most)
+    return level(times, heights, edge, inward) + noise_m + behind
 
 
-def rises_towards(heights: np.ndarray, window: slice, inward: int) -> bool:
-    """Whether the ``heights`` in ``window`` mostly rise towards its end away from ``inward``:
-    the median of their steps (robust to a few swing samples at the edge).
+def lag(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float | None:
+    """[m] How much the level next to stance sample ``edge`` rose towards it from the level
+    :data:`EDGE_REFERENCE_S` farther inwards; None where the stance is too short or the rate
+    too low for more than :data:`MIN_WINDOW` samples in that span.
     """
-    steps = np.diff(heights[window])
-    return bool(steps.size) and -inward * float(np.median(steps)) > 0.0
+    here = _inwards(times, edge, inward, EDGE_REFERENCE_S)
+    width = here.stop - here.start
+    before = edge + inward * width
+    if width <= MIN_WINDOW or not 0 <= before < heights.size:
+        return None
+    return level(times, heights, edge, inward) - level(times, heights, before, inward)
 
 
 def level(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float:

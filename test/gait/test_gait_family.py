@@ -36,36 +36,20 @@ WALK_START = (
     "first stride splits that stride; the report leaves the irregular half out"
 )
 FEET_LATE = (
-    "the feet's heights: with sensor noise a foot must rise 3 deviations of it before it is up; "
-    "a walk's foot rises slowly (1 mm some 16 ms after it left)"
+    "the feet's heights: a walk's foot rises from rest, and in sensor noise its rise's fitted "
+    "onset comes late; a soft foot comes up ~1 mm as it unloads, which the heights cannot tell "
+    "from a lift"
 )
 UNMET = {
-    ("a1_trot_fast+noise", FEET, DUTY): "0.026 from PyBullet",
-    ("a1_trot_fast+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 6 ms",
     ("a1_pronk+noise", FORCE, EVENTS): "touchdown 0 ms, lift-off 6 ms",
-    ("a1_pronk+noise", FEET, DUTY): "0.023 from PyBullet",
-    ("a1_pronk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
     ("go2_trot", FORCE, EVENTS): "touchdown 0 ms, lift-off 6 ms",
-    ("go2_trot", FEET, EVENTS): "touchdown 2 ms, lift-off 6 ms",
     ("go2_trot+noise", FORCE, EVENTS): "touchdown 0 ms, lift-off 6 ms",
-    ("go2_trot+noise", FEET, DUTY): "0.026 from PyBullet",
-    ("go2_trot+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
-    ("a1_walk", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
-    ("a1_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 14 ms",
-    ("a1_trot_slow", FEET, EVENTS): "touchdown 2 ms, lift-off 6 ms",
-    ("a1_trot_slow+noise", FEET, DUTY): "0.023 from PyBullet",
-    ("a1_trot_slow+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
-    ("a1_trot_turn", FEET, DUTY): "0.022 from PyBullet",
-    ("a1_trot_turn", FEET, EVENTS): "touchdown 2 ms, lift-off 6 ms",
-    ("a1_trot_turn+noise", FEET, DUTY): "0.028 from PyBullet",
-    ("a1_trot_turn+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
+    ("a1_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 7 ms",
     ("a1_trot_soft", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
-    ("go2_trot_fast+noise", FEET, DUTY): "0.020004 from PyBullet",
     ("go2_walk", FORCE, STANCES): "1.045 stances per stride",
     ("go2_walk", FORCE, SAME): "0.013 from the estimate",
-    ("go2_walk", FEET, EVENTS): "touchdown 2 ms, lift-off 8 ms",
     ("go2_walk", FORCE_CAUSAL, SAME): "0.013 from the estimate",
-    ("go2_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 14 ms",
+    ("go2_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 7 ms",
     ("go2_walk+noise", FORCE_CAUSAL, SAME): "0.013 from the estimate",
 }
 """Goals not met, by (run, evidence, goal): the measured number (max over legs)."""

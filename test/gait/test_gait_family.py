@@ -32,8 +32,9 @@ DUTY, SAME, EVENTS, STANCES = "duty vs PyBullet", "duty vs estimate", "events", 
 DUTY_GOAL, SAME_GOAL, EVENT_GOAL_MS = 0.02, 0.005, 4.0
 FORCE_LATE = "the smoothed force estimate's own lift-off is late here"
 WALK_START = (
-    "the estimate's own false swing of 38-66 ms (longer than the minimum phase) in the walk's "
-    "first stride splits that stride; the report leaves the irregular half out"
+    "the estimate's own false swings of 38 and 60 ms (longer than the minimum phase: PyBullet's "
+    "load dips to 0.4-3 N while the feet touch) in the walk's first stride split that stride; "
+    "the report leaves the irregular half out"
 )
 FEET_LATE = (
     "the feet's heights: a walk's foot rises from rest, and in sensor noise its rise's fitted "

@@ -218,7 +218,8 @@ class ContactEstimator:
             self.counts.kinematic += 1
         spreads = None
         if with_force and efforts is not None:
-            spreads = self.doubt.spreads((angles, efforts), gravity, down)
+            loaded = [n > self.model.force_half_n for n in normals]  # NaN: False
+            spreads = self.doubt.spreads((angles, efforts), gravity, down, loaded)
         probabilities = self.filter.update(
             dt if math.isfinite(dt) else 0.0,
             motions,

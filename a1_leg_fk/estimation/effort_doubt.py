@@ -40,10 +40,12 @@ class EffortDoubt:
         joints: tuple[Sequence[float], Sequence[float]],
         gravity: Sequence[float],
         down: Sequence[float],
+        legs: Sequence[bool],
     ) -> list[float]:
         """Per foot the spread [N]: ``joints`` the 12 angles [rad] and efforts [N m],
-        ``gravity`` [m/s^2] and its unit direction ``down``, base frame (NaN where the load is
-        unknown).
+        ``gravity`` [m/s^2] and its unit direction ``down``, base frame; only for ``legs`` (the
+        feet whose load is stance evidence: the filter needs no other), NaN for the others and
+        where the load is unknown.
         """
-        forces, _, _ = self.statics.estimate_floats(*joints, gravity)
+        forces, _, _ = self.statics.estimate_floats(*joints, gravity, legs)
         return [self.scale * abs(normal_force(force, down)) for force in forces]

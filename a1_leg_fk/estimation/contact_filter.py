@@ -9,7 +9,11 @@ stance by its likelihood ratio. Each is the log-likelihood ratio of a logistic m
 that no single sample decides alone:
 
 - the foot's *normal force* [N] (from the momentum observer or the statics), when there is one:
-  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``;
+  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``; where the load is above
+  ``force_half_n`` and the efforts' spread ``sigma`` is given
+  (:mod:`a1_leg_fk.estimation.effort_doubt`: what mis-scaled efforts could misstate), the
+  scale is ``sqrt(force_scale_n^2 + sigma^2)`` (a load is weaker stance evidence where the
+  efforts are in doubt; a foot without load stays full swing evidence);
 - its *height* [m] above the lowest foot along gravity: ``(height_half_m - h) / height_scale_m``;
 - its *speed* [m/s] relative to the other low feet (those within ``height_half_m`` of the lowest):
   the distance between the base velocity this foot gives if it were still
@@ -128,12 +132,14 @@ class ContactFilter:
         imu: tuple[Sequence[float], Sequence[float] | None],
         normal_forces: Sequence[float] | None = None,
         phase_prior: Sequence[float] | None = None,
+        force_spreads: Sequence[float] | None = None,
     ) -> list[float]:
         """The 4 probabilities of stance after a sample ``dt_s`` [s] after the previous one:
         each foot's motion (None: unknown); ``imu``: the base's angular velocity [rad/s, base
         frame; zeros if unknown] and specific force [m/s^2] (None: unknown); normal forces [N]
         (None: no force evidence; NaN: none for that foot); the gait phase's probabilities of
-        stance (None: no prior).
+        stance (None: no prior); each normal force's spread [N] from the efforts' doubt (None
+        or NaN: none).
         """
         model = self.model
         limit = model.max_log_ratio
@@ -156,7 +162,10 @@ class ContactFilter:
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
             odds = prior + kinematic[leg]
             if forced[leg]:
-                force = (forces[leg] - model.force_half_n) / model.force_scale_n
+                load, scale = forces[leg] - model.force_half_n, model.force_scale_n
+                if load > 0.0 and force_spreads is not None and force_spreads[leg] > 0.0:
+                    scale = sqrt(scale * scale + force_spreads[leg] ** 2)
+                force = load / scale
                 odds += _clip(force, limit, limit)
             else:  # free fall stands in for a foot's own force
                 odds += common

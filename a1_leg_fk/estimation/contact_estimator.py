@@ -206,6 +206,7 @@ class ContactEstimator:
             (imu.angular_velocity or NO_ROTATION, imu.specific_force),
             normals if with_force else None,
             phase_prior,
+            down,
         )
         corrections = self.corrections
         if corrections is not None and with_force:

@@ -9,10 +9,11 @@ LocalGround`), in a frame the contact estimate keeps by itself, without the odom
 
 - gravity-levelled: z up (minus ``down``), x the base's x along the horizontal, turned by a
   heading ``psi`` [rad] integrated from the gyro's rate about z;
-- carried by the settled feet: the base moves by the mean displacement, in that frame, of the
-  feet that have stood for at least :data:`SETTLED_S` (a standing foot is still; one that has
-  just touched down may still be landing), or of all standing feet when none has settled (a
-  pronk's landing), so that footholds left behind stay put.
+- carried by the standing feet: the base moves by the mean displacement, in that frame, of the
+  standing feet (a standing foot is still) whose speed is within :data:`CARRY_GATE_MPS` of the
+  base's at the previous sample (a foot the estimate still holds while it lifts, or already
+  holds while it lands, moves differently: left out), else of the one closest to it; with none
+  standing (a flight), at the previous speed. The footholds left behind stay put.
 
 A slope within :data:`SIGNIFICANT` standard deviations of level (the plane's own covariance) is
 taken for level: on a flat floor the rule is the flat-floor rule, exactly. A foot's height [m] is
@@ -34,8 +35,8 @@ LEGS = len(LEG_NAMES)
 Vector = tuple[float, float, float]
 SIGNIFICANT = 2.0
 """A slope smaller than this many of its standard deviations is taken for level."""
-SETTLED_S = 0.05
-"""[s] a foot that has stood this long carries the frame."""
+CARRY_GATE_MPS = 0.1
+"""[m/s] a standing foot carries the frame while its speed is this close to the base's."""
 
 
 class FootGround:
@@ -48,8 +49,8 @@ class FootGround:
         self.base: list[float] = [0.0, 0.0, 0.0]
         """[m] the base's origin in the frame, carried by the standing feet."""
         self._offsets: list[Vector | None] = [None] * LEGS
-        self._stood_s = [0.0] * LEGS
-        """[s] how long each foot has stood (0: it does not)."""
+        self._velocity: Vector = (0.0, 0.0, 0.0)
+        """[m/s] the base's velocity in the frame at the previous sample."""
         self._stamp_s = 0.0
         self._slope: tuple[int, float, float] | None = None
         """(the footholds' revision, dz/dx, dz/dy) of the plane last fitted."""
@@ -87,11 +88,7 @@ class FootGround:
             x, y = ax * rx + ay * ry + az * rz, bx * rx + by * ry + bz * rz
             offsets.append((cos * x - sin * y, sin * x + cos * y, ux * rx + uy * ry + uz * rz))
         dt_s = max(dt_s, 0.0)
-        stood = self._stood_s
-        for leg in range(LEGS):
-            stood[leg] = stood[leg] + dt_s if standing[leg] else 0.0
-        settled = [time >= SETTLED_S for time in stood]
-        self._carry(offsets, settled if any(settled) else standing)
+        self._carry(offsets, standing, dt_s)
         base = self.base
         self._stamp_s += dt_s
         self.ground.update(
@@ -111,23 +108,36 @@ class FootGround:
         lowest = min(known) if known else math.nan
         return [value - lowest for value in level]
 
-    def _carry(self, offsets: list[Vector | None], settled: Sequence[bool]) -> None:
-        """The base moved by the mean displacement of the settled feet."""
-        count, sx, sy, sz = 0, 0.0, 0.0, 0.0
-        for leg, (now, before) in enumerate(zip(offsets, self._offsets, strict=True)):
-            if now is not None and before is not None and settled[leg]:
-                count, sx, sy, sz = (
-                    count + 1,
-                    sx + before[0] - now[0],
-                    sy + before[1] - now[1],
-                    sz + before[2] - now[2],
+    def _carry(self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float) -> None:
+        """The base moved by the standing feet that move as it did (see the module text)."""
+        previous, self._offsets = self._offsets, offsets
+        if dt_s <= 0.0:
+            return
+        vx, vy, vz = self._velocity
+        moves: list[tuple[float, Vector]] = []
+        for leg, (now, before) in enumerate(zip(offsets, previous, strict=True)):
+            if now is not None and before is not None and standing[leg]:
+                mx, my, mz = (
+                    (before[0] - now[0]) / dt_s,
+                    (before[1] - now[1]) / dt_s,
+                    (before[2] - now[2]) / dt_s,
                 )
-        if count:
-            base = self.base
-            base[0] += sx / count
-            base[1] += sy / count
-            base[2] += sz / count
-        self._offsets = offsets
+                off = math.sqrt((mx - vx) ** 2 + (my - vy) ** 2 + (mz - vz) ** 2)
+                moves.append((off, (mx, my, mz)))
+        if moves:
+            kept = [move for off, move in moves if off <= CARRY_GATE_MPS]
+            if not kept:
+                kept = [min(moves)[1]]
+            count = len(kept)
+            self._velocity = (
+                sum(move[0] for move in kept) / count,
+                sum(move[1] for move in kept) / count,
+                sum(move[2] for move in kept) / count,
+            )
+        base, (vx, vy, vz) = self.base, self._velocity
+        base[0] += vx * dt_s
+        base[1] += vy * dt_s
+        base[2] += vz * dt_s
 
     def _fitted(self) -> tuple[int, float, float] | None:
         """The plane's slope, fitted again only when its footholds changed (None: none yet)."""

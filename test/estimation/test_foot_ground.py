@@ -95,7 +95,7 @@ def walk(
 def a1() -> Quadruped:
     from pybullet_sim import A1_URDF
 
-    return Quadruped.from_urdf(A1_URDF)
+    return Quadruped.from_urdf(str(A1_URDF))
 
 
 def test_a_stance_foot_on_the_high_side_of_a_ramp_stands(a1: Quadruped) -> None:

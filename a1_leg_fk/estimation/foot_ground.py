@@ -122,10 +122,11 @@ class FootGround:
                     (before[1] - now[1]) / dt_s,
                     (before[2] - now[2]) / dt_s,
                 )
-                off = math.sqrt((mx - vx) ** 2 + (my - vy) ** 2 + (mz - vz) ** 2)
+                off = (mx - vx) * (mx - vx) + (my - vy) * (my - vy) + (mz - vz) * (mz - vz)
                 moves.append((off, (mx, my, mz)))
         if moves:
-            kept = [move for off, move in moves if off <= CARRY_GATE_MPS]
+            gate = CARRY_GATE_MPS * CARRY_GATE_MPS
+            kept = [move for off, move in moves if off <= gate]
             if not kept:
                 kept = [min(moves)[1]]
             count = len(kept)

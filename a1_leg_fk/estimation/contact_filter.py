@@ -14,7 +14,8 @@ that no single sample decides alone:
   ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), whichever is lower (a foot
   low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
   ``(height_half_m - h) / height_scale_m``;
-- its *speed* [m/s] relative to the other low feet (those within ``height_half_m`` of the lowest):
+- its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
+  ``height_half_m``):
   the distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;

@@ -20,6 +20,8 @@ taken for level: on a flat floor the rule is the flat-floor rule, exactly. A foo
 then its contact point's height with the slope taken off (``z - gx x - gy y``), above the lowest
 foot's: the slope comes from the footholds, the heights from the feet now, so that the frame's
 slow vertical drift does not bias them. Before the first foothold there is no slope: None.
+Absurd input is kept out: a contact point farther than :data:`MAX_REACH_M` from the base is
+unknown, and a frame carried beyond :data:`MAX_FRAME_M` starts anew.
 """
 
 from __future__ import annotations
@@ -35,6 +37,11 @@ LEGS = len(LEG_NAMES)
 Vector = tuple[float, float, float]
 SIGNIFICANT = 2.0
 """A slope smaller than this many of its standard deviations is taken for level."""
+MAX_REACH_M = 10.0
+"""[m] a contact point farther than this from the base along any axis is no foot (absurd input):
+unknown."""
+MAX_FRAME_M = 1.0e6
+"""[m] a frame whose base has gone farther (a gap of hours, absurd speeds) starts anew."""
 CARRY_GATE_MPS = 0.1
 """[m/s] a standing foot carries the frame while its speed is this close to the base's."""
 
@@ -43,6 +50,10 @@ class FootGround:
     """The frame, the base's place in it, the footholds and the plane (see the module text)."""
 
     def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """A new frame: no footholds, the base at its origin, still."""
         self.ground = LocalGround()
         self.psi = 0.0
         """[rad] the heading of the levelled frame, from the gyro."""
@@ -81,15 +92,19 @@ class FootGround:
         cos, sin = math.cos(self.psi), math.sin(self.psi)
         offsets: list[Vector | None] = []
         for foot in feet:
-            if foot is None:
-                offsets.append(None)
+            rx, ry, rz = foot.r if foot is not None else (math.nan,) * 3
+            if not (abs(rx) <= MAX_REACH_M and abs(ry) <= MAX_REACH_M and abs(rz) <= MAX_REACH_M):
+                offsets.append(None)  # NaN too
                 continue
-            rx, ry, rz = foot.r
             x, y = ax * rx + ay * ry + az * rz, bx * rx + by * ry + bz * rz
             offsets.append((cos * x - sin * y, sin * x + cos * y, ux * rx + uy * ry + uz * rz))
         dt_s = max(dt_s, 0.0)
         self._carry(offsets, standing, dt_s)
         base = self.base
+        if not (abs(base[0]) <= MAX_FRAME_M and abs(base[1]) <= MAX_FRAME_M
+                and abs(base[2]) <= MAX_FRAME_M):  # fmt: skip
+            self.reset()
+            return None
         self._stamp_s += dt_s
         self.ground.update(
             self._stamp_s,

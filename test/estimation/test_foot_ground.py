@@ -150,3 +150,36 @@ def test_a_level_floor_reads_as_the_lowest_foot() -> None:
         heights = ground.heights(0.002, feet, down, (0.0, 0.0, 0.0), standing)
     assert heights is not None
     assert heights == pytest.approx([0.0, 0.0, 0.0, 0.03], abs=1e-9)
+
+
+def test_absurd_feet_and_stamps_give_probabilities_not_errors(a1: Quadruped) -> None:
+    """Positions of 1e300 m or NaN, infinite gyro rates, stamps that leap by 1e300 s: every
+    step gives four probabilities in [0, 1], and no numpy warning (the footholds' fit is never
+    fed a point it cannot solve for)."""
+    import random
+    import warnings
+
+    rng = random.Random(1)
+    values = [0.0, 1e300, -1e300, 1e-300, 3.0, -2.0, math.inf, math.nan, 1e154]
+    zeros = [0.0] * 12
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        estimator = ContactEstimator(a1)
+        for _ in range(40):
+            estimator.reset()
+            for n in range(40):
+                feet = [
+                    ((rng.choice(values), rng.choice(values), rng.choice(values)),
+                     (rng.choice(values), 0.0, 0.0)) if rng.random() < 0.8 else None
+                    for _ in range(4)
+                ]  # fmt: skip
+                gravity = (rng.choice(values), rng.choice(values), -9.8)
+                imu = ImuSample(
+                    gravity if rng.random() < 0.7 else None,
+                    (rng.choice(values), 0.0, rng.choice(values)),
+                    (0.0, 0.0, 9.8),
+                )
+                stamp = n * STEP_S if rng.random() < 0.9 else rng.choice([1e300, -5.0, 0.0])
+                efforts = None if rng.random() < 0.5 else zeros
+                step = estimator.step(stamp, (zeros, zeros, efforts), feet, imu)
+                assert all(0.0 <= p <= 1.0 for p in step.probabilities)

@@ -227,6 +227,7 @@ class ContactEstimator:
             normals if with_force else None,
             phase_prior,
             spreads,
+            down,
         )
         corrections = self.corrections
         if corrections is not None and with_force:

@@ -25,46 +25,47 @@ pytestmark = pytest.mark.timeout(900)
 """The module's fixture simulates the family (two at a time, about a minute of wall time per
 run on a loaded 2-core machine) once per machine and scores it: minutes."""
 
-SLOPE = "contacts {} % with efforts, {} % without; vertical drift {} % (ground: flat)"
+DRIFT = "vertical drift {} % (ground: flat)"
+SLOPE = "contacts {} % with efforts, {} % without; " + DRIFT
 UNMET = {
-    "a1_slope_up_5": SLOPE.format(93.37, 75.92, "6.8-7.3") + "; sigma / error 5.5 kinematic",
-    "a1_slope_down_5": SLOPE.format(91.84, 75.22, "8.2-8.4"),
-    "a1_rough_2cm": "contacts without efforts 92.84 %",
+    "a1_slope_up_5": DRIFT.format("6.8"),
+    "a1_slope_down_5": DRIFT.format("8.1-8.2"),
+    "a1_rough_2cm": "contacts without efforts 92.90 %",
     "a1_mat_toes": "within 3 sigma 44-47 %; RMSE 0.031 m/s clean",
-    "go2_slope_up_5": SLOPE.format(90.68, 74.06, "7.3-7.6") + "; sigma / error 5.1-7.1 clean",
+    "go2_slope_up_5": DRIFT.format("7.4-7.5"),
     "go2_rough_1cm": "contacts without efforts 94.32 %",
-    "a1_slope_down_10": SLOPE.format(90.07, 69.32, "16.5-16.8") + "; sigma / error 6.5 kinematic",
-    "go2_slope_down_8": SLOPE.format(86.95, 68.70, "13.0-13.3"),
-    "a1_stairs_up_3cm": SLOPE.format(95.26, 87.95, "4.5-4.8"),
-    "a1_stairs_down_4cm": SLOPE.format(91.64, 78.01, "8.3-8.4"),
-    "go2_stairs_down_6cm": SLOPE.format(92.54, 85.00, "10.2"),
-    "a1_heightmap": "contacts without efforts 93.47 %",
+    "a1_slope_down_10": "contacts 94.89 % without efforts; " + DRIFT.format("16.6-16.7"),
+    "go2_slope_down_8": "contacts 93.58 % without efforts; " + DRIFT.format("13.1-13.3"),
+    "a1_stairs_up_3cm": SLOPE.format("97.11 (1.37 % swing called stance)", 91.76, "4.5-4.8"),
+    "a1_stairs_down_4cm": SLOPE.format(97.67, 86.23, "8.3-8.4"),
+    "go2_stairs_down_6cm": SLOPE.format(96.09, 87.08, "10.2"),
+    "a1_heightmap": "contacts without efforts 93.96 %",
     "a1_position_flat": "contacts 96.69 % with efforts (3.28 % swing called stance), 85.70 % "
     "without; within 3 sigma 87-91 %; kinematic clean: RMSE 0.037, burst 0.204 m/s, 2.2 % drift",
     "go2_position_flat": "contacts 98.34 % with efforts (1.65 % swing called stance), 88.68 % "
     "without; within 3 sigma 89-92 % kinematic",
 }
 """Runs whose goals today's defaults miss, with the numbers (strict xfail): every run but
-a1_rigid_toes."""
+a1_rigid_toes. The contacts' heights against the footholds' slope (estimation/foot_ground.py)
+brought the slopes' contacts to the goals (with efforts 98.9-99.5 %, without 93.6-95.6 %; they
+were 87-93 % and 69-76 %); ``ground: flat``'s vertical drift is what the slopes miss."""
 GROUND_UNMET = {
-    "a1_slope_up_5": "slope off by up to 1.02° (ground: flat flattens the footholds)",
-    "a1_slope_down_5": "slope off by up to 1.30°",
-    "go2_slope_up_5": "slope off by up to 1.05°",
-    "a1_slope_down_10": "slope off by up to 4.68°, height 2.4 cm",
-    "go2_slope_down_8": "slope off by up to 4.11°",
-    "a1_stairs_up_3cm": "slope off by up to 5.19° (footholds on two or three treads)",
-    "a1_stairs_down_4cm": "slope off by up to 7.49°, height 3.3 cm",
-    "go2_stairs_down_6cm": "slope off by up to 7.42°, height 6.0 cm",
+    "a1_slope_up_5": "slope off by up to 1.36° (ground: flat flattens the footholds)",
+    "a1_slope_down_5": "slope off by up to 2.20°",
+    "go2_slope_up_5": "slope off by up to 1.33°",
+    "a1_slope_down_10": "slope off by up to 3.86°, height 2.4 cm",
+    "go2_slope_down_8": "slope off by up to 4.84°",
+    "a1_stairs_up_3cm": "slope off by up to 4.14° (footholds on two or three treads)",
+    "a1_stairs_down_4cm": "slope off by up to 5.79°, height 3.3 cm",
+    "go2_stairs_down_6cm": "slope off by up to 10.39°, height 6.0 cm",
 }
 """Slope and stair runs whose local ground misses its goal today (strict xfail)."""
 LOCAL_UNMET = {
-    "a1_slope_up_5": "vertical drift 0.53 %",
-    "go2_slope_up_5": "sigma / error 5.4",
-    "a1_slope_down_10": "vertical drift 0.76 %",
-    "go2_slope_down_8": "vertical drift 0.96 %",
-    "a1_stairs_up_3cm": "ground 4.61° off the treads' plane",
-    "a1_stairs_down_4cm": "vertical drift 0.61 %; ground 7.28°, 2.1 cm",
-    "go2_stairs_down_6cm": "vertical drift 0.68 %; ground 8.42°, 3.2 cm",
+    "a1_slope_down_10": "vertical drift 0.74 %",
+    "go2_slope_down_8": "vertical drift 0.86 %",
+    "a1_stairs_up_3cm": "ground 3.56° off the treads' plane",
+    "a1_stairs_down_4cm": "vertical drift 0.61 %; ground 6.21°, 2.1 cm",
+    "go2_stairs_down_6cm": "vertical drift 0.75 %; ground 9.53°, 3.2 cm",
 }
 """Slope and stair runs that ``ground: local`` leaves short of a goal (strict xfail)."""
 STRIDE_S = 0.4
@@ -218,7 +219,7 @@ def test_a_slope_run_and_its_live_ground() -> None:
     """The family's representative in ``make test`` (a1_slope_up_5, about 5 s to simulate): the
     truth is a 5° slope the robot climbs on its feet, and the feed's live local ground keeps the
     base's height above it within the goal's 2 cm from the first stride on (its slope: the
-    accept family, strict xfail while ``ground: flat`` bends it by 1.02°); with ``ground:
+    accept family, strict xfail while ``ground: flat`` bends it by 1.36°); with ``ground:
     local`` the slope too is within the goal's 1°."""
     from terrain_runs import terrain_runs
     from terrain_scoring import ground_errors

@@ -3,14 +3,22 @@ c (y - y₀) [m, odom frame] fitted by least squares to where the stance feet to
 covariance; the height under the base, the plane's normal and its tilt (what a model-predictive
 controller plans on).
 
-A foothold is one foot's stance: the mean of its contact points (the foot's centre less its
-rolling radius, straight down) over the samples it stood, in odom. :class:`LocalGround` keeps the
-footholds of the last ``window_s`` seconds, at most ``max_footholds`` of them, and fits the plane
-about the point asked for (x₀, y₀), with a Gaussian prior on the slopes (zero, standard deviation
-``slope_prior``): where the footholds are fewer than three or in a line, the slope across them
-stays level with a large variance instead of being made up. The fit's noise is the footholds'
-residual RMS (corrected for the three parameters fitted), at least ``min_sigma_m``: feet that
-agree exactly still give the sink and roll of a real foot's contact.
+A foothold is one foot's stance: the mean (x, y) of its contact points (the foot's centre less its
+rolling radius, straight down) in odom, at its anchored height. :class:`LocalGround` keeps the
+footholds of the last ``window_s`` seconds, at most ``max_footholds``, and fits the plane about
+the point asked for with a Gaussian prior on the slopes (zero, standard deviation
+``slope_prior``): footholds fewer than three or in a line leave the slope across them level and
+uncertain. The fit's noise is the residual RMS (for three parameters), at least ``min_sigma_m``.
+
+The heights are anchored, not taken from the drifting estimate (``ground: footholds``, the
+odometry's default): a foot that touches down where the anchored ground predicts, within
+``step_gate`` standard deviations of the prediction and a touchdown's noise (``min_sigma_m``),
+is placed at the prediction (a flat floor, the same tread, an even slope: no height error carried
+from one stance to the next); one that lands off it (a step, a riser) keeps its own height. The
+prediction carries the footholds' heights along the ground's slope, which comes from the height
+differences between feet standing at the same time (the base's position cancels out of them,
+and so does the load of a trot's diagonal pair), summed over ``slope_time_s`` seconds (a stance
+counting as one measurement per :data:`CORRELATION_S`) with the slope prior.
 """
 
 from __future__ import annotations
@@ -34,6 +42,14 @@ DEFAULT_SLOPE_PRIOR = math.tan(math.radians(30.0))
 """The slopes' prior standard deviation (dz/dx, dz/dy): a 30° incline is one sigma."""
 DEFAULT_MIN_SIGMA_M = 0.005
 """[m] the footholds' height noise at least (a compliant foot's sink, the contact's roll)."""
+DEFAULT_STEP_GATE = 3.0
+"""A touchdown this many standard deviations off the anchored ground's prediction is a step."""
+DEFAULT_SLOPE_TIME_S = 2.0
+"""[s] the time constant over which the standing feet's height differences are summed."""
+CORRELATION_S = 0.2
+"""[s] the span over which one stance's height differences count as one measurement."""
+MAX_SLOPE_STEP_S = 0.1
+"""[s] the longest sample interval the slope's sums weigh (a gap counts as this)."""
 
 
 class GroundPlane(NamedTuple):
@@ -140,9 +156,10 @@ def _moved(
 
 
 class LocalGround:
-    """The footholds of the recent stances and the plane through them (see the module text).
+    """The footholds of the recent stances, their anchored heights and the plane through them
+    (see the module text).
 
-    A standing foot counts at its touchdown point until it lifts, then at its stance's mean: the
+    A standing foot counts at its touchdown point until it lifts, then at its stance's: the
     points change only at touchdowns, liftoffs and expiries, and the plane is fitted again only
     then (about the points' centre), and moved to the point asked for by :meth:`plane`.
     """
@@ -153,10 +170,14 @@ class LocalGround:
         max_footholds: int = DEFAULT_MAX_FOOTHOLDS,
         slope_prior: float = DEFAULT_SLOPE_PRIOR,
         min_sigma_m: float = DEFAULT_MIN_SIGMA_M,
+        step_gate: float = DEFAULT_STEP_GATE,
+        slope_time_s: float = DEFAULT_SLOPE_TIME_S,
     ) -> None:
-        if window_s <= 0.0 or max_footholds < 1 or slope_prior <= 0.0 or min_sigma_m <= 0.0:
-            raise ValueError("window_s, max_footholds, slope_prior and min_sigma_m must be > 0")
+        if min(window_s, max_footholds, slope_prior, min_sigma_m, step_gate, slope_time_s) <= 0:
+            raise ValueError("LocalGround's settings must be > 0")
         self.window_s = window_s
+        self.step_gate = step_gate
+        self.slope_time_s = slope_time_s
         self.slope_prior = slope_prior
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
@@ -166,25 +187,32 @@ class LocalGround:
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
+        self._slope_sums = [0.0] * 5
+        """The standing feet's pairwise differences' decaying sums [m² s]: dx², dx dy, dy², dx dz,
+        dy dz."""
+        self._stamp_s: float | None = None
         self.revision = 0
         """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
         only with it, and with the point asked for."""
 
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
-        not among them ends its stance: its foothold is kept.
+        not among them ends its stance: its foothold is kept, at its stance's mean (x, y) and
+        its anchored height; a leg new among them is anchored (see the module text).
         """
         standing = dict(contacts)
+        self._add_slopes(stamp_s, list(standing.values()))
         for leg in [leg for leg in self._open if leg not in standing]:
-            _, total, count = self._open.pop(leg)
-            mean = (total[0] / count, total[1] / count, total[2] / count)
+            touchdown, total, count = self._open.pop(leg)
+            mean = (total[0] / count, total[1] / count, touchdown[2])
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
         for leg, point in standing.items():
             opened = self._open.get(leg)
             if opened is None:
-                self._open[leg] = (point, [point[0], point[1], point[2]], 1)
+                anchored = (point[0], point[1], self._anchor(point))
+                self._open[leg] = (anchored, [point[0], point[1], point[2]], 1)
                 self._changed = True
                 self.revision += 1
             else:
@@ -198,8 +226,88 @@ class LocalGround:
             self._changed = True
             self.revision += 1
 
+    def _add_slopes(self, stamp_s: float, points: list[Point]) -> None:
+        """Decay the slope's sums to ``stamp_s`` [s] and add the pairwise differences of the
+        standing feet's contact ``points`` [m, odom], weighted by the sample's interval.
+        """
+        last, self._stamp_s = self._stamp_s, stamp_s
+        dt = 0.0 if last is None else min(max(stamp_s - last, 0.0), MAX_SLOPE_STEP_S)
+        decay = math.exp(-dt / self.slope_time_s)
+        sums = [value * decay for value in self._slope_sums]
+        for i, (xi, yi, zi) in enumerate(points):
+            for xj, yj, zj in points[i + 1 :]:
+                dx, dy, dz = xj - xi, yj - yi, zj - zi
+                sums[0] += dt * dx * dx
+                sums[1] += dt * dx * dy
+                sums[2] += dt * dy * dy
+                sums[3] += dt * dx * dz
+                sums[4] += dt * dy * dz
+        self._slope_sums = sums
+
+    def gradient(self) -> tuple[tuple[float, float], tuple[float, float, float]]:
+        """The ground's slope (dz/dx, dz/dy) from the standing feet's height differences with
+        the slope prior, and its covariance (xx, xy, yy); level and the prior's before any.
+        """
+        weight = 1.0 / (self.min_sigma_m**2 * CORRELATION_S)
+        prior = 1.0 / self.slope_prior**2
+        xx, xy, yy, xz, yz = self._slope_sums
+        a, b, d = xx * weight + prior, xy * weight, yy * weight + prior
+        det = a * d - b * b
+        cxx, cxy, cyy = d / det, -b / det, a / det
+        u, v = xz * weight, yz * weight
+        return (cxx * u + cxy * v, cxy * u + cyy * v), (cxx, cxy, cyy)
+
+    def predicted(self, x: float, y: float) -> tuple[float, float] | None:
+        """The anchored ground's height at (x, y) [m, odom] and its variance [m²]: the anchored
+        footholds' heights (the standing feet's too) carried along :meth:`gradient`, averaged;
+        None before the first.
+        """
+        anchors = self.points()
+        if not anchors:
+            return None
+        (gx, gy), (cxx, cxy, cyy) = self.gradient()
+        count = len(anchors)
+        height = sum(z + gx * (x - px) + gy * (y - py) for px, py, z in anchors) / count
+        mx = sum(point[0] for point in anchors) / count - x
+        my = sum(point[1] for point in anchors) / count - y
+        spread = cxx * mx * mx + 2.0 * cxy * mx * my + cyy * my * my
+        return height, self.min_sigma_m**2 / count + spread
+
+    def _anchor(self, point: Point) -> float:
+        """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction's where
+        it agrees within :attr:`step_gate` sigmas, its own where not (or with no prediction).
+        """
+        prediction = self.predicted(point[0], point[1])
+        if prediction is None:
+            return point[2]
+        height, variance = prediction
+        off = point[2] - height
+        agrees = off * off <= self.step_gate**2 * (variance + self.min_sigma_m**2)
+        return height if agrees else point[2]
+
+    def under(
+        self, feet: Iterable[tuple[int, Point]], legs: int
+    ) -> list[tuple[float, float] | None]:
+        """Per leg of ``legs``, the ground's height [m, odom] under its foot and its variance
+        [m²] (what the state filter holds a stance foot to, ``ground: footholds``): a standing
+        foot's anchored height (no variance: the anchor is the ground), else the plane's under
+        its contact point in ``feet`` (leg, point [m, odom]); None: no foot, or no ground yet.
+        """
+        grounds: list[tuple[float, float] | None] = [None] * legs
+        for leg, (x, y, _) in feet:
+            opened = self._open.get(leg)
+            if opened is not None:
+                grounds[leg] = (opened[0][2], 0.0)
+                continue
+            plane = self.plane(x, y)
+            if plane is not None:
+                grounds[leg] = (plane.height_m, plane.covariance[0][0])
+        return grounds
+
     def points(self) -> list[Point]:
-        """The footholds kept and the standing feet's touchdown points [m, odom]."""
+        """The footholds kept and the standing feet's touchdown points [m, odom], at their
+        anchored heights.
+        """
         standing = [touchdown for touchdown, _, _ in self._open.values()]
         return [foothold.point for foothold in self.footholds] + standing
 

@@ -15,10 +15,10 @@ odometry's default): a foot that touches down where the anchored ground predicts
 ``step_gate`` standard deviations of the prediction and a touchdown's noise (``min_sigma_m``),
 is placed at the prediction (a flat floor, the same tread, an even slope: no height error carried
 from one stance to the next); one that lands off it (a step, a riser) keeps its own height. The
-prediction carries the footholds' heights along the ground's slope, which comes from the height
-differences between feet standing at the same time (the base's position cancels out of them,
-and so does the load of a trot's diagonal pair), summed over ``slope_time_s`` seconds (a stance
-counting as one measurement per :data:`CORRELATION_S`) with the slope prior.
+prediction takes the nearest foothold's height, carried along the ground's slope (measured
+between feet standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`) or level (a
+tread), whichever lands nearer; a touchdown's own height is taken against the standing feet's
+anchors in the same sample, so the estimate's drift cancels out of it too.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.estimation.ground_slope import GroundSlope
 from a1_leg_fk.kinematics.frames import Quaternion, rotate
 
 Point = tuple[float, float, float]
@@ -48,8 +49,6 @@ DEFAULT_SLOPE_TIME_S = 2.0
 """[s] the time constant over which the standing feet's height differences are summed."""
 CORRELATION_S = 0.2
 """[s] the span over which one stance's height differences count as one measurement."""
-MAX_SLOPE_STEP_S = 0.1
-"""[s] the longest sample interval the slope's sums weigh (a gap counts as this)."""
 
 
 class GroundPlane(NamedTuple):
@@ -177,20 +176,18 @@ class LocalGround:
             raise ValueError("LocalGround's settings must be > 0")
         self.window_s = window_s
         self.step_gate = step_gate
-        self.slope_time_s = slope_time_s
         self.slope_prior = slope_prior
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
         """The ended stances, oldest first."""
-        self._open: dict[int, tuple[Point, list[float], int]] = {}
-        """Per standing leg: its touchdown point [m], the sum of its contact points and count."""
+        self._open: dict[int, tuple[Point, list[float], int, float]] = {}
+        """Per standing leg: its touchdown point [m] (at its anchored height), the sums of its
+        contact points' x and y, their count and its contact point's last height."""
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
-        self._slope_sums = [0.0] * 5
-        """The standing feet's pairwise differences' decaying sums [m² s]: dx², dx dy, dy², dx dz,
-        dy dz."""
-        self._stamp_s: float | None = None
+        self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
+        """The slope of the feet that stood at the same time."""
         self.revision = 0
         """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
         only with it, and with the point asked for."""
@@ -198,89 +195,79 @@ class LocalGround:
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
         not among them ends its stance: its foothold is kept, at its stance's mean (x, y) and
-        its anchored height; a leg new among them is anchored (see the module text).
+        its anchored height; a leg new among them is anchored (:meth:`_touchdown`).
         """
         standing = dict(contacts)
-        self._add_slopes(stamp_s, list(standing.values()))
+        self.slope.add(stamp_s, list(standing.values()))
+        lifted = {}
         for leg in [leg for leg in self._open if leg not in standing]:
-            touchdown, total, count = self._open.pop(leg)
+            touchdown, total, count, last_z = self._open.pop(leg)
+            lifted[leg] = (last_z, touchdown[2])
             mean = (total[0] / count, total[1] / count, touchdown[2])
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
+        kept = {leg: (point[2], self._open[leg][0][2]) for leg, point in standing.items()
+                if leg in self._open}  # fmt: skip
         for leg, point in standing.items():
             opened = self._open.get(leg)
             if opened is None:
-                anchored = (point[0], point[1], self._anchor(point))
-                self._open[leg] = (anchored, [point[0], point[1], point[2]], 1)
+                anchored = (point[0], point[1], self._touchdown(point, kept or lifted))
+                self._open[leg] = (anchored, [point[0], point[1]], 1, point[2])
                 self._changed = True
                 self.revision += 1
             else:
                 total = opened[1]
                 total[0] += point[0]
                 total[1] += point[1]
-                total[2] += point[2]
-                self._open[leg] = (opened[0], total, opened[2] + 1)
+                self._open[leg] = (opened[0], total, opened[2] + 1, point[2])
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
             self._changed = True
             self.revision += 1
 
-    def _add_slopes(self, stamp_s: float, points: list[Point]) -> None:
-        """Decay the slope's sums to ``stamp_s`` [s] and add the pairwise differences of the
-        standing feet's contact ``points`` [m, odom], weighted by the sample's interval.
+    def _touchdown(self, point: Point, others: dict[int, tuple[float, float]]) -> float:
+        """The anchored height [m] of a foot touching down at ``point`` [m, odom] (:meth:`_anchor`
+        of its height against the ``others``' anchors: per other foot its contact point's
+        height in the same sample, or the last before it lifted, and its anchored height [m];
+        the estimate's own offset from the anchors cancels out; its height as given without
+        any).
         """
-        last, self._stamp_s = self._stamp_s, stamp_s
-        dt = 0.0 if last is None else min(max(stamp_s - last, 0.0), MAX_SLOPE_STEP_S)
-        decay = math.exp(-dt / self.slope_time_s)
-        sums = [value * decay for value in self._slope_sums]
-        for i, (xi, yi, zi) in enumerate(points):
-            for xj, yj, zj in points[i + 1 :]:
-                dx, dy, dz = xj - xi, yj - yi, zj - zi
-                sums[0] += dt * dx * dx
-                sums[1] += dt * dx * dy
-                sums[2] += dt * dy * dy
-                sums[3] += dt * dx * dz
-                sums[4] += dt * dy * dz
-        self._slope_sums = sums
+        if not others:
+            return self._anchor(point)
+        height = sum(anchor + point[2] - z for z, anchor in others.values()) / len(others)
+        return self._anchor((point[0], point[1], height))
 
     def gradient(self) -> tuple[tuple[float, float], tuple[float, float, float]]:
-        """The ground's slope (dz/dx, dz/dy) from the standing feet's height differences with
-        the slope prior, and its covariance (xx, xy, yy); level and the prior's before any.
+        """The ground's slope (dz/dx, dz/dy) and its covariance (xx, xy, yy), from the feet that
+        stood at the same time (:class:`~a1_leg_fk.estimation.ground_slope.GroundSlope`).
         """
-        weight = 1.0 / (self.min_sigma_m**2 * CORRELATION_S)
-        prior = 1.0 / self.slope_prior**2
-        xx, xy, yy, xz, yz = self._slope_sums
-        a, b, d = xx * weight + prior, xy * weight, yy * weight + prior
-        det = a * d - b * b
-        cxx, cxy, cyy = d / det, -b / det, a / det
-        u, v = xz * weight, yz * weight
-        return (cxx * u + cxy * v, cxy * u + cyy * v), (cxx, cxy, cyy)
+        return self.slope.gradient()
 
-    def predicted(self, x: float, y: float) -> tuple[float, float] | None:
-        """The anchored ground's height at (x, y) [m, odom] and its variance [m²]: the anchored
-        footholds' heights (the standing feet's too) carried along :meth:`gradient`, averaged;
-        None before the first.
+    def predicted(self, x: float, y: float) -> list[tuple[float, float]]:
+        """The anchored ground's heights at (x, y) [m, odom] and their variances [m²], from the
+        nearest anchored foothold (the standing feet's too: per foothold, so a staircase's
+        treads stay apart): carried along :meth:`gradient` (a slope), and level (a tread);
+        none before the first foothold.
         """
         anchors = self.points()
         if not anchors:
-            return None
+            return []
+        px, py, pz = min(anchors, key=lambda p: (p[0] - x) ** 2 + (p[1] - y) ** 2)
         (gx, gy), (cxx, cxy, cyy) = self.gradient()
-        count = len(anchors)
-        height = sum(z + gx * (x - px) + gy * (y - py) for px, py, z in anchors) / count
-        mx = sum(point[0] for point in anchors) / count - x
-        my = sum(point[1] for point in anchors) / count - y
-        spread = cxx * mx * mx + 2.0 * cxy * mx * my + cyy * my * my
-        return height, self.min_sigma_m**2 / count + spread
+        dx, dy = x - px, y - py
+        spread = cxx * dx * dx + 2.0 * cxy * dx * dy + cyy * dy * dy
+        return [(pz + gx * dx + gy * dy, spread), (pz, 0.0)]
 
     def _anchor(self, point: Point) -> float:
-        """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction's where
-        it agrees within :attr:`step_gate` sigmas, its own where not (or with no prediction).
+        """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction nearer
+        to it, where it agrees within :attr:`step_gate` sigmas; its own where neither does (a
+        step), or with no prediction.
         """
-        prediction = self.predicted(point[0], point[1])
-        if prediction is None:
+        predictions = self.predicted(point[0], point[1])
+        if not predictions:
             return point[2]
-        height, variance = prediction
+        height, variance = min(predictions, key=lambda p: abs(point[2] - p[0]))
         off = point[2] - height
         agrees = off * off <= self.step_gate**2 * (variance + self.min_sigma_m**2)
         return height if agrees else point[2]
@@ -308,7 +295,7 @@ class LocalGround:
         """The footholds kept and the standing feet's touchdown points [m, odom], at their
         anchored heights.
         """
-        standing = [touchdown for touchdown, _, _ in self._open.values()]
+        standing = [opened[0] for opened in self._open.values()]
         return [foothold.point for foothold in self.footholds] + standing
 
     def plane(self, x: float, y: float) -> GroundPlane | None:

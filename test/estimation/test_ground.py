@@ -138,3 +138,25 @@ def test_the_kept_fit_moved_to_the_base_is_the_fit_about_the_base() -> None:
 def test_bad_settings_are_refused() -> None:
     with pytest.raises(ValueError, match="settings"):
         LocalGround(window_s=0.0)
+
+
+def test_touchdowns_are_anchored_on_the_ground_not_on_the_drifting_estimate() -> None:
+    """A trot's diagonals (0.2 s each, 0.1 m apart) over a floor with a 4 cm step up at x = 1 m,
+    the contact points carrying the estimate's drift (2 cm/s up, common to every foot of a
+    sample): a touchdown's height is taken against the standing feet's anchors, so the drift
+    cancels (but for the 10 ms between the last sample of the feet that lift and the first of
+    those that land: 0.2 mm a step); where the floor predicts it (level, the same tread) the
+    foothold takes the prediction, where a step lifts it, its own height: every anchor is the
+    truth's."""
+    ground = LocalGround()
+    for step in range(40):
+        pair = (0, 3) if step % 2 == 0 else (1, 2)
+        feet = []
+        for leg in pair:
+            x = 0.1 * step + (0.18 if leg < 2 else -0.18)
+            feet.append((leg, x, 0.13 if leg % 2 else -0.13, 0.04 if x > 1.0 else 0.0))
+        for t in (0.2 * step, 0.2 * step + 0.19):  # touchdown, the stance's last sample
+            ground.update(t, [(leg, (x, y, z + 0.02 * t)) for leg, x, y, z in feet])
+        anchored = ground.under([(leg, (x, y, math.nan)) for leg, x, y, _ in feet], 4)
+        for leg, x, _, z in feet:
+            assert anchored[leg] == pytest.approx((z, 0.0), abs=5e-4), (step, leg, x)

@@ -47,6 +47,8 @@ DEFAULT_STEP_GATE = 3.0
 """A touchdown this many standard deviations off the anchored ground's prediction is a step."""
 DEFAULT_SLOPE_TIME_S = 2.0
 """[s] the time constant over which the standing feet's height differences are summed."""
+SCATTER_TOUCHDOWNS = 16
+"""The touchdowns whose offsets from a confident prediction scale the touchdowns' noise."""
 CORRELATION_S = 0.2
 """[s] the span over which one stance's height differences count as one measurement."""
 
@@ -155,8 +157,7 @@ def _moved(
 
 
 class LocalGround:
-    """The footholds of the recent stances, their anchored heights and the plane through them
-    (see the module text).
+    """The recent footholds, their anchored heights and the plane through them (module text).
 
     A standing foot counts at its touchdown point until it lifts, then at its stance's: the
     points change only at touchdowns, liftoffs and expiries, and the plane is fitted again only
@@ -186,6 +187,8 @@ class LocalGround:
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
+        self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
+        """The last touchdowns' absolute offsets from the prediction [m]."""
         self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
         """The slope of the feet that stood at the same time."""
         self.revision = 0
@@ -227,11 +230,9 @@ class LocalGround:
             self.revision += 1
 
     def _touchdown(self, point: Point, others: dict[int, tuple[float, float]]) -> float:
-        """The anchored height [m] of a foot touching down at ``point`` [m, odom] (:meth:`_anchor`
-        of its height against the ``others``' anchors: per other foot its contact point's
-        height in the same sample, or the last before it lifted, and its anchored height [m];
-        the estimate's own offset from the anchors cancels out; its height as given without
-        any).
+        """The anchored height [m] of a foot landing at ``point`` [m, odom]: :meth:`_anchor` of
+        its height against the ``others``' anchors (per other foot its contact point's height now
+        or as it lifted, and its anchor [m]: the estimate's offset cancels), or its own.
         """
         if not others:
             return self._anchor(point)
@@ -245,10 +246,9 @@ class LocalGround:
         return self.slope.gradient()
 
     def predicted(self, x: float, y: float) -> list[tuple[float, float]]:
-        """The anchored ground's heights at (x, y) [m, odom] and their variances [m²], from the
-        nearest anchored foothold (the standing feet's too: per foothold, so a staircase's
-        treads stay apart): carried along :meth:`gradient` (a slope), and level (a tread);
-        none before the first foothold.
+        """The anchored ground's heights at (x, y) [m, odom] and their variances [m²] from the
+        nearest anchored foothold (per foothold, so a staircase's treads stay apart), carried
+        along :meth:`gradient` (a slope) and level (a tread); none before the first foothold.
         """
         anchors = self.points()
         if not anchors:
@@ -261,16 +261,30 @@ class LocalGround:
 
     def _anchor(self, point: Point) -> float:
         """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction nearer
-        to it, where it agrees within :attr:`step_gate` sigmas; its own where neither does (a
-        step), or with no prediction.
+        to it, where it agrees within :attr:`step_gate` sigmas (the prediction's and
+        :meth:`touchdown_sigma_m`); its own where neither does (a step), or with no prediction.
         """
         predictions = self.predicted(point[0], point[1])
         if not predictions:
             return point[2]
         height, variance = min(predictions, key=lambda p: abs(point[2] - p[0]))
         off = point[2] - height
-        agrees = off * off <= self.step_gate**2 * (variance + self.min_sigma_m**2)
+        noise = self.touchdown_sigma_m()
+        if variance <= self.min_sigma_m**2:  # a confident prediction: the offset is noise's
+            self._offsets.append(abs(off))
+        agrees = off * off <= self.step_gate**2 * (variance + noise * noise)
         return height if agrees else point[2]
+
+    def touchdown_sigma_m(self) -> float:
+        """[m] a touchdown's height noise: ``min_sigma_m``, or where larger the robust scatter
+        of the last :data:`SCATTER_TOUCHDOWNS` about their predictions (their absolute offsets'
+        lower quartile, a normal sigma's 0.3186: steps may be most of a staircase's
+        touchdowns): feet that land cm off the prediction as a rule are not steps.
+        """
+        if 2 * len(self._offsets) < SCATTER_TOUCHDOWNS:  # from half of them on
+            return self.min_sigma_m
+        quartile = sorted(self._offsets)[len(self._offsets) // 4]
+        return max(self.min_sigma_m, quartile / 0.3186)
 
     def under(
         self, feet: Iterable[tuple[int, Point]], legs: int
@@ -292,9 +306,7 @@ class LocalGround:
         return grounds
 
     def points(self) -> list[Point]:
-        """The footholds kept and the standing feet's touchdown points [m, odom], at their
-        anchored heights.
-        """
+        """The footholds kept and the standing feet's touchdowns [m, odom], anchored."""
         standing = [opened[0] for opened in self._open.values()]
         return [foothold.point for foothold in self.footholds] + standing
 

@@ -1,24 +1,21 @@
 """The local ground under the robot, from its recent footholds: a plane z = a + b (x - x₀) +
-c (y - y₀) [m, odom frame] fitted by least squares to where the stance feet touched, with its
-covariance; the height under the base, the plane's normal and its tilt (what a model-predictive
-controller plans on).
+c (y - y₀) [m, odom] fitted by least squares to where the stance feet touched, with its
+covariance; the height under the base, the plane's normal and tilt (what an MPC plans on).
 
 A foothold is one foot's stance: the mean (x, y) of its contact points (the foot's centre less its
 rolling radius, straight down) in odom, at its anchored height. :class:`LocalGround` keeps the
-footholds of the last ``window_s`` seconds, at most ``max_footholds``, and fits the plane about
-the point asked for with a Gaussian prior on the slopes (zero, standard deviation
-``slope_prior``): footholds fewer than three or in a line leave the slope across them level and
-uncertain. The fit's noise is the residual RMS (for three parameters), at least ``min_sigma_m``.
+footholds of the last ``window_s`` seconds, at most ``max_footholds``, and fits the plane with a
+Gaussian prior on the slopes (zero, ``slope_prior``): footholds fewer than three or in a line
+leave the slope across them level and uncertain. The fit's noise is the residual RMS, at least
+``min_sigma_m``.
 
-The heights are anchored, not taken from the drifting estimate (``ground: footholds``, the
-odometry's default): a foot that touches down where the anchored ground predicts, within
-``step_gate`` standard deviations of the prediction and a touchdown's noise (``min_sigma_m``),
-is placed at the prediction (a flat floor, the same tread, an even slope: no height error carried
-from one stance to the next); one that lands off it (a step, a riser) keeps its own height. The
-prediction takes the nearest foothold's height, carried along the ground's slope (measured
-between feet standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`) or level (a
-tread), whichever lands nearer; a touchdown's own height is taken against the standing feet's
-anchors in the same sample, so the estimate's drift cancels out of it too.
+The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
+touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,
+an even slope: no error carried from stance to stance), one off it keeps its own height (a step).
+The prediction is the nearest foothold's height carried along the slope (measured between feet
+standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`; level below
+:data:`LEVEL_SLOPE`) or level (a tread), the nearer; a touchdown's own height is taken against
+the feet standing in the same sample, so the estimate's drift cancels out of it.
 """
 
 from __future__ import annotations
@@ -47,10 +44,12 @@ DEFAULT_STEP_GATE = 3.0
 """A touchdown this many standard deviations off the anchored ground's prediction is a step."""
 DEFAULT_SLOPE_TIME_S = 2.0
 """[s] the time constant over which the standing feet's height differences are summed."""
+LEVEL_SLOPE = math.tan(math.radians(1.0))
+"""Slopes below this are level: an IMU's mounting error (0.3°) tilts the feet's differences."""
 SCATTER_TOUCHDOWNS = 16
 """The touchdowns whose offsets from a confident prediction scale the touchdowns' noise."""
 CORRELATION_S = 0.2
-"""[s] the span over which one stance's height differences count as one measurement."""
+"""[s] the span one stance's height differences count as one measurement over."""
 
 
 class GroundPlane(NamedTuple):
@@ -190,7 +189,6 @@ class LocalGround:
         self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
         """The last touchdowns' absolute offsets from the prediction [m]."""
         self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
-        """The slope of the feet that stood at the same time."""
         self.revision = 0
         """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
         only with it, and with the point asked for."""
@@ -255,6 +253,8 @@ class LocalGround:
             return []
         px, py, pz = min(anchors, key=lambda p: (p[0] - x) ** 2 + (p[1] - y) ** 2)
         (gx, gy), (cxx, cxy, cyy) = self.gradient()
+        if gx * gx + gy * gy <= LEVEL_SLOPE**2:
+            return [(pz, 0.0)]
         dx, dy = x - px, y - py
         spread = cxx * dx * dx + 2.0 * cxy * dx * dy + cyy * dy * dy
         return [(pz + gx * dx + gy * dy, spread), (pz, 0.0)]

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from math import exp, isfinite, sqrt
+from math import exp, hypot, isfinite, sqrt
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.foot_ground import FootGround
@@ -177,7 +177,7 @@ class ContactFilter:
             if forced[leg]:
                 load, scale = forces[leg] - model.force_half_n, model.force_scale_n
                 if load > 0.0 and force_spreads is not None and force_spreads[leg] > 0.0:
-                    scale = sqrt(scale * scale + force_spreads[leg] ** 2)
+                    scale = hypot(scale, force_spreads[leg])  # no overflow on absurd efforts
                 force = load / scale
                 odds += _clip(force, limit, limit)
             else:  # free fall stands in for a foot's own force

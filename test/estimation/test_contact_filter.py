@@ -45,6 +45,16 @@ def test_a_spread_weakens_a_load_as_stance_evidence_never_its_absence() -> None:
     assert out == pytest.approx([sigmoid(odds) for odds in expected], abs=1e-12)
 
 
+def test_an_absurd_spread_leaves_a_load_no_evidence_and_raises_nothing() -> None:
+    """A spread of 1e200 N (a damaged recording's efforts) takes a load's stance evidence to
+    nought instead of overflowing its square; an infinite one too."""
+    contacts = ContactFilter(MODEL)
+    forces = [3.6 + 2 * 0.6] * 4
+    spreads = [1e200, math.inf, 1e-200, 0.0]
+    out = contacts.update(0.0, [None] * 4, (STILL, None), forces, None, spreads)
+    assert out == pytest.approx([0.5, 0.5, sigmoid(2.0), sigmoid(2.0)], abs=1e-12)
+
+
 def test_the_transition_model_pulls_towards_even_odds() -> None:
     contacts = ContactFilter(MODEL)
     contacts.probabilities = [1.0, 0.0, 0.9, 0.5]

@@ -27,7 +27,7 @@ from a1_leg_fk.cli.common import (
     non_negative,
 )
 from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, GROUND_MODELS
-from a1_leg_fk.estimation.ground import GROUND_COLUMNS
+from a1_leg_fk.estimation.ground_outputs import GROUND_COLUMNS
 from a1_leg_fk.estimation.odometry_feed import CONTACT_SOURCES
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError

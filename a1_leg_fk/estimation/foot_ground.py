@@ -4,8 +4,11 @@ floats, per sample: the node runs it for every joint state).
 A flat-floor rule reads a foot's height against the lowest foot along gravity: on a slope, a foot
 on the higher side stands while it is "high" (a 5° slope lifts the A1's front feet 3 cm above its
 rear ones, twice the filter's even-odds height). Here the ground's slope is the plane through the
-recent footholds, fitted by the odometry's own rule (:class:`~a1_leg_fk.estimation.ground.
-LocalGround`), in a frame the contact estimate keeps by itself, without the odometry:
+recent footholds at their measured heights, fitted by the odometry's own rule
+(:class:`~a1_leg_fk.estimation.ground.LocalGround` with ``anchored=False``: the odometry's anchors
+snap a touchdown to a level or lagging prediction, which flattens a ramp's footholds: 0.123
+instead of 0.141 on an 8° one), in a frame the contact estimate keeps by itself, without the
+odometry:
 
 - gravity-levelled: z up (minus ``down``), x the base's x along the horizontal, turned by a
   heading ``psi`` [rad] integrated from the gyro's rate about z;
@@ -54,7 +57,7 @@ class FootGround:
 
     def reset(self) -> None:
         """A new frame: no footholds, the base at its origin, still."""
-        self.ground = LocalGround()
+        self.ground = LocalGround(anchored=False)
         self.psi = 0.0
         """[rad] the heading of the levelled frame, from the gyro."""
         self.base: list[float] = [0.0, 0.0, 0.0]

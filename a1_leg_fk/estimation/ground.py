@@ -16,6 +16,9 @@ The prediction is the nearest foothold's height carried along the slope (measure
 standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`; level below
 :data:`LEVEL_SLOPE`) or level (a tread), the nearer; a touchdown's own height is taken against
 the feet standing in the same sample, so the estimate's drift cancels out of it.
+``anchored=False`` keeps the measured heights instead (each foothold at its stance's mean contact
+point, no slope measured): the plane fitted to them is the raw footholds' (the contact filter's,
+:mod:`a1_leg_fk.estimation.foot_ground`, whose frame is not the odometry's).
 """
 
 from __future__ import annotations
@@ -171,10 +174,13 @@ class LocalGround:
         min_sigma_m: float = DEFAULT_MIN_SIGMA_M,
         step_gate: float = DEFAULT_STEP_GATE,
         slope_time_s: float = DEFAULT_SLOPE_TIME_S,
+        anchored: bool = True,
     ) -> None:
         if min(window_s, max_footholds, slope_prior, min_sigma_m, step_gate, slope_time_s) <= 0:
             raise ValueError("LocalGround's settings must be > 0")
         self.window_s = window_s
+        self.anchored = anchored
+        """False: the footholds keep their measured heights (module text)."""
         self.step_gate = step_gate
         self.slope_prior = slope_prior
         self.min_sigma_m = min_sigma_m
@@ -182,7 +188,7 @@ class LocalGround:
         """The ended stances, oldest first."""
         self._open: dict[int, tuple[Point, list[float], int, float]] = {}
         """Per standing leg: its touchdown point [m] (at its anchored height), the sums of its
-        contact points' x and y, their count and its contact point's last height."""
+        contact points' x, y and z, their count and its contact point's last height."""
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
@@ -196,15 +202,18 @@ class LocalGround:
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
         not among them ends its stance: its foothold is kept, at its stance's mean (x, y) and
-        its anchored height; a leg new among them is anchored (:meth:`_touchdown`).
+        its anchored height (or mean height); a leg new among them is anchored
+        (:meth:`_touchdown`) or kept at its own height.
         """
         standing = dict(contacts)
-        self.slope.add(stamp_s, list(standing.values()))
+        if self.anchored:
+            self.slope.add(stamp_s, list(standing.values()))
         lifted = {}
         for leg in [leg for leg in self._open if leg not in standing]:
             touchdown, total, count, last_z = self._open.pop(leg)
             lifted[leg] = (last_z, touchdown[2])
-            mean = (total[0] / count, total[1] / count, touchdown[2])
+            height = touchdown[2] if self.anchored else total[2] / count
+            mean = (total[0] / count, total[1] / count, height)
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
@@ -213,14 +222,15 @@ class LocalGround:
         for leg, point in standing.items():
             opened = self._open.get(leg)
             if opened is None:
-                anchored = (point[0], point[1], self._touchdown(point, kept or lifted))
-                self._open[leg] = (anchored, [point[0], point[1]], 1, point[2])
+                own = self._touchdown(point, kept or lifted) if self.anchored else point[2]
+                self._open[leg] = ((point[0], point[1], own), list(point), 1, point[2])
                 self._changed = True
                 self.revision += 1
             else:
                 total = opened[1]
                 total[0] += point[0]
                 total[1] += point[1]
+                total[2] += point[2]
                 self._open[leg] = (opened[0], total, opened[2] + 1, point[2])
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
@@ -347,54 +357,3 @@ def contact_points(
         x, y, z = rotate(orientation, (foot[0], foot[1], foot[2]))
         points.append((leg, (position[0] + x, position[1] + y, position[2] + z - radii[leg])))
     return points
-
-
-GROUND_COLUMNS = (
-    "ground_height_m",
-    "ground_normal_x",
-    "ground_normal_y",
-    "ground_normal_z",
-    "ground_var_height",
-    "ground_var_roll",
-    "ground_var_pitch",
-)
-"""The local ground's values as the odom CSV names them (:func:`ground_values`)."""
-
-
-def ground_values(plane: GroundPlane | None) -> tuple[float, ...]:
-    """``plane`` as :data:`GROUND_COLUMNS`: its height [m, odom], unit normal and the variances
-    of the height [m²], roll and pitch [rad²]; NaN each before the first stance (None).
-    """
-    if plane is None:
-        return (math.nan,) * len(GROUND_COLUMNS)
-    covariance = plane.covariance
-    return (
-        plane.height_m,
-        *plane.normal,
-        covariance[0][0],
-        covariance[1][1],
-        covariance[2][2],
-    )
-
-
-def plane_pose(
-    plane: GroundPlane, x: float, y: float
-) -> tuple[Point, tuple[float, float, float, float], list[float]]:
-    """``plane`` at (x, y) [m, odom] as a pose with covariance (geometry_msgs'): the point on it
-    there [m], the tilt as a quaternion (x, y, z, w; R = Ry(pitch) Rx(roll), no yaw) and the
-    6×6 covariance, row-major (x, y, z, rotation about x, y, z): the height's and the tilt's,
-    zero for x, y and yaw (the point is under the base by construction, a plane has no yaw).
-    """
-    half_roll, half_pitch = plane.roll / 2.0, plane.pitch / 2.0
-    cr, sr, cp, sp = (
-        math.cos(half_roll),
-        math.sin(half_roll),
-        math.cos(half_pitch),
-        math.sin(half_pitch),
-    )
-    quaternion = (cp * sr, sp * cr, -sp * sr, cp * cr)  # qy(pitch) ⊗ qx(roll)
-    covariance = [0.0] * 36
-    for row, axis in enumerate((2, 3, 4)):  # z, roll, pitch
-        for column, other in enumerate((2, 3, 4)):
-            covariance[6 * axis + other] = plane.covariance[row][column]
-    return (x, y, plane.height_m), quaternion, covariance

@@ -24,7 +24,7 @@ import numpy as np
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, FilterCounts, FilterSettings
-from a1_leg_fk.estimation.ground import ground_values
+from a1_leg_fk.estimation.ground_outputs import ground_values
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed

@@ -12,12 +12,12 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from a1_leg_fk.estimation.filter_model import FilterCounts
-from a1_leg_fk.estimation.ground import GROUND_COLUMNS
+from a1_leg_fk.estimation.ground_outputs import GROUND_COLUMNS
 from a1_leg_fk.estimation.odometry import OdometrySample
 
 LiveRow = tuple[tuple[float, ...], tuple[float, ...]]
-"""A row's local ground (:func:`~a1_leg_fk.estimation.ground.ground_values`) and the filter's
-running counts (:func:`running_counts`), as the feed had them after the row."""
+"""A row's local ground (:func:`~a1_leg_fk.estimation.ground_outputs.ground_values`) and the
+filter's running counts (:func:`running_counts`), as the feed had them after the row."""
 HISTORY_WIDTH = 11
 
 
@@ -29,8 +29,8 @@ class TrackRows:
     yaw) and ``twist_variances`` (vx .. wz) (N, 6); ``stance`` and ``used`` (N, 4) bool: the
     legs taken for standing and those the estimate used. Live, as the node has them after each
     row (also under smoothed rows): ``grounds`` (N, 7) the local ground
-    (:data:`~a1_leg_fk.estimation.ground.GROUND_COLUMNS`) and ``filter_history`` (N, 11) the
-    filter's running counts: NIS sum, NIS count, feet used (4), feet rejected by the gate (4),
+    (:data:`~a1_leg_fk.estimation.ground_outputs.GROUND_COLUMNS`) and ``filter_history`` (N, 11)
+    the filter's running counts: NIS sum, NIS count, feet used (4), feet rejected by the gate (4),
     gate resets.
     """
 

@@ -31,7 +31,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import Imu
 
 from a1_leg_fk.estimation.filter_model import GROUND_MODELS
-from a1_leg_fk.estimation.ground import plane_pose
+from a1_leg_fk.estimation.ground_outputs import plane_pose
 from a1_leg_fk.estimation.imu import MAX_ANGULAR_RATE_RADPS, imu_reading
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (

@@ -180,3 +180,27 @@ def test_a_tilt_below_a_degree_is_taken_as_level() -> None:
         xs = [x for x, _, _ in ground.points()]
         expected = [slope * x for x in xs] if follows else [heights[0]] * len(xs)
         assert heights == pytest.approx(expected, abs=2e-3), degrees
+
+
+def test_unanchored_footholds_keep_their_measured_heights() -> None:
+    """``anchored=False`` (the contact filter's footholds): a foothold is its stance's mean
+    contact point, height too (a foot sinking 2 cm: 1 cm), and a trot onto an 8° ramp (flat to
+    x = 0.3 m) fits the ramp's slope, tan 8° = 0.1405, within 0.002 once every foothold is on it
+    (anchored, the touchdowns snap to the lagging slope's and the level predictions: 0.1315)."""
+    ground = LocalGround(anchored=False)
+    ground.update(0.0, [(0, (0.1, 0.1, 0.0))])
+    ground.update(0.1, [(0, (0.12, 0.1, -0.02))])
+    ground.update(0.2, [])
+    assert ground.footholds[0].point == pytest.approx((0.11, 0.1, -0.01))
+    slope = math.tan(math.radians(8.0))
+    ground = LocalGround(anchored=False)
+    for step in range(30):
+        pair = (0, 3) if step % 2 == 0 else (1, 2)
+        feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
+                for leg in pair]  # fmt: skip
+        for t in (0.2 * step, 0.2 * step + 0.19):
+            ground.update(t, [(leg, (x, y, slope * max(x - 0.3, 0.0))) for leg, x, y in feet])
+    assert min(x for x, _, _ in ground.points()) > 0.3
+    plane = ground.plane(3.0, 0.0)
+    assert plane is not None
+    assert plane.gradient[0] == pytest.approx(slope, abs=0.002)

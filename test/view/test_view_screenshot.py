@@ -38,10 +38,10 @@ from one opening to the next)."""
 SOLID_ORANGE_PX = 50
 """Pixels of the description's orange (the A1 URDF's material "orange", shaded) with all eight
 neighbours orange too, at least: a body of the robot at least 9 px across, which the 2 px foot
-trails, also orange, cannot make (145-206 px on the pictures looked at, 0 before the robot
-comes)."""
+trails, also orange, cannot make (206 px on each run's picture, 0 before the robot comes)."""
 CURVE_COLUMNS = 0.5
-"""The share of a plot cell's columns a curve crosses, at least (0.67-0.86 drawn, 0 before)."""
+"""The share of a plot cell's columns a curve crosses, at least: 0.45-0.92 on the 11 runs' pictures
+(a curve that starts flat on the axis is grey there), 0 before the plots come."""
 
 
 def coloured(image: np.ndarray) -> np.ndarray:

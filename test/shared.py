@@ -1,5 +1,5 @@
 """What the tests and the bench/ scripts share: the A1's names and standing pose, the machine-wide
-ROS-domain lock, and the package's installed executables.
+ROS-domain lock, the package's installed executables, and local ports and bounded waits.
 
 Standard library only at import time (no pytest, no ROS, no a1_leg_fk), so a bench script imports
 it as it is; the commands ask the package's own ``child_command`` where its scripts are.
@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import fcntl
 import os
+import socket
 import tempfile
+import time
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 from typing import IO
@@ -123,3 +126,29 @@ def cpu_seconds(pid: int) -> float:
     """
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS
+
+
+def free_port() -> int:
+    """A TCP port nothing listens on at the moment, on 127.0.0.1."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def listening(port: int) -> bool:
+    """Whether something accepts TCP connections on 127.0.0.1:``port``."""
+    try:
+        socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
+    except OSError:
+        return False
+    return True
+
+
+def wait_for(condition: Callable[[], bool], timeout_s: float, every_s: float = 0.1) -> bool:
+    """Whether ``condition()`` became true within ``timeout_s`` [s], asked every ``every_s``."""
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(every_s)
+    return True

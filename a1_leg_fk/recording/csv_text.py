@@ -14,6 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 CELL = 24  # bytes per value, before padding is removed; repr of any float fits
+CHUNK_ROWS = 1024
+"""Rows formatted at once: the numpy temporaries take about 150 bytes a value, so a block of a
+smoothed window's 8,000 rows of 24 values at once would take some 30 MB for a moment (the
+resident peak of ``odom``); in chunks, a few MB whatever the block's length."""
 SPACE, COMMA, NEWLINE, ZERO = ord(" "), ord(","), ord("\n"), ord("0")
 _SPLIT = 134217729.0  # 2**27 + 1, Veltkamp's splitting constant
 _LOW, _HIGH = 1e-6, 1e15  # the fast path: 10**k is exact in binary64 for the k this range needs
@@ -42,6 +46,11 @@ def _trailing_zeros(groups: np.ndarray) -> np.ndarray:
 def format_rows(integers: np.ndarray, floats: np.ndarray) -> bytes:
     """CSV lines: the (R, I) int64 columns, then the (R, F) float64 columns; NaN -> empty cell."""
     rows = integers.shape[0]
+    if rows > CHUNK_ROWS:
+        return b"".join(
+            format_rows(integers[start : start + CHUNK_ROWS], floats[start : start + CHUNK_ROWS])
+            for start in range(0, rows, CHUNK_ROWS)
+        )
     cells = np.full((rows, integers.shape[1] + floats.shape[1], CELL + 1), SPACE, dtype=np.uint8)
     cells[:, :, CELL] = COMMA
     cells[:, -1, CELL] = NEWLINE

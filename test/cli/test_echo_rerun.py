@@ -8,7 +8,6 @@ stamps, and the simulation's joint angles."""
 from __future__ import annotations
 
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -24,7 +23,15 @@ from pybullet_sim import simulate, walking_targets
 from rclpy.qos import QoSProfile
 from rrd_reader import read_rrd, series
 from sensor_msgs.msg import Imu, JointState
-from shared import LEGS, cli_command, node_command, odometry_node_command
+from shared import (
+    LEGS,
+    cli_command,
+    free_port,
+    listening,
+    node_command,
+    odometry_node_command,
+    wait_for,
+)
 
 from a1_leg_fk import cli
 from a1_leg_fk.cli.rerun_sdk import viewer_executable
@@ -49,29 +56,6 @@ PING_IMU.orientation_covariance[0] = PING_IMU.linear_acceleration_covariance[0] 
 PING_IMU.angular_velocity.x = float("nan")
 FLOAT32_M = 1e-6
 """[m] positions and transforms are float32 in Rerun (see test_view.py)."""
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
-def listening(port: int) -> bool:
-    try:
-        socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-    except OSError:
-        return False
-    return True
-
-
-def wait_for(condition, timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.1)
-    return True
 
 
 def recorded_view(run, folder: Path) -> dict:

@@ -473,6 +473,7 @@ def test_big_endian_and_malformed_joint_state_bytes(processes, ros):
     and the next good message is answered."""
     process, client = start_node(processes, ros)
     raw_publisher = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=10))
+    assert ros.spin_until(lambda: raw_publisher.get_subscription_count() > 0, 20.0)
     angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
     stamp = 1_700_000_000_123_456_789
     message = joint_state(JointStateMsg(stamp, PYBULLET_NAMES, angles, efforts=[1.5] * 12))

@@ -26,40 +26,41 @@ pytestmark = pytest.mark.timeout(900)
 run on a loaded 2-core machine) once per machine and scores it: minutes."""
 
 CONTACTS = "contacts {} % with efforts, {} % without"
+NOISY_SLOPE = (
+    "vertical drift {} % noisy (the noise model's IMU mounted 0.3° off: a slope seen 0.3° steeper)"
+)
 UNMET = {
-    "a1_slope_up_5": CONTACTS.format(92.79, 75.92) + "; sigma / error 5.8 clean kinematic",
-    "a1_slope_down_5": CONTACTS.format(91.23, 75.22) + "; vertical drift 0.57-0.60 % noisy (the "
-    "noise model's IMU mounted 0.3° off: a slope seen 0.3° steeper); sigma / error 5.03 clean "
-    "kinematic",
-    "a1_rough_2cm": "contacts without efforts 92.84 %",
+    "a1_slope_down_5": NOISY_SLOPE.format("0.57-0.58"),
+    "a1_rough_2cm": "contacts without efforts 92.90 %",
     "a1_mat_toes": "within 3 sigma 44-48 %; RMSE 0.031 m/s clean",
-    "go2_slope_up_5": CONTACTS.format(90.35, 74.06) + "; sigma / error 5.4-7.5 clean",
     "go2_rough_1cm": "contacts without efforts 94.32 %",
-    "a1_slope_down_10": CONTACTS.format(89.84, 69.32) + "; vertical drift 0.74 % clean "
-    "kinematic, 0.73-1.10 % noisy; sigma / error 6.9 clean kinematic",
-    "go2_slope_down_8": CONTACTS.format(86.70, 68.70) + "; vertical drift 1.06 % clean "
-    "kinematic, 0.76-1.47 % noisy; sigma / error 5.5 clean kinematic",
-    "a1_stairs_up_3cm": CONTACTS.format(94.89, 87.95),
-    "a1_stairs_down_4cm": CONTACTS.format(91.18, 78.01),
-    "go2_stairs_down_6cm": CONTACTS.format(92.11, 85.00),
-    "a1_heightmap": "contacts without efforts 93.47 %",
+    "a1_slope_down_10": "contacts without efforts 94.89 %; " + NOISY_SLOPE.format("0.75-0.85"),
+    "go2_slope_down_8": "contacts without efforts 93.58 %; " + NOISY_SLOPE.format("0.77-0.82"),
+    "a1_stairs_up_3cm": CONTACTS.format(97.55, 91.76),
+    "a1_stairs_down_4cm": CONTACTS.format(97.65, 86.23)
+    + "; vertical drift 2.31 % clean kinematic",
+    "go2_stairs_down_6cm": CONTACTS.format(96.10, 87.08) + "; vertical drift 0.52-0.63 %",
+    "a1_heightmap": "contacts without efforts 93.96 %",
     "a1_position_flat": "contacts 96.69 % with efforts (3.28 % swing called stance), 85.70 % "
     "without; within 3 sigma 87-91 %; kinematic clean: RMSE 0.037, burst 0.204 m/s, 2.2 % "
     "horizontal and 0.54 % vertical drift",
     "go2_position_flat": "contacts 98.34 % with efforts (1.65 % swing called stance), 88.68 % "
     "without; within 3 sigma 89-92 % kinematic",
 }
-"""Runs whose goals the defaults (``ground: footholds``) miss, with the numbers (strict xfail):
-every run but a1_rigid_toes. The vertical drift is met on every slope and stair run clean with
-efforts (0.07-0.38 %; ``ground: flat`` drifted 4.8-16.7 %)."""
+"""Runs whose goals the defaults (``ground: footholds``, the contacts' heights against the
+footholds' slope) miss, with the numbers (strict xfail): every run but a1_rigid_toes,
+a1_slope_up_5 and go2_slope_up_5. The vertical drift is met on every slope and stair run clean
+with efforts (0.02-0.39 %; ``ground: flat`` drifted 4.8-16.7 %)."""
 GROUND_UNMET = {
-    "a1_stairs_up_3cm": "slope off by up to 4.27° (the plane through footholds on two treads)",
-    "a1_stairs_down_4cm": "slope off by up to 7.48°, height 2.05 cm",
-    "go2_stairs_down_6cm": "slope off by up to 10.36°, height 3.34 cm",
+    "go2_slope_down_8": "slope off by up to 1.53° (p95 1.37°)",
+    "a1_stairs_up_3cm": "slope off by up to 3.30° (the plane through footholds on two treads)",
+    "a1_stairs_down_4cm": "slope off by up to 6.22°",
+    "go2_stairs_down_6cm": "slope off by up to 10.17°, height 3.29 cm",
 }
-"""Stair runs whose local ground misses its goal (strict xfail): the plane through the recent
-footholds spans two or three treads, the rays' plane under the root one or two. On every slope
-the ground is within 0.04-0.91° and 0.27 cm (``ground: flat`` bent it by 1.0-4.7°)."""
+"""Runs whose local ground misses its goal (strict xfail): on stairs the plane through the recent
+footholds spans two or three treads, the rays' plane under the root one or two; go2_slope_down_8
+is 0.5° over. On the other slopes the ground is within 0.08-0.91° and 0.29 cm (``ground: flat``
+bent it by 1.0-4.7°)."""
 STRIDE_S = 0.4
 """[s] the first stride (both robots' trot period), not scored for the ground."""
 

@@ -36,6 +36,10 @@ FAST_SUBSET = (
     "test/estimation/test_contact_estimator.py",
     "test/estimation/test_leg_odometry.py",
     "test/estimation/test_leg_order.py",
+    "test/estimation/test_foot_ground.py",
+    "test/estimation/test_ground.py",
+    "test/estimation/test_ground_walks.py",
+    "test/gait/test_gait_edges.py",
     "test/recording/test_lowstate.py::test_the_imu_quaternion_is_read_w_first",
 )
 """The tests every mutation must fail (about a minute on two idle cores): no simulated family,
@@ -144,6 +148,30 @@ MUTATIONS = (
         "a1_leg_fk/estimation/filter_stack.py",
         "rows += (ry * uz - rz * uy, rz * ux - rx * uz, rx * uy - ry * ux, 1.0)",
         "rows += (rz * uy - ry * uz, rx * uz - rz * ux, ry * ux - rx * uy, -1.0)",
+    ),
+    Mutation(
+        "the footholds' slope added to the feet's heights, not taken off",
+        "a1_leg_fk/estimation/foot_ground.py",
+        "o[2] - gx * o[0] - gy * o[1]",
+        "o[2] + gx * o[0] + gy * o[1]",
+    ),
+    Mutation(
+        "a touchdown never takes the ground's prediction (no anchoring)",
+        "a1_leg_fk/estimation/ground.py",
+        "agrees = off * off <= self.step_gate**2 * (variance + noise * noise)",
+        "agrees = False",
+    ),
+    Mutation(
+        "the efforts' spread ignored by the contact filter",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "force_spreads[leg] > 0.0",
+        "force_spreads[leg] < 0.0",
+    ),
+    Mutation(
+        "the gait's edge tolerance x 10",
+        "a1_leg_fk/gait/edges.py",
+        "base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
+        "base = 10.0 * max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
     ),
 )
 

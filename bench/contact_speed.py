@@ -82,7 +82,7 @@ def main() -> None:
             for leg in range(4)
         ]  # fmt: skip
         estimator.filter.update(
-            STEP_S, motions, ([0.1, -0.2, 0.3], None), [20.0, 1.0, 2.0, 30.0], None, down
+            STEP_S, motions, ([0.1, -0.2, 0.3], None), [20.0, 1.0, 2.0, 30.0], None, down=down
         )
 
     ground, standing = FootGround(), [True, False, False, True]

@@ -162,12 +162,6 @@ MUTATIONS = (
         "agrees = False",
     ),
     Mutation(
-        "the efforts' spread ignored by the contact filter",
-        "a1_leg_fk/estimation/contact_filter.py",
-        "force_spreads[leg] > 0.0",
-        "force_spreads[leg] < 0.0",
-    ),
-    Mutation(
         "the gait's edge tolerance x 10",
         "a1_leg_fk/gait/edges.py",
         "base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",

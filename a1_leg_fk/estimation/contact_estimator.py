@@ -27,7 +27,6 @@ import numpy as np
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.correction_file import read_correction_file
-from a1_leg_fk.estimation.effort_doubt import EffortDoubt
 from a1_leg_fk.estimation.effort_timing import EffortTiming
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.model_corrections import (
@@ -147,8 +146,6 @@ class ContactEstimator:
         self.timing = EffortTiming(*timing)
         """The efforts' scale and latency the calibration's file gives (none: 1 and 0)."""
         self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
-        self.doubt = EffortDoubt(self.statics)
-        """The spread of each foot's load that mis-scaled efforts could make."""
         self.motion = LegMotion(quadruped)
         payload = self.calibration.payload_kg if self.calibration is not None else 0.0
         weight = (self.statics.total_mass_kg + payload) * STANDARD_GRAVITY
@@ -216,18 +213,13 @@ class ContactEstimator:
             self.counts.force += 1
         else:
             self.counts.kinematic += 1
-        spreads = None
-        if with_force and efforts is not None:
-            loaded = [n > self.model.force_half_n for n in normals]  # NaN: False
-            spreads = self.doubt.spreads((angles, efforts), gravity, down, loaded)
         probabilities = self.filter.update(
             dt if math.isfinite(dt) else 0.0,
             motions,
             (imu.angular_velocity or NO_ROTATION, imu.specific_force),
             normals if with_force else None,
             phase_prior,
-            spreads,
-            down,
+            down=down,
         )
         corrections = self.corrections
         if corrections is not None and with_force:

@@ -9,11 +9,7 @@ stance by its likelihood ratio. Each is the log-likelihood ratio of a logistic m
 that no single sample decides alone:
 
 - the foot's *normal force* [N] (from the momentum observer or the statics), when there is one:
-  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``; where the load is above
-  ``force_half_n`` and the efforts' spread ``sigma`` is given
-  (:mod:`a1_leg_fk.estimation.effort_doubt`: what mis-scaled efforts could misstate), the
-  scale is ``sqrt(force_scale_n^2 + sigma^2)`` (a load is weaker stance evidence where the
-  efforts are in doubt; a foot without load stays full swing evidence);
+  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``;
 - its *height* [m] above the lowest foot along gravity, or above the lowest foot with the local
   ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), whichever is lower (a foot
   low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
@@ -41,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from math import exp, hypot, isfinite, sqrt
+from math import exp, isfinite, sqrt
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.foot_ground import FootGround
@@ -139,16 +135,14 @@ class ContactFilter:
         imu: tuple[Sequence[float], Sequence[float] | None],
         normal_forces: Sequence[float] | None = None,
         phase_prior: Sequence[float] | None = None,
-        force_spreads: Sequence[float] | None = None,
         down: Vector | None = None,
     ) -> list[float]:
         """The 4 probabilities of stance after a sample ``dt_s`` [s] after the previous one:
         each foot's motion (None: unknown); ``imu``: the base's angular velocity [rad/s, base
         frame; zeros if unknown] and specific force [m/s^2] (None: unknown); normal forces [N]
         (None: no force evidence; NaN: none for that foot); the gait phase's probabilities of
-        stance (None: no prior); each normal force's spread [N] from the efforts' doubt (None
-        or NaN: none); ``down``: gravity's unit direction in the base frame, for the feet's
-        heights against the local ground's slope too (None: the lowest foot's alone).
+        stance (None: no prior); ``down``: gravity's unit direction in the base frame, for the
+        feet's heights against the local ground's slope too (None: the lowest foot's alone).
         """
         model = self.model
         limit = model.max_log_ratio
@@ -175,10 +169,7 @@ class ContactFilter:
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
             odds = prior + kinematic[leg]
             if forced[leg]:
-                load, scale = forces[leg] - model.force_half_n, model.force_scale_n
-                if load > 0.0 and force_spreads is not None and force_spreads[leg] > 0.0:
-                    scale = hypot(scale, force_spreads[leg])  # no overflow on absurd efforts
-                force = load / scale
+                force = (forces[leg] - model.force_half_n) / model.force_scale_n
                 odds += _clip(force, limit, limit)
             else:  # free fall stands in for a foot's own force
                 odds += common

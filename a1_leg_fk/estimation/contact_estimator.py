@@ -138,12 +138,12 @@ class ContactEstimator:
         self.correction_settings: CorrectionSettings | None = None
         """The online corrections' settings from the next :meth:`reset` (None: the defaults;
         a calibration learns without forgetting)."""
-        timing = (
-            (1.0, 0.0)
-            if self.calibration is None
-            else (self.calibration.effort_scale, self.calibration.effort_latency_s)
+        calibration = self.calibration
+        self.timing = (
+            EffortTiming()
+            if calibration is None
+            else EffortTiming(calibration.effort_scale, calibration.effort_latency_s)
         )
-        self.timing = EffortTiming(*timing)
         """The efforts' scale and latency the calibration's file gives (none: 1 and 0)."""
         self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
         self.motion = LegMotion(quadruped)
@@ -165,7 +165,7 @@ class ContactEstimator:
             elif self.model_corrections == ONLINE and self.contact_rule == FILTER:
                 self.observer.corrections = ModelCorrections(self.correction_settings)
         self.filter = ContactFilter(self.model)
-        self.timing = EffortTiming(self.timing.scale, self.timing.latency_s)
+        self.timing.reset()
         self.rule = ContactRule(self.rule.thresholds)
         self.counts = EvidenceCounts()
         self._stamp_s = math.nan

@@ -30,6 +30,10 @@ class EffortTiming:
         self.scale, self.latency_s = scale, latency_s
         self._previous: tuple[float, Sequence[float]] | None = None
 
+    def reset(self) -> None:
+        """Forget the previous joint state's efforts (a new recording, a node's reset)."""
+        self._previous = None
+
     @property
     def identity(self) -> bool:
         """True when nothing is changed (scale 1, no latency)."""

@@ -357,7 +357,7 @@ def dense_search(
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["a1", "aliengo"])
+@pytest.mark.parametrize("name", ["a1", pytest.param("aliengo", marks=pytest.mark.accept)])
 def test_statuses_over_a_uniform_cloud_match_a_dense_search(name: str) -> None:
     path, feet, _ = ROBOTS[name]
     quadruped = Quadruped.from_urdf(str(path), foot_links=feet)

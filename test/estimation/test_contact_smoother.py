@@ -34,6 +34,17 @@ def unknown(count: int) -> np.ndarray:
     return np.full((count, LEGS), np.nan)
 
 
+def kinematic_rows(kinematic: np.ndarray) -> EvidenceRows:
+    """Rows 2 ms apart without force evidence, ``kinematic`` their only evidence, the filter's
+    transition (0.1 s between changes)."""
+    count = len(kinematic)
+    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
+    forced = np.zeros((count, LEGS), bool)
+    return EvidenceRows(
+        np.arange(count) * 0.002, switch, kinematic, forced, kinematic, unknown(count)
+    )
+
+
 def enumerated_posterior(evidence: np.ndarray, switch: np.ndarray) -> np.ndarray:
     """P(stance at k | every sample) of one foot by summing over all 2^N state sequences:
     even odds before the first sample, a change of state before sample k with probability
@@ -89,15 +100,7 @@ def test_the_lead_moves_a_liftoff_and_not_a_touchdown() -> None:
     count = 300
     kinematic = np.full((count, LEGS), 2.0)
     kinematic[100:200] = -4.0
-    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
-    rows = EvidenceRows(
-        np.arange(count) * 0.002,
-        switch,
-        kinematic,
-        np.zeros((count, LEGS), bool),
-        kinematic,
-        unknown(count),
-    )
+    rows = kinematic_rows(kinematic)
     for lead_s, liftoff in ((0.0, 100), (0.014, 93)):
         stance = probabilities(smooth(rows, np.zeros(LEGS), lead_s)[0])[:, 0] >= 0.5
         assert np.flatnonzero(~stance)[0] == liftoff, lead_s
@@ -111,15 +114,7 @@ def test_windows_give_the_whole_pass() -> None:
     count = 5000
     states = np.repeat(rng.integers(0, 2, count // 50), 50)[:, None].repeat(LEGS, axis=1)
     kinematic = np.where(states, 1.0, -2.0) + rng.normal(0.0, 1.5, (count, LEGS))
-    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
-    rows = EvidenceRows(
-        np.arange(count) * 0.002,
-        switch,
-        kinematic,
-        np.zeros((count, LEGS), bool),
-        kinematic,
-        unknown(count),
-    )
+    rows = kinematic_rows(kinematic)
     whole = probabilities(smooth(rows, np.zeros(LEGS))[0])
     smoother, parts = FixedLagSmoother(), []
     for start in range(0, count, 137):

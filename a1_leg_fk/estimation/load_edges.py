@@ -137,32 +137,35 @@ def _ramp(
     result: np.ndarray, stamps_s: np.ndarray, loads: np.ndarray, last: int, leg: int
 ) -> None:
     """The unloading ramp of the leg's ``loads`` [N] before row ``last`` carried to zero (the
-    module text), into ``result``.
+    module text), into ``result``: least squares in floats (a handful of samples).
     """
     end_s = float(stamps_s[last])
     first = int(np.searchsorted(stamps_s, end_s - RAMP_WINDOW_S + 1e-9, side="left"))
-    t = stamps_s[first : last + 1] - end_s
-    n = loads[first : last + 1]
-    known = np.isfinite(n)
-    t, n = t[known], n[known]
-    if t.size < 3 or np.ptp(t) <= 0.0:
+    points = [
+        (t - end_s, n)
+        for t, n in zip(stamps_s[first : last + 1].tolist(), loads[first : last + 1].tolist())
+        if math.isfinite(n)
+    ]
+    count = len(points)
+    if count < 3:
         return
-    design = np.stack([np.ones_like(t), t], axis=1)
-    (offset, slope), *_ = np.linalg.lstsq(design, n, rcond=None)
+    t_mean = sum(t for t, _ in points) / count
+    n_mean = sum(n for _, n in points) / count
+    spread = sum((t - t_mean) ** 2 for t, _ in points)
+    if spread <= 0.0:
+        return
+    slope = sum((t - t_mean) * (n - n_mean) for t, n in points) / spread
+    offset = n_mean - slope * t_mean
     if not slope < 0.0 or -offset / slope > RAMP_REACH_S:
         return
-    residual = n - design @ np.array([offset, slope])
-    variance = float(residual @ residual) / max(t.size - 2, 1)
-    covariance = variance * np.linalg.inv(design.T @ design)
+    variance = sum((n - offset - slope * t) ** 2 for t, n in points) / max(count - 2, 1)
     k = last + 1
     while k < len(stamps_s) and (dt := float(stamps_s[k]) - end_s) <= RAMP_REACH_S:
         load = offset + slope * dt
-        spread = math.sqrt(
-            max(covariance[0, 0] + 2.0 * dt * covariance[0, 1] + dt * dt * covariance[1, 1], 1e-24)
-        )
-        if load <= RAMP_CONFIDENCE * spread:
+        error = math.sqrt(max(variance * (1.0 / count + (dt - t_mean) ** 2 / spread), 1e-24))
+        if load <= RAMP_CONFIDENCE * error:
             break
-        result[k, leg] = max(result[k, leg], _above_zero(load / spread))
+        result[k, leg] = max(result[k, leg], _above_zero(load / error))
         k += 1
 
 

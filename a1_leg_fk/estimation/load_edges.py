@@ -151,18 +151,23 @@ def _ramp(
         return
     t_mean = sum(t for t, _ in points) / count
     n_mean = sum(n for _, n in points) / count
-    spread = sum((t - t_mean) ** 2 for t, _ in points)
-    if spread <= 0.0:
+    spread = sum((t - t_mean) * (t - t_mean) for t, _ in points)
+    if not spread > 0.0:
         return
     slope = sum((t - t_mean) * (n - n_mean) for t, n in points) / spread
     offset = n_mean - slope * t_mean
     if not slope < 0.0 or -offset / slope > RAMP_REACH_S:
         return
-    variance = sum((n - offset - slope * t) ** 2 for t, n in points) / max(count - 2, 1)
+    residuals = [n - offset - slope * t for t, n in points]
+    variance = sum(r * r for r in residuals) / max(count - 2, 1)
+    if not math.isfinite(variance):  # absurd loads: no ramp
+        return
     k = last + 1
     while k < len(stamps_s) and (dt := float(stamps_s[k]) - end_s) <= RAMP_REACH_S:
         load = offset + slope * dt
-        error = math.sqrt(max(variance * (1.0 / count + (dt - t_mean) ** 2 / spread), 1e-24))
+        error = math.sqrt(
+            max(variance * (1.0 / count + (dt - t_mean) * (dt - t_mean) / spread), 1e-24)
+        )
         if load <= RAMP_CONFIDENCE * error:
             break
         result[k, leg] = max(result[k, leg], _above_zero(load / error))

@@ -116,15 +116,15 @@ def test_unlagged_inverts_a_first_order_lag() -> None:
 
 
 def test_windows_give_the_whole_pass_with_loads() -> None:
-    """Blocks of 137 rows through the fixed-lag smoother against one pass over every row, on
+    """Blocks of 7 rows through the fixed-lag smoother against one pass over every row, on
     noisy loads with ramps: the loads' rules see the same rows (their history kept), the same
     stance on every row."""
     loads, _ = gait_loads(np.random.default_rng(11), 1.1)
     rows = rows_of(loads, np.full(loads.shape, -3.5))
     whole = stance_of(rows, OBSERVER_LAG_S)
     smoother, parts = FixedLagSmoother(force_lag_s=OBSERVER_LAG_S), []
-    for start in range(0, len(rows), 137):
-        smoother.add(rows[start : start + 137])
+    for start in range(0, len(rows), 7):  # a block's end lands inside many stances' ends
+        smoother.add(rows[start : start + 7])
         parts.append(smoother.take(smoother.final_rows()))
     parts.append(smoother.take(len(smoother.pending)))
     np.testing.assert_array_equal(np.concatenate(parts) >= 0.5, whole)

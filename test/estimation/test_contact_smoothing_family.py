@@ -7,7 +7,8 @@ on the PyBullet contact family, judged by PyBullet's contacts, against the issue
   below it, duty factors within 0.02.
 
 The smoother's settings (its liftoff lead without efforts; with them, no liftoff before the
-filter's) were chosen on test_contact_family.py's :data:`TUNED` runs only. A representative pair
+filter's, then the load's edges: estimation/load_edges.py) were chosen on test_contact_family.py's
+:data:`TUNED` runs only. A representative pair
 (one tuned run, one held out, both noisy) runs in the normal suite; the whole family under
 ``accept``, with every goal a run misses kept as a strict expected failure that names the
 measured number.

@@ -19,8 +19,7 @@ from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
-from a1_leg_fk.estimation.contact_smoother import EvidenceRows, force_liftoffs, smooth
-from a1_leg_fk.estimation.contact_smoother import probabilities as stance_probabilities
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -74,7 +73,8 @@ def estimate(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run: the
     causal filter's, or ``smoothed`` over the whole run (the filter's evidence through
-    :func:`~a1_leg_fk.estimation.contact_smoother.smooth`, as ``a1-leg-fk bag`` does it);
+    :class:`~a1_leg_fk.estimation.contact_smoother.FixedLagSmoother` in one block, as
+    ``a1-leg-fk bag`` does it);
     ``options``: the estimator's keywords.
     """
     rotations = rotation_matrices(run.quaternions)
@@ -103,9 +103,9 @@ def estimate(
         kept.append(estimator.filter.evidence)
     if smoothed:
         switch, kinematic, forced, total = (np.array(c) for c in zip(*kept, strict=True))
-        rows = EvidenceRows(run.stamps_s, switch, kinematic, forced, total)
-        smoothed_odds, filtered = smooth(rows, np.zeros(4))
-        probabilities = stance_probabilities(force_liftoffs(smoothed_odds, filtered, forced))
+        smoother = FixedLagSmoother(force_lag_s=estimator.force_lag_s)
+        smoother.add(EvidenceRows(run.stamps_s, switch, kinematic, forced, total, normals))
+        probabilities = smoother.take(len(run.stamps_s))
     return probabilities, normals
 
 

@@ -227,6 +227,13 @@ class ContactEstimator:
         return ContactStep(forces, normals, probabilities, missing, singular, motions)
 
     @property
+    def force_lag_s(self) -> float:
+        """[s] The time constant of the lag of the normal forces it gives: the momentum
+        observer's ``1 / K`` (0 with the statics).
+        """
+        return 0.0 if self.observer is None else 1.0 / self.observer.gain_per_s
+
+    @property
     def corrections(self) -> ModelCorrections | None:
         """The model's online corrections (None: off)."""
         return None if self.observer is None else self.observer.corrections

@@ -22,8 +22,9 @@ Where a foot's force is evidence, a liftoff is not placed before the filter's ow
 (:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), and the forward-backward
 places a liftoff there, a few ms before the force reaches zero, where the foot still stands; the
 filter, which needs the evidence of swing to outweigh its stance, places it later, nearer the
-zero. Such a foot stands while either says so (tuned on the contact family's tuned runs,
-docs/forces.md).
+zero. Such a foot stands while either says so; then its load itself may carry the stance on to
+where it reaches zero (:mod:`a1_leg_fk.estimation.load_edges`; both tuned on the contact
+family's tuned runs, docs/forces.md).
 
 :class:`FixedLagSmoother` runs this over a stream of rows in windows: a row is final once the
 rows after it cover ``lag_s`` (the backward message from further on is taken as flat; see
@@ -37,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -57,7 +59,8 @@ class EvidenceRows:
     """The filter's evidence over N rows (:class:`~a1_leg_fk.estimation.contact_filter.
     SampleEvidence` stacked): ``stamps_s`` (N,) [s], ``switch`` (N,) probabilities of a change of
     state since the previous row, ``kinematic`` (N, 4) and ``total`` (N, 4) log-likelihood
-    ratios, ``forced`` (N, 4) bool (the foot's force was evidence).
+    ratios, ``forced`` (N, 4) bool (the foot's force was evidence), ``normals`` (N, 4) the normal
+    forces [N] the filter was given (NaN: none).
     """
 
     stamps_s: np.ndarray
@@ -65,12 +68,14 @@ class EvidenceRows:
     kinematic: np.ndarray
     forced: np.ndarray
     total: np.ndarray
+    normals: np.ndarray
 
     @classmethod
     def empty(cls) -> EvidenceRows:
         """No rows."""
         legs = np.empty((0, LEGS))
-        return cls(np.empty(0), np.empty(0), legs, np.empty((0, LEGS), dtype=bool), legs.copy())
+        forced = np.empty((0, LEGS), dtype=bool)
+        return cls(np.empty(0), np.empty(0), legs, forced, legs.copy(), legs.copy())
 
     def __len__(self) -> int:
         return len(self.stamps_s)
@@ -86,7 +91,7 @@ class EvidenceRows:
         )
 
 
-FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total")
+FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total", "normals")
 
 
 def led_evidence(rows: EvidenceRows, lead_s: float = LIFTOFF_LEAD_S) -> np.ndarray:
@@ -177,13 +182,21 @@ def smoothing_line(smoothed: bool) -> str:
 class FixedLagSmoother:
     """Smoothed contacts over rows arriving in blocks: :meth:`add` a block's evidence, :meth:`take`
     the rows that are final (every row ``lag_s`` [s] before the latest, or all at the end).
-    Keeps only the rows not yet taken.
+    Keeps only the rows not yet taken, and the last :data:`~a1_leg_fk.estimation.load_edges.
+    HISTORY_S` of those taken (with their log-odds before the loads' rules) for those rules.
+    ``force_lag_s`` [s]: the time constant of the lag of the normal forces in the evidence (the
+    momentum observer's, :attr:`~a1_leg_fk.estimation.contact_estimator.ContactEstimator.
+    force_lag_s`; 0: none).
     """
 
-    def __init__(self, lag_s: float = LAG_S, lead_s: float = LIFTOFF_LEAD_S) -> None:
-        self.lag_s, self.lead_s = lag_s, lead_s
+    def __init__(
+        self, lag_s: float = LAG_S, lead_s: float = LIFTOFF_LEAD_S, force_lag_s: float = 0.0
+    ) -> None:
+        self.lag_s, self.lead_s, self.force_lag_s = lag_s, lead_s, force_lag_s
         self.pending = EvidenceRows.empty()
         self.start = np.zeros(LEGS)  # the forward log-odds before the first pending row
+        self.history = EvidenceRows.empty()  # taken rows the loads' rules still look back at
+        self.history_odds = np.empty((0, LEGS))  # their log-odds before those rules
 
     def add(self, rows: EvidenceRows) -> None:
         """Rows after those added before."""
@@ -204,7 +217,23 @@ class FixedLagSmoother:
         if count <= 0:
             return np.empty((0, LEGS))
         smoothed, filtered = smooth(self.pending, self.start, self.lead_s)
-        stance = force_liftoffs(smoothed[:count], filtered[:count], self.pending.forced[:count])
+        odds = force_liftoffs(smoothed, filtered, self.pending.forced)
+        stance = odds[:count]
+        if self.pending.forced.any() or self.history.forced.any():
+            rows = self.history.then(self.pending)
+            before = len(self.history)
+            loads = unlagged(rows.normals, rows.stamps_s, self.force_lag_s)
+            every = np.vstack([self.history_odds, odds])
+            stance = loaded_stance(every, rows.stamps_s, loads, rows.forced)[before:][:count]
+            self._keep(rows[: before + count], every[: before + count])
         self.start = filtered[count - 1]
         self.pending = self.pending[count:]
         return probabilities(stance)
+
+    def _keep(self, taken: EvidenceRows, odds: np.ndarray) -> None:
+        """The last :data:`HISTORY_S` of the ``taken`` rows and their ``odds`` become the
+        history.
+        """
+        reached = np.maximum.accumulate(taken.stamps_s)
+        first = int(np.searchsorted(reached, reached[-1] - HISTORY_S, side="left"))
+        self.history, self.history_odds = taken[first:], odds[first:]

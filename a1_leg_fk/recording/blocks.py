@@ -61,7 +61,7 @@ def iter_foot_blocks(
     """
     blocks = _foot_blocks(recording, progress, on_message, others)
     forces = recording.forces
-    return smoothed_blocks(blocks) if forces is not None and forces.smoothed else blocks
+    return smoothed_blocks(blocks, forces) if forces is not None and forces.smoothed else blocks
 
 
 def _foot_blocks(

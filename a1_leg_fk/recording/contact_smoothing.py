@@ -10,14 +10,16 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from a1_leg_fk.estimation.contact_smoother import FixedLagSmoother
+from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.recording.foot_block import FootBlock
 
 
-def smoothed_blocks(blocks: Iterator[FootBlock]) -> Iterator[FootBlock]:
-    """``blocks`` (each with its ``evidence``) again, in order, with smoothed ``contacts`` and no
-    evidence; a block may come cut in two where the rows final so far end.
+def smoothed_blocks(blocks: Iterator[FootBlock], forces: ForcePass) -> Iterator[FootBlock]:
+    """``blocks`` (each with its ``evidence``, from the pass ``forces``) again, in order, with
+    smoothed ``contacts`` and no evidence; a block may come cut in two where the rows final so
+    far end.
     """
-    smoother = FixedLagSmoother()
+    smoother = FixedLagSmoother(force_lag_s=forces.estimator.force_lag_s)
     pending: list[FootBlock] = []
     for block in blocks:
         if block.evidence is None:  # no contacts in it: nothing to smooth

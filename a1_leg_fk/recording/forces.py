@@ -230,12 +230,14 @@ class RecordingForces(ForcePass):
             forces,
             normals,
             probabilities,
-            None if kept is None else self._evidence(stamps_ns, kept),
+            None if kept is None else self._evidence(stamps_ns, kept, normals),
         )
 
-    def _evidence(self, stamps_ns: np.ndarray, kept: list[SampleEvidence]) -> EvidenceRows:
+    def _evidence(
+        self, stamps_ns: np.ndarray, kept: list[SampleEvidence], normals: np.ndarray
+    ) -> EvidenceRows:
         """The evidence of rows stamped ``stamps_ns`` as arrays, their stamps [s] since the
-        first of the pass.
+        first of the pass, with the (N, 4) ``normals`` [N] the filter was given.
         """
         switch, kinematic, forced, total = zip(*kept, strict=True) if kept else ((),) * 4
         return EvidenceRows(
@@ -244,6 +246,7 @@ class RecordingForces(ForcePass):
             np.array(kinematic, dtype=float).reshape(-1, 4),
             np.array(forced, dtype=bool).reshape(-1, 4),
             np.array(total, dtype=float).reshape(-1, 4),
+            normals,
         )
 
 

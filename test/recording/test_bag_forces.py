@@ -285,7 +285,7 @@ SETTLED = 250
 
 WORSE_WITH_EFFORTS = pytest.mark.xfail(
     strict=True,
-    reason="with efforts, smoothing this in-place trot agrees on 95.66 % against the causal "
+    reason="with efforts, smoothing this in-place trot agrees on 95.38 % against the causal "
     "filter's 96.74 %: without the filter's lag its liftoffs come early where the force fades "
     "slowly (as on the family's walks and pronk, docs/forces.md)",
 )

@@ -1,0 +1,183 @@
+"""Where a foot with force evidence stops standing, placed from its estimated load over the
+recording: the contact smoother's last step (:mod:`a1_leg_fk.estimation.contact_smoother`),
+offline only. Numpy arrays in and out, without ROS.
+
+A foot is on the ground while its normal force is above zero; the contact filter's force
+evidence is at even odds at 3 % of the weight
+(:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), so a smoothed stance ends while
+the foot still carries a little load: a few ms early where the load ramps down slowly, or where
+it lingers below that share for a while (a foot unloading slowly, or dipping to a few newtons
+while it stands). With the whole recording at hand the load itself can place that end. Where a
+stance of a foot with force evidence ends (its last sample of log-odds >= 0, the next below),
+two rules may lengthen it, never shorten it:
+
+- **the unloading ramp**: a line fitted to the load over the :data:`RAMP_WINDOW_S` up to the
+  stance's last sample; where it falls to zero within :data:`RAMP_REACH_S` after it, the samples
+  up to there stand with the probability that the line's load is above zero (its value over its
+  standard error, through the normal distribution), as long as that value is at least
+  :data:`RAMP_CONFIDENCE` standard errors;
+- **the load above the noise floor**: the samples right after the stance whose load stays above
+  :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
+  last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread
+  (1.4826 times the median of its absolute value) over every foot's swing samples within
+  :data:`NOISE_S` either side of the stance's end; without :data:`MIN_NOISE_SAMPLES` of them,
+  this rule is off there. On a clean simulation the floor is a fraction of a newton; with a
+  real robot's sensor noise it is tens of newtons, and this rule does nothing.
+
+The load is the estimated normal force with the momentum observer's first-order lag undone
+(:func:`unlagged`): right after a foot lifts, the observer still shows a newton or so decaying
+by ``exp(-dt / lag)`` per sample, which the floor would otherwise read as a foot still
+loaded. Tuned on the contact family's tuned runs (docs/forces.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+RAMP_WINDOW_S = 0.010
+"""[s] The load's samples a stance's unloading ramp is fitted over, up to its last sample."""
+RAMP_REACH_S = 0.008
+"""[s] How far after a stance's last sample the ramp may carry it: a ramp reaching zero later
+is no unloading ramp, and leaves the stance as it is."""
+RAMP_CONFIDENCE = 1.0
+"""A sample stands on the ramp while the ramp's load there is this many standard errors above
+zero."""
+FLOOR_SIGMAS = 8.0
+"""A load above this many times its noise is a foot still loaded."""
+MAX_LOADED_S = 0.1
+"""[s] The longest a stance is carried on by its load above the noise floor (the transition's
+mean time between changes)."""
+NOISE_S = 0.4
+"""[s] The swing samples the load's noise is taken over, either side of a stance's end."""
+MIN_NOISE_SAMPLES = 20
+"""Fewer swing samples than this give no noise floor."""
+HISTORY_S = NOISE_S + MAX_LOADED_S + RAMP_WINDOW_S
+"""[s] The rows before a window that these rules may look back at (the fixed-lag smoother keeps
+them)."""
+MAX_LOG_ODDS = 20.0
+"""Log-odds of stance the rules give are kept within +-this."""
+
+
+def unlagged(normals: np.ndarray, stamps_s: np.ndarray, lag_s: float) -> np.ndarray:
+    """(N, 4) the loads [N]: ``normals`` (N, 4) [N] (NaN: none) with a first-order lag of time
+    constant ``lag_s`` [s] undone, ``(n_k - a n_(k-1)) / (1 - a)``, ``a = exp(-dt / lag_s)``
+    (the first row, and rows after a missing one or no time, as they are; ``lag_s`` 0: none).
+    """
+    if lag_s <= 0.0 or len(normals) < 2:
+        return normals.copy()
+    dt = np.diff(stamps_s)[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        keep = np.exp(-np.maximum(dt, 0.0) / lag_s)
+        undone = (normals[1:] - keep * normals[:-1]) / (1.0 - keep)
+    usable = np.isfinite(undone) & (dt > 0.0)
+    result: np.ndarray = np.vstack([normals[:1], np.where(usable, undone, normals[1:])])
+    return result
+
+
+def loaded_stance(
+    odds: np.ndarray, stamps_s: np.ndarray, loads: np.ndarray, forced: np.ndarray
+) -> np.ndarray:
+    """(N, 4) log-odds of stance: ``odds`` (N, 4) with the stances of feet whose force was
+    evidence (``forced``, (N, 4) bool) carried on by their ``loads`` (N, 4) [N] (the module
+    text); rows at ``stamps_s`` (N,) [s] (a stamp before an earlier row's counts as that one's).
+    """
+    result = odds.copy()
+    if not len(stamps_s):
+        return result
+    stamps_s = np.maximum.accumulate(stamps_s)
+    stance = odds >= 0.0
+    ends = stance[:-1] & ~stance[1:] & forced[:-1]
+    swing = ~stance & forced & np.isfinite(loads)
+    for last, leg in zip(*np.nonzero(ends), strict=True):
+        floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
+        if floor is not None:
+            _above_floor(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
+        _ramp(result, stamps_s, loads[:, leg], last, leg)
+    return result
+
+
+def _noise(
+    loads: np.ndarray, swing: np.ndarray, stamps_s: np.ndarray, at_s: float
+) -> float | None:
+    """The loads' robust spread [N] over the swing samples within :data:`NOISE_S` of ``at_s``."""
+    lo, hi = np.searchsorted(stamps_s, [at_s - NOISE_S, at_s + NOISE_S], side="left")
+    values = loads[lo:hi][swing[lo:hi]]
+    if values.size < MIN_NOISE_SAMPLES:
+        return None
+    return 1.4826 * float(np.median(np.abs(values)))
+
+
+def _above_floor(
+    result: np.ndarray,
+    leg_rows: tuple[np.ndarray, np.ndarray, np.ndarray],
+    last: int,
+    leg: int,
+    noise_n: float,
+) -> None:
+    """The swing samples after row ``last`` whose load stays above the floor stand
+    (:data:`FLOOR_SIGMAS` times ``noise_n`` [N]); ``leg_rows``: the stamps [s], the leg's loads
+    [N] and its stance before these rules.
+    """
+    stamps_s, loads, stance = leg_rows
+    floor = FLOOR_SIGMAS * noise_n
+    k = last + 1
+    while (
+        k < len(stamps_s)
+        and not stance[k]
+        and loads[k] > floor
+        and stamps_s[k] - stamps_s[last] <= MAX_LOADED_S
+    ):
+        result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
+        k += 1
+
+
+def _ramp(
+    result: np.ndarray, stamps_s: np.ndarray, loads: np.ndarray, last: int, leg: int
+) -> None:
+    """The unloading ramp of the leg's ``loads`` [N] before row ``last`` carried to zero (the
+    module text), into ``result``: least squares in floats (a handful of samples).
+    """
+    end_s = float(stamps_s[last])
+    first = int(np.searchsorted(stamps_s, end_s - RAMP_WINDOW_S + 1e-9, side="left"))
+    points = [
+        (t - end_s, n)
+        for t, n in zip(stamps_s[first : last + 1].tolist(), loads[first : last + 1].tolist())
+        if math.isfinite(n)
+    ]
+    count = len(points)
+    if count < 3:
+        return
+    t_mean = sum(t for t, _ in points) / count
+    n_mean = sum(n for _, n in points) / count
+    spread = sum((t - t_mean) * (t - t_mean) for t, _ in points)
+    if not spread > 0.0:
+        return
+    slope = sum((t - t_mean) * (n - n_mean) for t, n in points) / spread
+    offset = n_mean - slope * t_mean
+    if not slope < 0.0 or -offset / slope > RAMP_REACH_S:
+        return
+    residuals = [n - offset - slope * t for t, n in points]
+    variance = sum(r * r for r in residuals) / max(count - 2, 1)
+    if not math.isfinite(variance):  # absurd loads: no ramp
+        return
+    k = last + 1
+    while k < len(stamps_s) and (dt := float(stamps_s[k]) - end_s) <= RAMP_REACH_S:
+        load = offset + slope * dt
+        error = math.sqrt(
+            max(variance * (1.0 / count + (dt - t_mean) * (dt - t_mean) / spread), 1e-24)
+        )
+        if load <= RAMP_CONFIDENCE * error:
+            break
+        result[k, leg] = max(result[k, leg], _above_zero(load / error))
+        k += 1
+
+
+def _above_zero(z: float) -> float:
+    """The log-odds that a normal variable ``z`` standard deviations above zero is above it,
+    within +-:data:`MAX_LOG_ODDS`.
+    """
+    z = min(max(z, -8.0), 8.0)
+    above, below = math.erfc(-z / math.sqrt(2.0)), math.erfc(z / math.sqrt(2.0))
+    return min(max(math.log(above / below), -MAX_LOG_ODDS), MAX_LOG_ODDS)

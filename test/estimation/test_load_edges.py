@@ -1,0 +1,130 @@
+"""Where the smoothed contacts of a foot with force evidence end, on loads built by construction
+(issue #39): a slow unloading ramp whose zero is known, a dip to half a newton inside a stance,
+and a step to zero seen through the momentum observer's first-order lag. The evidence is the
+contact filter's model written out (force log-ratio ``(N - 3 % W) / (0.5 % W)`` within +-4,
+the transition's switch probability), so the right answer is the load's own zero.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
+from a1_leg_fk.estimation.load_edges import unlagged
+
+LEGS, STEP_S, WEIGHT_N = 4, 0.002, 120.0
+HALF_N, SCALE_N = 0.03 * WEIGHT_N, 0.005 * WEIGHT_N
+OBSERVER_LAG_S = 0.001
+
+
+def rows_of(loads: np.ndarray, kinematic: np.ndarray) -> EvidenceRows:
+    """The filter's evidence of (N, 4) normal forces [N] and kinematic log-ratios, 500 Hz."""
+    count = len(loads)
+    force = np.clip((loads - HALF_N) / SCALE_N, -4.0, 4.0)
+    switch = np.full(count, 1.0 - np.exp(-STEP_S / 0.1))
+    forced = np.ones((count, LEGS), dtype=bool)
+    return EvidenceRows(
+        np.arange(count) * STEP_S, switch, kinematic, forced, kinematic + force, loads
+    )
+
+
+def stance_of(rows: EvidenceRows, force_lag_s: float = 0.0) -> np.ndarray:
+    """(N, 4) bool: the smoother's stance (probability >= 0.5) over the whole run."""
+    smoother = FixedLagSmoother(force_lag_s=force_lag_s)
+    smoother.add(rows)
+    return smoother.take(len(rows)) >= 0.5
+
+
+def liftoffs(stance: np.ndarray) -> np.ndarray:
+    """Rows where a stance has ended (the first row of swing)."""
+    return np.flatnonzero(stance[:-1] & ~stance[1:]) + 1
+
+
+def gait_loads(rng: np.random.Generator, ramp_n_per_ms: float) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) loads [N] of 20 strides (200 ms stance at 30 N ending in a linear ramp of
+    ``ramp_n_per_ms`` to zero, 200 ms of swing at 0) plus 2 N of sensor noise, and the rows where
+    each true load reaches zero (the first row without load)."""
+    stride = np.zeros(200)
+    ramp_rows = int(np.ceil(30.0 / (ramp_n_per_ms * 2.0)))
+    stride[:100] = 30.0
+    stride[100 - ramp_rows : 100] = 30.0 - ramp_n_per_ms * 2.0 * np.arange(1, ramp_rows + 1)
+    stride = np.maximum(stride, 0.0)
+    true = np.tile(stride, 20)
+    zeros = np.flatnonzero((true[:-1] > 0.0) & (true[1:] <= 0.0)) + 1
+    loads = true[:, None] + rng.normal(0.0, 2.0, (true.size, LEGS))
+    return loads, zeros
+
+
+def test_a_slow_unloading_ramp_lifts_off_where_it_reaches_zero() -> None:
+    """A pronk's push-off: the kinematics say swing through the stance's end (-3.5, the foot
+    moving), the load falls at 1.1 N/ms. Evidence at even odds at 3.6 N ends the stance ~3 ms
+    early; the ramp's zero is the liftoff: median error within one sample on every foot."""
+    loads, zeros = gait_loads(np.random.default_rng(39), 1.1)
+    kinematic = np.full(loads.shape, -3.5)
+    stance = stance_of(rows_of(loads, kinematic))
+    for leg in range(LEGS):
+        found = liftoffs(stance[:, leg])
+        errors = [int(found[np.abs(found - z).argmin()]) - z for z in zeros]
+        assert abs(np.median(errors)) <= 1, (leg, errors)
+
+
+def test_a_dip_that_never_unloads_is_bridged_and_a_swing_is_kept() -> None:
+    """Clean loads (0.02 N of noise): stances at 30 N, one dipping to 0.5 N for 40 ms
+    (a foot that never leaves the ground, below the evidence's 3.6 N), swings at 0 N. The dip
+    stands; every swing stays a swing from its second sample on."""
+    rng = np.random.default_rng(7)
+    true = np.tile(np.r_[np.full(100, 30.0), np.zeros(100)], 10)
+    dip = slice(430, 450)  # inside the third stance
+    true[dip] = 0.5
+    loads = (true + rng.normal(0.0, 0.02, true.size))[:, None].repeat(LEGS, axis=1)
+    stance = stance_of(rows_of(loads, np.zeros(loads.shape)))
+    assert stance[dip].all()
+    swing = (true == 0.0)[:, None].repeat(LEGS, axis=1)
+    swing[np.flatnonzero(np.diff(true == 0.0, prepend=False))] = False  # each swing's first
+    assert not (stance & swing).any()
+
+
+def test_the_observers_lag_is_no_load() -> None:
+    """A load stepping from 30 N to 0 seen through the observer's lag (1 ms: 4.1, 0.55, 0.07 N
+    on the samples after the step) with 0.02 N of noise: the lag undone, the stance ends at most
+    one sample after the step (the filter's own), not carried on by the decaying lag."""
+    rng = np.random.default_rng(5)
+    true = np.tile(np.r_[np.full(100, 30.0), np.zeros(100)], 10)
+    lagged = np.empty_like(true)
+    keep, value = np.exp(-STEP_S / OBSERVER_LAG_S), 30.0
+    for k, load in enumerate(true):
+        value = keep * value + (1.0 - keep) * load
+        lagged[k] = value
+    loads = (lagged + rng.normal(0.0, 0.02, true.size))[:, None].repeat(LEGS, axis=1)
+    stance = stance_of(rows_of(loads, np.zeros(loads.shape)), OBSERVER_LAG_S)
+    steps = np.flatnonzero((true[:-1] > 0.0) & (true[1:] == 0.0)) + 1
+    for leg in range(LEGS):
+        found = liftoffs(stance[:, leg])
+        assert all(0 <= found[np.abs(found - s).argmin()] - s <= 1 for s in steps), found
+
+
+def test_unlagged_inverts_a_first_order_lag() -> None:
+    """Any load through the lag's exact discretization, then undone: the load again."""
+    rng = np.random.default_rng(3)
+    stamps = np.cumsum(rng.uniform(0.001, 0.003, 200))
+    load = rng.uniform(0.0, 50.0, (200, LEGS))
+    lagged = load.copy()
+    for k in range(1, 200):
+        keep = np.exp(-(stamps[k] - stamps[k - 1]) / OBSERVER_LAG_S)
+        lagged[k] = keep * lagged[k - 1] + (1.0 - keep) * load[k]
+    np.testing.assert_allclose(unlagged(lagged, stamps, OBSERVER_LAG_S)[1:], load[1:], atol=1e-9)
+
+
+def test_windows_give_the_whole_pass_with_loads() -> None:
+    """Blocks of 7 rows through the fixed-lag smoother against one pass over every row, on
+    noisy loads with ramps: the loads' rules see the same rows (their history kept), the same
+    stance on every row."""
+    loads, _ = gait_loads(np.random.default_rng(11), 1.1)
+    rows = rows_of(loads, np.full(loads.shape, -3.5))
+    whole = stance_of(rows, OBSERVER_LAG_S)
+    smoother, parts = FixedLagSmoother(force_lag_s=OBSERVER_LAG_S), []
+    for start in range(0, len(rows), 7):  # a block's end lands inside many stances' ends
+        smoother.add(rows[start : start + 7])
+        parts.append(smoother.take(smoother.final_rows()))
+    parts.append(smoother.take(len(smoother.pending)))
+    np.testing.assert_array_equal(np.concatenate(parts) >= 0.5, whole)

@@ -40,6 +40,7 @@ FAST_SUBSET = (
     "test/estimation/test_ground.py",
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
+    "test/estimation/test_load_edges.py",
     "test/recording/test_lowstate.py::test_the_imu_quaternion_is_read_w_first",
 )
 """The tests every mutation must fail (about a minute on two idle cores): no simulated family,
@@ -166,6 +167,12 @@ MUTATIONS = (
         "a1_leg_fk/gait/edges.py",
         "base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
         "base = 10.0 * max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
+    ),
+    Mutation(
+        "the load's noise floor / 10 (a lift-off's last newtons x 10 below it)",
+        "a1_leg_fk/estimation/load_edges.py",
+        "FLOOR_SIGMAS = 8.0",
+        "FLOOR_SIGMAS = 0.8",
     ),
 )
 

@@ -19,7 +19,7 @@ from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
-from a1_leg_fk.estimation.contact_smoother import EvidenceRows, force_liftoffs, smooth
+from a1_leg_fk.estimation.contact_smoother import EvidenceRows, smoothed_stance
 from a1_leg_fk.estimation.contact_smoother import probabilities as stance_probabilities
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_forces
 from a1_leg_fk.kinematics.foot_forces import FootForces
@@ -74,8 +74,8 @@ def estimate(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(N, 4) probabilities of stance and normal forces [N] of one evidence over the run: the
     causal filter's, or ``smoothed`` over the whole run (the filter's evidence through
-    :func:`~a1_leg_fk.estimation.contact_smoother.smooth`, as ``a1-leg-fk bag`` does it);
-    ``options``: the estimator's keywords.
+    :func:`~a1_leg_fk.estimation.contact_smoother.smoothed_stance`, as ``a1-leg-fk bag`` does
+    it); ``options``: the estimator's keywords.
     """
     rotations = rotation_matrices(run.quaternions)
     gravity = np.einsum("nji,j->ni", rotations, [0.0, 0.0, -STANDARD_GRAVITY])
@@ -102,10 +102,8 @@ def estimate(
         probabilities[n], normals[n] = step.probabilities, step.normals
         kept.append(estimator.filter.evidence)
     if smoothed:
-        switch, kinematic, forced, total = (np.array(c) for c in zip(*kept, strict=True))
-        rows = EvidenceRows(run.stamps_s, switch, kinematic, forced, total)
-        smoothed_odds, filtered = smooth(rows, np.zeros(4))
-        probabilities = stance_probabilities(force_liftoffs(smoothed_odds, filtered, forced))
+        rows = EvidenceRows(run.stamps_s, *(np.array(c) for c in zip(*kept, strict=True)))
+        probabilities = stance_probabilities(smoothed_stance(rows, np.zeros(4))[0])
     return probabilities, normals
 
 

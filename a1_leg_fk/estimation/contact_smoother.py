@@ -17,6 +17,13 @@ evidence of swing (:data:`CLEAR_SWING`) ``lead_s`` later also counts as evidence
 (the smaller of the two kinematic log-ratios); a touchdown, where the foot stops as it lands,
 is left where the evidence puts it.
 
+Without force evidence, the posterior decides which stances and swings there are and the feet's
+heights place their edges (:func:`height_edges`, the rules of
+:mod:`a1_leg_fk.estimation.stance_edges` that ``gait``'s own kinematic contacts use for their
+liftoffs): a touchdown where the foot stops coming down (the evidence of a foot 1-4 mm up and
+still descending already says stance), a liftoff where its rise, fitted as ``c (t - t0)^p``,
+starts. A sample they move to swing takes the posterior's odds reversed.
+
 Where a foot's force is evidence, a liftoff is not placed before the filter's own
 (:func:`force_liftoffs`): the force's log-ratio is at even odds at 3 % of the weight
 (:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), and the forward-backward
@@ -37,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.estimation.stance_edges import placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -57,7 +65,8 @@ class EvidenceRows:
     """The filter's evidence over N rows (:class:`~a1_leg_fk.estimation.contact_filter.
     SampleEvidence` stacked): ``stamps_s`` (N,) [s], ``switch`` (N,) probabilities of a change of
     state since the previous row, ``kinematic`` (N, 4) and ``total`` (N, 4) log-likelihood
-    ratios, ``forced`` (N, 4) bool (the foot's force was evidence).
+    ratios, ``forced`` (N, 4) bool (the foot's force was evidence), ``heights`` (N, 4) [m] the
+    feet's heights the kinematic evidence took (NaN: unknown).
     """
 
     stamps_s: np.ndarray
@@ -65,12 +74,14 @@ class EvidenceRows:
     kinematic: np.ndarray
     forced: np.ndarray
     total: np.ndarray
+    heights: np.ndarray
 
     @classmethod
     def empty(cls) -> EvidenceRows:
         """No rows."""
         legs = np.empty((0, LEGS))
-        return cls(np.empty(0), np.empty(0), legs, np.empty((0, LEGS), dtype=bool), legs.copy())
+        forced = np.empty((0, LEGS), dtype=bool)
+        return cls(np.empty(0), np.empty(0), legs, forced, legs.copy(), legs.copy())
 
     def __len__(self) -> int:
         return len(self.stamps_s)
@@ -86,7 +97,7 @@ class EvidenceRows:
         )
 
 
-FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total")
+FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total", "heights")
 
 
 def led_evidence(rows: EvidenceRows, lead_s: float = LIFTOFF_LEAD_S) -> np.ndarray:
@@ -134,6 +145,40 @@ def smooth(
     return filtered + np.array(backward).reshape(count, LEGS), filtered
 
 
+def smoothed_stance(
+    rows: EvidenceRows,
+    start: np.ndarray,
+    lead_s: float = LIFTOFF_LEAD_S,
+    open_start: tuple[bool, ...] = (True,) * LEGS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) log-odds of stance of ``rows`` as the smoother gives them (:func:`smooth` from
+    ``start``, :func:`force_liftoffs`, :func:`height_edges` with ``open_start``) and the (N, 4)
+    filtered (forward) log-odds.
+    """
+    smoothed, filtered = smooth(rows, start, lead_s)
+    stance = force_liftoffs(smoothed, filtered, rows.forced)
+    return height_edges(rows, stance, open_start), filtered
+
+
+def height_edges(
+    rows: EvidenceRows, log_odds: np.ndarray, open_start: tuple[bool, ...]
+) -> np.ndarray:
+    """(N, 4) log-odds of stance: ``log_odds``, with the edges of each stance (log-odds >= 0) of
+    a foot without force evidence placed by its heights
+    (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; ``open_start`` per foot: a stance
+    at the first row began before it, not a touchdown); a row they move to swing takes its
+    log-odds reversed.
+    """
+    times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
+    stance = log_odds >= 0.0
+    result = log_odds.copy()
+    for leg in range(LEGS):
+        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg], open_start[leg])
+        moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
+        result[moved, leg] = -log_odds[moved, leg]
+    return result
+
+
 def force_liftoffs(smoothed: np.ndarray, filtered: np.ndarray, forced: np.ndarray) -> np.ndarray:
     """(N, 4) log-odds of stance: ``smoothed``, but where the foot's force was evidence
     (``forced``) the larger of ``smoothed`` and the filter's ``filtered`` (the module text).
@@ -169,7 +214,8 @@ def smoothing_line(smoothed: bool) -> str:
     if smoothed:
         return (
             f"smoothing: contacts smoothed over the recording (forward-backward, {LAG_S:g} s lag, "
-            f"liftoff lead {1000 * LIFTOFF_LEAD_S:g} ms; --causal: the node's)"
+            f"liftoff lead {1000 * LIFTOFF_LEAD_S:g} ms, edges by the heights without efforts; "
+            "--causal: the node's)"
         )
     return "smoothing: none, the causal filter's contacts as the node has them (--causal)"
 
@@ -184,6 +230,7 @@ class FixedLagSmoother:
         self.lag_s, self.lead_s = lag_s, lead_s
         self.pending = EvidenceRows.empty()
         self.start = np.zeros(LEGS)  # the forward log-odds before the first pending row
+        self.standing = (True,) * LEGS  # a stance at the first pending row began before it
 
     def add(self, rows: EvidenceRows) -> None:
         """Rows after those added before."""
@@ -203,8 +250,8 @@ class FixedLagSmoother:
         """
         if count <= 0:
             return np.empty((0, LEGS))
-        smoothed, filtered = smooth(self.pending, self.start, self.lead_s)
-        stance = force_liftoffs(smoothed[:count], filtered[:count], self.pending.forced[:count])
+        stance, filtered = smoothed_stance(self.pending, self.start, self.lead_s, self.standing)
         self.start = filtered[count - 1]
+        self.standing = tuple(bool(odds >= 0.0) for odds in stance[count - 1])
         self.pending = self.pending[count:]
-        return probabilities(stance)
+        return probabilities(stance[:count])

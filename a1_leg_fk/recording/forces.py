@@ -237,13 +237,14 @@ class RecordingForces(ForcePass):
         """The evidence of rows stamped ``stamps_ns`` as arrays, their stamps [s] since the
         first of the pass.
         """
-        switch, kinematic, forced, total = zip(*kept, strict=True) if kept else ((),) * 4
+        switch, kinematic, forced, total, heights = zip(*kept, strict=True) if kept else ((),) * 5
         return EvidenceRows(
             (stamps_ns - (self._origin_ns or 0)) * 1e-9,
             np.array(switch, dtype=float),
             np.array(kinematic, dtype=float).reshape(-1, 4),
             np.array(forced, dtype=bool).reshape(-1, 4),
             np.array(total, dtype=float).reshape(-1, 4),
+            np.array(heights, dtype=float).reshape(-1, 4),
         )
 
 

@@ -24,7 +24,14 @@ def rows_of(evidence: np.ndarray, switch: np.ndarray, step_s: float = 0.002) -> 
     """Rows whose every foot has force evidence (no lead) and ``evidence`` as its kinematics."""
     count = len(switch)
     forced = np.ones((count, LEGS), dtype=bool)
-    return EvidenceRows(np.arange(count) * step_s, switch, evidence, forced, evidence)
+    return EvidenceRows(
+        np.arange(count) * step_s, switch, evidence, forced, evidence, unknown(count)
+    )
+
+
+def unknown(count: int) -> np.ndarray:
+    """(count, 4) heights [m] not known: no edges placed by them."""
+    return np.full((count, LEGS), np.nan)
 
 
 def enumerated_posterior(evidence: np.ndarray, switch: np.ndarray) -> np.ndarray:
@@ -69,8 +76,7 @@ def test_the_forward_pass_is_the_live_filters() -> None:
     for row in forces.tolist():
         expected.append(live.update(0.002, [None] * LEGS, ((0.0, 0.0, 0.0), None), row))
         kept.append(live.evidence)
-    switch, kinematic, forced, total = (np.array(column) for column in zip(*kept, strict=True))
-    rows = EvidenceRows(np.arange(300) * 0.002, switch, kinematic, forced, total)
+    rows = EvidenceRows(np.arange(300) * 0.002, *(np.array(c) for c in zip(*kept, strict=True)))
     _, filtered = smooth(rows, np.zeros(LEGS))
     np.testing.assert_allclose(probabilities(filtered), np.array(expected), rtol=0, atol=1e-8)
 
@@ -84,7 +90,12 @@ def test_the_lead_moves_a_liftoff_and_not_a_touchdown() -> None:
     kinematic[100:200] = -4.0
     switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
     rows = EvidenceRows(
-        np.arange(count) * 0.002, switch, kinematic, np.zeros((count, LEGS), bool), kinematic
+        np.arange(count) * 0.002,
+        switch,
+        kinematic,
+        np.zeros((count, LEGS), bool),
+        kinematic,
+        unknown(count),
     )
     for lead_s, liftoff in ((0.0, 100), (0.014, 93)):
         stance = probabilities(smooth(rows, np.zeros(LEGS), lead_s)[0])[:, 0] >= 0.5
@@ -101,7 +112,12 @@ def test_windows_give_the_whole_pass() -> None:
     kinematic = np.where(states, 1.0, -2.0) + rng.normal(0.0, 1.5, (count, LEGS))
     switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
     rows = EvidenceRows(
-        np.arange(count) * 0.002, switch, kinematic, np.zeros((count, LEGS), bool), kinematic
+        np.arange(count) * 0.002,
+        switch,
+        kinematic,
+        np.zeros((count, LEGS), bool),
+        kinematic,
+        unknown(count),
     )
     whole = probabilities(smooth(rows, np.zeros(LEGS))[0])
     smoother, parts = FixedLagSmoother(), []
@@ -130,7 +146,9 @@ def test_a_foot_with_force_evidence_lifts_off_where_the_filter_does() -> None:
     smoother.add(forced)
     with_force = smoother.take(200)[:, 0] >= 0.5
     assert int(np.argmin(with_force)) == liftoff["filtered"]
-    unforced = EvidenceRows(forced.stamps_s, switch, evidence, ~forced.forced, evidence)
+    unforced = EvidenceRows(
+        forced.stamps_s, switch, evidence, ~forced.forced, evidence, unknown(200)
+    )
     smoother = FixedLagSmoother(lead_s=0.0)
     smoother.add(unforced)
     assert int(np.argmin(smoother.take(200)[:, 0] >= 0.5)) == liftoff["smoothed"]

@@ -12,6 +12,10 @@ Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`
   fast, ``p = 1``, or from rest, ``p = 2``), give ``t0``; at most :data:`BACK_S` back (noise
   makes a foot rise three deviations before it is up; a walk's foot rises 0.1 mm only some 6 ms
   after it left).
+* **Late rise** (:func:`late_rise`). A stance whose last sample already stands more than
+  :data:`LIFT_M` above the stance's median height ended before it: the foot's rise leading up
+  to it is fitted the same way and the stance ends at its onset (a walk's foot rises from rest,
+  5 mm in 50 ms, before the contact filter's kinematic evidence turns to swing).
 * **Landing** (:func:`landing_start`). A touchdown is moved later while the foot is still coming
   down: while some height within :data:`DESCENT_LOOK_S` after a stance sample lies lower than it
   at more than :data:`DESCENT_MPS` on average. The contact filter's heights are taken against
@@ -41,6 +45,13 @@ RISE_POWERS = (1.0, 1.5, 2.0, 3.0)
 """The shapes a liftoff's rise is fitted with, ``(t - t0)^p``."""
 MIN_WINDOW = 4
 """A level or a trend is taken over at least this many samples."""
+LIFT_M = 0.0025
+"""[m] A stance's last sample this far above the stance's median height is a foot already
+rising (a soft foot unloading comes up ~1 mm, another foot's landing moves the lowest foot by
+~1 mm; 2 and 3 mm met the same goals on the contact family's tuned runs, 1.5 mm did not:
+docs/forces.md)."""
+RISE_SPAN_S = 0.06
+"""[s] A late rise is fitted over at most this long before the stance's last sample."""
 DESCENT_MPS = 0.075
 """[m/s] A foot coming down faster than this towards a height ahead has not landed yet (chosen
 on the contact family's tuned runs among 0.05, 0.075 and 0.1 m/s, docs/forces.md)."""
@@ -60,10 +71,10 @@ def placed_edges(
     times: np.ndarray, heights: np.ndarray, stance: np.ndarray, open_start: bool
 ) -> np.ndarray:
     """``stance`` (n,) with each stance's touchdown moved later by :func:`landing_start` and its
-    liftoff earlier by :func:`rise_start` (with the tolerance :data:`EDGE_NOISE_FLOOR_M`), never
-    past the stance's middle sample; the edges at the run's borders are not observed and stay
-    (the first stance's start too when ``open_start``: it began before these samples). Heights
-    [m] NaN near an edge leave it where it is.
+    liftoff earlier by :func:`late_rise`, then :func:`rise_start` (with the tolerance
+    :data:`EDGE_NOISE_FLOOR_M`), never past the stance's middle sample; the edges at the run's
+    borders are not observed and stay (the first stance's start too when ``open_start``: it
+    began before these samples). Heights [m] NaN near an edge leave it where it is.
     """
     placed = stance.copy()
     for first, last, value in runs(stance):
@@ -74,7 +85,8 @@ def placed_edges(
         if first > 0 or not open_start:
             start = landing_start(times, heights, first, middle)
         if last < stance.size - 1:
-            end = rise_start(times, heights, last, middle, EDGE_NOISE_FLOOR_M)
+            end = late_rise(times, heights, (first, last), middle)
+            end = rise_start(times, heights, end, middle, EDGE_NOISE_FLOOR_M)
         placed[first:start] = False
         placed[end + 1 : last + 1] = False
     return placed
@@ -95,6 +107,28 @@ def landing_start(times: np.ndarray, heights: np.ndarray, first: int, limit: int
             break
         start += 1
     return start
+
+
+def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], limit: int) -> int:
+    """The last sample of the stance on samples ``stance`` (first, last) moved back, where it
+    stands more than :data:`LIFT_M` above the stance's median height, to the onset of the rise
+    that leads up to it: the samples before it (within :data:`RISE_SPAN_S`) above the median
+    + :data:`EDGE_NOISE_FLOOR_M`, fitted by :func:`rise_onset`; not past ``limit``.
+    """
+    first, last = stance
+    ground = float(np.median(heights[first : last + 1]))
+    if not heights[last] > ground + LIFT_M:  # NaN: unknown, kept
+        return last
+    begin = max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))
+    start = last
+    while start > begin and heights[start - 1] > ground + EDGE_NOISE_FLOOR_M:
+        start -= 1
+    rising = slice(start, last + 1)
+    if last - start < 2:
+        return last
+    onset = rise_onset(times[rising] - times[last], heights[rising] - ground)
+    end = int(np.searchsorted(times, times[last] + onset, side="right")) - 1
+    return min(max(end, limit), last)
 
 
 def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:

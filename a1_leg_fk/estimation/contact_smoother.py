@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.estimation.stance_edges import placed_edges
+from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -146,34 +146,37 @@ def smooth(
 
 
 def smoothed_stance(
-    rows: EvidenceRows,
-    start: np.ndarray,
-    lead_s: float = LIFTOFF_LEAD_S,
-    open_start: tuple[bool, ...] = (True,) * LEGS,
+    rows: EvidenceRows, start: np.ndarray, lead_s: float = LIFTOFF_LEAD_S
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 4) log-odds of stance of ``rows`` as the smoother gives them (:func:`smooth` from
-    ``start``, :func:`force_liftoffs`, :func:`height_edges` with ``open_start``) and the (N, 4)
-    filtered (forward) log-odds.
+    """(N, 4) log-odds of stance of a whole recording's ``rows`` as the smoother gives them
+    (:func:`posterior` from ``start``, :func:`height_edges`) and the (N, 4) filtered (forward)
+    log-odds.
+    """
+    stance, filtered = posterior(rows, start, lead_s)
+    return height_edges(rows, stance), filtered
+
+
+def posterior(
+    rows: EvidenceRows, start: np.ndarray, lead_s: float = LIFTOFF_LEAD_S
+) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) log-odds of stance before the heights place any edge (:func:`smooth` from
+    ``start``, :func:`force_liftoffs`) and the (N, 4) filtered (forward) log-odds.
     """
     smoothed, filtered = smooth(rows, start, lead_s)
-    stance = force_liftoffs(smoothed, filtered, rows.forced)
-    return height_edges(rows, stance, open_start), filtered
+    return force_liftoffs(smoothed, filtered, rows.forced), filtered
 
 
-def height_edges(
-    rows: EvidenceRows, log_odds: np.ndarray, open_start: tuple[bool, ...]
-) -> np.ndarray:
+def height_edges(rows: EvidenceRows, log_odds: np.ndarray) -> np.ndarray:
     """(N, 4) log-odds of stance: ``log_odds``, with the edges of each stance (log-odds >= 0) of
     a foot without force evidence placed by its heights
-    (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; ``open_start`` per foot: a stance
-    at the first row began before it, not a touchdown); a row they move to swing takes its
-    log-odds reversed.
+    (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; a stance at the first row began
+    before it); a row they move to swing takes its log-odds reversed.
     """
     times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
     stance = log_odds >= 0.0
     result = log_odds.copy()
     for leg in range(LEGS):
-        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg], open_start[leg])
+        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg])
         moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
         result[moved, leg] = -log_odds[moved, leg]
     return result
@@ -223,14 +226,17 @@ def smoothing_line(smoothed: bool) -> str:
 class FixedLagSmoother:
     """Smoothed contacts over rows arriving in blocks: :meth:`add` a block's evidence, :meth:`take`
     the rows that are final (every row ``lag_s`` [s] before the latest, or all at the end).
-    Keeps only the rows not yet taken.
+    Keeps only the rows not yet taken, and the last
+    :data:`~a1_leg_fk.estimation.stance_edges.CONTEXT_S` of those taken with their posterior,
+    for the heights' edges.
     """
 
     def __init__(self, lag_s: float = LAG_S, lead_s: float = LIFTOFF_LEAD_S) -> None:
         self.lag_s, self.lead_s = lag_s, lead_s
         self.pending = EvidenceRows.empty()
         self.start = np.zeros(LEGS)  # the forward log-odds before the first pending row
-        self.standing = (True,) * LEGS  # a stance at the first pending row began before it
+        self.context = EvidenceRows.empty()  # the last rows taken, for the heights' edges
+        self.context_odds = np.empty((0, LEGS))  # their posterior (log-odds)
 
     def add(self, rows: EvidenceRows) -> None:
         """Rows after those added before."""
@@ -250,8 +256,14 @@ class FixedLagSmoother:
         """
         if count <= 0:
             return np.empty((0, LEGS))
-        stance, filtered = smoothed_stance(self.pending, self.start, self.lead_s, self.standing)
+        odds, filtered = posterior(self.pending, self.start, self.lead_s)
+        rows = self.context.then(self.pending)
+        odds = np.concatenate([self.context_odds, odds])
+        done = len(self.context) + count
+        stance = height_edges(rows, odds)[len(self.context) : done]
+        stamps = rows.stamps_s[:done]
+        kept = int(np.searchsorted(np.maximum.accumulate(stamps), stamps.max() - CONTEXT_S))
+        self.context, self.context_odds = rows[kept:done], odds[kept:done]
         self.start = filtered[count - 1]
-        self.standing = tuple(bool(odds >= 0.0) for odds in stance[count - 1])
         self.pending = self.pending[count:]
-        return probabilities(stance[:count])
+        return probabilities(stance)

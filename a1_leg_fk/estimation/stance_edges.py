@@ -57,6 +57,15 @@ DESCENT_MPS = 0.075
 on the contact family's tuned runs among 0.05, 0.075 and 0.1 m/s, docs/forces.md)."""
 DESCENT_LOOK_S = 0.004
 """[s] How far ahead a stance sample's descent is looked for (at least the next sample)."""
+LANDING_S = 0.1
+"""[s] A touchdown is moved later by its descent at most this far (less than
+:data:`CONTEXT_S`)."""
+STANCE_REFERENCE_S = 0.2
+"""[s] A stance's height, for a late rise, is the median of its heights this long before its
+last sample."""
+CONTEXT_S = STANCE_REFERENCE_S
+"""[s] How far back from a stance's last sample these rules look: with this much of the samples
+before a window, its edges are those of one pass over every sample."""
 
 
 def runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
@@ -67,14 +76,11 @@ def runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
     return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
-def placed_edges(
-    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, open_start: bool
-) -> np.ndarray:
+def placed_edges(times: np.ndarray, heights: np.ndarray, stance: np.ndarray) -> np.ndarray:
     """``stance`` (n,) with each stance's touchdown moved later by :func:`landing_start` and its
     liftoff earlier by :func:`late_rise`, then :func:`rise_start` (with the tolerance
     :data:`EDGE_NOISE_FLOOR_M`), never past the stance's middle sample; the edges at the run's
-    borders are not observed and stay (the first stance's start too when ``open_start``: it
-    began before these samples). Heights [m] NaN near an edge leave it where it is.
+    borders are not observed and stay. Heights [m] NaN near an edge leave it where it is.
     """
     placed = stance.copy()
     for first, last, value in runs(stance):
@@ -82,7 +88,7 @@ def placed_edges(
             continue
         middle = (first + last) // 2
         start, end = first, last
-        if first > 0 or not open_start:
+        if first > 0:
             start = landing_start(times, heights, first, middle)
         if last < stance.size - 1:
             end = late_rise(times, heights, (first, last), middle)
@@ -93,11 +99,13 @@ def placed_edges(
 
 
 def landing_start(times: np.ndarray, heights: np.ndarray, first: int, limit: int) -> int:
-    """A touchdown's first stance sample ``first`` moved later (not past ``limit``) while some
-    height within :data:`DESCENT_LOOK_S` after it (at least the next) lies lower than it at more
-    than :data:`DESCENT_MPS` on average: the foot has not landed yet.
+    """A touchdown's first stance sample ``first`` moved later (not past ``limit``, nor more than
+    :data:`LANDING_S`) while some height within :data:`DESCENT_LOOK_S` after it (at least the
+    next) lies lower than it at more than :data:`DESCENT_MPS` on average: the foot has not
+    landed yet.
     """
     start = first
+    limit = min(limit, int(np.searchsorted(times, times[first] + LANDING_S, side="right")) - 1)
     while start < limit:
         stop = int(np.searchsorted(times, times[start] + DESCENT_LOOK_S, side="right"))
         ahead = slice(start + 1, max(stop, start + 2))
@@ -111,12 +119,14 @@ def landing_start(times: np.ndarray, heights: np.ndarray, first: int, limit: int
 
 def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], limit: int) -> int:
     """The last sample of the stance on samples ``stance`` (first, last) moved back, where it
-    stands more than :data:`LIFT_M` above the stance's median height, to the onset of the rise
-    that leads up to it: the samples before it (within :data:`RISE_SPAN_S`) above the median
-    + :data:`EDGE_NOISE_FLOOR_M`, fitted by :func:`rise_onset`; not past ``limit``.
+    stands more than :data:`LIFT_M` above the stance's height (the median over
+    :data:`STANCE_REFERENCE_S` before it), to the onset of the rise that leads up to it: the
+    samples before it (within :data:`RISE_SPAN_S`) above that height +
+    :data:`EDGE_NOISE_FLOOR_M`, fitted by :func:`rise_onset`; not past ``limit``.
     """
     first, last = stance
-    ground = float(np.median(heights[first : last + 1]))
+    since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
+    ground = float(np.median(heights[since : last + 1]))
     if not heights[last] > ground + LIFT_M:  # NaN: unknown, kept
         return last
     begin = max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))

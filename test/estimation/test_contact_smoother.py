@@ -8,13 +8,16 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contact_smoother import (
     EvidenceRows,
     FixedLagSmoother,
+    force_liftoffs,
     probabilities,
     smooth,
+    smoothed_stance,
 )
 
 LEGS = 4
@@ -152,3 +155,82 @@ def test_a_foot_with_force_evidence_lifts_off_where_the_filter_does() -> None:
     smoother = FixedLagSmoother(lead_s=0.0)
     smoother.add(unforced)
     assert int(np.argmin(smoother.take(200)[:, 0] >= 0.5)) == liftoff["smoothed"]
+
+
+STEP_S = 0.002
+LIFTOFF_S, TOUCHDOWN_S = 0.3001, 0.5001
+"""A stepping foot's true liftoff and touchdown [s], off the 500 Hz grid."""
+
+
+def stepping_foot(rise_mps2: float, landing_mps: float) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) stamps [s] and heights [m] of a foot standing, leaving the ground at
+    :data:`LIFTOFF_S` from rest as ``rise_mps2 (t - LIFTOFF_S)^2`` and landing at
+    :data:`TOUCHDOWN_S` coming down at ``landing_mps``, then standing again."""
+    stamps = np.arange(0.0, 1.0, STEP_S)
+    swing = (stamps > LIFTOFF_S) & (stamps < TOUCHDOWN_S)
+    rise = rise_mps2 * (stamps - LIFTOFF_S) ** 2
+    fall = landing_mps * (TOUCHDOWN_S - stamps)
+    return stamps, np.where(swing, np.minimum(rise, fall), 0.0)
+
+
+def kinematic_rows(stamps: np.ndarray, heights: np.ndarray, forced: bool) -> EvidenceRows:
+    """Rows of the contact filter's kinematic evidence for ``heights`` [m] on every foot, as
+    its model defines it for a leg 0.4 m long (contact_filter.py: height at even odds 16 mm,
+    4 mm per unit of log-odds; speed at even odds 0.32 m/s, 0.08 m/s per unit; each within
+    +-4), the speed the heights' own rate; ``forced``: the feet's force was evidence too."""
+    speed = np.abs(np.gradient(heights, stamps))
+    evidence = np.clip((0.016 - heights) / 0.004, -4, 4) + np.clip((0.32 - speed) / 0.08, -4, 4)
+    count = len(stamps)
+    switch = np.r_[0.0, np.full(count - 1, 1.0 - np.exp(-STEP_S / 0.1))]
+    legs = np.repeat(evidence[:, None], LEGS, axis=1)
+    flags = np.full((count, LEGS), forced)
+    return EvidenceRows(
+        stamps, switch, legs, flags, legs.copy(), np.repeat(heights[:, None], LEGS, axis=1)
+    )
+
+
+def edges(stamps: np.ndarray, stance: np.ndarray) -> tuple[float, float]:
+    """[s] The first swing sample and the first stance sample after it."""
+    liftoff = int(np.argmin(stance))
+    return float(stamps[liftoff]), float(stamps[liftoff + int(np.argmax(stance[liftoff:]))])
+
+
+def test_heights_place_the_edges_of_a_foot_without_force_evidence() -> None:
+    """A foot that unloads 10 ms before it rises measurably (0.5 mm) and lands coming down at
+    0.3 m/s: the posterior alone lifts it off 36 ms late and lands it 56 ms early; with the
+    heights the first swing sample and the first stance sample are within a sample (2 ms) of
+    the first after the true liftoff and touchdown. With force evidence the edges stay the
+    posterior's (force_liftoffs)."""
+    stamps, heights = stepping_foot(5.0, 0.3)
+    expected = (stamps[stamps > LIFTOFF_S][0], stamps[stamps > TOUCHDOWN_S][0])
+    rows = kinematic_rows(stamps, heights, forced=False)
+    placed = probabilities(smoothed_stance(rows, np.zeros(LEGS))[0]) >= 0.5
+    assert edges(stamps, placed[:, 0]) == pytest.approx(expected, abs=STEP_S + 1e-9)
+    smoothed, filtered = smooth(rows, np.zeros(LEGS))
+    posterior = probabilities(force_liftoffs(smoothed, filtered, rows.forced)) >= 0.5
+    late, early = edges(stamps, posterior[:, 0])
+    assert late - expected[0] > 0.03 and expected[1] - early > 0.05  # what the heights fix
+    forced = kinematic_rows(stamps, heights, forced=True)
+    smoothed, filtered = smooth(forced, np.zeros(LEGS))
+    np.testing.assert_array_equal(
+        smoothed_stance(forced, np.zeros(LEGS))[0],
+        force_liftoffs(smoothed, filtered, forced.forced),
+    )
+
+
+def test_windows_with_heights_give_the_whole_pass() -> None:
+    """Five strides of a foot rising from rest and landing, with height noise, in blocks of
+    137 rows through the fixed-lag smoother against one pass over every row: the same stance
+    on every row."""
+    stamps, heights = stepping_foot(5.0, 0.3)
+    stamps = np.concatenate([stamps + k for k in range(5)])
+    heights = np.tile(heights, 5) + np.random.default_rng(5).normal(0.0, 1e-4, len(stamps))
+    rows = kinematic_rows(stamps, heights, forced=False)
+    whole = probabilities(smoothed_stance(rows, np.zeros(LEGS))[0]) >= 0.5
+    smoother, parts = FixedLagSmoother(), []
+    for start in range(0, len(rows), 137):
+        smoother.add(rows[start : start + 137])
+        parts.append(smoother.take(smoother.final_rows()))
+    parts.append(smoother.take(len(smoother.pending)))
+    np.testing.assert_array_equal(np.concatenate(parts) >= 0.5, whole)
+    assert np.count_nonzero(np.diff(whole[:, 0].astype(int)) == -1) == 5  # five liftoffs

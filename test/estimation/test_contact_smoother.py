@@ -32,6 +32,17 @@ def rows_of(evidence: np.ndarray, switch: np.ndarray, step_s: float = 0.002) -> 
     )
 
 
+def unforced(kinematic: np.ndarray) -> EvidenceRows:
+    """Rows 2 ms apart whose (N, 4) ``kinematic`` evidence is all there is: no force, heights
+    unknown; the filter's transitions (a mean time of 0.1 s between changes)."""
+    count = len(kinematic)
+    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
+    forced = np.zeros((count, LEGS), bool)
+    return EvidenceRows(
+        np.arange(count) * 0.002, switch, kinematic, forced, kinematic, unknown(count)
+    )
+
+
 def unknown(count: int) -> np.ndarray:
     """(count, 4) heights [m] not known: no edges placed by them."""
     return np.full((count, LEGS), np.nan)
@@ -91,15 +102,7 @@ def test_the_lead_moves_a_liftoff_and_not_a_touchdown() -> None:
     count = 300
     kinematic = np.full((count, LEGS), 2.0)
     kinematic[100:200] = -4.0
-    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
-    rows = EvidenceRows(
-        np.arange(count) * 0.002,
-        switch,
-        kinematic,
-        np.zeros((count, LEGS), bool),
-        kinematic,
-        unknown(count),
-    )
+    rows = unforced(kinematic)
     for lead_s, liftoff in ((0.0, 100), (0.014, 93)):
         stance = probabilities(smooth(rows, np.zeros(LEGS), lead_s)[0])[:, 0] >= 0.5
         assert np.flatnonzero(~stance)[0] == liftoff, lead_s
@@ -113,15 +116,7 @@ def test_windows_give_the_whole_pass() -> None:
     count = 5000
     states = np.repeat(rng.integers(0, 2, count // 50), 50)[:, None].repeat(LEGS, axis=1)
     kinematic = np.where(states, 1.0, -2.0) + rng.normal(0.0, 1.5, (count, LEGS))
-    switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
-    rows = EvidenceRows(
-        np.arange(count) * 0.002,
-        switch,
-        kinematic,
-        np.zeros((count, LEGS), bool),
-        kinematic,
-        unknown(count),
-    )
+    rows = unforced(kinematic)
     whole = probabilities(smooth(rows, np.zeros(LEGS))[0])
     smoother, parts = FixedLagSmoother(), []
     for start in range(0, count, 137):

@@ -121,8 +121,9 @@ def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], l
     """The last sample of the stance on samples ``stance`` (first, last) moved back, where it
     stands more than :data:`LIFT_M` above the stance's height (the median over
     :data:`STANCE_REFERENCE_S` before it), to the onset of the rise that leads up to it: the
-    samples before it (within :data:`RISE_SPAN_S`) above that height +
-    :data:`EDGE_NOISE_FLOOR_M`, fitted by :func:`rise_onset`; not past ``limit``.
+    samples before it (within :data:`RISE_SPAN_S`) more than half :data:`LIFT_M` above that
+    height (not a soft foot's unloading millimetre), fitted by :func:`rise_onset`; not past
+    ``limit``.
     """
     first, last = stance
     since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
@@ -131,7 +132,7 @@ def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], l
         return last
     begin = max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))
     start = last
-    while start > begin and heights[start - 1] > ground + EDGE_NOISE_FLOOR_M:
+    while start > begin and heights[start - 1] > ground + 0.5 * LIFT_M:
         start -= 1
     rising = slice(start, last + 1)
     if last - start < 2:

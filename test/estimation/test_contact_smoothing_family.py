@@ -31,10 +31,10 @@ suite."""
 MISSED = {
     ("a1_trot_turn", KINEMATIC): "98.29 %, swing as stance 1.31 %",
     ("a1_trot_turn+noise", KINEMATIC): "swing as stance 1.18 %",
-    ("a1_walk+noise", KINEMATIC): "liftoff 7 ms",
+    ("a1_walk+noise", KINEMATIC): "liftoff 8 ms",
     ("a1_pronk", KINEMATIC): "92.50 %, push-offs as swing 7.21 %, liftoff 26 ms, duty 0.082",
     ("a1_pronk+noise", KINEMATIC): "92.00 %, push-offs as swing 7.63 %, liftoff 32 ms, duty 0.080",
-    ("go2_walk+noise", KINEMATIC): "swing as stance 1.06 %, liftoff 20 ms",
+    ("go2_walk+noise", KINEMATIC): "liftoff 20 ms",
     ("a1_pronk+noise", FORCE): "98.83 % against the causal 98.58 %, below 99 %",
 }
 """Where a goal is not met: the measured numbers (docs/forces.md's table)."""

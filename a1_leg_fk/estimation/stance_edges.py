@@ -53,8 +53,9 @@ docs/forces.md)."""
 RISE_SPAN_S = 0.06
 """[s] A late rise is fitted over at most this long before the stance's last sample."""
 DESCENT_MPS = 0.075
-"""[m/s] A foot coming down faster than this towards a height ahead has not landed yet (chosen
-on the contact family's tuned runs among 0.05, 0.075 and 0.1 m/s, docs/forces.md)."""
+"""[m/s] A foot coming down faster than this towards a height ahead has not landed yet (0.05,
+0.075 and 0.1 m/s met the same goals on the contact family's tuned runs; the middle kept,
+docs/forces.md)."""
 DESCENT_LOOK_S = 0.004
 """[s] How far ahead a stance sample's descent is looked for (at least the next sample)."""
 LANDING_S = 0.1

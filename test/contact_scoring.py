@@ -102,9 +102,10 @@ def estimate(
         probabilities[n], normals[n] = step.probabilities, step.normals
         kept.append(estimator.filter.evidence)
     if smoothed:
-        switch, kinematic, forced, total = (np.array(c) for c in zip(*kept, strict=True))
+        switch, kinematic, forced, total, heights = (np.array(c) for c in zip(*kept, strict=True))
+        rows = EvidenceRows(run.stamps_s, switch, kinematic, forced, total, normals, heights)
         smoother = FixedLagSmoother(force_lag_s=estimator.force_lag_s)
-        smoother.add(EvidenceRows(run.stamps_s, switch, kinematic, forced, total, normals))
+        smoother.add(rows)
         probabilities = smoother.take(len(run.stamps_s))
     return probabilities, normals
 

@@ -41,6 +41,8 @@ FAST_SUBSET = (
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
     "test/estimation/test_load_edges.py",
+    "test/estimation/test_stance_edges.py",
+    "test/estimation/test_contact_smoother.py",
     "test/recording/test_lowstate.py::test_the_imu_quaternion_is_read_w_first",
 )
 """The tests every mutation must fail (about a minute on two idle cores): no simulated family,
@@ -161,6 +163,18 @@ MUTATIONS = (
         "a1_leg_fk/estimation/ground.py",
         "agrees = off * off <= self.step_gate**2 * (variance + noise * noise)",
         "agrees = False",
+    ),
+    Mutation(
+        "a touchdown never waits for the foot to stop coming down",
+        "a1_leg_fk/estimation/stance_edges.py",
+        "if not (rates > DESCENT_MPS).any():",
+        "if True:",
+    ),
+    Mutation(
+        "a late rise fitted from its first 0.1 mm (a soft foot's unloading taken for it)",
+        "a1_leg_fk/estimation/stance_edges.py",
+        "heights[start - 1] > ground + 0.5 * LIFT_M",
+        "heights[start - 1] > ground + EDGE_NOISE_FLOOR_M",
     ),
     Mutation(
         "the gait's edge tolerance x 10",

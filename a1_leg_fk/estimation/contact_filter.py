@@ -104,14 +104,17 @@ SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
 class SampleEvidence(NamedTuple):
     """One sample's transition and evidence per foot, as the filter used them: the probability
     ``switch`` of a change of state since the previous sample, the kinematic (height and speed)
-    log-likelihood ratios, whether the foot's force was evidence, and the ``total``
-    log-likelihood ratio (kinematic, force or free fall, phase prior).
+    log-likelihood ratios, whether the foot's force was evidence, the ``total``
+    log-likelihood ratio (kinematic, force or free fall, phase prior) and the feet's
+    ``heights`` [m] the kinematic evidence took (above the lowest foot along gravity, or above
+    the local ground's slope where lower; NaN: unknown).
     """
 
     switch: float
     kinematic: list[float]
     forced: list[bool]
     total: list[float]
+    heights: list[float]
 
 
 class ContactFilter:
@@ -123,7 +126,9 @@ class ContactFilter:
         self.model = model
         self.probabilities = [0.5] * LEGS
         """Each foot's probability of stance after the latest sample."""
-        self.evidence = SampleEvidence(0.0, [0.0] * LEGS, [False] * LEGS, [0.0] * LEGS)
+        self.evidence = SampleEvidence(
+            0.0, [0.0] * LEGS, [False] * LEGS, [0.0] * LEGS, [math.nan] * LEGS
+        )
         """The latest sample's transition and evidence, for a smoother (kept by reference)."""
         self.ground = FootGround()
         """The feet's heights above the local ground (given gravity's direction)."""
@@ -163,7 +168,7 @@ class ContactFilter:
         if down is not None:
             standing = [p >= 0.5 for p in self.probabilities]
             heights = self.ground.heights(dt_s, feet, down, omega, standing)
-        kinematic = _kinematic(model, feet, omega, forced, common < -1.0, heights)
+        kinematic, taken = _kinematic(model, feet, omega, forced, common < -1.0, heights)
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
@@ -178,7 +183,7 @@ class ContactFilter:
             posterior.append(1.0 / (1.0 + exp(-odds)))
             totals.append(odds - prior)
         self.probabilities = posterior
-        self.evidence = SampleEvidence(switch, kinematic, forced, totals)
+        self.evidence = SampleEvidence(switch, kinematic, forced, totals, taken)
         return posterior
 
 
@@ -208,11 +213,11 @@ def _kinematic(
     forced: Sequence[bool],
     falling: bool,
     ground: Sequence[float] | None,
-) -> list[float]:
+) -> tuple[list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too (``forced``), and for all while the base is
-    ``falling``. Heights [m] above the lowest foot, or from ``ground`` (the slope taken off)
-    where that is lower.
+    ``falling``; and the heights [m] it took (NaN: unknown): above the lowest foot, or from
+    ``ground`` (the slope taken off) where that is lower.
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -220,7 +225,7 @@ def _kinematic(
         if foot is not None and (not known or foot.depth > lowest):
             lowest, known = foot.depth, True
     if not isfinite(lowest):
-        return [0.0] * LEGS
+        return [0.0] * LEGS, [math.nan] * LEGS
     wx, wy, wz = omega
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
     stance_cap = model.max_kinematic_stance
@@ -262,7 +267,7 @@ def _kinematic(
                 if x == x:  # noqa: PLR0124 (NaN: no evidence)
                     evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         out.append(evidence)
-    return out
+    return out, heights
 
 
 def _clip(log_ratio: float, limit: float, cap: float) -> float:

@@ -17,6 +17,13 @@ evidence of swing (:data:`CLEAR_SWING`) ``lead_s`` later also counts as evidence
 (the smaller of the two kinematic log-ratios); a touchdown, where the foot stops as it lands,
 is left where the evidence puts it.
 
+Without force evidence, the posterior decides which stances and swings there are and the feet's
+heights place their edges (:func:`height_edges`, the rules of
+:mod:`a1_leg_fk.estimation.stance_edges` that ``gait``'s own kinematic contacts use for their
+liftoffs): a touchdown where the foot stops coming down (the evidence of a foot 1-4 mm up and
+still descending already says stance), a liftoff where its rise, fitted as ``c (t - t0)^p``,
+starts. A sample they move to swing takes the posterior's odds reversed.
+
 Where a foot's force is evidence, a liftoff is not placed before the filter's own
 (:func:`force_liftoffs`): the force's log-ratio is at even odds at 3 % of the weight
 (:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), and the forward-backward
@@ -39,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
+from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -60,7 +68,8 @@ class EvidenceRows:
     SampleEvidence` stacked): ``stamps_s`` (N,) [s], ``switch`` (N,) probabilities of a change of
     state since the previous row, ``kinematic`` (N, 4) and ``total`` (N, 4) log-likelihood
     ratios, ``forced`` (N, 4) bool (the foot's force was evidence), ``normals`` (N, 4) the normal
-    forces [N] the filter was given (NaN: none).
+    forces [N] the filter was given (NaN: none), ``heights`` (N, 4) [m] the feet's heights the
+    kinematic evidence took (NaN: unknown).
     """
 
     stamps_s: np.ndarray
@@ -69,13 +78,14 @@ class EvidenceRows:
     forced: np.ndarray
     total: np.ndarray
     normals: np.ndarray
+    heights: np.ndarray
 
     @classmethod
     def empty(cls) -> EvidenceRows:
         """No rows."""
         legs = np.empty((0, LEGS))
         forced = np.empty((0, LEGS), dtype=bool)
-        return cls(np.empty(0), np.empty(0), legs, forced, legs.copy(), legs.copy())
+        return cls(np.empty(0), np.empty(0), legs, forced, legs.copy(), legs.copy(), legs.copy())
 
     def __len__(self) -> int:
         return len(self.stamps_s)
@@ -91,7 +101,7 @@ class EvidenceRows:
         )
 
 
-FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total", "normals")
+FIELDS = ("stamps_s", "switch", "kinematic", "forced", "total", "normals", "heights")
 
 
 def led_evidence(rows: EvidenceRows, lead_s: float = LIFTOFF_LEAD_S) -> np.ndarray:
@@ -139,6 +149,59 @@ def smooth(
     return filtered + np.array(backward).reshape(count, LEGS), filtered
 
 
+def smoothed_stance(
+    rows: EvidenceRows,
+    start: np.ndarray,
+    lead_s: float = LIFTOFF_LEAD_S,
+    force_lag_s: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) log-odds of stance of a whole recording's ``rows`` as the smoother gives them
+    (:func:`posterior` from ``start``, :func:`placed_stance`) and the (N, 4) filtered (forward)
+    log-odds.
+    """
+    stance, filtered = posterior(rows, start, lead_s)
+    return placed_stance(rows, stance, force_lag_s), filtered
+
+
+def placed_stance(rows: EvidenceRows, log_odds: np.ndarray, force_lag_s: float) -> np.ndarray:
+    """(N, 4) log-odds of stance: the posterior ``log_odds`` with the stances' edges placed, by
+    the heights for feet without force evidence (:func:`height_edges`) and by the loads for
+    those with it (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the normal forces
+    with their lag ``force_lag_s`` [s] undone).
+    """
+    result = height_edges(rows, log_odds)
+    if rows.forced.any():
+        loads = unlagged(rows.normals, rows.stamps_s, force_lag_s)
+        result = loaded_stance(result, rows.stamps_s, loads, rows.forced)
+    return result
+
+
+def posterior(
+    rows: EvidenceRows, start: np.ndarray, lead_s: float = LIFTOFF_LEAD_S
+) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 4) log-odds of stance before the heights place any edge (:func:`smooth` from
+    ``start``, :func:`force_liftoffs`) and the (N, 4) filtered (forward) log-odds.
+    """
+    smoothed, filtered = smooth(rows, start, lead_s)
+    return force_liftoffs(smoothed, filtered, rows.forced), filtered
+
+
+def height_edges(rows: EvidenceRows, log_odds: np.ndarray) -> np.ndarray:
+    """(N, 4) log-odds of stance: ``log_odds``, with the edges of each stance (log-odds >= 0) of
+    a foot without force evidence placed by its heights
+    (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; a stance at the first row began
+    before it); a row they move to swing takes its log-odds reversed.
+    """
+    times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
+    stance = log_odds >= 0.0
+    result = log_odds.copy()
+    for leg in range(LEGS):
+        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg])
+        moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
+        result[moved, leg] = -log_odds[moved, leg]
+    return result
+
+
 def force_liftoffs(smoothed: np.ndarray, filtered: np.ndarray, forced: np.ndarray) -> np.ndarray:
     """(N, 4) log-odds of stance: ``smoothed``, but where the foot's force was evidence
     (``forced``) the larger of ``smoothed`` and the filter's ``filtered`` (the module text).
@@ -174,16 +237,21 @@ def smoothing_line(smoothed: bool) -> str:
     if smoothed:
         return (
             f"smoothing: contacts smoothed over the recording (forward-backward, {LAG_S:g} s lag, "
-            f"liftoff lead {1000 * LIFTOFF_LEAD_S:g} ms; --causal: the node's)"
+            f"liftoff lead {1000 * LIFTOFF_LEAD_S:g} ms, edges by the heights without efforts; "
+            "--causal: the node's)"
         )
     return "smoothing: none, the causal filter's contacts as the node has them (--causal)"
+
+
+KEPT_S = max(HISTORY_S, CONTEXT_S)
+"""[s] The rows already taken that the edges' rules may look back at."""
 
 
 class FixedLagSmoother:
     """Smoothed contacts over rows arriving in blocks: :meth:`add` a block's evidence, :meth:`take`
     the rows that are final (every row ``lag_s`` [s] before the latest, or all at the end).
-    Keeps only the rows not yet taken, and the last :data:`~a1_leg_fk.estimation.load_edges.
-    HISTORY_S` of those taken (with their log-odds before the loads' rules) for those rules.
+    Keeps only the rows not yet taken, and the last :data:`KEPT_S` of those taken with their
+    posterior (log-odds before the edges are placed), for the rules that place the edges.
     ``force_lag_s`` [s]: the time constant of the lag of the normal forces in the evidence (the
     momentum observer's, :attr:`~a1_leg_fk.estimation.contact_estimator.ContactEstimator.
     force_lag_s`; 0: none).
@@ -195,8 +263,8 @@ class FixedLagSmoother:
         self.lag_s, self.lead_s, self.force_lag_s = lag_s, lead_s, force_lag_s
         self.pending = EvidenceRows.empty()
         self.start = np.zeros(LEGS)  # the forward log-odds before the first pending row
-        self.history = EvidenceRows.empty()  # taken rows the loads' rules still look back at
-        self.history_odds = np.empty((0, LEGS))  # their log-odds before those rules
+        self.history = EvidenceRows.empty()  # the last rows taken, for the edges' rules
+        self.history_odds = np.empty((0, LEGS))  # their posterior (log-odds)
 
     def add(self, rows: EvidenceRows) -> None:
         """Rows after those added before."""
@@ -216,24 +284,21 @@ class FixedLagSmoother:
         """
         if count <= 0:
             return np.empty((0, LEGS))
-        smoothed, filtered = smooth(self.pending, self.start, self.lead_s)
-        odds = force_liftoffs(smoothed, filtered, self.pending.forced)
-        stance = odds[:count]
-        if self.pending.forced.any() or self.history.forced.any():
-            rows = self.history.then(self.pending)
-            before = len(self.history)
-            loads = unlagged(rows.normals, rows.stamps_s, self.force_lag_s)
-            every = np.vstack([self.history_odds, odds])
-            stance = loaded_stance(every, rows.stamps_s, loads, rows.forced)[before:][:count]
-            self._keep(rows[: before + count], every[: before + count])
+        odds, filtered = posterior(self.pending, self.start, self.lead_s)
+        rows = self.history.then(self.pending)
+        before = len(self.history)
+        every = np.vstack([self.history_odds, odds])
+        done = before + count
+        stance = placed_stance(rows, every, self.force_lag_s)[before:done]
+        self._keep(rows[:done], every[:done])
         self.start = filtered[count - 1]
         self.pending = self.pending[count:]
         return probabilities(stance)
 
     def _keep(self, taken: EvidenceRows, odds: np.ndarray) -> None:
-        """The last :data:`HISTORY_S` of the ``taken`` rows and their ``odds`` become the
+        """The last :data:`KEPT_S` of the ``taken`` rows and their ``odds`` become the
         history.
         """
         reached = np.maximum.accumulate(taken.stamps_s)
-        first = int(np.searchsorted(reached, reached[-1] - HISTORY_S, side="left"))
+        first = int(np.searchsorted(reached, reached[-1] - KEPT_S, side="left"))
         self.history, self.history_odds = taken[first:], odds[first:]

@@ -19,11 +19,9 @@ edges late or early; the heights place them (:func:`fit_edges`):
   the noise, standing above its median there (a soft foot unloading), is allowed its whole
   drift; one that bobs up and comes down to its edge (the demo's) nothing, so its first
   millimetres of swing are swing.
-* **Rise** (:func:`rise_start`). A liftoff is moved back to where the foot's rise starts: the
-  heights within :data:`RISE_S` after the stance, fitted as ``c (t - t0)^p`` (a foot that
-  leaves fast, ``p = 1``, or from rest, ``p = 2``), give ``t0``; at most :data:`BACK_S` back
-  (noise makes a foot rise three deviations before it is up; a walk's foot rises 0.1 mm only
-  some 6 ms after it left).
+* **Rise** (:func:`~a1_leg_fk.estimation.stance_edges.rise_start`, the rule the contact
+  smoother shares). A liftoff is moved back to where the foot's rise starts, fitted as
+  ``c (t - t0)^p`` over the heights just after the stance.
 """
 
 from __future__ import annotations
@@ -32,22 +30,17 @@ import math
 
 import numpy as np
 
-from a1_leg_fk.gait.phases import runs
+from a1_leg_fk.estimation.stance_edges import (
+    EDGE_NOISE_FLOOR_M,
+    EDGE_REFERENCE_S,
+    MIN_WINDOW,
+    inwards,
+    level,
+    rise_start,
+    runs,
+)
 
 EDGE_NOISE_DEVIATIONS = 3.0
-EDGE_NOISE_FLOOR_M = 0.0001
-"""[m] A stance's edge tolerance is at least this (noise-free heights; chosen on the contact
-family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
-EDGE_REFERENCE_S = 0.02
-"""[s] A stance's level next to an edge is the median of its heights this close to it."""
-RISE_S = 0.01
-"""[s] A liftoff's rise is fitted over the heights this long after the stance's last sample."""
-BACK_S = 0.01
-"""[s] A liftoff is moved back by its rise's fit at most this far (a soft foot's slow rise)."""
-RISE_POWERS = (1.0, 1.5, 2.0, 3.0)
-"""The shapes a liftoff's rise is fitted with, ``(t - t0)^p``."""
-MIN_WINDOW = 4
-"""A level or a trend is taken over at least this many samples."""
 MAD_SIGMA = 1.4826
 """A normal distribution's standard deviation per median absolute deviation."""
 
@@ -100,43 +93,6 @@ def drift(levels: np.ndarray, noise_m: float) -> float:
         return 0.0
     spread = MAD_SIGMA * float(np.median(np.abs(levels - np.median(levels))))
     return math.sqrt(max(spread**2 - noise_m**2, 0.0))
-
-
-def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:
-    """A liftoff's last stance sample ``end`` moved back to where the foot's rise starts: a
-    parabola fitted to the heights above the level next to the edge within :data:`RISE_S`
-    after it (a foot that leaves fast or rises from rest) is extrapolated back to where it
-    last reaches the level, or comes closest to it; not more than :data:`BACK_S` back, nor
-    past ``limit``. Kept where the last sample already stands above the level + ``base_m``
-    [m] (a soft foot rising as it unloads: the level lags) and where fewer than three samples
-    follow within :data:`RISE_S` (a low rate).
-    """
-    stop = int(np.searchsorted(times, times[end] + RISE_S, side="right"))
-    after = np.arange(end + 1, stop)
-    ground = level(times, heights, end, -1)
-    if after.size < 3 or heights[end] > ground + base_m:
-        return end
-    lift = heights[after] - ground
-    if (lift <= 0.0).any():
-        return end
-    start = times[end] + max(rise_onset(times[after] - times[end], lift), -BACK_S)
-    return int(min(max(np.searchsorted(times, start, side="right") - 1, limit), end))
-
-
-def rise_onset(dt: np.ndarray, lift: np.ndarray) -> float:
-    """[s] When a rise ``lift`` [m] > 0 at times ``dt`` [s] started: the onset of the power law
-    ``c (t - t0)^p`` (``p`` among :data:`RISE_POWERS`) that fits it best (least squares in
-    height; ``p = 1``: a foot that leaves fast, ``p = 2``: from rest).
-    """
-    best = (math.inf, float(dt[0]))
-    for power in RISE_POWERS:
-        slope, intercept = np.polyfit(dt, lift ** (1.0 / power), 1)
-        if slope <= 0.0:
-            continue
-        onset = -intercept / slope
-        error = float(np.sum(((slope * np.clip(dt - onset, 0.0, None)) ** power - lift) ** 2))
-        best = min(best, (error, float(onset)))
-    return best[1]
 
 
 def settle(
@@ -195,27 +151,9 @@ def lag(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float
     :data:`EDGE_REFERENCE_S` farther inwards; None where the stance is too short or the rate
     too low for more than :data:`MIN_WINDOW` samples in that span.
     """
-    here = _inwards(times, edge, inward, EDGE_REFERENCE_S)
+    here = inwards(times, edge, inward, EDGE_REFERENCE_S)
     width = here.stop - here.start
     before = edge + inward * width
     if width <= MIN_WINDOW or not 0 <= before < heights.size:
         return None
     return level(times, heights, edge, inward) - level(times, heights, before, inward)
-
-
-def level(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float:
-    """[m] The median height of the samples within :data:`EDGE_REFERENCE_S` of sample ``edge``
-    towards ``inward`` (1: later samples, -1: earlier), ``edge`` included.
-    """
-    return float(np.median(heights[_inwards(times, edge, inward, EDGE_REFERENCE_S)]))
-
-
-def _inwards(times: np.ndarray, edge: int, inward: int, span_s: float) -> slice:
-    """The samples within ``span_s`` [s] of sample ``edge`` towards ``inward``, ``edge``
-    included; at least :data:`MIN_WINDOW` where there are (a low rate).
-    """
-    if inward > 0:
-        stop = int(np.searchsorted(times, times[edge] + span_s, side="right"))
-        return slice(edge, max(stop, edge + MIN_WINDOW))
-    begin = int(np.searchsorted(times, times[edge] - span_s, side="left"))
-    return slice(max(min(begin, edge + 1 - MIN_WINDOW), 0), edge + 1)

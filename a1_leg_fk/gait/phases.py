@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.estimation.stance_edges import runs
+
 
 @dataclass(frozen=True)
 class Stance:
@@ -53,14 +55,6 @@ class Blips:
 
     def __add__(self, other: Blips) -> Blips:
         return Blips(self.dropped + other.dropped, self.bridged + other.bridged)
-
-
-def runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
-    """``(first, last, value)`` of each run of equal values in ``mask`` (indices inclusive)."""
-    cuts = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
-    firsts = np.concatenate(([0], cuts))
-    lasts = np.concatenate((cuts - 1, [mask.size - 1]))
-    return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
 def segment_slices(valid: np.ndarray) -> list[slice]:

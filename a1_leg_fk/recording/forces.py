@@ -239,7 +239,7 @@ class RecordingForces(ForcePass):
         """The evidence of rows stamped ``stamps_ns`` as arrays, their stamps [s] since the
         first of the pass, with the (N, 4) ``normals`` [N] the filter was given.
         """
-        switch, kinematic, forced, total = zip(*kept, strict=True) if kept else ((),) * 4
+        switch, kinematic, forced, total, heights = zip(*kept, strict=True) if kept else ((),) * 5
         return EvidenceRows(
             (stamps_ns - (self._origin_ns or 0)) * 1e-9,
             np.array(switch, dtype=float),
@@ -247,6 +247,7 @@ class RecordingForces(ForcePass):
             np.array(forced, dtype=bool).reshape(-1, 4),
             np.array(total, dtype=float).reshape(-1, 4),
             normals,
+            np.array(heights, dtype=float).reshape(-1, 4),
         )
 
 

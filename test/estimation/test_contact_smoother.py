@@ -8,13 +8,16 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contact_smoother import (
     EvidenceRows,
     FixedLagSmoother,
+    force_liftoffs,
     probabilities,
     smooth,
+    smoothed_stance,
 )
 
 LEGS = 4
@@ -24,25 +27,24 @@ def rows_of(evidence: np.ndarray, switch: np.ndarray, step_s: float = 0.002) -> 
     """Rows whose every foot has force evidence (no lead) and ``evidence`` as its kinematics."""
     count = len(switch)
     forced = np.ones((count, LEGS), dtype=bool)
-    return EvidenceRows(
-        np.arange(count) * step_s, switch, evidence, forced, evidence, unknown(count)
-    )
+    stamps = np.arange(count) * step_s
+    return EvidenceRows(stamps, switch, evidence, forced, evidence, unknown(count), unknown(count))
 
 
 def unknown(count: int) -> np.ndarray:
-    """(count, 4) normal forces none of which is known (NaN)."""
+    """(count, 4) values none of which is known (NaN): normal forces, or heights (no edges
+    placed by them)."""
     return np.full((count, LEGS), np.nan)
 
 
-def kinematic_rows(kinematic: np.ndarray) -> EvidenceRows:
-    """Rows 2 ms apart without force evidence, ``kinematic`` their only evidence, the filter's
-    transition (0.1 s between changes)."""
+def unforced(kinematic: np.ndarray) -> EvidenceRows:
+    """Rows 2 ms apart whose (N, 4) ``kinematic`` evidence is all there is: no force, heights
+    unknown; the filter's transitions (a mean time of 0.1 s between changes)."""
     count = len(kinematic)
     switch = np.full(count, 1.0 - np.exp(-0.002 / 0.1))
     forced = np.zeros((count, LEGS), bool)
-    return EvidenceRows(
-        np.arange(count) * 0.002, switch, kinematic, forced, kinematic, unknown(count)
-    )
+    stamps, nan = np.arange(count) * 0.002, unknown(count)
+    return EvidenceRows(stamps, switch, kinematic, forced, kinematic, nan, nan.copy())
 
 
 def enumerated_posterior(evidence: np.ndarray, switch: np.ndarray) -> np.ndarray:
@@ -87,8 +89,8 @@ def test_the_forward_pass_is_the_live_filters() -> None:
     for row in forces.tolist():
         expected.append(live.update(0.002, [None] * LEGS, ((0.0, 0.0, 0.0), None), row))
         kept.append(live.evidence)
-    switch, kinematic, forced, total = (np.array(column) for column in zip(*kept, strict=True))
-    rows = EvidenceRows(np.arange(300) * 0.002, switch, kinematic, forced, total, forces)
+    switch, kinematic, forced, total, heights = (np.array(c) for c in zip(*kept, strict=True))
+    rows = EvidenceRows(np.arange(300) * 0.002, switch, kinematic, forced, total, forces, heights)
     _, filtered = smooth(rows, np.zeros(LEGS))
     np.testing.assert_allclose(probabilities(filtered), np.array(expected), rtol=0, atol=1e-8)
 
@@ -100,7 +102,7 @@ def test_the_lead_moves_a_liftoff_and_not_a_touchdown() -> None:
     count = 300
     kinematic = np.full((count, LEGS), 2.0)
     kinematic[100:200] = -4.0
-    rows = kinematic_rows(kinematic)
+    rows = unforced(kinematic)
     for lead_s, liftoff in ((0.0, 100), (0.014, 93)):
         stance = probabilities(smooth(rows, np.zeros(LEGS), lead_s)[0])[:, 0] >= 0.5
         assert np.flatnonzero(~stance)[0] == liftoff, lead_s
@@ -114,7 +116,7 @@ def test_windows_give_the_whole_pass() -> None:
     count = 5000
     states = np.repeat(rng.integers(0, 2, count // 50), 50)[:, None].repeat(LEGS, axis=1)
     kinematic = np.where(states, 1.0, -2.0) + rng.normal(0.0, 1.5, (count, LEGS))
-    rows = kinematic_rows(kinematic)
+    rows = unforced(kinematic)
     whole = probabilities(smooth(rows, np.zeros(LEGS))[0])
     smoother, parts = FixedLagSmoother(), []
     for start in range(0, count, 137):
@@ -143,8 +145,87 @@ def test_a_foot_with_force_evidence_lifts_off_where_the_filter_does() -> None:
     with_force = smoother.take(200)[:, 0] >= 0.5
     assert int(np.argmin(with_force)) == liftoff["filtered"]
     unforced = EvidenceRows(
-        forced.stamps_s, switch, evidence, ~forced.forced, evidence, forced.normals
+        forced.stamps_s, switch, evidence, ~forced.forced, evidence, forced.normals, unknown(200)
     )
     smoother = FixedLagSmoother(lead_s=0.0)
     smoother.add(unforced)
     assert int(np.argmin(smoother.take(200)[:, 0] >= 0.5)) == liftoff["smoothed"]
+
+
+STEP_S = 0.002
+LIFTOFF_S, TOUCHDOWN_S = 0.3001, 0.5001
+"""A stepping foot's true liftoff and touchdown [s], off the 500 Hz grid."""
+
+
+def stepping_foot(rise_mps2: float, landing_mps: float) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) stamps [s] and heights [m] of a foot standing, leaving the ground at
+    :data:`LIFTOFF_S` from rest as ``rise_mps2 (t - LIFTOFF_S)^2`` and landing at
+    :data:`TOUCHDOWN_S` coming down at ``landing_mps``, then standing again."""
+    stamps = np.arange(0.0, 1.0, STEP_S)
+    swing = (stamps > LIFTOFF_S) & (stamps < TOUCHDOWN_S)
+    rise = rise_mps2 * (stamps - LIFTOFF_S) ** 2
+    fall = landing_mps * (TOUCHDOWN_S - stamps)
+    return stamps, np.where(swing, np.minimum(rise, fall), 0.0)
+
+
+def kinematic_rows(stamps: np.ndarray, heights: np.ndarray, forced: bool) -> EvidenceRows:
+    """Rows of the contact filter's kinematic evidence for ``heights`` [m] on every foot, as
+    its model defines it for a leg 0.4 m long (contact_filter.py: height at even odds 16 mm,
+    4 mm per unit of log-odds; speed at even odds 0.32 m/s, 0.08 m/s per unit; each within
+    +-4), the speed the heights' own rate; ``forced``: the feet's force was evidence too (its
+    values unknown)."""
+    speed = np.abs(np.gradient(heights, stamps))
+    evidence = np.clip((0.016 - heights) / 0.004, -4, 4) + np.clip((0.32 - speed) / 0.08, -4, 4)
+    count = len(stamps)
+    switch = np.r_[0.0, np.full(count - 1, 1.0 - np.exp(-STEP_S / 0.1))]
+    legs = np.repeat(evidence[:, None], LEGS, axis=1)
+    flags = np.full((count, LEGS), forced)
+    feet = np.repeat(heights[:, None], LEGS, axis=1)
+    return EvidenceRows(stamps, switch, legs, flags, legs.copy(), unknown(count), feet)
+
+
+def edges(stamps: np.ndarray, stance: np.ndarray) -> tuple[float, float]:
+    """[s] The first swing sample and the first stance sample after it."""
+    liftoff = int(np.argmin(stance))
+    return float(stamps[liftoff]), float(stamps[liftoff + int(np.argmax(stance[liftoff:]))])
+
+
+def test_heights_place_the_edges_of_a_foot_without_force_evidence() -> None:
+    """A foot that unloads 10 ms before it rises measurably (0.5 mm) and lands coming down at
+    0.3 m/s: the posterior alone lifts it off 36 ms late and lands it 56 ms early; with the
+    heights the first swing sample and the first stance sample are within a sample (2 ms) of
+    the first after the true liftoff and touchdown. With force evidence the edges stay the
+    posterior's (force_liftoffs)."""
+    stamps, heights = stepping_foot(5.0, 0.3)
+    expected = (stamps[stamps > LIFTOFF_S][0], stamps[stamps > TOUCHDOWN_S][0])
+    rows = kinematic_rows(stamps, heights, forced=False)
+    placed = probabilities(smoothed_stance(rows, np.zeros(LEGS))[0]) >= 0.5
+    assert edges(stamps, placed[:, 0]) == pytest.approx(expected, abs=STEP_S + 1e-9)
+    smoothed, filtered = smooth(rows, np.zeros(LEGS))
+    posterior = probabilities(force_liftoffs(smoothed, filtered, rows.forced)) >= 0.5
+    late, early = edges(stamps, posterior[:, 0])
+    assert late - expected[0] > 0.03 and expected[1] - early > 0.05  # what the heights fix
+    forced = kinematic_rows(stamps, heights, forced=True)
+    smoothed, filtered = smooth(forced, np.zeros(LEGS))
+    np.testing.assert_array_equal(
+        smoothed_stance(forced, np.zeros(LEGS))[0],
+        force_liftoffs(smoothed, filtered, forced.forced),
+    )
+
+
+def test_windows_with_heights_give_the_whole_pass() -> None:
+    """Five strides of a foot rising from rest and landing, with height noise, in blocks of
+    137 rows through the fixed-lag smoother against one pass over every row: the same stance
+    on every row."""
+    stamps, heights = stepping_foot(5.0, 0.3)
+    stamps = np.concatenate([stamps + k for k in range(5)])
+    heights = np.tile(heights, 5) + np.random.default_rng(5).normal(0.0, 1e-4, len(stamps))
+    rows = kinematic_rows(stamps, heights, forced=False)
+    whole = probabilities(smoothed_stance(rows, np.zeros(LEGS))[0]) >= 0.5
+    smoother, parts = FixedLagSmoother(), []
+    for start in range(0, len(rows), 137):
+        smoother.add(rows[start : start + 137])
+        parts.append(smoother.take(smoother.final_rows()))
+    parts.append(smoother.take(len(smoother.pending)))
+    np.testing.assert_array_equal(np.concatenate(parts) >= 0.5, whole)
+    assert np.count_nonzero(np.diff(whole[:, 0].astype(int)) == -1) == 5  # five liftoffs

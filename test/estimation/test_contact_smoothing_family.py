@@ -6,8 +6,9 @@ on the PyBullet contact family, judged by PyBullet's contacts, against the issue
 - with efforts: agreement no worse than the causal filter's, >= 99 % where the causal filter is
   below it, duty factors within 0.02.
 
-The smoother's settings (its liftoff lead without efforts; with them, no liftoff before the
-filter's, then the load's edges: estimation/load_edges.py) were chosen on test_contact_family.py's
+The smoother's settings (without efforts its liftoff lead and the heights' edges of
+a1_leg_fk/estimation/stance_edges.py; with them, no liftoff before the filter's, then the load's
+edges of a1_leg_fk/estimation/load_edges.py) were chosen on test_contact_family.py's
 :data:`TUNED` runs only. A representative pair
 (one tuned run, one held out, both noisy) runs in the normal suite; the whole family under
 ``accept``, with every goal a run misses kept as a strict expected failure that names the
@@ -24,24 +25,17 @@ from contact_scoring import FORCE, HEADER, KINEMATIC, Score, estimate, robot_of,
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 
+EVENT_GOAL_MS = 4.0
 FAST = ("a1_trot_fast+noise", "go2_trot_fast+noise")
 """A tuned run and a held-out one (test_contact_family.py's TUNED and HELD_OUT), for the normal
 suite."""
 MISSED = {
-    ("a1_trot_slow", KINEMATIC): "swing as stance 1.34 %, duty error 0.025",
-    ("a1_trot_slow+noise", KINEMATIC): "swing as stance 1.34 %",
-    ("a1_trot_fast", KINEMATIC): "swing as stance 1.16 %",
-    ("a1_trot_turn", KINEMATIC): "97.72 %, swing as stance 1.89 %, duty error 0.041",
-    ("a1_trot_turn+noise", KINEMATIC): "97.63 %, swing as stance 1.96 %, duty error 0.040",
-    ("a1_walk", KINEMATIC): "97.83 %, swing as stance 2.15 %, liftoff 25 ms, duty error 0.042",
-    ("a1_walk+noise", KINEMATIC): "97.91 %, 2.07 % swing as stance, liftoff 24 ms, duty 0.041",
-    ("a1_pronk", KINEMATIC): "93.61 %, push-offs as swing 5.74 %, liftoff 20 ms, duty 0.065",
-    ("a1_pronk+noise", KINEMATIC): "91.79 %, push-offs as swing 7.60 %, liftoff 32 ms, duty 0.080",
-    ("a1_trot_soft", KINEMATIC): "swing as stance 1.005 %",
-    ("go2_trot", KINEMATIC): "swing as stance 1.40 %, duty error 0.025",
-    ("go2_trot+noise", KINEMATIC): "swing as stance 1.21 %",
-    ("go2_walk", KINEMATIC): "swing as stance 1.88 %, liftoff 24 ms, duty error 0.025",
-    ("go2_walk+noise", KINEMATIC): "swing as stance 1.85 %, liftoff 24 ms, duty error 0.025",
+    ("a1_trot_turn", KINEMATIC): "98.29 %, swing as stance 1.31 %",
+    ("a1_trot_turn+noise", KINEMATIC): "swing as stance 1.18 %",
+    ("a1_walk+noise", KINEMATIC): "liftoff 8 ms",
+    ("a1_pronk", KINEMATIC): "92.50 %, push-offs as swing 7.21 %, liftoff 26 ms, duty 0.082",
+    ("a1_pronk+noise", KINEMATIC): "92.00 %, push-offs as swing 7.63 %, liftoff 32 ms, duty 0.080",
+    ("go2_walk+noise", KINEMATIC): "liftoff 20 ms",
     ("a1_trot_soft+noise", FORCE): "99.357 % against the causal 99.362 % (one foot-sample)",
 }
 """Where a goal is not met: the measured numbers (docs/forces.md's table)."""
@@ -63,7 +57,8 @@ def assert_goals(causal: Score, smoothed: Score, evidence: str) -> None:
     if evidence == KINEMATIC:
         assert smoothed.agree_pct >= 98.0
         assert smoothed.swing_as_stance_pct <= 1.0
-        assert smoothed.touchdown_ms <= 4.0 and smoothed.liftoff_ms <= 4.0
+        # events on a 2 ms grid: 4 ms is the goal however the median's float rounds
+        assert max(smoothed.touchdown_ms, smoothed.liftoff_ms) <= EVENT_GOAL_MS + 1e-6
     else:
         assert smoothed.agree_pct >= causal.agree_pct
         assert causal.agree_pct >= 99.0 or smoothed.agree_pct >= 99.0

@@ -18,14 +18,15 @@ OBSERVER_LAG_S = 0.001
 
 
 def rows_of(loads: np.ndarray, kinematic: np.ndarray) -> EvidenceRows:
-    """The filter's evidence of (N, 4) normal forces [N] and kinematic log-ratios, 500 Hz."""
+    """The filter's evidence of (N, 4) normal forces [N] and kinematic log-ratios, 500 Hz (the
+    feet's heights unknown)."""
     count = len(loads)
     force = np.clip((loads - HALF_N) / SCALE_N, -4.0, 4.0)
     switch = np.full(count, 1.0 - np.exp(-STEP_S / 0.1))
     forced = np.ones((count, LEGS), dtype=bool)
-    return EvidenceRows(
-        np.arange(count) * STEP_S, switch, kinematic, forced, kinematic + force, loads
-    )
+    heights = np.full((count, LEGS), np.nan)
+    stamps = np.arange(count) * STEP_S
+    return EvidenceRows(stamps, switch, kinematic, forced, kinematic + force, loads, heights)
 
 
 def stance_of(rows: EvidenceRows, force_lag_s: float = 0.0) -> np.ndarray:

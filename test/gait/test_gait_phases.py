@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from a1_leg_fk.estimation.stance_edges import runs
 from a1_leg_fk.gait.analysis import Blips, ContactThresholds
-from a1_leg_fk.gait.phases import drop_blips, runs
+from a1_leg_fk.gait.phases import drop_blips
 
 STEP_S = 0.002  # 500 Hz, as the runs
 MIN_PHASE_S = ContactThresholds().min_phase_s

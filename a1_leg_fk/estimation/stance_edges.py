@@ -1,0 +1,198 @@
+"""A foot's stance edges placed by its heights: where it stops coming down (a touchdown) and where
+its rise starts (a liftoff). The one place of these rules for ``gait``'s own kinematic contacts
+(:mod:`a1_leg_fk.gait.edges`, world heights above the ground plane) and the contact smoother
+(:mod:`a1_leg_fk.estimation.contact_smoother`, the contact filter's heights above the lowest
+foot along gravity).
+
+Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`` (n,) [s],
+``heights`` (n,) [m], ``stance`` (n,) bool.
+
+* **Rise** (:func:`rise_start`). A liftoff is moved back to where the foot's rise starts: the
+  heights within :data:`RISE_S` after the stance, fitted as ``c (t - t0)^p`` (a foot that leaves
+  fast, ``p = 1``, or from rest, ``p = 2``), give ``t0``; at most :data:`BACK_S` back (noise
+  makes a foot rise three deviations before it is up; a walk's foot rises 0.1 mm only some 6 ms
+  after it left).
+* **Late rise** (:func:`late_rise`). A stance whose last sample already stands more than
+  :data:`LIFT_M` above the stance's median height ended before it: the foot's rise leading up
+  to it is fitted the same way and the stance ends at its onset (a walk's foot rises from rest,
+  5 mm in 50 ms, before the contact filter's kinematic evidence turns to swing).
+* **Landing** (:func:`landing_start`). A touchdown is moved later while the foot is still coming
+  down: while some height within :data:`DESCENT_LOOK_S` after a stance sample lies lower than it
+  at more than :data:`DESCENT_MPS` on average. The contact filter's heights are taken against
+  the lowest foot, which steps and then settles by a millimetre as another foot lands (its
+  contact sinks in under the impact): a level, as ``gait``'s edges take it, would follow that
+  settling; the descent rate does not.
+
+:func:`placed_edges` applies both to every stance of a mask (the contact smoother's rule).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+EDGE_NOISE_FLOOR_M = 0.0001
+"""[m] A stance's edge tolerance is at least this (noise-free heights; chosen on the contact
+family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
+EDGE_REFERENCE_S = 0.02
+"""[s] A stance's level next to an edge is the median of its heights this close to it."""
+RISE_S = 0.01
+"""[s] A liftoff's rise is fitted over the heights this long after the stance's last sample."""
+BACK_S = 0.01
+"""[s] A liftoff is moved back by its rise's fit at most this far (a soft foot's slow rise)."""
+RISE_POWERS = (1.0, 1.5, 2.0, 3.0)
+"""The shapes a liftoff's rise is fitted with, ``(t - t0)^p``."""
+MIN_WINDOW = 4
+"""A level or a trend is taken over at least this many samples."""
+LIFT_M = 0.0025
+"""[m] A stance's last sample this far above the stance's median height is a foot already
+rising (a soft foot unloading comes up ~1 mm, another foot's landing moves the lowest foot by
+~1 mm; 2 and 3 mm met the same goals on the contact family's tuned runs, 1.5 mm did not:
+docs/forces.md)."""
+RISE_SPAN_S = 0.06
+"""[s] A late rise is fitted over at most this long before the stance's last sample."""
+DESCENT_MPS = 0.075
+"""[m/s] A foot coming down faster than this towards a height ahead has not landed yet (0.05,
+0.075 and 0.1 m/s met the same goals on the contact family's tuned runs; the middle kept,
+docs/forces.md)."""
+DESCENT_LOOK_S = 0.004
+"""[s] How far ahead a stance sample's descent is looked for (at least the next sample)."""
+LANDING_S = 0.1
+"""[s] A touchdown is moved later by its descent at most this far (less than
+:data:`CONTEXT_S`)."""
+STANCE_REFERENCE_S = 0.2
+"""[s] A stance's height, for a late rise, is the median of its heights this long before its
+last sample."""
+CONTEXT_S = STANCE_REFERENCE_S
+"""[s] How far back from a stance's last sample these rules look: with this much of the samples
+before a window, its edges are those of one pass over every sample."""
+
+
+def runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
+    """``(first, last, value)`` of each run of equal values in ``mask`` (indices inclusive)."""
+    cuts = np.flatnonzero(np.diff(mask.astype(np.int8))) + 1
+    firsts = np.concatenate(([0], cuts))
+    lasts = np.concatenate((cuts - 1, [mask.size - 1]))
+    return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
+
+
+def placed_edges(times: np.ndarray, heights: np.ndarray, stance: np.ndarray) -> np.ndarray:
+    """``stance`` (n,) with each stance's touchdown moved later by :func:`landing_start` and its
+    liftoff earlier by :func:`late_rise`, then :func:`rise_start` (with the tolerance
+    :data:`EDGE_NOISE_FLOOR_M`), never past the stance's middle sample; the edges at the run's
+    borders are not observed and stay. Heights [m] NaN near an edge leave it where it is.
+    """
+    placed = stance.copy()
+    for first, last, value in runs(stance):
+        if not value:
+            continue
+        middle = (first + last) // 2
+        start, end = first, last
+        if first > 0:
+            start = landing_start(times, heights, first, middle)
+        if last < stance.size - 1:
+            end = late_rise(times, heights, (first, last), middle)
+            end = rise_start(times, heights, end, middle, EDGE_NOISE_FLOOR_M)
+        placed[first:start] = False
+        placed[end + 1 : last + 1] = False
+    return placed
+
+
+def landing_start(times: np.ndarray, heights: np.ndarray, first: int, limit: int) -> int:
+    """A touchdown's first stance sample ``first`` moved later (not past ``limit``, nor more than
+    :data:`LANDING_S`) while some height within :data:`DESCENT_LOOK_S` after it (at least the
+    next) lies lower than it at more than :data:`DESCENT_MPS` on average: the foot has not
+    landed yet.
+    """
+    start = first
+    limit = min(limit, int(np.searchsorted(times, times[first] + LANDING_S, side="right")) - 1)
+    while start < limit:
+        stop = int(np.searchsorted(times, times[start] + DESCENT_LOOK_S, side="right"))
+        ahead = slice(start + 1, max(stop, start + 2))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rates = (heights[start] - heights[ahead]) / (times[ahead] - times[start])
+        if not (rates > DESCENT_MPS).any():  # NaN: no evidence of a descent
+            break
+        start += 1
+    return start
+
+
+def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], limit: int) -> int:
+    """The last sample of the stance on samples ``stance`` (first, last) moved back, where it
+    stands more than :data:`LIFT_M` above the stance's height (the median over
+    :data:`STANCE_REFERENCE_S` before it), to the onset of the rise that leads up to it: the
+    samples before it (within :data:`RISE_SPAN_S`) more than half :data:`LIFT_M` above that
+    height (not a soft foot's unloading millimetre), fitted by :func:`rise_onset`; not past
+    ``limit``.
+    """
+    first, last = stance
+    since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
+    ground = float(np.median(heights[since : last + 1]))
+    if not heights[last] > ground + LIFT_M:  # NaN: unknown, kept
+        return last
+    begin = max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))
+    start = last
+    while start > begin and heights[start - 1] > ground + 0.5 * LIFT_M:
+        start -= 1
+    rising = slice(start, last + 1)
+    if last - start < 2:
+        return last
+    onset = rise_onset(times[rising] - times[last], heights[rising] - ground)
+    end = int(np.searchsorted(times, times[last] + onset, side="right")) - 1
+    return min(max(end, limit), last)
+
+
+def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:
+    """A liftoff's last stance sample ``end`` moved back to where the foot's rise starts: a
+    parabola fitted to the heights above the level next to the edge within :data:`RISE_S`
+    after it (a foot that leaves fast or rises from rest) is extrapolated back to where it
+    last reaches the level, or comes closest to it; not more than :data:`BACK_S` back, nor
+    past ``limit``. Kept where the last sample already stands above the level + ``base_m``
+    [m] (a soft foot rising as it unloads: the level lags), where fewer than three samples
+    follow within :data:`RISE_S` (a low rate) and where a height there is not finite.
+    """
+    stop = int(np.searchsorted(times, times[end] + RISE_S, side="right"))
+    after = np.arange(end + 1, stop)
+    ground = level(times, heights, end, -1)
+    if after.size < 3 or not heights[end] <= ground + base_m:
+        return end
+    lift = heights[after] - ground
+    if not (lift > 0.0).all():
+        return end
+    start = times[end] + max(rise_onset(times[after] - times[end], lift), -BACK_S)
+    return int(min(max(np.searchsorted(times, start, side="right") - 1, limit), end))
+
+
+def rise_onset(dt: np.ndarray, lift: np.ndarray) -> float:
+    """[s] When a rise ``lift`` [m] > 0 at times ``dt`` [s] started: the onset of the power law
+    ``c (t - t0)^p`` (``p`` among :data:`RISE_POWERS`) that fits it best (least squares in
+    height; ``p = 1``: a foot that leaves fast, ``p = 2``: from rest).
+    """
+    best = (math.inf, float(dt[0]))
+    for power in RISE_POWERS:
+        slope, intercept = np.polyfit(dt, lift ** (1.0 / power), 1)
+        if slope <= 0.0:
+            continue
+        onset = -intercept / slope
+        error = float(np.sum(((slope * np.clip(dt - onset, 0.0, None)) ** power - lift) ** 2))
+        best = min(best, (error, float(onset)))
+    return best[1]
+
+
+def level(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float:
+    """[m] The median height of the samples within :data:`EDGE_REFERENCE_S` of sample ``edge``
+    towards ``inward`` (1: later samples, -1: earlier), ``edge`` included.
+    """
+    return float(np.median(heights[inwards(times, edge, inward, EDGE_REFERENCE_S)]))
+
+
+def inwards(times: np.ndarray, edge: int, inward: int, span_s: float) -> slice:
+    """The samples within ``span_s`` [s] of sample ``edge`` towards ``inward``, ``edge``
+    included; at least :data:`MIN_WINDOW` where there are (a low rate).
+    """
+    if inward > 0:
+        stop = int(np.searchsorted(times, times[edge] + span_s, side="right"))
+        return slice(edge, max(stop, edge + MIN_WINDOW))
+    begin = int(np.searchsorted(times, times[edge] - span_s, side="left"))
+    return slice(max(min(begin, edge + 1 - MIN_WINDOW), 0), edge + 1)

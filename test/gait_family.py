@@ -141,8 +141,11 @@ def score_gait(run: ContactRun, evidence: str, smoothed: bool = True) -> GaitSco
         for start, end in zip(downs[:-1][regular], downs[1:][regular]):
             span |= (times >= start) & (times < end)
         true_duty[leg] = run.contacts[span, leg].mean()
-        if probabilities is not None:
-            estimate_duty[leg] = (probabilities[span, leg] >= 0.5).mean()
+        if probabilities is not None:  # over the strides the report's duty is computed from
+            used = np.zeros(times.size, dtype=bool)
+            for start, end in metrics.strides_s:
+                used |= (times >= start) & (times < end)
+            estimate_duty[leg] = (probabilities[used, leg] >= 0.5).mean()
         ons = [a for a, _ in metrics.stance_s]
         offs = [b for _, b in metrics.stance_s]
         touchdown_errors.append(_median_error_ms(downs.tolist(), ons))

@@ -58,6 +58,8 @@ class LegMetrics:
     # runs shorter than min_phase_s the phase rule removed: stances dropped, swings bridged
     blips_dropped: int = 0
     blips_bridged: int = 0
+    # the regular strides the metrics are computed from: (touchdown, next touchdown) [s]
+    strides_s: tuple[tuple[float, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -87,7 +89,8 @@ class GaitReport:
         legs = {}
         for leg, metrics in self.legs.items():
             entry = {key: value for key, value in asdict(metrics).items() if key != "leg"}
-            entry["stance_s"] = [[round(a, 6), round(b, 6)] for a, b in metrics.stance_s]
+            for key in ("stance_s", "strides_s"):
+                entry[key] = [[round(a, 6), round(b, 6)] for a, b in getattr(metrics, key)]
             if entry["reason"] is None:
                 del entry["reason"]
             legs[leg] = entry
@@ -211,6 +214,7 @@ def _leg_metrics(contacts: Contacts, slot: int) -> tuple[LegMetrics, list[tuple[
         None,
         blips.dropped,
         blips.bridged,
+        tuple(kept),
     )
     return metrics, kept
 

@@ -27,7 +27,6 @@ subtracted from every residual, stance included (friction acts there too).
 from __future__ import annotations
 
 import math
-from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -133,10 +132,9 @@ class ModelCorrections:
         self._applied = [ZERO_TERMS] * JOINT_COUNT
         self._latest: list[tuple[float, float] | None] = [None] * JOINT_COUNT
         """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
-        self._kept = array("d")
+        self._kept: list[float] = []
         """The samples not yet taken in, five floats each: joint, residual [N m], rate [rad/s],
-        the joint's learning clock after it and the sample's step of it [s] (C doubles: numpy
-        reads them without a copy)."""
+        the joint's learning clock after it and the sample's step of it [s]."""
         self._clock = [0.0] * JOINT_COUNT
         """Per joint, its learning time [s]: the sum of its samples' steps (forgetting's time)."""
         self._taken = np.zeros(JOINT_COUNT)
@@ -202,8 +200,8 @@ class ModelCorrections:
         learnt solved.
         """
         forget_s = self.settings.forget_s
-        data = np.frombuffer(self._kept).reshape(-1, KEPT)
-        self._kept = array("d")  # the buffer stays with ``data``
+        data = np.fromiter(self._kept, float, len(self._kept)).reshape(-1, KEPT)
+        self._kept.clear()
         joint, residual, rate = data[:, 0].astype(np.intp), data[:, 1], data[:, 2]
         now = np.array(self._clock)
         weight = np.exp((data[:, 3] - now[joint]) / forget_s)

@@ -95,45 +95,54 @@ class FootGround:
         cos, sin = math.cos(self.psi), math.sin(self.psi)
         offsets: list[Vector | None] = []
         for foot in feet:
-            rx, ry, rz = foot.r if foot is not None else (math.nan,) * 3
+            if foot is None:
+                offsets.append(None)
+                continue
+            rx, ry, rz = foot.r
             if not (abs(rx) <= MAX_REACH_M and abs(ry) <= MAX_REACH_M and abs(rz) <= MAX_REACH_M):
                 offsets.append(None)  # NaN too
                 continue
             x, y = ax * rx + ay * ry + az * rz, bx * rx + by * ry + bz * rz
             offsets.append((cos * x - sin * y, sin * x + cos * y, ux * rx + uy * ry + uz * rz))
         dt_s = max(dt_s, 0.0)
-        self._carry(offsets, standing, dt_s)
-        base = self.base
-        if not (abs(base[0]) <= MAX_FRAME_M and abs(base[1]) <= MAX_FRAME_M
-                and abs(base[2]) <= MAX_FRAME_M):  # fmt: skip
+        base = self._carry(offsets, standing, dt_s)
+        px, py, pz = base
+        if not (abs(px) <= MAX_FRAME_M and abs(py) <= MAX_FRAME_M and abs(pz) <= MAX_FRAME_M):
             self.reset()
             return None
         self._stamp_s += dt_s
         self.ground.update(
             self._stamp_s,
             [
-                (leg, (base[0] + o[0], base[1] + o[1], base[2] + o[2]))
+                (leg, (px + o[0], py + o[1], pz + o[2]))
                 for leg, o in enumerate(offsets)
                 if o is not None and standing[leg]
             ],
         )
-        slope = self._fitted()
-        if slope is None:
-            return None
+        slope = self._slope
+        if slope is None or slope[0] != self.ground.revision:
+            slope = self._fitted()
+            if slope is None:
+                return None
         _, gx, gy = slope
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
-        known = [value for value in level if value == value]  # noqa: PLR0124 (NaN)
-        lowest = min(known) if known else math.nan
+        lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
         return [value - lowest for value in level]
 
-    def _carry(self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float) -> None:
-        """The base moved by the standing feet that move as it did (see the module text)."""
+    def _carry(
+        self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float
+    ) -> list[float]:
+        """The base moved by the standing feet that move as it did (see the module text);
+        :attr:`base`.
+        """
         previous, self._offsets = self._offsets, offsets
+        base = self.base
         if dt_s <= 0.0:
-            return
+            return base
         vx, vy, vz = self._velocity
         moves: list[tuple[float, Vector]] = []
-        for leg, (now, before) in enumerate(zip(offsets, previous, strict=True)):
+        for leg, now in enumerate(offsets):
+            before = previous[leg]
             if now is not None and before is not None and standing[leg]:
                 mx, my, mz = (
                     (before[0] - now[0]) / dt_s,
@@ -144,19 +153,18 @@ class FootGround:
                 moves.append((off, (mx, my, mz)))
         if moves:
             gate = CARRY_GATE_MPS * CARRY_GATE_MPS
-            kept = [move for off, move in moves if off <= gate]
-            if not kept:
-                kept = [min(moves)[1]]
+            kept = [move for off, move in moves if off <= gate] or [min(moves)[1]]
+            sx = sy = sz = 0.0  # summed in order, as sum() does
+            for mx, my, mz in kept:
+                sx += mx
+                sy += my
+                sz += mz
             count = len(kept)
-            self._velocity = (
-                sum(move[0] for move in kept) / count,
-                sum(move[1] for move in kept) / count,
-                sum(move[2] for move in kept) / count,
-            )
-        base, (vx, vy, vz) = self.base, self._velocity
+            vx, vy, vz = self._velocity = (sx / count, sy / count, sz / count)
         base[0] += vx * dt_s
         base[1] += vy * dt_s
         base[2] += vz * dt_s
+        return base
 
     def _fitted(self) -> tuple[int, float, float] | None:
         """The plane's slope, fitted again only when its footholds changed (None: none yet)."""

@@ -217,23 +217,40 @@ class LocalGround:
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
-        kept = {leg: (point[2], self._open[leg][0][2]) for leg, point in standing.items()
-                if leg in self._open}  # fmt: skip
-        for leg, point in standing.items():
-            opened = self._open.get(leg)
+        opened_now = self._open
+        landed = []
+        for leg, point in standing.items():  # the stances that go on: their sums
+            opened = opened_now.get(leg)
             if opened is None:
-                own = self._touchdown(point, kept or lifted) if self.anchored else point[2]
-                self._open[leg] = ((point[0], point[1], own), list(point), 1, point[2])
-                self._changed = True
-                self.revision += 1
-            else:
-                total = opened[1]
-                total[0] += point[0]
-                total[1] += point[1]
-                total[2] += point[2]
-                self._open[leg] = (opened[0], total, opened[2] + 1, point[2])
+                landed.append((leg, point))
+                continue
+            total = opened[1]
+            total[0] += point[0]
+            total[1] += point[1]
+            total[2] += point[2]
+            opened_now[leg] = (opened[0], total, opened[2] + 1, point[2])
+        if landed:
+            self._land(landed, standing, lifted)
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
+            self._changed = True
+            self.revision += 1
+
+    def _land(
+        self,
+        landed: list[tuple[int, Point]],
+        standing: dict[int, Point],
+        lifted: dict[int, tuple[float, float]],
+    ) -> None:
+        """Open the stances of the ``landed`` legs (slot, contact point [m, odom]), anchored
+        (:meth:`_touchdown`) against the feet that stood before this sample and stand on
+        (``standing``, not ``landed``), else the ``lifted`` ones; or kept at their own heights.
+        """
+        kept = {leg: (point[2], self._open[leg][0][2]) for leg, point in standing.items()
+                if leg in self._open}  # fmt: skip
+        for leg, point in landed:
+            own = self._touchdown(point, kept or lifted) if self.anchored else point[2]
+            self._open[leg] = ((point[0], point[1], own), list(point), 1, point[2])
             self._changed = True
             self.revision += 1
 

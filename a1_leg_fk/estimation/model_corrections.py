@@ -87,6 +87,7 @@ KEPT = 5
 INFO = [0, 1, 2, 1, 3, 4, 2, 4, 5]
 """The regressors' information (3x3) from a joint's sums (:class:`ModelCorrections`)."""
 ZERO_TERMS = (0.0, 0.0, 0.0)
+JOINT_SLOTS = np.arange(JOINT_COUNT)
 
 
 def _shrunk(value: np.ndarray, margin: np.ndarray) -> np.ndarray:
@@ -122,6 +123,8 @@ class ModelCorrections:
         noise = self.settings.noise_nm
         self._prior = np.array([(bound / noise) ** 2 for bound in self.settings.bounds])
         """The prior's variance per parameter, over the noise's."""
+        self._prior_information = np.diag(1.0 / self._prior)
+        """Its information (3x3, diagonal), added to each joint's."""
         self._sums = np.zeros((JOINT_COUNT, 10))
         self._theta = np.zeros((JOINT_COUNT, PARAMETERS))
         self._diagonal = np.tile(self._prior, (JOINT_COUNT, 1))
@@ -211,7 +214,7 @@ class ModelCorrections:
             [weight, wr, ws, wr * rate, wr * sign, ws * sign, wy, wy * rate, wy * sign,
              wy * residual, weight * keep * error * error],
         )  # fmt: skip
-        learnt = joint[:, None] == np.arange(JOINT_COUNT)
+        learnt = joint[:, None] == JOINT_SLOTS
         sums = columns @ learnt  # (11, 12): per joint
         decay = np.exp((self._taken - now) / forget_s)
         self._taken = now
@@ -227,7 +230,7 @@ class ModelCorrections:
         """
         sums = self._sums[joints]
         info = sums[:, INFO].reshape(-1, PARAMETERS, PARAMETERS)
-        covariance = np.linalg.inv(info + np.diag(1.0 / self._prior))
+        covariance = np.linalg.inv(info + self._prior_information)
         theta = np.einsum("jab,jb->ja", covariance, sums[:, 6:9])
         diagonal = np.diagonal(covariance, axis1=1, axis2=2)
         self._theta[joints], self._diagonal[joints] = theta, diagonal

@@ -220,23 +220,27 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
-        grounds = self._grounds(feet) if self.filter.ground == FOOTHOLDS else None
+        grounds = self._grounds(feet, legs) if self.filter.ground == FOOTHOLDS else None
         used = self.filter.update(
             stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
         )
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
         return self.filter.sample(stamp_ns, stance, used)
 
-    def _grounds(self, feet: Sequence[Foot | None]) -> list[tuple[float, float] | None] | None:
+    def _grounds(
+        self, feet: Sequence[Foot | None], measured: Sequence[LegMeasurement | None]
+    ) -> list[tuple[float, float] | None] | None:
         """Per leg, the ground's height [m, odom] under its foot and its variance [m²]
         (:meth:`~a1_leg_fk.estimation.ground.LocalGround.under`, the feet placed by the last
-        estimate's pose); None before the first estimate.
+        estimate's pose); None before the first estimate, and for the legs without a
+        measurement (``measured``: the filter reads the standing feet's alone, and a swinging
+        foot's plane costs a fit's move per sample).
         """
         last = self._last
         if last is None:
             return None
         centres = [None if foot is None else foot[0] for foot in feet]
-        legs = range(len(feet))
+        legs = [leg for leg, measurement in enumerate(measured) if measurement is not None]
         points = contact_points(last.position, last.orientation, centres, self.motion.radii, legs)
         return self.ground.under(points, len(feet))
 

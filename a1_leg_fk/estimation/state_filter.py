@@ -66,6 +66,7 @@ from a1_leg_fk.estimation.filter_model import (
 )
 from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.foot_gate import FootGate
+from a1_leg_fk.estimation.foot_give import FootGive
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of
 from a1_leg_fk.estimation.state_sample import floats_of, state_sample
@@ -107,6 +108,7 @@ class StateFilter:
         self._gyro: Vector = (0.0, 0.0, 0.0)
         self._touchdowns: list[int | None] = [None] * LEGS
         self.gate = FootGate(self.settings, self.counts)
+        self.give = FootGive(self.settings)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
@@ -240,6 +242,7 @@ class StateFilter:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
         positions = [candidates.index(leg) for leg in used]
+        self._observe_give(stamp_ns, stack, positions)
         spread = scattered(
             [stack.foot_residuals[k] for k in positions],
             [stack.foot_noises[k] for k in positions],
@@ -276,6 +279,9 @@ class StateFilter:
             feet.append(
                 (measurement, touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9))
             )
+        give = self.give.variance(len(feet))
+        if give:
+            feet = [(measurement, impact + give) for measurement, impact in feet]
         return candidates, feet
 
     def _gate_feet(
@@ -302,6 +308,17 @@ class StateFilter:
             self.ground_z = sum(heights) / len(heights)
         return used, reset
 
+    def _observe_give(self, stamp_ns: int, stack: Stack, positions: list[int]) -> None:
+        """The accepted feet's mean vertical residual to the give (:class:`FootGive`)."""
+        if not positions:
+            return
+        ux, uy, uz = stack.up
+        along = 0.0
+        for k in positions:
+            x, y, z = stack.foot_residuals[k]
+            along += ux * x + uy * y + uz * z
+        self.give.observe(stamp_ns, along / len(positions))
+
     def _correct(self, cross: np.ndarray, innovation: np.ndarray, residual: np.ndarray) -> None:
         """One Kalman update (``cross = P Hᵀ``, ``innovation = H P Hᵀ + N``), and the error's
         injection into the nominal state.
@@ -314,6 +331,7 @@ class StateFilter:
         self.covariance = covariance
         self.rotation = self.rotation.dot(exp_so3(error[0:3].tolist()))
         self._nominal += error[3:]
+        self.give.corrected(float(error[5]))
 
     def _floats(self) -> tuple[list[list[float]], Vector, list[float]]:
         """The rotation's rows, ``Rᵀ v`` and the nominal state's first 9 values

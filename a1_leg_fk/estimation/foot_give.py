@@ -1,0 +1,72 @@
+"""The standing feet's give (:mod:`a1_leg_fk.estimation.state_filter`): the part of their vertical
+velocity the IMU does not confirm, measured over the last strides, as the feet's vertical noise.
+
+A compliant foot (or ground) sinks as it loads and rises as it unloads, and rolls on a radius
+smaller than its URDF sphere: the legs see the base move vertically by that much, every standing
+foot alike (a trot's pair loads together), for tens of milliseconds at a time. No foot's
+innovation shows it while they agree, so no constant fitted to one contact model holds on
+another. The IMU does see it: over a fraction of a second its integrated vertical acceleration is
+exact to millimetres per second, and the feet's mean vertical velocity less it, high-passed over
+``give_window_s``, is the give (plus the IMU's own noise). Its mean square over
+``give_average_s``, ``σ²``, is a colored noise of correlation time ``give_s`` ``τ`` shared by the
+``n`` standing feet: each foot's sample ``dt`` apart is given the white noise of the same low
+frequency power, ``n σ² 2τ / dt`` (the feet's fused measurement keeps the give's ``σ²`` over
+``τ``, not ``σ²/n`` at every sample).
+"""
+
+from __future__ import annotations
+
+from a1_leg_fk.estimation.filter_model import FilterSettings
+
+
+class FootGive:
+    """The give's running estimate: :meth:`observe` at every update with standing feet,
+    :meth:`variance` for each standing foot's vertical noise.
+    """
+
+    def __init__(self, settings: FilterSettings) -> None:
+        self.settings = settings
+        self.square = 0.0
+        """The give's mean square [m²/s²] (``σ²``)."""
+        self._stamp_ns: int | None = None
+        self._corrections_ms = 0.0
+        """The sum of the updates' corrections to the filter's vertical velocity [m/s]: the
+        filter's velocity less it is the IMU's alone."""
+        self._slow: float | None = None
+        """The feet's vertical velocity less the IMU's, low-passed over ``give_window_s``."""
+        self.interval_s = 0.0
+        """The time between the last two updates with standing feet [s]."""
+
+    def corrected(self, correction_ms: float) -> None:
+        """One update's correction to the filter's vertical velocity [m/s, world up]."""
+        self._corrections_ms += correction_ms
+
+    def observe(self, stamp_ns: int, residual_ms: float) -> None:
+        """One update's standing feet: their mean vertical residual [m/s, world up] against the
+        filter's velocity before the update (the feet's velocity less the IMU's is it plus the
+        corrections so far).
+        """
+        s = self.settings
+        previous, self._stamp_ns = self._stamp_ns, stamp_ns
+        difference = residual_ms + self._corrections_ms
+        if previous is None or self._slow is None:
+            self._slow = difference
+            return
+        seconds = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s)
+        self.interval_s = seconds
+        self._slow += _share(seconds, s.give_window_s) * (difference - self._slow)
+        give = difference - self._slow
+        self.square += _share(seconds, s.give_average_s) * (give * give - self.square)
+
+    def variance(self, feet: int) -> float:
+        """Each of ``feet`` standing feet's vertical variance for the give [m²/s²], ``n σ² 2τ /
+        dt`` (0 before two updates).
+        """
+        if not self.interval_s > 0.0:
+            return 0.0
+        return feet * self.square * 2.0 * self.settings.give_s / self.interval_s
+
+
+def _share(seconds: float, time_constant: float) -> float:
+    """A running mean's step: ``seconds`` over its ``time_constant`` (0: the last value), <= 1."""
+    return min(seconds / time_constant, 1.0) if time_constant > 0.0 else 1.0

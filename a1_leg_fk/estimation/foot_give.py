@@ -3,15 +3,16 @@ velocity the IMU does not confirm, measured over the last strides, as the feet's
 
 A compliant foot (or ground) sinks as it loads and rises as it unloads, and rolls on a radius
 smaller than its URDF sphere: the legs see the base move vertically by that much, every standing
-foot alike (a trot's pair loads together), for tens of milliseconds at a time. No foot's
-innovation shows it while they agree, so no constant fitted to one contact model holds on
-another. The IMU does see it: over a fraction of a second its integrated vertical acceleration is
-exact to millimetres per second, and the feet's mean vertical velocity less it, high-passed over
-``give_window_s``, is the give (plus the IMU's own noise). Its mean square over
+foot alike (a trot's pair loads together), for tens of milliseconds at a time. No foot's innovation
+shows it while they agree, so no constant fitted to one contact model holds on another. The IMU
+does see it: over a fraction of a second its integrated vertical acceleration is exact to
+millimetres per second, and the accepted feet's mean vertical velocity (weighted by their vertical
+noises, as the filter weighs them: a landing foot's transient counts little) less it, high-passed
+over ``give_window_s``, is the give (plus the IMU's own noise). Its mean square over
 ``give_average_s``, ``σ²``, is a colored noise of correlation time ``give_s`` ``τ`` shared by the
 ``n`` standing feet: each foot's sample ``dt`` apart is given the white noise of the same low
-frequency power, ``n σ² 2τ / dt`` (the feet's fused measurement keeps the give's ``σ²`` over
-``τ``, not ``σ²/n`` at every sample).
+frequency power, ``n σ² 2τ / dt`` (the feet's fused measurement keeps the give's ``σ²`` over ``τ``,
+not ``σ²/n`` at every sample).
 """
 
 from __future__ import annotations
@@ -41,11 +42,33 @@ class FootGive:
         """One update's correction to the filter's vertical velocity [m/s, world up]."""
         self._corrections_ms += correction_ms
 
-    def observe(self, stamp_ns: int, residual_ms: float) -> None:
-        """One update's standing feet: their mean vertical residual [m/s, world up] against the
-        filter's velocity before the update (the feet's velocity less the IMU's is it plus the
-        corrections so far).
+    def observe(
+        self,
+        stamp_ns: int,
+        up: list[float],
+        residuals: list[tuple[float, float, float]],
+        noises: list[tuple[float, ...]],
+    ) -> None:
+        """One update's accepted feet (none: nothing): their residuals [m/s, base frame] against
+        the filter's velocity before the update and their noises (3 x 3 row-major [m²/s²]),
+        world ``up`` in the base frame. Their mean along ``up``, weighted by their noises along
+        it, plus the corrections so far is the feet's vertical velocity less the IMU's.
         """
+        if not residuals:
+            return
+        ux, uy, uz = up
+        along = total = 0.0
+        for (x, y, z), (a, b, c, _, d, e, _, _, f) in zip(residuals, noises):
+            weight = 1.0 / (
+                a * ux * ux + d * uy * uy + f * uz * uz
+                + 2.0 * (b * ux * uy + c * ux * uz + e * uy * uz)
+            )  # fmt: skip
+            along += weight * (ux * x + uy * y + uz * z)
+            total += weight
+        self._observe(stamp_ns, along / total)
+
+    def _observe(self, stamp_ns: int, residual_ms: float) -> None:
+        """The feet's weighted mean vertical residual [m/s] to the running means."""
         s = self.settings
         previous, self._stamp_ns = self._stamp_ns, stamp_ns
         difference = residual_ms + self._corrections_ms

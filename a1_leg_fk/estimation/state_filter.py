@@ -242,12 +242,10 @@ class StateFilter:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
         positions = [candidates.index(leg) for leg in used]
-        self._observe_give(stamp_ns, stack, positions)
-        spread = scattered(
-            [stack.foot_residuals[k] for k in positions],
-            [stack.foot_noises[k] for k in positions],
-            self.settings.gate_chi2,
-        )
+        residuals = [stack.foot_residuals[k] for k in positions]
+        noises = [stack.foot_noises[k] for k in positions]
+        self.give.observe(stamp_ns, stack.up, residuals, noises)
+        spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k
             innovation[first : first + 3, first : first + 3] += spread * np.eye(3)
@@ -307,17 +305,6 @@ class StateFilter:
             heights = [stack.foot_heights[candidates.index(leg)] for leg in used]
             self.ground_z = sum(heights) / len(heights)
         return used, reset
-
-    def _observe_give(self, stamp_ns: int, stack: Stack, positions: list[int]) -> None:
-        """The accepted feet's mean vertical residual to the give (:class:`FootGive`)."""
-        if not positions:
-            return
-        ux, uy, uz = stack.up
-        along = 0.0
-        for k in positions:
-            x, y, z = stack.foot_residuals[k]
-            along += ux * x + uy * y + uz * z
-        self.give.observe(stamp_ns, along / len(positions))
 
     def _correct(self, cross: np.ndarray, innovation: np.ndarray, residual: np.ndarray) -> None:
         """One Kalman update (``cross = P Hᵀ``, ``innovation = H P Hᵀ + N``), and the error's

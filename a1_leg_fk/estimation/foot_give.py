@@ -17,7 +17,16 @@ not ``σ²/n`` at every sample).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
+
 from a1_leg_fk.estimation.filter_model import FilterSettings
+
+CLIP = 9.0
+"""A sample's squared give counts up to this times the variance so far (the give's and the white
+noise's: 3 sigma), so one impact or a start in motion does not hold the feet loose for seconds;
+a softer ground is taken up over a fraction of a second (the mean may grow by that factor per
+``give_average_s``)."""
 
 
 class FootGive:
@@ -28,12 +37,15 @@ class FootGive:
     def __init__(self, settings: FilterSettings) -> None:
         self.settings = settings
         self.square = 0.0
-        """The give's mean square [m²/s²] (``σ²``)."""
+        """The give's mean square [m²/s²] (``σ²``), the feet's white noise taken off (below 0:
+        none)."""
         self._stamp_ns: int | None = None
         self._corrections_ms = 0.0
         """The sum of the updates' corrections to the filter's vertical velocity [m/s]: the
         filter's velocity less it is the IMU's alone."""
         self._slow: float | None = None
+        self._trend = 0.0
+        """Its rate [m/s²]: an IMU bias not yet learnt makes the difference a ramp."""
         """The feet's vertical velocity less the IMU's, low-passed over ``give_window_s``."""
         self.interval_s = 0.0
         """The time between the last two updates with standing feet [s]."""
@@ -47,47 +59,65 @@ class FootGive:
         stamp_ns: int,
         up: list[float],
         residuals: list[tuple[float, float, float]],
-        noises: list[tuple[float, ...]],
+        noises: list[tuple[list[float] | tuple[float, ...], float]],
     ) -> None:
-        """One update's accepted feet (none: nothing): their residuals [m/s, base frame] against
-        the filter's velocity before the update and their noises (3 x 3 row-major [m²/s²]),
-        world ``up`` in the base frame. Their mean along ``up``, weighted by their noises along
-        it, plus the corrections so far is the feet's vertical velocity less the IMU's.
+        """One update's accepted feet (none: nothing): their ``residuals`` [m/s, base frame]
+        against the filter's velocity before the update and their ``noises``, each its 3 x 3
+        row-major covariance [m²/s²] and the part of its variance along up that is no white
+        noise (the touchdown's and the give's); world ``up`` in the base frame. The residuals'
+        mean along ``up``, weighted as the filter weighs them (a landing foot little), plus the
+        corrections so far is the feet's vertical velocity less the IMU's; that mean's white
+        noise, ``Σ w² v / (Σ w)²``, is no give.
         """
         if not residuals:
             return
-        ux, uy, uz = up
-        along = total = 0.0
-        for (x, y, z), (a, b, c, _, d, e, _, _, f) in zip(residuals, noises):
-            weight = 1.0 / (
-                a * ux * ux + d * uy * uy + f * uz * uz
-                + 2.0 * (b * ux * uy + c * ux * uz + e * uy * uz)
-            )  # fmt: skip
-            along += weight * (ux * x + uy * y + uz * z)
+        along = total = white = 0.0
+        for (x, y, z), (noise, transient) in zip(residuals, noises):
+            variance = quadratic(up, noise)
+            if not variance > 0.0:
+                return
+            weight = 1.0 / variance
+            along += weight * (up[0] * x + up[1] * y + up[2] * z)
             total += weight
-        self._observe(stamp_ns, along / total)
+            white += weight * weight * max(variance - transient, 0.0)
+        self._observe(stamp_ns, along / total, white / (total * total))
 
-    def _observe(self, stamp_ns: int, residual_ms: float) -> None:
-        """The feet's weighted mean vertical residual [m/s] to the running means."""
+    def _observe(self, stamp_ns: int, residual_ms: float, white: float) -> None:
+        """The feet's weighted mean vertical residual [m/s] and its white noise's variance
+        [m²/s²] to the running means.
+        """
         s = self.settings
         previous, self._stamp_ns = self._stamp_ns, stamp_ns
         difference = residual_ms + self._corrections_ms
-        if previous is None or self._slow is None:
-            self._slow = difference
+        seconds = (stamp_ns - previous) / 1e9 if previous is not None else math.inf
+        if self._slow is None or not seconds <= s.give_window_s:  # the first, or after a gap
+            self._slow, self._trend = difference, 0.0
             return
-        seconds = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s)
+        seconds = min(max(seconds, 0.0), s.max_step_s)
         self.interval_s = seconds
-        self._slow += _share(seconds, s.give_window_s) * (difference - self._slow)
-        give = difference - self._slow
-        self.square += _share(seconds, s.give_average_s) * (give * give - self.square)
+        share = _share(seconds, s.give_window_s)
+        give = difference - self._slow - self._trend * seconds
+        self._slow += self._trend * seconds + 2.0 * share * give
+        self._trend += share * share / max(seconds, 1e-9) * give
+        square = min(give * give, CLIP * (max(self.square, 0.0) + white)) - white
+        self.square += _share(seconds, s.give_average_s) * (square - self.square)
 
     def variance(self, feet: int) -> float:
         """Each of ``feet`` standing feet's vertical variance for the give [m²/s²], ``n σ² 2τ /
-        dt`` (0 before two updates).
+        dt`` (0 before two updates, or while the feet's scatter is all their white noise).
         """
-        if not self.interval_s > 0.0:
+        if not (self.interval_s > 0.0 and self.square > 0.0):
             return 0.0
         return feet * self.square * 2.0 * self.settings.give_s / self.interval_s
+
+
+def quadratic(up: list[float], matrix: Sequence[float]) -> float:
+    """``uᵀ M u`` for a symmetric 3 x 3 ``matrix`` (row-major) and ``up`` ``u``."""
+    ux, uy, uz = up
+    a, b, c, _, d, e, _, _, f = matrix
+    return (
+        a * ux * ux + d * uy * uy + f * uz * uz + 2.0 * (b * ux * uy + c * ux * uz + e * uy * uz)
+    )
 
 
 def _share(seconds: float, time_constant: float) -> float:

@@ -244,7 +244,8 @@ class StateFilter:
         positions = [candidates.index(leg) for leg in used]
         residuals = [stack.foot_residuals[k] for k in positions]
         noises = [stack.foot_noises[k] for k in positions]
-        self.give.observe(stamp_ns, stack.up, residuals, noises)
+        transients = [feet[k][1] for k in positions]
+        self.give.observe(stamp_ns, stack.up, residuals, list(zip(noises, transients)))
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k

@@ -74,12 +74,13 @@ def test_a_foot_sinking_under_load_is_inside_the_reported_sigma() -> None:
 def test_the_give_is_measured_against_the_imu() -> None:
     """The give's mean square is the half-sines' variance about their mean, ``A² (1/2 - 4/π²)``
     (the stance feet's vertical velocity the IMU does not confirm, high-passed: their mean, a
-    steady sink, is left to the height rows), within 20 %; feet that agree with the IMU have
-    none, and the filter then gives what it gave without the term."""
+    steady sink, is left to the height rows), less what the feet's white vertical noise, matched
+    to their innovations, already holds: between half of it and all of it (+10 %). Feet that agree
+    with the IMU have none, and the filter then gives what it gave without the term."""
     _, _, state = trot(FilterSettings(), GIVE_MPS, seconds=4.0)
     expected = GIVE_MPS**2 * (0.5 - 4.0 / math.pi**2)
-    assert abs(state.give.square / expected - 1.0) < 0.2, (state.give.square, expected)
+    assert 0.5 * expected < state.give.square < 1.1 * expected, (state.give.square, expected)
     exact, exact_sigma, rigid = trot(FilterSettings(), 0.0, seconds=3.0)
-    assert rigid.give.square < 1e-12
+    assert rigid.give.square <= 0.0
     without, without_sigma, _ = trot(FilterSettings(give_s=0.0), 0.0, seconds=3.0)
     assert np.allclose(exact, without, atol=1e-9) and np.allclose(exact_sigma, without_sigma)

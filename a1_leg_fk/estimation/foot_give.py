@@ -60,6 +60,7 @@ class FootGive:
         up: list[float],
         residuals: list[tuple[float, float, float]],
         noises: list[tuple[list[float] | tuple[float, ...], float]],
+        accel_bias: list[float],
     ) -> None:
         """One update's accepted feet (none: nothing): their ``residuals`` [m/s, base frame]
         against the filter's velocity before the update and their ``noises``, each its 3 x 3
@@ -67,7 +68,10 @@ class FootGive:
         noise (the touchdown's and the give's); world ``up`` in the base frame. The residuals'
         mean along ``up``, weighted as the filter weighs them (a landing foot little), plus the
         corrections so far is the feet's vertical velocity less the IMU's; that mean's white
-        noise, ``Σ w² v / (Σ w)²``, is no give.
+        noise, ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its covariance
+        ``accel_bias``, 3 x 3 row-major [m²/s⁴], base frame) is not known to that noise over
+        ``give_window_s`` (the filter's first seconds), the IMU's velocity is not the reference
+        yet: nothing is measured.
         """
         if not residuals:
             return
@@ -80,7 +84,11 @@ class FootGive:
             along += weight * (up[0] * x + up[1] * y + up[2] * z)
             total += weight
             white += weight * weight * max(variance - transient, 0.0)
-        self._observe(stamp_ns, along / total, white / (total * total))
+        white /= total * total
+        if quadratic(up, accel_bias) * self.settings.give_window_s**2 > white:
+            self._slow = None
+            return
+        self._observe(stamp_ns, along / total, white)
 
     def _observe(self, stamp_ns: int, residual_ms: float, white: float) -> None:
         """The feet's weighted mean vertical residual [m/s] and its white noise's variance

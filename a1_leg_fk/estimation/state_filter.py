@@ -245,7 +245,8 @@ class StateFilter:
         residuals = [stack.foot_residuals[k] for k in positions]
         noises = [stack.foot_noises[k] for k in positions]
         transients = [feet[k][1] for k in positions]
-        self.give.observe(stamp_ns, stack.up, residuals, list(zip(noises, transients)))
+        bias = self.covariance[ACCEL_BIAS, ACCEL_BIAS].ravel().tolist()
+        self.give.observe(stamp_ns, stack.up, residuals, list(zip(noises, transients)), bias)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k

@@ -59,21 +59,21 @@ class FootGive:
         stamp_ns: int,
         up: list[float],
         residuals: list[tuple[float, float, float]],
-        noises: list[tuple[list[float] | tuple[float, ...], float]],
+        noises: list[tuple[tuple[float, ...], float]],
         accel_bias: list[float],
     ) -> None:
-        """One update's accepted feet (none: nothing): their ``residuals`` [m/s, base frame]
-        against the filter's velocity before the update and their ``noises``, each its 3 x 3
-        row-major covariance [m²/s²] and the part of its variance along up that is no white
-        noise (the touchdown's and the give's); world ``up`` in the base frame. The residuals'
-        mean along ``up``, weighted as the filter weighs them (a landing foot little), plus the
-        corrections so far is the feet's vertical velocity less the IMU's; that mean's white
-        noise, ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its covariance
+        """One update's accepted feet (none, or ``give_s`` 0: nothing): their ``residuals`` [m/s,
+        base frame] against the filter's velocity before the update and their ``noises``, each its
+        3 x 3 row-major covariance [m²/s²] and the part of its variance along up that is no white
+        noise (the touchdown's and the give's); world ``up`` in the base frame. The residuals' mean
+        along ``up``, weighted as the filter weighs them (a landing foot little), plus the
+        corrections so far is the feet's vertical velocity less the IMU's; that mean's white noise,
+        ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its covariance
         ``accel_bias``, 3 x 3 row-major [m²/s⁴], base frame) is not known to that noise over
         ``give_window_s`` (the filter's first seconds), the IMU's velocity is not the reference
         yet: nothing is measured.
         """
-        if not residuals:
+        if not (residuals and self.settings.give_s > 0.0):
             return
         along = total = white = 0.0
         for (x, y, z), (noise, transient) in zip(residuals, noises):

@@ -244,9 +244,10 @@ class StateFilter:
         positions = [candidates.index(leg) for leg in used]
         residuals = [stack.foot_residuals[k] for k in positions]
         noises = [stack.foot_noises[k] for k in positions]
-        transients = [feet[k][1] for k in positions]
-        bias = self.covariance[ACCEL_BIAS, ACCEL_BIAS].ravel().tolist()
-        self.give.observe(stamp_ns, stack.up, residuals, list(zip(noises, transients)), bias)
+        if self.settings.give_s > 0.0:  # the feet's give modelled
+            transients = [(noises[n], feet[k][1]) for n, k in enumerate(positions)]
+            bias = self.covariance[ACCEL_BIAS, ACCEL_BIAS].ravel().tolist()
+            self.give.observe(stamp_ns, stack.up, residuals, transients, bias)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k

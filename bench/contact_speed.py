@@ -8,7 +8,8 @@ its stamp advancing 2 ms each call, median of interleaved runs:
 - ``ContactEstimator.step``: the dynamic forces (momentum observer) and the contact filter for
   four legs, the whole per-input work (goal <= 40 us);
 - its parts: ``MomentumObserver.step_floats`` (the forces), ``ContactFilter.update`` with the
-  feet's motion (``LegMotion.foot`` x 4);
+  feet's motion (``LegMotion.foot`` x 4), and inside that update ``FootGround.heights`` (the
+  feet's heights against the local ground's slope; two feet standing);
 - the model corrections (:mod:`a1_leg_fk.estimation.model_corrections`, online by default):
   ``ContactEstimator.step`` with them off, and their own work in a trot's worst case, two legs
   surely in swing (12 residuals corrected, 6 joints learning);
@@ -21,6 +22,7 @@ from __future__ import annotations
 from common import machine, median_seconds_per_call
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
+from a1_leg_fk.estimation.foot_ground import FootGround
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.model_corrections import ModelCorrections
 from a1_leg_fk.estimation.momentum_observer import MomentumObserver
@@ -79,7 +81,16 @@ def main() -> None:
                         *legs[leg], down)
             for leg in range(4)
         ]  # fmt: skip
-        estimator.filter.update(STEP_S, motions, ([0.1, -0.2, 0.3], None), [20.0, 1.0, 2.0, 30.0])
+        estimator.filter.update(
+            STEP_S, motions, ([0.1, -0.2, 0.3], None), [20.0, 1.0, 2.0, 30.0], None, down
+        )
+
+    ground, standing = FootGround(), [True, False, False, True]
+    still = [motion.foot(leg, ANGLES[3 * leg : 3 * leg + 3], [0.0] * 3, legs[leg][0], [0.0] * 3,
+                         down) for leg in range(4)]  # fmt: skip
+
+    def heights() -> None:
+        ground.heights(STEP_S, still, down, (0.1, -0.2, 0.3), standing)
 
     gravity = list(IMU.gravity or ())
     runs = median_seconds_per_call(
@@ -89,6 +100,7 @@ def main() -> None:
             "ModelCorrections: 12 corrected, 6 learning": correct_and_learn,
             "MomentumObserver.step_floats": observe,
             "LegMotion.foot x4 + ContactFilter.update": fuse,
+            "FootGround.heights (in the filter's update)": heights,
             "FootForces.estimate_floats": lambda: statics.estimate_floats(
                 ANGLES, EFFORTS, gravity
             ),

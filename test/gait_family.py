@@ -81,13 +81,16 @@ def world_feet(run: ContactRun) -> np.ndarray:
     return run.base_positions[:, None, :] + np.einsum("nij,nlj->nli", rotations, base_feet)
 
 
-def gait_of(run: ContactRun, evidence: str) -> tuple[GaitReport, np.ndarray | None, tuple]:
+def gait_of(
+    run: ContactRun, evidence: str, smoothed: bool = True
+) -> tuple[GaitReport, np.ndarray | None, tuple]:
     """The gait report of the run under ``evidence``, the estimate's (N, 4) probabilities (None
-    for :data:`FEET`) and the per-leg blips."""
+    for :data:`FEET`) and the per-leg blips; the estimate ``smoothed`` over the run (``gait``'s
+    default on a recording) or the causal filter's (``gait --causal``)."""
     contacts = detect_contacts(run.stamps_s, world_feet(run))
     probabilities = None
     if evidence != FEET:
-        probabilities, _ = estimate(run, robot_of(run), evidence)
+        probabilities, _ = estimate(run, robot_of(run), evidence, smoothed=smoothed)
         contacts = with_force_stance(contacts, run.stamps_s, probabilities)
     return gait_metrics(contacts), probabilities, contacts.blips
 
@@ -117,10 +120,11 @@ def _median_error_ms(true: list[float], found: list[float]) -> float:
     return 1000.0 * float(np.median(nearest))
 
 
-def score_gait(run: ContactRun, evidence: str) -> GaitScore:
+def score_gait(run: ContactRun, evidence: str, smoothed: bool = True) -> GaitScore:
     """The run's :class:`GaitScore` under ``evidence``: ``force``, ``kinematic`` or
-    :data:`FEET`."""
-    report, probabilities, blips = gait_of(run, evidence)
+    :data:`FEET`; the estimate ``smoothed`` (the default, as ``gait`` runs on a recording) or
+    causal (``gait --causal``)."""
+    report, probabilities, blips = gait_of(run, evidence, smoothed)
     times = run.stamps_s - run.stamps_s[0]
     gait = run.gait
     duty, true_duty, estimate_duty = np.zeros(4), np.zeros(4), np.zeros(4)

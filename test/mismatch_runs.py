@@ -62,43 +62,17 @@ from contact_runs import (
     print_table,
     targets_and_rates,
 )
+from mismatch_specs import SPECS_MISMATCH, Mismatch, MismatchSpec
 from pybullet_sim import A1_FEET, A1_JOINTS, A1_URDF, GRAVITY, STEP_S, QuadrupedSim
 
 CACHE = Path("/tmp/a1_leg_fk-mismatch-runs")
 """Where the family is kept between sessions (its own: the contact family's cache is not
 touched)."""
 SOURCES = ("mismatch_runs.py", "contact_runs.py", "contact_gaits.py", "pybullet_sim.py")
-"""The files whose text names the cache."""
+"""The files whose text names the cache (with each run's own :class:`MismatchSpec`: the
+family's table, test/mismatch_specs.py, is not one of them)."""
 PAYLOAD_SIDE_M = 0.1
 """[m] The payload's inertia is a cube's of this side."""
-
-
-@dataclass(frozen=True)
-class Mismatch:
-    """How the simulated robot differs from its URDF (see the module text): joint friction
-    ``damping`` [N m s/rad] and ``coulomb`` [N m] on every joint, ``thigh_mass`` and
-    ``calf_mass`` fractions added, ``payload_kg`` at ``payload_at`` [m, root frame], the efforts
-    reported times ``torque_scale`` and ``latency_s`` [s] late.
-    """
-
-    damping: float = 0.0
-    coulomb: float = 0.0
-    thigh_mass: float = 0.0
-    calf_mass: float = 0.0
-    payload_kg: float = 0.0
-    payload_at: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    torque_scale: float = 1.0
-    latency_s: float = 0.0
-
-
-@dataclass(frozen=True)
-class MismatchSpec:
-    """One run: ``base`` names the contact family's run (robot, gait, motors), ``mismatch`` what
-    differs, ``gait_s`` [s] how long the gait lasts."""
-
-    base: str
-    mismatch: Mismatch
-    gait_s: float = 8.0
 
 
 @dataclass(frozen=True)
@@ -116,63 +90,6 @@ class MismatchRun:
     def true_weight_n(self) -> float:
         """The simulated robot's weight [N]."""
         return self.true_mass_kg * GRAVITY
-
-
-A1_FIGURES = Mismatch(damping=0.01, coulomb=0.2)
-"""unitree_ros' a1.urdf ``<dynamics>`` on every joint."""
-GO2_FIGURES = Mismatch(damping=0.1, coulomb=0.2)
-"""unitree_mujoco's go2.xml joint ``damping`` and ``frictionloss``."""
-EXACT = ("a1_trot_fast", "a1_trot_slow", "a1_trot_turn", "a1_walk", "go2_trot", "go2_walk")
-"""Gaits simulated also without a mismatch: the exact robot's figures on the same trot."""
-SPECS_MISMATCH = {
-    **{f"{name}=exact": MismatchSpec(name, Mismatch()) for name in EXACT},
-    "a1_trot_fast+friction": MismatchSpec("a1_trot_fast", Mismatch(damping=0.1, coulomb=0.4)),
-    "a1_walk+heavy_legs": MismatchSpec(
-        "a1_walk", Mismatch(damping=0.05, coulomb=0.2, thigh_mass=0.15, calf_mass=0.25)
-    ),
-    "go2_trot+friction_heavy": MismatchSpec(
-        "go2_trot", Mismatch(damping=0.2, coulomb=0.6, thigh_mass=0.1, calf_mass=0.25)
-    ),
-    "a1_trot_turn+light_legs": MismatchSpec(
-        "a1_trot_turn", Mismatch(damping=0.2, coulomb=0.6, thigh_mass=-0.1, calf_mass=-0.1)
-    ),
-    "a1_trot_fast+payload": MismatchSpec(
-        "a1_trot_fast", replace(A1_FIGURES, payload_kg=3.0, payload_at=(0.05, 0.03, 0.03))
-    ),
-    "a1_trot_slow+scale_latency": MismatchSpec(
-        "a1_trot_slow", Mismatch(damping=0.1, coulomb=0.3, torque_scale=0.9, latency_s=0.003)
-    ),
-    "go2_walk+payload_scale": MismatchSpec(
-        "go2_walk",
-        replace(
-            GO2_FIGURES,
-            payload_kg=2.0,
-            payload_at=(-0.04, -0.02, 0.03),
-            torque_scale=1.1,
-            latency_s=0.002,
-        ),
-    ),
-    "a1_trot_turn+everything": MismatchSpec(
-        "a1_trot_turn",
-        Mismatch(0.2, 0.6, 0.25, 0.25, 3.0, (0.04, -0.03, 0.02), 1.1, 0.003),
-    ),
-}
-"""The family, by name (``BASE=exact`` or ``BASE+WHAT``)."""
-TUNED = (
-    "a1_trot_fast+friction",
-    "a1_walk+heavy_legs",
-    "go2_trot+friction_heavy",
-    "a1_trot_turn+light_legs",
-)
-"""Friction and leg masses only: what the corrections were tuned on."""
-HELD_OUT = (
-    "a1_trot_fast+payload",
-    "a1_trot_slow+scale_latency",
-    "go2_walk+payload_scale",
-    "a1_trot_turn+everything",
-)
-"""Whole kinds never looked at while tuning: payloads, torque scales, latencies (and the slow
-trot, the Go2's walk)."""
 
 
 def mismatched_urdf(text: str, joints: tuple[str, ...], mismatch: Mismatch) -> str:
@@ -320,11 +237,14 @@ def simulate_mismatch(
     return MismatchRun(run, spec, mass, motor)
 
 
-def source_hash() -> str:
-    """16 hex digits of a hash of :data:`SOURCES` and PyBullet's API version."""
+def source_hash(spec: MismatchSpec | None = None) -> str:
+    """16 hex digits of a hash of :data:`SOURCES`, PyBullet's API version and ``spec`` (its
+    repr: None for what all runs share)."""
     digest = hashlib.sha256(str(pybullet.getAPIVersion()).encode())
     for name in SOURCES:
         digest.update((Path(__file__).parent / name).read_bytes())
+    if spec is not None:
+        digest.update(repr(spec).encode())
     return digest.hexdigest()[:16]
 
 
@@ -357,8 +277,9 @@ def mismatch_runs(
     names: tuple[str, ...] = tuple(SPECS_MISMATCH), cache_dir: Path = CACHE
 ) -> dict[str, MismatchRun]:
     """The clean runs ``names`` of :data:`SPECS_MISMATCH`, by name: read from
-    ``cache_dir/NAME-HASH.npz`` or simulated and saved there (with the nominal and mismatched
-    descriptions), one lock per run; loaded once per process."""
+    ``cache_dir/NAME-HASH.npz`` (HASH: :func:`source_hash` of its spec) or simulated and saved
+    there (with the nominal and mismatched descriptions), one lock per run; loaded once per
+    process."""
     cache_dir = Path(cache_dir).resolve()
     cache_dir.mkdir(parents=True, exist_ok=True)
     digest = source_hash()
@@ -366,16 +287,16 @@ def mismatch_runs(
     _write(go2_path, go2_urdf())
     out = {}
     for name in names:
-        key = (cache_dir, digest, name)
+        spec = SPECS_MISMATCH[name]
+        key = (cache_dir, source_hash(spec), name)
         if key not in _LOADED:
-            spec = SPECS_MISMATCH[name]
             nominal = A1_URDF if SPECS[spec.base].robot == "a1" else go2_path
-            path = cache_dir / f"{name}-{digest}.npz"
+            path = cache_dir / f"{name}-{key[1]}.npz"
             with _locked(cache_dir / f"{name}.lock"):
                 if not path.exists():
                     joints = A1_JOINTS if SPECS[spec.base].robot == "a1" else GO2_JOINTS
                     text = nominal.read_text(encoding="utf-8")
-                    simulated = cache_dir / f"{name}-{digest}.urdf"
+                    simulated = cache_dir / f"{name}-{key[1]}.urdf"
                     _write(simulated, mismatched_urdf(text, joints, spec.mismatch))
                     _save(simulate_mismatch(name, spec, nominal, simulated), path)
             run = replace(_load(path), urdf_path=str(nominal))

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from contact_scoring import FORCE, Score, estimate, score
-from mismatch_runs import SPECS_MISMATCH, MismatchRun, mismatch_runs
+from mismatch_runs import MismatchRun, mismatch_runs
+from mismatch_specs import SPECS_MISMATCH
 from odometry_scoring import errors
 from odometry_scoring import estimate as odometry
 from sensor_noise import with_noise

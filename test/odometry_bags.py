@@ -19,6 +19,11 @@ def stamp_of(run: SimRun, row: int) -> int:
     return T0 + round(run.stamps_s[row] * 1e9)
 
 
+def stamps_of(run: SimRun) -> np.ndarray:
+    """(N,) every sample's stamp [ns] (:func:`stamp_of`)."""
+    return np.array([stamp_of(run, row) for row in range(len(run.stamps_s))], np.int64)
+
+
 def imu_message(run: SimRun, row: int, orientation: bool = True, force: np.ndarray | None = None):
     """sensor_msgs/msg/Imu of a sample: the root's orientation (or none), gyro and specific force
     (``force``: the run's :attr:`SimRun.specific_force` row, computed once by the caller; None:

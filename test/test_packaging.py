@@ -75,6 +75,7 @@ SCALAR_DEFAULTS = {
     "touchdown_force_n": 0.0,
     "liftoff_force_n": 0.0,
     "model_corrections": "online",
+    "model_corrections_file": "",
     "gait_phase_timeout_s": 0.1,
 }
 STRING_ARRAYS = ("foot_links", "joint_aliases")

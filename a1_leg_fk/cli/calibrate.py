@@ -37,6 +37,24 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="sensor_msgs/msg/Imu aligned with the base: gravity's direction, the base's motion "
         "(as bag --imu)",
     )
+    calibrate.add_argument(
+        "--effort-scale",
+        type=float,
+        default=1.0,
+        metavar="K",
+        help="the efforts read K times the motors' torques (a torque constant off; from the "
+        "maker or a bench test: a recording cannot tell it from a payload), in [0.5, 2]; "
+        "undone before the fit and written to FILE (default 1)",
+    )
+    calibrate.add_argument(
+        "--effort-latency-ms",
+        type=float,
+        default=0.0,
+        metavar="MS",
+        help="the efforts arrive MS late against the joint positions (a recording does not "
+        "single it out), in [0, 20]; undone (predicted ahead) before the fit and written to "
+        "FILE (default 0)",
+    )
     calibrate.add_argument("-o", "--output", required=True, metavar="FILE", help="the file")
     calibrate.add_argument("--force", action="store_true", help="replace FILE if it exists")
     calibrate.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -60,6 +78,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             foot_links=options.foot_links,
             joint_aliases=options.joint_aliases,
             imu=options.imu,
+            timing=(options.effort_scale, options.effort_latency_ms * 1e-3),
         )
         target.write_text(calibration.text(), encoding="utf-8")
     except (LegFkError, OSError) as error:
@@ -82,6 +101,10 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     print(
         f"payload:   {calibration.payload_kg:+.2f} kg over the URDF's mass, from "
         f"{calibration.standing_s:.2f} s of standing"
+    )
+    print(
+        f"efforts:   scale {calibration.effort_scale:g}, latency "
+        f"{calibration.effort_latency_s * 1e3:g} ms (undone before the fit; as given)"
     )
     print(f"wrote:     {target}")
     return EXIT_OK

@@ -4,8 +4,10 @@ entities of ``a1-leg-fk view`` (:mod:`a1_leg_fk.view.live`).
 Subscribes (under ``--namespace``) to ``foot_positions/<leg>``, ``foot_forces/<leg>``,
 ``foot_contacts`` (foot_fk_node), ``leg_odometry`` (leg_odometry_node) and ``joint_states``;
 sends the rows every :data:`~a1_leg_fk.view.live.BATCH_S` to a viewer it spawns, or with
-``--connect URL`` to a running one (``rerun``, or ``rerun --serve-grpc``). Ctrl-C (or
-``--duration``) sends what is left, flushes and disconnects: the viewer keeps the data; exit 0.
+``--connect URL`` to a running one (``rerun``, or ``rerun --serve-grpc``); prints
+``receiving: TOPIC`` at each topic's first message. Ctrl-C (or ``--duration``) takes in the
+messages already received (:func:`_drain`), sends what is left, flushes and disconnects: the
+viewer keeps the data; exit 0.
 Exit 2: no ``rerun-sdk``, a URDF that does not load, no viewer taking the stream at the start
 (within :data:`CONNECT_TIMEOUT_S`), ROS that cannot start; 1: the viewer stopped taking it. Rerun's
 own log lines are off unless ``RUST_LOG`` is set.
@@ -14,7 +16,6 @@ own log lines are off unless ``RUST_LOG`` is set.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import threading
 import time
@@ -31,21 +32,23 @@ from a1_leg_fk.cli.common import (
     prefixed,
     with_ros,
 )
+from a1_leg_fk.cli.rerun_sdk import import_rerun, viewer_executable
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:
     from a1_leg_fk.view.live import LiveRows, LiveView
 
-RERUN_HINT = (
-    f"{PROG} echo --rerun needs rerun-sdk: pip install 'a1_leg_fk[view]' (or pip install "
-    "rerun-sdk==0.41.0)"
-)
 CONNECT_TIMEOUT_S = 5.0
 """How long the description may take to reach the viewer at the start [s]."""
 FLUSH_TIMEOUT_S = 10.0
 """How long the last rows may take to reach the viewer [s]."""
 SPIN_S = 0.01
+DRAIN_QUIET_S = 0.2
+"""At the stop, the messages already received are taken in until none has come for this long
+[s] (on a loaded machine echo lags the nodes: Ctrl-C would drop the messages still queued) ..."""
+DRAIN_TIMEOUT_S = 2.0
+"""... or for at most this long [s] (a robot that keeps publishing)."""
 
 
 def add_arguments(echo: argparse.ArgumentParser) -> None:
@@ -71,11 +74,8 @@ def add_arguments(echo: argparse.ArgumentParser) -> None:
 
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk echo --rerun``: see the module docstring for exit codes."""
-    os.environ.setdefault("RUST_LOG", "off")  # the SDK's own log lines: only when asked for
-    try:
-        import rerun as rr
-    except ImportError:
-        print(RERUN_HINT, file=sys.stderr)
+    rr = import_rerun("echo --rerun")
+    if rr is None:
         return EXIT_BAD_INPUT
     from a1_leg_fk.kinematics.robot_config import load_robot
     from a1_leg_fk.model.urdf import default_urdf_path
@@ -88,7 +88,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         if options.connect:
             recording.connect_grpc(options.connect)
         else:
-            rr.spawn(recording=recording, executable_path=_viewer_executable())
+            rr.spawn(recording=recording, executable_path=viewer_executable())
         scene = Scene(recording, Path(options.urdf or default_urdf_path()), quadruped)
         _flushed(recording, CONNECT_TIMEOUT_S, options.connect or "the spawned viewer")
     except (LegFkError, OSError, ValueError, RuntimeError) as error:
@@ -120,18 +120,6 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     return EXIT_OK
 
 
-def _viewer_executable() -> str | None:
-    """The viewer that came with rerun-sdk (its ``rerun_cli`` package), else None: ``rerun`` on
-    the PATH (a virtualenv's bin folder is not on it when its python is run directly).
-    """
-    try:
-        import rerun_cli  # type: ignore[import-untyped,unused-ignore]
-    except ImportError:
-        return None
-    binary = Path(rerun_cli.__file__).with_name("rerun")
-    return str(binary) if binary.is_file() else None
-
-
 def _flushed(recording: Any, timeout_s: float, target: str) -> None:
     """Everything logged so far delivered to ``target`` within ``timeout_s`` [s], else
     RuntimeError saying so.
@@ -159,13 +147,28 @@ def _stream(ros: Ros, stop: threading.Event, live: LiveView, options: argparse.N
             live.tick(now)
             next_batch = now + BATCH_S
         ros.executor.spin_once(timeout_sec=SPIN_S)
+    _drain(ros, live.rows)
     live.tick(time.monotonic(), everything=True)
     return True
 
 
+def _drain(ros: Ros, rows: LiveRows) -> None:
+    """Take in the messages that have come but wait in the subscriptions' queues: spin until
+    none has been taken for :data:`DRAIN_QUIET_S`, at most :data:`DRAIN_TIMEOUT_S` [s].
+    """
+    deadline = time.monotonic() + DRAIN_TIMEOUT_S
+    quiet_until = time.monotonic() + DRAIN_QUIET_S
+    while ros.context.ok() and time.monotonic() < min(deadline, quiet_until):
+        taken = rows.messages
+        ros.executor.spin_once(timeout_sec=SPIN_S)
+        if rows.messages != taken:
+            quiet_until = time.monotonic() + DRAIN_QUIET_S
+
+
 def subscribe(ros: Ros, namespace: str, rows: LiveRows) -> None:
     """The nodes' topics under ``namespace`` into ``rows`` (best effort: a viewer may miss a
-    message, the robot never waits for it).
+    message, the robot never waits for it); a line ``receiving: TOPIC`` at each topic's first
+    message.
     """
     from geometry_msgs.msg import PointStamped, WrenchStamped
     from nav_msgs.msg import Odometry
@@ -174,9 +177,18 @@ def subscribe(ros: Ros, namespace: str, rows: LiveRows) -> None:
 
     qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
     node = ros.node
+    heard: set[str] = set()
 
     def on(kind: type, topic: str, callback: Any) -> None:
-        node.create_subscription(kind, prefixed(namespace, topic), callback, qos)
+        name = prefixed(namespace, topic)
+
+        def take(message: Any) -> None:
+            if name not in heard:  # said once per topic: what the viewer will get
+                heard.add(name)
+                print(f"receiving: {name}", flush=True)
+            callback(message)
+
+        node.create_subscription(kind, name, take, qos)
 
     for slot, leg in enumerate(LEG_NAMES):
         on(

@@ -26,7 +26,7 @@ from a1_leg_fk.cli.common import (
     input_error,
     non_negative,
 )
-from a1_leg_fk.estimation.filter_model import FLAT, GROUND_MODELS
+from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, GROUND_MODELS
 from a1_leg_fk.estimation.ground import GROUND_COLUMNS
 from a1_leg_fk.estimation.odometry_feed import CONTACT_SOURCES
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -77,9 +77,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     odom.add_argument(
         "--ground",
         choices=GROUND_MODELS,
-        default=FLAT,
-        help="flat (default): the stance feet's heights anchor the height; none: they do not "
-        "(stairs, slopes)",
+        default=DEFAULT_GROUND,
+        help="footholds (default): each stance foot's height is held to its foothold's, anchored "
+        "where it agrees with the ground predicted from the earlier footholds and their slope "
+        "(flat floors, slopes, stairs, rough ground); flat: to the first feet's height (a known "
+        "flat floor); none: not held",
     )
     odom.add_argument(
         "--causal",

@@ -25,16 +25,12 @@ from a1_leg_fk.cli.common import (
     EXIT_OK,
     input_error,
 )
+from a1_leg_fk.cli.rerun_sdk import import_rerun, viewer_executable
 from a1_leg_fk.model.urdf import LegFkError
 
 if TYPE_CHECKING:  # the bag side is imported when the command runs
     from a1_leg_fk.recording.odometry import OdometryTrack
     from a1_leg_fk.recording.trajectories import FootTrajectories
-
-RERUN_HINT = (
-    "a1-leg-fk view needs rerun-sdk: pip install 'a1_leg_fk[view]' (or pip install "
-    "rerun-sdk==0.41.0)"
-)
 
 
 def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -64,10 +60,7 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     """``a1-leg-fk view``: see the module docstring for exit codes."""
     del argv  # no ROS here
-    try:
-        import rerun  # noqa: F401 (only whether it is there)
-    except ImportError:
-        print(RERUN_HINT, file=sys.stderr)
+    if import_rerun("view") is None:
         return EXIT_BAD_INPUT
     from a1_leg_fk.cli.odom import track_of
     from a1_leg_fk.recording.outputs import checked_targets
@@ -132,8 +125,9 @@ def robot_options(options: argparse.Namespace) -> tuple[str | None, list[str], l
 
 def _open_viewer(path: Path) -> None:
     """The Rerun viewer on ``path``, in its own session (it outlives this command)."""
+    viewer = viewer_executable()
     subprocess.Popen(
-        [sys.executable, "-m", "rerun", str(path)],
+        [viewer, str(path)] if viewer else [sys.executable, "-m", "rerun", str(path)],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

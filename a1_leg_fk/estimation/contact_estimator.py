@@ -27,6 +27,8 @@ import numpy as np
 from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.correction_file import read_correction_file
+from a1_leg_fk.estimation.effort_doubt import EffortDoubt
+from a1_leg_fk.estimation.effort_timing import EffortTiming
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.model_corrections import (
     DEFAULT_MODEL_CORRECTIONS,
@@ -114,7 +116,8 @@ class ContactEstimator:
         learns and takes off the joints' friction and bias (:mod:`a1_leg_fk.estimation.
         model_corrections`; the dynamic force model and the filter only), ``"off"``, or the path
         of a calibration's file (:mod:`a1_leg_fk.estimation.correction_file`: its terms taken
-        off as they are, its payload added to the URDF's weight).
+        off as they are, its payload added to the URDF's weight, its efforts' scale and latency
+        undone: :mod:`a1_leg_fk.estimation.effort_timing`).
         """
         for name, value, choices in (
             ("force model", force_model, FORCE_MODELS),
@@ -136,7 +139,16 @@ class ContactEstimator:
         self.correction_settings: CorrectionSettings | None = None
         """The online corrections' settings from the next :meth:`reset` (None: the defaults;
         a calibration learns without forgetting)."""
+        timing = (
+            (1.0, 0.0)
+            if self.calibration is None
+            else (self.calibration.effort_scale, self.calibration.effort_latency_s)
+        )
+        self.timing = EffortTiming(*timing)
+        """The efforts' scale and latency the calibration's file gives (none: 1 and 0)."""
         self.observer = MomentumObserver(quadruped) if force_model == DYNAMIC else None
+        self.doubt = EffortDoubt(self.statics)
+        """The spread of each foot's load that mis-scaled efforts could make."""
         self.motion = LegMotion(quadruped)
         payload = self.calibration.payload_kg if self.calibration is not None else 0.0
         weight = (self.statics.total_mass_kg + payload) * STANDARD_GRAVITY
@@ -156,6 +168,7 @@ class ContactEstimator:
             elif self.model_corrections == ONLINE and self.contact_rule == FILTER:
                 self.observer.corrections = ModelCorrections(self.correction_settings)
         self.filter = ContactFilter(self.model)
+        self.timing = EffortTiming(self.timing.scale, self.timing.latency_s)
         self.rule = ContactRule(self.rule.thresholds)
         self.counts = EvidenceCounts()
         self._stamp_s = math.nan
@@ -175,6 +188,9 @@ class ContactEstimator:
         stance per foot (None: none), evidence for the filter.
         """
         angles, rates, efforts = joints
+        if efforts is not None and not self.timing.identity:
+            efforts = self.timing.efforts(stamp_s, efforts)
+            joints = (angles, rates, efforts)
         gravity = LEVEL_GRAVITY if imu.gravity is None else imu.gravity
         gx, gy, gz = gravity
         norm = math.sqrt(gx * gx + gy * gy + gz * gz)
@@ -200,12 +216,18 @@ class ContactEstimator:
             self.counts.force += 1
         else:
             self.counts.kinematic += 1
+        spreads = None
+        if with_force and efforts is not None:
+            loaded = [n > self.model.force_half_n for n in normals]  # NaN: False
+            spreads = self.doubt.spreads((angles, efforts), gravity, down, loaded)
         probabilities = self.filter.update(
             dt if math.isfinite(dt) else 0.0,
             motions,
             (imu.angular_velocity or NO_ROTATION, imu.specific_force),
             normals if with_force else None,
             phase_prior,
+            spreads,
+            down,
         )
         corrections = self.corrections
         if corrections is not None and with_force:

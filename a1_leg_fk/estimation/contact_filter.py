@@ -9,9 +9,17 @@ stance by its likelihood ratio. Each is the log-likelihood ratio of a logistic m
 that no single sample decides alone:
 
 - the foot's *normal force* [N] (from the momentum observer or the statics), when there is one:
-  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``;
-- its *height* [m] above the lowest foot along gravity: ``(height_half_m - h) / height_scale_m``;
-- its *speed* [m/s] relative to the other low feet (those within ``height_half_m`` of the lowest):
+  ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``; where the load is above
+  ``force_half_n`` and the efforts' spread ``sigma`` is given
+  (:mod:`a1_leg_fk.estimation.effort_doubt`: what mis-scaled efforts could misstate), the
+  scale is ``sqrt(force_scale_n^2 + sigma^2)`` (a load is weaker stance evidence where the
+  efforts are in doubt; a foot without load stays full swing evidence);
+- its *height* [m] above the lowest foot along gravity, or above the lowest foot with the local
+  ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), whichever is lower (a foot
+  low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
+  ``(height_half_m - h) / height_scale_m``;
+- its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
+  ``height_half_m``):
   the distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;
@@ -36,6 +44,7 @@ from dataclasses import dataclass
 from math import exp, isfinite, sqrt
 from typing import NamedTuple
 
+from a1_leg_fk.estimation.foot_ground import FootGround
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -120,6 +129,8 @@ class ContactFilter:
         """Each foot's probability of stance after the latest sample."""
         self.evidence = SampleEvidence(0.0, [0.0] * LEGS, [False] * LEGS, [0.0] * LEGS)
         """The latest sample's transition and evidence, for a smoother (kept by reference)."""
+        self.ground = FootGround()
+        """The feet's heights above the local ground (given gravity's direction)."""
 
     def update(
         self,
@@ -128,12 +139,16 @@ class ContactFilter:
         imu: tuple[Sequence[float], Sequence[float] | None],
         normal_forces: Sequence[float] | None = None,
         phase_prior: Sequence[float] | None = None,
+        force_spreads: Sequence[float] | None = None,
+        down: Vector | None = None,
     ) -> list[float]:
         """The 4 probabilities of stance after a sample ``dt_s`` [s] after the previous one:
         each foot's motion (None: unknown); ``imu``: the base's angular velocity [rad/s, base
         frame; zeros if unknown] and specific force [m/s^2] (None: unknown); normal forces [N]
         (None: no force evidence; NaN: none for that foot); the gait phase's probabilities of
-        stance (None: no prior).
+        stance (None: no prior); each normal force's spread [N] from the efforts' doubt (None
+        or NaN: none); ``down``: gravity's unit direction in the base frame, for the feet's
+        heights against the local ground's slope too (None: the lowest foot's alone).
         """
         model = self.model
         limit = model.max_log_ratio
@@ -150,13 +165,20 @@ class ContactFilter:
         forces = NO_FORCES if normal_forces is None else normal_forces
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # falling, no foot stands however low and still it is: the kinematics' stance is weak
-        kinematic = _kinematic(model, feet, omega, forced, common < -1.0)
+        heights = None
+        if down is not None:
+            standing = [p >= 0.5 for p in self.probabilities]
+            heights = self.ground.heights(dt_s, feet, down, omega, standing)
+        kinematic = _kinematic(model, feet, omega, forced, common < -1.0, heights)
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
             odds = prior + kinematic[leg]
             if forced[leg]:
-                force = (forces[leg] - model.force_half_n) / model.force_scale_n
+                load, scale = forces[leg] - model.force_half_n, model.force_scale_n
+                if load > 0.0 and force_spreads is not None and force_spreads[leg] > 0.0:
+                    scale = sqrt(scale * scale + force_spreads[leg] ** 2)
+                force = load / scale
                 odds += _clip(force, limit, limit)
             else:  # free fall stands in for a foot's own force
                 odds += common
@@ -194,10 +216,12 @@ def _kinematic(
     omega: Sequence[float],
     forced: Sequence[bool],
     falling: bool,
+    ground: Sequence[float] | None,
 ) -> list[float]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too (``forced``), and for all while the base is
-    ``falling``.
+    ``falling``. Heights [m] above the lowest foot, or from ``ground`` (the slope taken off)
+    where that is lower.
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -216,7 +240,10 @@ def _kinematic(
     for leg, foot in enumerate(feet):
         if foot is None:
             continue
-        heights[leg] = height = lowest - foot.depth
+        height = lowest - foot.depth
+        if ground is not None and ground[leg] < height:  # low on either ground
+            height = ground[leg]
+        heights[leg] = height
         (ex, ey, ez), (rx, ry, rz), _ = foot  # the base velocity if it stands: e - w x r
         vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
         if isfinite(vx + vy + vz):

@@ -6,8 +6,10 @@ phase showed; without ROS.
 The file is YAML written in its JSON-compatible flow style (every YAML 1.2 reader reads it; the
 package reads it with the standard library). Reading it checks it against the robot: the same
 joints (by name, every one), finite values within :class:`CorrectionSettings`' bounds and signs
-(friction opposes motion), a payload between minus half and twice the URDF's mass; anything else
-is refused in one line naming the file and the culprit.
+(friction opposes motion), a payload between minus half and twice the URDF's mass, and the URDF's
+mass it was made with (``urdf_mass_kg``, when the file gives it) within :data:`MASS_TOLERANCE` of
+the robot's: pybullet_data's A1 and Aliengo share their joint names, not their masses. Anything
+else is refused in one line naming the file and the culprit.
 """
 
 from __future__ import annotations
@@ -26,6 +28,11 @@ FORMAT = "a1_leg_fk model corrections 1"
 TERMS = ("bias_nm", "viscous_nms_per_rad", "coulomb_nm")
 """A joint's entries taken off (the fit's residuals beside them are for reading)."""
 MAX_FILE_BYTES = 1_000_000
+EFFORT_SCALES = (0.5, 2.0)
+EFFORT_LATENCIES_S = (0.0, 0.02)
+"""The efforts' scale and latency [s] a file may give (inclusive)."""
+MASS_TOLERANCE = 0.01
+"""The largest relative difference between the URDF's mass a file was made with and the robot's."""
 
 
 class CorrectionFileError(LegFkError):
@@ -37,7 +44,11 @@ class CorrectionFile:
     """A calibration: ``joints`` (slot order: the robot's joint names), ``terms`` per joint
     (bias [N m], viscous [N m s/rad], Coulomb [N m]), ``residuals`` per joint (swing samples,
     the residual's RMS [N m] before and after the fit), ``payload_kg`` [kg] (the standing
-    phase's weight over the URDF's), ``standing_s`` [s] the standing phase used, ``source``.
+    phase's weight over the URDF's), ``standing_s`` [s] the standing phase used, ``source``,
+    ``urdf_mass_kg`` [kg] the URDF's mass it was made with (NaN: unknown, a file without it),
+    ``effort_scale`` (the efforts reported over the motors' torques) and ``effort_latency_s`` [s]
+    (how late they are): not fitted (calibrate writes 1 and 0), set by hand from what the
+    robot's maker or a bench test says (:mod:`a1_leg_fk.estimation.effort_timing`).
     """
 
     joints: tuple[str, ...]
@@ -46,6 +57,9 @@ class CorrectionFile:
     payload_kg: float
     standing_s: float
     source: str
+    urdf_mass_kg: float = math.nan
+    effort_scale: float = 1.0
+    effort_latency_s: float = 0.0
 
     def text(self) -> str:
         """The file's text."""
@@ -61,8 +75,11 @@ class CorrectionFile:
         document = {
             "format": FORMAT,
             "source": self.source,
+            "urdf_mass_kg": round(self.urdf_mass_kg, 4),
             "payload_kg": round(self.payload_kg, 3),
             "standing_s": round(self.standing_s, 3),
+            "effort_scale": self.effort_scale,
+            "effort_latency_s": self.effort_latency_s,
             "joints": joints,
         }
         return json.dumps(document, indent=2) + "\n"
@@ -99,6 +116,12 @@ def read_correction_file(
             f"{where}: payload_kg {payload} is below half the URDF's mass, negated"
         )
     standing = _number(where, "standing_s", document.get("standing_s"), math.inf)
+    made_for = _number(where, "urdf_mass_kg", document.get("urdf_mass_kg", math.nan), 1e6, True)
+    if abs(made_for - urdf_mass_kg) > MASS_TOLERANCE * urdf_mass_kg:  # False for NaN
+        raise CorrectionFileError(
+            f"{where}: made for a robot whose URDF weighs {made_for:g} kg, this one's "
+            f"{urdf_mass_kg:.4g} kg"
+        )
     return CorrectionFile(
         tuple(joints),
         terms,
@@ -106,7 +129,25 @@ def read_correction_file(
         payload,
         standing,
         str(document.get("source", "")),
+        made_for,
+        *_timing(where, document),
     )
+
+
+def _timing(where: str, document: dict[str, object]) -> tuple[float, float]:
+    """The file's effort scale (within :data:`EFFORT_SCALES`; 1 when absent) and latency [s]
+    (within :data:`EFFORT_LATENCIES_S`; 0 when absent).
+    """
+    values = []
+    for name, default, (least, most) in (
+        ("effort_scale", 1.0, EFFORT_SCALES),
+        ("effort_latency_s", 0.0, EFFORT_LATENCIES_S),
+    ):
+        value = _number(where, name, document.get(name, default), most)
+        if value < least:
+            raise CorrectionFileError(f"{where}: {name} {value} is absurd (at least {least:g})")
+        values.append(value)
+    return values[0], values[1]
 
 
 def _terms(where: str, name: str, entry: object) -> tuple[float, float, float]:

@@ -17,12 +17,13 @@ STATE = 15
 THETA, VELOCITY, POSITION, GYRO_BIAS, ACCEL_BIAS = (slice(k, k + 3) for k in range(0, STATE, 3))
 """The error state's blocks: attitude [rad], velocity [m/s], position [m], gyro and accelerometer
 biases (odom frame, biases in the base frame)."""
-FLAT, NO_GROUND, LOCAL = "flat", "none", "local"
-GROUND_MODELS = (FLAT, NO_GROUND, LOCAL)
-"""``flat``: the stance feet's heights anchor z at the first feet's; ``none``: they do not;
-``local``: each stance foot's height is held to the local ground under it (the plane through the
-recent footholds, :mod:`a1_leg_fk.estimation.ground`), with that plane's variance (slopes,
-stairs, rough ground)."""
+FOOTHOLDS, FLAT, NO_GROUND = "footholds", "flat", "none"
+GROUND_MODELS = (FOOTHOLDS, FLAT, NO_GROUND)
+"""``footholds`` (the default): each stance foot's height is held to its foothold's anchored
+height (:mod:`a1_leg_fk.estimation.ground`: a touchdown where the ground predicts takes the
+prediction, a step its own height; slopes, stairs, rough ground and flat floors); ``flat``: the
+stance feet's heights anchor z at the first feet's (a known flat floor); ``none``: they do not."""
+DEFAULT_GROUND = FOOTHOLDS
 MAX_BASE_SPEED_MPS = 1e3
 """[m/s] A standing foot that says the base moves faster (on some axis) says nothing: its joint
 rates or foot velocity are corrupt (no leg comes near it), and the sums of squares stay far from

@@ -1,16 +1,21 @@
 """The local ground under the robot, from its recent footholds: a plane z = a + b (x - x₀) +
-c (y - y₀) [m, odom frame] fitted by least squares to where the stance feet touched, with its
-covariance; the height under the base, the plane's normal and its tilt (what a model-predictive
-controller plans on).
+c (y - y₀) [m, odom] fitted by least squares to where the stance feet touched, with its
+covariance; the height under the base, the plane's normal and tilt (what an MPC plans on).
 
-A foothold is one foot's stance: the mean of its contact points (the foot's centre less its
-rolling radius, straight down) over the samples it stood, in odom. :class:`LocalGround` keeps the
-footholds of the last ``window_s`` seconds, at most ``max_footholds`` of them, and fits the plane
-about the point asked for (x₀, y₀), with a Gaussian prior on the slopes (zero, standard deviation
-``slope_prior``): where the footholds are fewer than three or in a line, the slope across them
-stays level with a large variance instead of being made up. The fit's noise is the footholds'
-residual RMS (corrected for the three parameters fitted), at least ``min_sigma_m``: feet that
-agree exactly still give the sink and roll of a real foot's contact.
+A foothold is one foot's stance: the mean (x, y) of its contact points (the foot's centre less its
+rolling radius, straight down) in odom, at its anchored height. :class:`LocalGround` keeps the
+footholds of the last ``window_s`` seconds, at most ``max_footholds``, and fits the plane with a
+Gaussian prior on the slopes (zero, ``slope_prior``): footholds fewer than three or in a line
+leave the slope across them level and uncertain. The fit's noise is the residual RMS, at least
+``min_sigma_m``.
+
+The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
+touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,
+an even slope: no error carried from stance to stance), one off it keeps its own height (a step).
+The prediction is the nearest foothold's height carried along the slope (measured between feet
+standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`; level below
+:data:`LEVEL_SLOPE`) or level (a tread), the nearer; a touchdown's own height is taken against
+the feet standing in the same sample, so the estimate's drift cancels out of it.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.estimation.ground_slope import GroundSlope
 from a1_leg_fk.kinematics.frames import Quaternion, rotate
 
 Point = tuple[float, float, float]
@@ -34,6 +40,16 @@ DEFAULT_SLOPE_PRIOR = math.tan(math.radians(30.0))
 """The slopes' prior standard deviation (dz/dx, dz/dy): a 30° incline is one sigma."""
 DEFAULT_MIN_SIGMA_M = 0.005
 """[m] the footholds' height noise at least (a compliant foot's sink, the contact's roll)."""
+DEFAULT_STEP_GATE = 3.0
+"""A touchdown this many standard deviations off the anchored ground's prediction is a step."""
+DEFAULT_SLOPE_TIME_S = 2.0
+"""[s] the time constant over which the standing feet's height differences are summed."""
+LEVEL_SLOPE = math.tan(math.radians(1.0))
+"""Slopes below this are level: an IMU's mounting error (0.3°) tilts the feet's differences."""
+SCATTER_TOUCHDOWNS = 16
+"""The touchdowns whose offsets from a confident prediction scale the touchdowns' noise."""
+CORRELATION_S = 0.2
+"""[s] the span one stance's height differences count as one measurement over."""
 
 
 class GroundPlane(NamedTuple):
@@ -140,9 +156,9 @@ def _moved(
 
 
 class LocalGround:
-    """The footholds of the recent stances and the plane through them (see the module text).
+    """The recent footholds, their anchored heights and the plane through them (module text).
 
-    A standing foot counts at its touchdown point until it lifts, then at its stance's mean: the
+    A standing foot counts at its touchdown point until it lifts, then at its stance's: the
     points change only at touchdowns, liftoffs and expiries, and the plane is fitted again only
     then (about the points' centre), and moved to the point asked for by :meth:`plane`.
     """
@@ -153,54 +169,145 @@ class LocalGround:
         max_footholds: int = DEFAULT_MAX_FOOTHOLDS,
         slope_prior: float = DEFAULT_SLOPE_PRIOR,
         min_sigma_m: float = DEFAULT_MIN_SIGMA_M,
+        step_gate: float = DEFAULT_STEP_GATE,
+        slope_time_s: float = DEFAULT_SLOPE_TIME_S,
     ) -> None:
-        if window_s <= 0.0 or max_footholds < 1 or slope_prior <= 0.0 or min_sigma_m <= 0.0:
-            raise ValueError("window_s, max_footholds, slope_prior and min_sigma_m must be > 0")
+        if min(window_s, max_footholds, slope_prior, min_sigma_m, step_gate, slope_time_s) <= 0:
+            raise ValueError("LocalGround's settings must be > 0")
         self.window_s = window_s
+        self.step_gate = step_gate
         self.slope_prior = slope_prior
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
         """The ended stances, oldest first."""
-        self._open: dict[int, tuple[Point, list[float], int]] = {}
-        """Per standing leg: its touchdown point [m], the sum of its contact points and count."""
+        self._open: dict[int, tuple[Point, list[float], int, float]] = {}
+        """Per standing leg: its touchdown point [m] (at its anchored height), the sums of its
+        contact points' x and y, their count and its contact point's last height."""
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
+        self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
+        """The last touchdowns' absolute offsets from the prediction [m]."""
+        self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
         self.revision = 0
         """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
         only with it, and with the point asked for."""
 
     def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
         """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
-        not among them ends its stance: its foothold is kept.
+        not among them ends its stance: its foothold is kept, at its stance's mean (x, y) and
+        its anchored height; a leg new among them is anchored (:meth:`_touchdown`).
         """
         standing = dict(contacts)
+        self.slope.add(stamp_s, list(standing.values()))
+        lifted = {}
         for leg in [leg for leg in self._open if leg not in standing]:
-            _, total, count = self._open.pop(leg)
-            mean = (total[0] / count, total[1] / count, total[2] / count)
+            touchdown, total, count, last_z = self._open.pop(leg)
+            lifted[leg] = (last_z, touchdown[2])
+            mean = (total[0] / count, total[1] / count, touchdown[2])
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
+        kept = {leg: (point[2], self._open[leg][0][2]) for leg, point in standing.items()
+                if leg in self._open}  # fmt: skip
         for leg, point in standing.items():
             opened = self._open.get(leg)
             if opened is None:
-                self._open[leg] = (point, [point[0], point[1], point[2]], 1)
+                anchored = (point[0], point[1], self._touchdown(point, kept or lifted))
+                self._open[leg] = (anchored, [point[0], point[1]], 1, point[2])
                 self._changed = True
                 self.revision += 1
             else:
                 total = opened[1]
                 total[0] += point[0]
                 total[1] += point[1]
-                total[2] += point[2]
-                self._open[leg] = (opened[0], total, opened[2] + 1)
+                self._open[leg] = (opened[0], total, opened[2] + 1, point[2])
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
             self._changed = True
             self.revision += 1
 
+    def _touchdown(self, point: Point, others: dict[int, tuple[float, float]]) -> float:
+        """The anchored height [m] of a foot landing at ``point`` [m, odom]: :meth:`_anchor` of
+        its height against the ``others``' anchors (per other foot its contact point's height now
+        or as it lifted, and its anchor [m]: the estimate's offset cancels), or its own.
+        """
+        if not others:
+            return self._anchor(point)
+        height = sum(anchor + point[2] - z for z, anchor in others.values()) / len(others)
+        return self._anchor((point[0], point[1], height))
+
+    def gradient(self) -> tuple[tuple[float, float], tuple[float, float, float]]:
+        """The ground's slope (dz/dx, dz/dy) and its covariance (xx, xy, yy), from the feet that
+        stood at the same time (:class:`~a1_leg_fk.estimation.ground_slope.GroundSlope`).
+        """
+        return self.slope.gradient()
+
+    def predicted(self, x: float, y: float) -> list[tuple[float, float]]:
+        """The anchored ground's heights at (x, y) [m, odom] and their variances [m²] from the
+        nearest anchored foothold (per foothold, so a staircase's treads stay apart), carried
+        along :meth:`gradient` (a slope) and level (a tread); none before the first foothold.
+        """
+        anchors = self.points()
+        if not anchors:
+            return []
+        px, py, pz = min(anchors, key=lambda p: (p[0] - x) ** 2 + (p[1] - y) ** 2)
+        (gx, gy), (cxx, cxy, cyy) = self.gradient()
+        if gx * gx + gy * gy <= LEVEL_SLOPE**2:
+            return [(pz, 0.0)]
+        dx, dy = x - px, y - py
+        spread = cxx * dx * dx + 2.0 * cxy * dx * dy + cyy * dy * dy
+        return [(pz + gx * dx + gy * dy, spread), (pz, 0.0)]
+
+    def _anchor(self, point: Point) -> float:
+        """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction nearer
+        to it, where it agrees within :attr:`step_gate` sigmas (the prediction's and
+        :meth:`touchdown_sigma_m`); its own where neither does (a step), or with no prediction.
+        """
+        predictions = self.predicted(point[0], point[1])
+        if not predictions:
+            return point[2]
+        height, variance = min(predictions, key=lambda p: abs(point[2] - p[0]))
+        off = point[2] - height
+        noise = self.touchdown_sigma_m()
+        if variance <= self.min_sigma_m**2:  # a confident prediction: the offset is noise's
+            self._offsets.append(abs(off))
+        agrees = off * off <= self.step_gate**2 * (variance + noise * noise)
+        return height if agrees else point[2]
+
+    def touchdown_sigma_m(self) -> float:
+        """[m] a touchdown's height noise: ``min_sigma_m``, or where larger the robust scatter
+        of the last :data:`SCATTER_TOUCHDOWNS` about their predictions (their absolute offsets'
+        lower quartile, a normal sigma's 0.3186: steps may be most of a staircase's
+        touchdowns): feet that land cm off the prediction as a rule are not steps.
+        """
+        if 2 * len(self._offsets) < SCATTER_TOUCHDOWNS:  # from half of them on
+            return self.min_sigma_m
+        quartile = sorted(self._offsets)[len(self._offsets) // 4]
+        return max(self.min_sigma_m, quartile / 0.3186)
+
+    def under(
+        self, feet: Iterable[tuple[int, Point]], legs: int
+    ) -> list[tuple[float, float] | None]:
+        """Per leg of ``legs``, the ground's height [m, odom] under its foot and its variance
+        [m²] (what the state filter holds a stance foot to, ``ground: footholds``): a standing
+        foot's anchored height (no variance: the anchor is the ground), else the plane's under
+        its contact point in ``feet`` (leg, point [m, odom]); None: no foot, or no ground yet.
+        """
+        grounds: list[tuple[float, float] | None] = [None] * legs
+        for leg, (x, y, _) in feet:
+            opened = self._open.get(leg)
+            if opened is not None:
+                grounds[leg] = (opened[0][2], 0.0)
+                continue
+            plane = self.plane(x, y)
+            if plane is not None:
+                grounds[leg] = (plane.height_m, plane.covariance[0][0])
+        return grounds
+
     def points(self) -> list[Point]:
-        """The footholds kept and the standing feet's touchdown points [m, odom]."""
-        standing = [touchdown for touchdown, _, _ in self._open.values()]
+        """The footholds kept and the standing feet's touchdowns [m, odom], anchored."""
+        standing = [opened[0] for opened in self._open.values()]
         return [foothold.point for foothold in self.footholds] + standing
 
     def plane(self, x: float, y: float) -> GroundPlane | None:

@@ -10,8 +10,9 @@ alone. Per joint it is fitted as
     r ≈ c(q̇) = bias + viscous q̇ + coulomb tanh(q̇ / ε)
 
 (friction opposes motion: ``viscous`` [N m s/rad] and ``coulomb`` [N m] are at most 0; ``ε``
-[rad/s] the smooth sign's width) by recursive least squares with exponential forgetting
-(time constant ``forget_s`` of learning time), left unconstrained (clipping a least squares'
+[rad/s] the smooth sign's width) by least squares with exponential forgetting (time constant
+``forget_s`` of learning time; the samples kept as they come and taken in by :data:`BATCH`,
+vectorized), left unconstrained (clipping a least squares'
 estimate breaks its covariance: on the first strides of an exact robot, with the rate of one
 sign, bias and Coulomb are collinear and a clipped viscous term drove them to their bounds).
 What is taken off is each estimate shrunk towards 0 by ``significance`` standard deviations
@@ -28,6 +29,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.model.legs import JOINT_COUNT, JOINTS_PER_LEG, LEG_NAMES
@@ -72,55 +75,38 @@ class CorrectionSettings:
             raise LegFkError(f"model corrections need positive finite settings: {self}")
 
 
-SOLVE_EVERY = 8
-"""A joint's least squares is solved once per this many samples learnt (its sums are kept every
-sample): the estimate lags by at most 16 ms at 500 Hz, against a forgetting of seconds."""
+BATCH = (24, 512)
+"""Joint samples kept as they come (five floats each) before they are taken into the twelve
+least squares at once (numpy) and the joints that learnt solved: an eighth of the samples learnt
+so far, within these bounds, so the first strides are solved as often as one by one (every ~8
+samples of a joint) and a long run every ~0.2-0.35 s of a trot at 500 Hz, against a forgetting of
+seconds. Taken one by one (the first way written) the least squares cost about twice as much per
+sample (bench/contact_speed.py)."""
+KEPT = 5
+"""Floats kept per joint sample."""
+INFO = [0, 1, 2, 1, 3, 4, 2, 4, 5]
+"""The regressors' information (3x3) from a joint's sums (:class:`ModelCorrections`)."""
+ZERO_TERMS = (0.0, 0.0, 0.0)
 
 
-def _shrunk(value: float, margin: float) -> float:
-    """``value`` moved towards 0 by ``margin`` (>= 0), 0 within it."""
-    if value > margin:
-        return value - margin
-    return value + margin if value < -margin else 0.0
-
-
-class _Joint:
-    """One joint's least squares in information form: ``info``, the regressors' information
-    (symmetric 3x3 by its upper triangle, i00 i01 i02 i11 i12 i22, over the residual's noise
-    variance, the prior's included) and ``moment``, the regressors times the residual [N m], both
-    forgotten alike; from them the parameters ``theta`` (bias [N m], viscous [N m s/rad],
-    Coulomb [N m]; unconstrained) and their covariance's ``diagonal``.
-    """
-
-    __slots__ = (
-        "applied",
-        "diagonal",
-        "info",
-        "moment",
-        "pending",
-        "squares",
-        "theta",
-        "variance",
-    )
-
-    def __init__(self, prior: Sequence[float], variance: float) -> None:
-        self.info = [1.0 / prior[0], 0.0, 0.0, 1.0 / prior[1], 0.0, 1.0 / prior[2]]
-        self.moment = [0.0, 0.0, 0.0]
-        self.squares = [0.0, 0.0]
-        """The residual's squares [N² m²] and the samples, forgotten alike (the fit's residual)."""
-        self.pending = 0
-        """Samples learnt since the last solution."""
-        self.theta = (0.0, 0.0, 0.0)
-        self.diagonal = tuple(prior)
-        self.variance = variance
-        """The residual's noise variance [N² m²] about the fit: the a priori errors' squares,
-        averaged with forgetting from the prior ``noise_nm`` squared."""
-        self.applied = (0.0, 0.0, 0.0)
-        """The parameters taken off: each shrunk towards 0 by its significance margin."""
+def _shrunk(value: np.ndarray, margin: np.ndarray) -> np.ndarray:
+    """``value`` moved towards 0 by ``margin`` (>= 0), 0 within it (elementwise)."""
+    result: np.ndarray = np.sign(value) * np.maximum(np.abs(value) - margin, 0.0)
+    return result
 
 
 class ModelCorrections:
-    """The twelve joints' corrections (slot order), learnt in swing and applied always."""
+    """The twelve joints' corrections (slot order), learnt in swing and applied always.
+
+    Each joint's least squares is kept in information form, the prior's information apart (what
+    forgetting takes from it, each sample gives back, so it stays): the data's sums ``_sums``
+    (12, 10), forgotten alike: of the regressors' products (1, q̇, s: 1, q̇, s, q̇², q̇ s, s²; the
+    first is the samples' count), of the regressors times the residual r [N m] (r, q̇ r, s r) and
+    of r²; ``_theta`` the parameters (bias [N m], viscous [N m s/rad], Coulomb
+    [N m]; unconstrained), ``_diagonal`` their covariance's diagonal (over the noise variance),
+    ``_variance`` [N² m²] the residual's about the fit (its a priori errors' squares averaged with
+    forgetting from ``noise_nm`` squared), ``_applied`` the terms taken off.
+    """
 
     def __init__(
         self,
@@ -134,23 +120,37 @@ class ModelCorrections:
         self.settings = settings or CorrectionSettings()
         self.fixed = fixed is not None
         noise = self.settings.noise_nm
-        prior = [(bound / noise) ** 2 for bound in self.settings.bounds]
-        self._prior_info = (1.0 / prior[0], 1.0 / prior[1], 1.0 / prior[2])
-        """The prior's information per parameter (its variance over the noise's, inverted)."""
-        self._joints = [_Joint(prior, noise**2) for _ in range(JOINT_COUNT)]
+        self._prior = np.array([(bound / noise) ** 2 for bound in self.settings.bounds])
+        """The prior's variance per parameter, over the noise's."""
+        self._sums = np.zeros((JOINT_COUNT, 10))
+        self._theta = np.zeros((JOINT_COUNT, PARAMETERS))
+        self._diagonal = np.tile(self._prior, (JOINT_COUNT, 1))
+        self._variance = np.full(JOINT_COUNT, noise**2)
+        self._applied = [ZERO_TERMS] * JOINT_COUNT
         self._latest: list[tuple[float, float] | None] = [None] * JOINT_COUNT
         """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
+        self._kept: list[float] = []
+        """The samples not yet taken in, five floats each: joint, residual [N m], rate [rad/s],
+        the joint's learning clock after it and the sample's step of it [s]."""
+        self._clock = [0.0] * JOINT_COUNT
+        """Per joint, its learning time [s]: the sum of its samples' steps (forgetting's time)."""
+        self._taken = np.zeros(JOINT_COUNT)
+        """Per joint, its learning clock when the sums were last taken in [s]."""
         self.learnt_samples = 0
-        """Joint samples the least squares took."""
-        for state, (bias, viscous, coulomb) in zip(self._joints, fixed or (), strict=False):
-            state.applied = (bias, -viscous, -coulomb)
+        """Joint samples the least squares took (kept or taken in)."""
+        self._taken_samples = 0
+        """Joint samples taken into the sums."""
+        for joint, (bias, viscous, coulomb) in enumerate(fixed or ()):
+            self._applied[joint] = (bias, -viscous, -coulomb)
 
     def correct(self, joint: int, residual: float, rate: float) -> float:
         """The residual [N m] of slot ``joint`` with its correction at ``rate`` [rad/s] taken
         off; the raw one kept for :meth:`learn`.
         """
         self._latest[joint] = (residual, rate)
-        bias, viscous, coulomb = self._joints[joint].applied
+        bias, viscous, coulomb = self._applied[joint]
+        if coulomb == 0.0:
+            return residual - (bias + viscous * rate)
         return residual - (
             bias + viscous * rate + coulomb * math.tanh(rate / self.settings.smooth_rate)
         )
@@ -165,94 +165,90 @@ class ModelCorrections:
         """Learn from the latest residuals of the legs confidently in the air: ``probabilities``
         of stance (the contact filter's, this sample) below ``swing_probability`` and the foot
         (``feet``' motions, None: unknown) more than ``height_half_m`` [m] above the lowest.
-        ``dt_s`` [s] since the previous sample sets the forgetting.
+        ``dt_s`` [s] since the previous sample sets the forgetting (of each learning joint).
         """
         depths = [foot.depth for foot in feet if foot is not None]
         if self.fixed or not depths or not dt_s > 0.0:
             return
-        lowest = max(depths)
-        forget = math.exp(-min(dt_s, 1.0) / self.settings.forget_s)
+        lowest, step = max(depths), min(dt_s, 1.0)
+        latest, threshold = self._latest, self.settings.swing_probability
+        kept, clock = self._kept, self._clock
+        before = len(kept)
         for leg, foot in enumerate(feet):
-            if foot is None or not probabilities[leg] < self.settings.swing_probability:
+            if foot is None or not probabilities[leg] < threshold:
                 continue
             if not lowest - foot.depth > height_half_m:
                 continue
             for joint in range(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG):
-                latest = self._latest[joint]
-                if latest is not None and math.isfinite(latest[0] + latest[1]):
-                    self._update(joint, latest[0], latest[1], forget)
-                self._latest[joint] = None
+                sample = latest[joint]
+                if sample is not None and math.isfinite(sample[0] + sample[1]):
+                    clock[joint] += step
+                    kept.extend((joint, sample[0], sample[1], clock[joint], step))
+                latest[joint] = None
+        self.learnt_samples += (len(kept) - before) // KEPT
+        least, most = BATCH
+        if len(kept) >= KEPT * min(most, max(least, self._taken_samples // 8)):
+            self._take_in()
 
-    def _update(self, joint: int, residual: float, rate: float, forget: float) -> None:
-        """One sample of ``joint`` into its least squares with forgetting ``forget`` (< 1; the
-        prior's information is kept: what forgetting takes from it, each sample gives back),
-        the residual's variance updated; solved every :data:`SOLVE_EVERY` samples. Written
-        out: the per-sample path.
+    def _take_in(self) -> None:
+        """The samples kept into the sums, each weighted by the forgetting over its joint's
+        learning time since (as if taken one by one: sums = f sums + sample, f = exp(-step /
+        forget_s)), the a priori errors' squares into the variance alike; then every joint that
+        learnt solved.
         """
-        state = self._joints[joint]
-        s = math.tanh(rate / self.settings.smooth_rate)  # the regressors: (1, rate, s)
-        t0, t1, t2 = state.theta
-        error = residual - (t0 + t1 * rate + t2 * s)
-        state.variance = forget * state.variance + (1.0 - forget) * error * error
-        i, m, keep = state.info, state.moment, 1.0 - forget
-        p0, p1, p2 = self._prior_info
-        state.info = [
-            forget * i[0] + 1.0 + keep * p0,
-            forget * i[1] + rate,
-            forget * i[2] + s,
-            forget * i[3] + rate * rate + keep * p1,
-            forget * i[4] + rate * s,
-            forget * i[5] + s * s + keep * p2,
-        ]
-        state.moment = [
-            forget * m[0] + residual,
-            forget * m[1] + rate * residual,
-            forget * m[2] + s * residual,
-        ]
-        squares = state.squares
-        state.squares = [forget * squares[0] + residual * residual, forget * squares[1] + 1.0]
-        state.pending += 1
-        if state.pending >= SOLVE_EVERY:
-            self._solve(state)
-        self.learnt_samples += 1
+        forget_s = self.settings.forget_s
+        data = np.fromiter(self._kept, float, len(self._kept)).reshape(-1, KEPT)
+        self._kept.clear()
+        joint, residual, rate = data[:, 0].astype(np.intp), data[:, 1], data[:, 2]
+        now = np.array(self._clock)
+        weight = np.exp((data[:, 3] - now[joint]) / forget_s)
+        sign = np.tanh(rate / self.settings.smooth_rate)
+        theta = self._theta[joint]
+        error = residual - (theta[:, 0] + theta[:, 1] * rate + theta[:, 2] * sign)
+        wr, ws, wy = weight * rate, weight * sign, weight * residual
+        keep = -np.expm1(-data[:, 4] / forget_s)  # 1 - f per sample
+        columns = np.stack(
+            [weight, wr, ws, wr * rate, wr * sign, ws * sign, wy, wy * rate, wy * sign,
+             wy * residual, weight * keep * error * error],
+        )  # fmt: skip
+        learnt = joint[:, None] == np.arange(JOINT_COUNT)
+        sums = columns @ learnt  # (11, 12): per joint
+        decay = np.exp((self._taken - now) / forget_s)
+        self._taken = now
+        self._sums = decay[:, None] * self._sums + sums[:10].T
+        self._variance = decay * self._variance + sums[10]
+        self._taken_samples += len(joint)
+        self._solve(learnt.any(axis=0))
 
-    def _solve(self, state: _Joint) -> None:
-        """``state``'s parameters, their covariance's diagonal and the terms taken off, from its
-        sums (the symmetric 3x3 inverted by cofactors; the prior keeps it positive definite).
+    def _solve(self, joints: np.ndarray) -> None:
+        """The parameters, their covariance's diagonal and the terms taken off of the
+        ``joints`` (a mask), from their sums and the prior (which keeps each 3x3 positive
+        definite).
         """
-        a00, a01, a02, a11, a12, a22 = state.info
-        c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
-        c11, c12, c22 = a00 * a22 - a02 * a02, a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
-        scale = 1.0 / (a00 * c00 + a01 * c01 + a02 * c02)
-        m0, m1, m2 = state.moment
-        state.theta = (
-            (c00 * m0 + c01 * m1 + c02 * m2) * scale,
-            (c01 * m0 + c11 * m1 + c12 * m2) * scale,
-            (c02 * m0 + c12 * m1 + c22 * m2) * scale,
-        )
-        state.diagonal = (c00 * scale, c11 * scale, c22 * scale)
-        state.applied = self._applied(state.theta, state.diagonal, state.variance)
-        state.pending = 0
+        sums = self._sums[joints]
+        info = sums[:, INFO].reshape(-1, PARAMETERS, PARAMETERS)
+        covariance = np.linalg.inv(info + np.diag(1.0 / self._prior))
+        theta = np.einsum("jab,jb->ja", covariance, sums[:, 6:9])
+        diagonal = np.diagonal(covariance, axis1=1, axis2=2)
+        self._theta[joints], self._diagonal[joints] = theta, diagonal
+        applied = self._applied_terms(theta, diagonal, self._variance[joints])
+        for joint, terms in zip(np.flatnonzero(joints), applied.tolist(), strict=True):
+            self._applied[joint] = (terms[0], terms[1], terms[2])
 
-    def _applied(
-        self, theta: Sequence[float], diagonal: Sequence[float], variance: float
-    ) -> tuple[float, float, float]:
-        """The parameters taken off: each estimate shrunk towards 0 by ``significance`` of its
-        standard deviation (the covariance's ``diagonal`` times the residual's ``variance``
-        [N² m²]), so a term the data do not show stays 0, then held to its bound and its sign
-        (friction opposes motion: viscous and Coulomb at most 0). The fit itself is left
-        unconstrained: clipping it would break the least squares' covariance.
+    def _applied_terms(
+        self, theta: np.ndarray, diagonal: np.ndarray, variance: np.ndarray
+    ) -> np.ndarray:
+        """The parameters taken off (rows of joints): each estimate shrunk towards 0 by
+        ``significance`` of its standard deviation (the covariance's ``diagonal`` times the
+        residual's ``variance`` [N² m²]), so a term the data do not show stays 0, then held to
+        its bound and its sign (friction opposes motion: viscous and Coulomb at most 0). The fit
+        itself is left unconstrained: clipping it would break the least squares' covariance.
         """
-        k, bounds = self.settings.significance, self.settings.bounds
-        bias_bound, viscous_bound, coulomb_bound = bounds
-        bias = _shrunk(theta[0], k * math.sqrt(diagonal[0] * variance))
-        viscous = _shrunk(theta[1], k * math.sqrt(diagonal[1] * variance))
-        coulomb = _shrunk(theta[2], k * math.sqrt(diagonal[2] * variance))
-        return (
-            min(bias_bound, max(-bias_bound, bias)),
-            min(0.0, max(-viscous_bound, viscous)),
-            min(0.0, max(-coulomb_bound, coulomb)),
-        )
+        margin = self.settings.significance * np.sqrt(diagonal * variance[:, None])
+        shrunk = _shrunk(theta, margin)
+        bias, viscous, coulomb = self.settings.bounds
+        result: np.ndarray = np.clip(shrunk, (-bias, -viscous, -coulomb), (bias, 0.0, 0.0))
+        return result
 
     @property
     def parameters(self) -> list[tuple[float, float, float]]:
@@ -260,24 +256,21 @@ class ModelCorrections:
         Coulomb [N m] friction as positive coefficients (the torque ``c(q̇) = bias - viscous q̇ -
         coulomb tanh(q̇/ε)``).
         """
-        return [(j.applied[0], -j.applied[1], -j.applied[2]) for j in self._joints]
+        return [(bias, -viscous, -coulomb) for bias, viscous, coulomb in self._applied]
 
     def fit_residuals(self) -> list[tuple[float, float, float]]:
         """Per joint (slot order): the swing samples learnt (forgotten alike), the residual's RMS
         [N m] in them before the fit and after it (the terms as fitted, before the shrinking).
         """
         out = []
-        for state in self._joints:
-            squares, samples = state.squares
+        for sums, theta in zip(self._sums, self._theta, strict=True):
+            samples, squares = float(sums[0]), float(sums[9])
             if not samples > 0.0:
                 out.append((0.0, math.nan, math.nan))
                 continue
-            theta, moment = state.theta, state.moment
-            a00, a01, a02, a11, a12, a22 = state.info
-            p0, p1, p2 = self._prior_info  # the data's information alone
-            info = ((a00 - p0, a01, a02), (a01, a11 - p1, a12), (a02, a12, a22 - p2))
-            quadratic = sum(theta[i] * info[i][j] * theta[j] for i in range(3) for j in range(3))
-            left = squares - 2.0 * sum(t * m for t, m in zip(theta, moment, strict=True))
+            info = sums[INFO].reshape(PARAMETERS, PARAMETERS)  # the data's information alone
+            quadratic = float(theta @ info @ theta)
+            left = squares - 2.0 * float(theta @ sums[6:9])
             after = max(0.0, left + quadratic) / samples
             out.append((samples, math.sqrt(squares / samples), math.sqrt(after)))
         return out
@@ -287,24 +280,20 @@ class ModelCorrections:
         (slot order) instead of the running estimate: a whole recording's fit judged by its own
         residual (:meth:`fit_residuals`).
         """
-        out = []
-        for state, variance in zip(self._joints, variances, strict=True):
-            bias, viscous, coulomb = self._applied(state.theta, state.diagonal, variance)
-            out.append((bias, -viscous, -coulomb))
-        return out
+        terms = self._applied_terms(self._theta, self._diagonal, np.asarray(variances, float))
+        return [(bias, -viscous, -coulomb) for bias, viscous, coulomb in terms.tolist()]
 
     def solve(self) -> None:
-        """Solve every joint's least squares now (the sums since the last solution taken in)."""
-        for state in self._joints:
-            if state.pending:
-                self._solve(state)
+        """Take in the samples kept and solve every joint's least squares now."""
+        if self._kept:
+            self._take_in()
 
     @property
     def fit(self) -> list[tuple[float, float, float]]:
         """Per joint, the least squares' estimates before the significance and the bounds, as
         :attr:`parameters` gives them.
         """
-        return [(j.theta[0], -j.theta[1], -j.theta[2]) for j in self._joints]
+        return [(bias, -viscous, -coulomb) for bias, viscous, coulomb in self._theta.tolist()]
 
     def values(self) -> dict[str, str]:
         """The terms taken off, per leg (``model_corrections_FR``...: its three joints'
@@ -334,8 +323,11 @@ class ModelCorrections:
         )
 
 
-def correction_values(corrections: ModelCorrections | None) -> dict[str, str]:
-    """The diagnostics' values of the corrections (None: off), for both nodes."""
+def correction_values(corrections: ModelCorrections | None, refused: str = "") -> dict[str, str]:
+    """The diagnostics' values of the corrections (None: off), for both nodes; ``refused``: why
+    a calibration's file was refused ("" none).
+    """
+    out = {"model_corrections_refused": refused} if refused else {}
     if corrections is None:
-        return {"model_corrections": OFF}
+        return {"model_corrections": OFF, **out}
     return {"model_corrections": "file" if corrections.fixed else ONLINE, **corrections.values()}

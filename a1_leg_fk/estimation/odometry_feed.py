@@ -29,9 +29,9 @@ from typing import NamedTuple
 from a1_leg_fk.estimation.contact_estimator import ContactStep, EvidenceCounts, ImuSample
 from a1_leg_fk.estimation.correction_file import CorrectionFileError
 from a1_leg_fk.estimation.filter_model import (
-    FLAT,
+    DEFAULT_GROUND,
+    FOOTHOLDS,
     LEGS,
-    LOCAL,
     MAX_BASE_SPEED_MPS,
     FilterSettings,
     LegMeasurement,
@@ -83,8 +83,9 @@ standing; ``kinematic`` the kinematics alone (efforts ignored)."""
 class OdometryFeed:
     """The base's state for one robot. ``radii``: the feet's rolling radii [m] (default: the
     URDF's collision spheres); ``use_imu`` false ignores IMU samples (legs alone); ``contacts``
-    one of :data:`CONTACT_SOURCES`; ``ground``: ``flat`` (the stance feet anchor the height) or
-    ``none`` (:data:`~a1_leg_fk.estimation.state_filter.GROUND_MODELS`);
+    one of :data:`CONTACT_SOURCES`; ``ground``: ``footholds`` (default: each stance foot held to
+    its foothold's anchored height), ``flat`` (the stance feet anchor the height at the first
+    feet's) or ``none`` (:data:`~a1_leg_fk.estimation.filter_model.GROUND_MODELS`);
     ``model_corrections``: the contact estimate's (:class:`ForcePass`).
     """
 
@@ -97,7 +98,7 @@ class OdometryFeed:
         use_imu: bool = True,
         contacts: str = AUTO,
         filter_settings: FilterSettings | None = None,
-        ground: str = FLAT,
+        ground: str = DEFAULT_GROUND,
         model_corrections: str = DEFAULT_MODEL_CORRECTIONS,
     ) -> None:
         if contacts not in CONTACT_SOURCES:
@@ -219,7 +220,7 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
-        grounds = self._grounds(feet) if self.filter.ground == LOCAL else None
+        grounds = self._grounds(feet) if self.filter.ground == FOOTHOLDS else None
         used = self.filter.update(
             stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
         )
@@ -227,22 +228,17 @@ class OdometryFeed:
         return self.filter.sample(stamp_ns, stance, used)
 
     def _grounds(self, feet: Sequence[Foot | None]) -> list[tuple[float, float] | None] | None:
-        """Per leg, the local ground's height [m, odom] under its foot and its variance [m²]
-        (None: no foot, or no ground yet), the feet placed by the last estimate's pose.
+        """Per leg, the ground's height [m, odom] under its foot and its variance [m²]
+        (:meth:`~a1_leg_fk.estimation.ground.LocalGround.under`, the feet placed by the last
+        estimate's pose); None before the first estimate.
         """
         last = self._last
         if last is None:
             return None
         centres = [None if foot is None else foot[0] for foot in feet]
-        grounds: list[tuple[float, float] | None] = [None] * len(feet)
         legs = range(len(feet))
-        for leg, (x, y, _) in contact_points(
-            last.position, last.orientation, centres, self.motion.radii, legs
-        ):
-            plane = self.ground.plane(x, y)
-            if plane is not None:
-                grounds[leg] = (plane.height_m, plane.covariance[0][0])
-        return grounds
+        points = contact_points(last.position, last.orientation, centres, self.motion.radii, legs)
+        return self.ground.under(points, len(feet))
 
     def _contacts(
         self,

@@ -16,8 +16,10 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
   :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability plus the
   touchdown's vertical transient (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`,
-  since the foot's first joint state in stance); on flat ground (``ground="flat"``) the stance
-  feet's heights ``p_z + (R r)_z`` equal the ground's, taken at the first feet believed; standing
+  since the foot's first joint state in stance); the stance feet's heights ``p_z + (R r)_z``
+  equal their footholds' anchored heights (``ground="footholds"``, the default,
+  :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
+  taken at the first feet believed; standing
   still (every foot in stance, none moving) a zero-velocity update.
 - **Gating** (:class:`~a1_leg_fk.estimation.foot_gate.FootGate`): each foot's innovation is
   tested alone (NIS against χ², 3 dof); a foot that fails (a slip, a swinging foot taken for
@@ -45,11 +47,12 @@ import numpy as np
 from a1_leg_fk.estimation.filter_history import FilterHistory
 from a1_leg_fk.estimation.filter_model import (
     ACCEL_BIAS,
+    DEFAULT_GROUND,
     FLAT,
+    FOOTHOLDS,
     GROUND_MODELS,
     GYRO_BIAS,
     LEGS,
-    LOCAL,
     POSITION,
     STATE,
     THETA,
@@ -90,7 +93,9 @@ class StateFilter:
     numpy's cost per call, not the arithmetic, sets the filter's speed (``bench/``).
     """
 
-    def __init__(self, settings: FilterSettings | None = None, ground: str = FLAT) -> None:
+    def __init__(
+        self, settings: FilterSettings | None = None, ground: str = DEFAULT_GROUND
+    ) -> None:
         if ground not in GROUND_MODELS:
             raise ValueError(f"ground must be one of {', '.join(GROUND_MODELS)}: {ground!r}")
         self.settings = s = settings or FilterSettings()
@@ -203,8 +208,9 @@ class StateFilter:
     ) -> list[int]:
         """Correct the state with one joint state's standing feet (None: a foot that does not
         stand, or unknown) and the IMU's orientation (None: none); the legs used (the gate's).
-        ``grounds`` (``ground="local"``): per leg, the local ground's height [m] under its foot
-        and its variance [m²] (None: unknown; the heights count when every standing foot has one).
+        ``grounds`` (``ground="footholds"``): per leg, the ground's height [m] under its foot
+        (its foothold's anchored height) and its variance [m²] (None: unknown; the heights count
+        when every standing foot has one).
 
         One stacked update (:class:`~a1_leg_fk.estimation.filter_stack.Stack`: the orientation,
         every standing foot, their heights, the zero-velocity update); the feet's gate reads its
@@ -218,7 +224,7 @@ class StateFilter:
         if orientation is None and not candidates and not still:
             return []
         local = None
-        if self.ground == LOCAL and grounds is not None:
+        if self.ground == FOOTHOLDS and grounds is not None:
             under = [grounds[leg] for leg in candidates]
             local = [ground for ground in under if ground is not None]
             local = local if len(local) == len(candidates) else None

@@ -23,9 +23,10 @@ when it is near the ground and nearly still:
   thresholds).
 * **Minimum phase.** Interior stances and swings shorter than ``min_phase_s`` (blips) are removed,
   shortest first (:mod:`a1_leg_fk.gait.phases`: a stance blip dropped, a swing blip bridged).
-* **Edges.** Each stance's first/last samples are trimmed to those within three noise deviations
-  (robust, from all stance heights; at least 1 mm) of the stance's median height, so the speed
-  window's reach does not bias touchdown early and lift-off late. An edge time is the midpoint
+* **Edges** (:func:`a1_leg_fk.gait.edges.fit_edges`). The speeds place edges late or early (a
+  foot unloads before it moves, may slide as it pushes off); the heights place them: a stance
+  ends where the foot starts to rise above the stance's level next to the edge and begins where
+  it stops coming down. An edge time is the midpoint
   between the last sample of one phase and the first of the next (unbiased on a sampling grid);
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
 
@@ -39,7 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, runs, segment_slices, stances_of
+from a1_leg_fk.gait.edges import fit_edges, stance_noise
+from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, segment_slices, stances_of
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -47,8 +49,6 @@ from a1_leg_fk.model.urdf import LegFkError
 MIN_SAMPLES = 5
 """Fewer valid rows than this cannot give a speed window and a phase on each side."""
 PLANE_REFITS = 3
-EDGE_NOISE_DEVIATIONS = 3.0
-EDGE_NOISE_FLOOR_M = 0.001
 SLOPE_RCOND = 0.01
 """Slopes along directions in which the still feet spread less than ~1 cm are not fitted (set
 0)."""
@@ -204,22 +204,6 @@ def hysteresis(heights: np.ndarray, speeds: np.ndarray, t: ContactThresholds) ->
     return state.astype(bool)
 
 
-def trim_edges(heights: np.ndarray, stance: np.ndarray, tolerance_m: float) -> np.ndarray:
-    """``stance`` with each stance's edge samples higher than its median + ``tolerance_m`` moved to
-    swing.
-    """
-    stance = stance.copy()
-    for first, last, value in runs(stance):
-        if not value:
-            continue
-        low = np.flatnonzero(
-            heights[first : last + 1] <= np.median(heights[first : last + 1]) + tolerance_m
-        )
-        stance[first : first + low[0]] = False
-        stance[first + low[-1] + 1 : last + 1] = False
-    return stance
-
-
 def detect_contacts(
     stamps_s: np.ndarray,
     world_feet: np.ndarray,
@@ -262,16 +246,12 @@ def detect_contacts(
             raw[rows, slot] = hysteresis(heights[rows, slot], speeds[rows, slot], per_leg[slot])
     stance, blips = apply_min_phase(times, raw, segments, thresholds.min_phase_s)
     blip_samples = stance != raw
-    stance_heights = heights[stance]
-    deviation = (
-        1.4826 * float(np.median(np.abs(stance_heights - np.median(stance_heights))))
-        if stance_heights.size
-        else 0.0
-    )
-    tolerance = max(EDGE_NOISE_DEVIATIONS * deviation, EDGE_NOISE_FLOOR_M)
     for slot in range(legs):
         for rows in segments[slot]:
-            stance[rows, slot] = trim_edges(heights[rows, slot], stance[rows, slot], tolerance)
+            noise = stance_noise(heights[rows, slot], stance[rows, slot])
+            stance[rows, slot] = fit_edges(
+                times[rows], heights[rows, slot], stance[rows, slot], noise
+            )
     stances = tuple(stances_of(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())
     if gaps:

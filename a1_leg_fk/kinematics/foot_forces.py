@@ -138,11 +138,16 @@ class FootForces:
         return ForceEstimate(np.array(out), np.array(missing), np.array(singular))
 
     def estimate_floats(
-        self, q: Sequence[float], tau: Sequence[float], gravity: Sequence[float]
+        self,
+        q: Sequence[float],
+        tau: Sequence[float],
+        gravity: Sequence[float],
+        legs: Sequence[bool] | None = None,
     ) -> tuple[list[list[float]], list[bool], list[bool]]:
         """:meth:`estimate` on Python floats, without numpy (the node's per-message path): 12
         angles [rad], 12 efforts [N m] and gravity (3,) [m/s^2]; per leg its force [N] (NaN when
-        none), whether it is missing and whether it is near-singular.
+        none), whether it is missing and whether it is near-singular; ``legs``: which legs to
+        solve (None: all; the others missing).
         """
         out = [[math.nan] * 3 for _ in range(LEGS)]
         missing, singular = [True] * LEGS, [False] * LEGS
@@ -151,6 +156,8 @@ class FootForces:
         if not (isfinite(gx) and isfinite(gy) and isfinite(gz)):
             return out, missing, singular
         for slot, statics in enumerate(self._legs):
+            if legs is not None and not legs[slot]:
+                continue
             first = slot * JOINTS_PER_LEG
             q0, q1, q2 = q[first : first + JOINTS_PER_LEG]
             t0, t1, t2 = tau[first : first + JOINTS_PER_LEG]

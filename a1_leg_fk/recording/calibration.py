@@ -20,7 +20,12 @@ from typing import Unpack
 
 import numpy as np
 
-from a1_leg_fk.estimation.correction_file import CorrectionFile
+from a1_leg_fk.estimation.correction_file import (
+    EFFORT_LATENCIES_S,
+    EFFORT_SCALES,
+    CorrectionFile,
+)
+from a1_leg_fk.estimation.effort_timing import EffortTiming
 from a1_leg_fk.estimation.model_corrections import ONLINE, CorrectionSettings
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.model.urdf import LegFkError
@@ -67,13 +72,27 @@ class _Standing:
 
 
 def calibrate_recording(
-    path: str | Path, *, progress: bool = False, **choices: Unpack[RecordingChoices]
+    path: str | Path,
+    *,
+    progress: bool = False,
+    timing: tuple[float, float] = (1.0, 0.0),
+    **choices: Unpack[RecordingChoices],
 ) -> CorrectionFile:
     """The calibration of the recording at ``path`` (``choices`` as
     :func:`~a1_leg_fk.recording.reader.open_recording`'s; forces always, the corrections
-    learning); :class:`LegFkError` (one line) for bad input or a recording that cannot identify
-    the terms or the payload.
+    learning); ``timing``: the efforts' scale and latency [s] (given, not fitted), undone before
+    the fit (:class:`EffortTiming`) and written to the file; :class:`LegFkError` (one line) for
+    bad input or a recording that cannot identify the terms or the payload.
     """
+    scale, latency_s = timing
+    for option, value, (least, most), unit in (
+        ("--effort-scale", scale, EFFORT_SCALES, 1.0),
+        ("--effort-latency-ms", latency_s, EFFORT_LATENCIES_S, 1e3),
+    ):
+        if not least <= value <= most:
+            raise LegFkError(
+                f"{option} {value * unit:g} is outside [{least * unit:g}, {most * unit:g}]"
+            )
     choices["forces"], choices["model_corrections"] = True, ONLINE
     recording = open_recording(path, **choices)
     try:
@@ -82,6 +101,7 @@ def calibrate_recording(
             raise LegFkError(f"{path}: no foot forces to calibrate from")
         estimator = forces.estimator
         estimator.correction_settings = CALIBRATION
+        estimator.timing = EffortTiming(scale, latency_s)
         standing = _Standing()
         for block in iter_foot_blocks(recording, progress=progress):
             standing.add(block)
@@ -111,4 +131,7 @@ def calibrate_recording(
         weight_n / STANDARD_GRAVITY - urdf_mass,
         standing.seconds,
         str(path),
+        urdf_mass,
+        scale,
+        latency_s,
     )

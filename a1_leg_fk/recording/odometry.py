@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Unpack
 import numpy as np
 
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
-from a1_leg_fk.estimation.filter_model import FLAT, FilterCounts, FilterSettings
+from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.ground import ground_values
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
@@ -71,7 +71,7 @@ class OdometryOptions:
     settings: OdometrySettings | None = None
     contacts: str = AUTO
     filter_settings: FilterSettings | None = None
-    ground: str = FLAT
+    ground: str = DEFAULT_GROUND
     smoothed: bool = False
     progress: bool = False
 

@@ -127,14 +127,15 @@ def fk_status(report: FkReport) -> tuple[bytes, str, dict[str, object]]:
 
 
 def force_values(
-    forces: ForcePass | None, problem: str, imu: ImuSample, gait_phase: str
+    forces: ForcePass | None, problem: str, imu: ImuSample, gait_phase: str, refused: str = ""
 ) -> dict[str, object]:
     """The foot-force part of the status: whether forces are estimated (else ``problem``), the
     force model and contact rule, the leg forces estimated, the legs without one (efforts
     missing, not finite or of the wrong length; near-singular), the joint states whose contacts
     had force evidence and those with kinematic evidence alone, what the latest ``imu`` gave
     (gravity's direction, gyro, accelerometer), the ``gait_phase`` input's state and the
-    threshold rule's forces [N], the model corrections' terms.
+    threshold rule's forces [N], the model corrections' terms (``refused``: why their file was
+    refused, "" none).
     """
     if forces is None:
         return {"foot_forces": problem}
@@ -163,7 +164,7 @@ def force_values(
         "gait_phase": gait_phase,
         "touchdown_force_n": f"{thresholds.touchdown_n:.3f}",
         "liftoff_force_n": f"{thresholds.liftoff_n:.3f}",
-        **correction_values(estimator.corrections),
+        **correction_values(estimator.corrections, refused),
     }
 
 

@@ -38,6 +38,7 @@ from a1_leg_fk.estimation.force_pass import ForcePass
 from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros import glue as ros_glue
+from a1_leg_fk.ros.correction_choice import with_corrections
 from a1_leg_fk.ros.diagnostics import FkReport, PeriodCounter, fk_status, force_values
 from a1_leg_fk.ros.foot_fk_parameters import FORCE_PARAMETERS, PARAMETERS
 from a1_leg_fk.ros.foot_output import FootOutput
@@ -236,7 +237,8 @@ class FootFkNode(Node):
         inputs_rejected = self._inputs.rejected_since()
         if self._diagnostics_pub.get_subscription_count() == 0:
             return
-        robot = self._robot
+        robot, problem, phase = self._robot, self._forces_problem, self._gait_phase.status()
+        refused = self._corrections_refused
         report = FkReport(
             counts=self._tracker.counts,
             received_in_period=received,
@@ -250,9 +252,7 @@ class FootFkNode(Node):
             description_rejected=robot.topic_rejected,
             last_verify=self._last_verify,
             verify_disagreed=self._verify_disagreed,
-            forces=force_values(
-                self._forces, self._forces_problem, self._imu, self._gait_phase.status()
-            ),
+            forces=force_values(self._forces, problem, self._imu, phase, refused),
             inputs_rejected_in_period=inputs_rejected,
             inputs_rejected=self._inputs.values(),
         )
@@ -349,17 +349,20 @@ class FootFkNode(Node):
         ``publish_forces`` is off or the URDF or thresholds do not allow them (with a warning).
         """
         self._forces, self._contacts, self._forces_problem = None, None, "off"
+        self._corrections_refused = ""
         if not self._bool("publish_forces"):
             return
         touchdown, liftoff = (
             self._float(name) or None for name in ("touchdown_force_n", "liftoff_force_n")
         )
-        choices = [
-            self.get_parameter(name).value
-            for name in ("force_model", "contact_rule", "model_corrections")
-        ]
+        model, rule = (self.get_parameter(name).value for name in ("force_model", "contact_rule"))
         try:
-            self._forces = ForcePass(self._model.quadruped, (touchdown, liftoff), *choices)
+            self._forces, self._corrections_refused = with_corrections(
+                self,
+                lambda fixes: ForcePass(
+                    self._model.quadruped, (touchdown, liftoff), model, rule, fixes
+                ),
+            )
         except LegFkError as error:
             self._forces_problem = f"none: {error}"
             self.get_logger().warn(f"no foot forces: {error}")

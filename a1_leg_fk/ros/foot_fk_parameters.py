@@ -8,6 +8,7 @@ from __future__ import annotations
 from rcl_interfaces.msg import ParameterType
 
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, MODEL_CORRECTIONS
+from a1_leg_fk.ros.correction_choice import FILE
 from a1_leg_fk.ros.joint_input import INPUT_PARAMETER
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 
@@ -31,12 +32,24 @@ MODEL_CORRECTIONS_PARAMETER = ParameterSpec(
     ParameterType.PARAMETER_STRING,
     "The joints' friction and torque bias the URDF does not list, learnt while a foot is surely "
     "in the air and taken off the momentum observer's torques, each term once it is "
-    "significant ('online'; force_model 'dynamic', contact_rule 'filter'), or not ('off'); "
+    "significant ('online'; force_model 'dynamic', contact_rule 'filter'), read from "
+    "model_corrections_file ('file'; a file given with 'online' is used too), or not ('off'); "
     "the terms in /diagnostics",
     read_only=True,
-    choices=MODEL_CORRECTIONS,
+    choices=(*MODEL_CORRECTIONS, FILE),
 )
 """``model_corrections`` of both nodes (foot_fk_node's forces, leg_odometry_node's contacts)."""
+MODEL_CORRECTIONS_FILE_PARAMETER = ParameterSpec(
+    "model_corrections_file",
+    "",
+    ParameterType.PARAMETER_STRING,
+    "A calibration's file (a1-leg-fk calibrate -o FILE): its joints' bias and friction taken "
+    "off as they are, its payload added to the weight; one that cannot be read or does not "
+    "match the robot is refused in one logged line and the node runs on the nominal model "
+    "(model_corrections_refused in /diagnostics); '' none",
+    read_only=True,
+)
+"""``model_corrections_file`` of both nodes."""
 
 PARAMETERS = (
     BASE_FRAME_PARAMETER,
@@ -129,6 +142,7 @@ PARAMETERS = (
         value_range=CONTACT_FORCE_RANGE_N,
     ),
     MODEL_CORRECTIONS_PARAMETER,
+    MODEL_CORRECTIONS_FILE_PARAMETER,
     ParameterSpec(
         "gait_phase_timeout_s",
         0.1,

@@ -44,6 +44,7 @@ from a1_leg_fk.kinematics.robot_config import RobotConfig
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 from a1_leg_fk.ros import glue as ros_glue
+from a1_leg_fk.ros.correction_choice import with_corrections
 from a1_leg_fk.ros.diagnostics import PeriodCounter
 from a1_leg_fk.ros.glue import JOINT_STATES_QOS, OUTPUT_QOS
 from a1_leg_fk.ros.guarded_input import GuardedInputs, read_imu
@@ -123,18 +124,21 @@ class LegOdometryNode(Node):
         self._config = config
         self._tracker = FootTracker(config.quadruped)
         radius = self._setting("foot_radius_m")
-        self._feed = OdometryFeed(
-            config.quadruped,
-            OdometrySettings(
-                slip_threshold_mps=self._setting("slip_threshold_mps"),
-                stance_band_m=self._setting("stance_band_m"),
+        self._feed, self._corrections_refused = with_corrections(
+            self,
+            lambda corrections: OdometryFeed(
+                config.quadruped,
+                OdometrySettings(
+                    slip_threshold_mps=self._setting("slip_threshold_mps"),
+                    stance_band_m=self._setting("stance_band_m"),
+                ),
+                radius if radius >= 0.0 else None,
+                self._setting("imu_timeout_s"),
+                use_imu=bool(self._setting("use_imu")),
+                contacts=self._contacts,
+                ground=self._ground,
+                model_corrections=corrections,
             ),
-            radius if radius >= 0.0 else None,
-            self._setting("imu_timeout_s"),
-            use_imu=bool(self._setting("use_imu")),
-            contacts=self._contacts,
-            ground=self._ground,
-            model_corrections=str(self.get_parameter("model_corrections").value),
         )
         if self._feed.note and self._contacts != KINEMATIC:
             self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
@@ -290,6 +294,7 @@ class LegOdometryNode(Node):
                 contact_counts=self._feed.counts,
                 contacts_note=self._feed.note,
                 corrections=self._feed.corrections,
+                corrections_refused=self._corrections_refused,
                 filtered=self._feed.samples_filtered,
                 filter=self._feed.filter.counts,
                 biases=(

@@ -49,6 +49,7 @@ class OdometryReport:
     contact_counts: EvidenceCounts
     contacts_note: str  # why there are no foot forces ("" when there are)
     corrections: ModelCorrections | None  # the contacts' model corrections (None: off)
+    corrections_refused: str  # why the corrections' file was refused ("" none)
     filtered: int  # samples the state filter gave
     filter: FilterCounts
     biases: tuple[tuple[float, ...], tuple[float, ...]]  # gyro [rad/s], accelerometer [m/s^2]
@@ -104,7 +105,7 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "contacts": report.contacts,
         "samples_with_force_evidence": report.contact_counts.force,
         "samples_with_kinematic_evidence_only": report.contact_counts.kinematic,
-        **correction_values(report.corrections),
+        **correction_values(report.corrections, report.corrections_refused),
         **{f"feet_used_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.used)},
         **{f"feet_rejected_{leg}": n for leg, n in zip(LEG_NAMES, report.filter.rejected)},
         "gate_resets": report.filter.gate_resets,

@@ -7,11 +7,14 @@ from __future__ import annotations
 
 from rcl_interfaces.msg import ParameterType
 
-from a1_leg_fk.estimation.filter_model import FLAT
+from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S
 from a1_leg_fk.estimation.odometry import OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO
-from a1_leg_fk.ros.foot_fk_parameters import MODEL_CORRECTIONS_PARAMETER
+from a1_leg_fk.ros.foot_fk_parameters import (
+    MODEL_CORRECTIONS_FILE_PARAMETER,
+    MODEL_CORRECTIONS_PARAMETER,
+)
 from a1_leg_fk.ros.joint_input import INPUT_PARAMETER
 from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 
@@ -45,13 +48,16 @@ PARAMETERS = (
     ),
     ParameterSpec(
         "ground",
-        FLAT,
+        DEFAULT_GROUND,
         ParameterType.PARAMETER_STRING,
-        "flat: the stance feet's heights anchor the height (flat ground); none: they do not; "
-        "local: each stance foot's height is held to the local ground under it (slopes, stairs)",
+        "footholds (default): each stance foot's height is held to its foothold's, anchored where "
+        "it agrees with the ground predicted from the earlier footholds (flat floors, slopes, "
+        "stairs, rough ground); flat: to the first feet's height (a known flat floor); none: not "
+        "held",
         read_only=True,
     ),
     MODEL_CORRECTIONS_PARAMETER,
+    MODEL_CORRECTIONS_FILE_PARAMETER,
     ParameterSpec(
         "imu_timeout_s",
         DEFAULT_IMU_TIMEOUT_S,

@@ -63,8 +63,11 @@ class LiveRows:
         self._joint_slot = {name: slot for slot, name in enumerate(joints)}
         self._width = _ANGLES + len(joints)
         self._rows: dict[int, tuple[float, np.ndarray]] = {}  # stamp -> (arrival, values)
+        self.messages = 0
+        """Messages taken in so far (every method call is one)."""
 
     def _row(self, stamp_ns: int) -> np.ndarray:
+        self.messages += 1
         entry = self._rows.get(stamp_ns)
         if entry is None:
             entry = self._rows[stamp_ns] = (time.monotonic(), np.full(self._width, math.nan))
@@ -104,12 +107,20 @@ class LiveRows:
         row[_LINEAR], row[_VARIANCES] = linear, variances
 
     def angles(self, stamp_ns: int, names: Sequence[str], positions: Vector) -> None:
-        """``joint_states``: the angles [rad] of the joints named (others ignored)."""
+        """``joint_states``: the angles [rad] of the joints named (others ignored: a message with
+        none of the robot's joints makes no row).
+        """
+        known = [
+            (slot, angle)
+            for name, angle in zip(names, positions)
+            if (slot := self._joint_slot.get(name)) is not None
+        ]
+        if not known:
+            self.messages += 1
+            return
         row = self._row(stamp_ns)
-        for name, angle in zip(names, positions):
-            slot = self._joint_slot.get(name)
-            if slot is not None:
-                row[_ANGLES + slot] = angle
+        for slot, angle in known:
+            row[_ANGLES + slot] = angle
 
     def take(self, now: float, everything: bool = False) -> tuple[FeetRows, BaseRows] | None:
         """The rows whose first message came :data:`HOLD_S` before ``now`` [s, monotonic] (all

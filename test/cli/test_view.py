@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from bag_factory import BagSpec, write_bag
 from exported_urdf import exported_quadruped
-from odometry_bags import IMU_TOPIC, TRUTH_TOPIC, imu_message, write_sim_bag
+from odometry_bags import IMU_TOPIC, TRUTH_TOPIC, imu_message, stamps_of, write_sim_bag
+from pybullet_sim import rotation_matrices as rotations
 from pybullet_sim import simulate, walking_targets
 from rrd_reader import read_rrd, series
 
@@ -26,6 +27,12 @@ SIM_S = 2.0
 FLOAT32_M = 1e-6
 """[m] Rerun keeps positions and transforms as float32: 0.3 m to about 3e-8 m, four composed
 transforms to about 1e-7 m; 1e-9 m is below what an .rrd holds."""
+
+
+TRUTH_VELOCITY_M_S = 0.01
+"""[m/s] The truth's velocity, differenced from its 2 ms poses, against PyBullet's: central
+differences of a trot (accelerations of a few m/s^2, changing over tens of ms) are within a few
+mm/s, a tenth of the estimate's errors it is drawn against."""
 
 
 @pytest.fixture(scope="module")
@@ -85,13 +92,25 @@ def test_series_equal_the_csvs(run, outputs) -> None:
         stamps, v = series(entities, f"plots/velocity/{axis}/estimate")
         assert (stamps == odom["stamp_ns"]).all()
         assert np.allclose(v, odom[f"v{axis}"], rtol=0, atol=1e-6)
+        sigma = np.sqrt(odom[f"cov_v{axis}"])
         _, upper = series(entities, f"plots/velocity/{axis}/plus_3sigma")
-        assert np.allclose(upper, odom[f"v{axis}"] + 3 * np.sqrt(odom[f"cov_v{axis}"]), atol=1e-6)
-        assert f"/plots/velocity/{axis}/truth" in entities
+        assert np.allclose(upper, odom[f"v{axis}"] + 3 * sigma, rtol=0, atol=1e-6)
+        _, lower = series(entities, f"plots/velocity/{axis}/minus_3sigma")
+        assert np.allclose(lower, odom[f"v{axis}"] - 3 * sigma, rtol=0, atol=1e-6)
+    true_body = np.einsum("nji,nj->ni", rotations(run.base_quaternions), run.base_velocities)
+    for slot, axis in enumerate("xyz"):  # the truth's: PyBullet's own velocity, in the base frame
+        stamps, v = series(entities, f"plots/velocity/{axis}/truth")
+        rows = np.searchsorted(stamps_of(run), stamps)
+        assert len(stamps) == len(odom["stamp_ns"])
+        error = np.abs(v - true_body[rows, slot])[5:-5]  # the ends: one-sided differences
+        assert np.median(error) < TRUTH_VELOCITY_M_S, (axis, np.median(error), error.max())
     base = entities["/robot/base_pose"]
     assert (np.array(base["stamp"]) == odom["stamp_ns"]).all()
     translation = np.array([v[0] for v in base["Transform3D:translation"]])
     assert np.abs(translation - np.stack([odom[a] for a in "xyz"], axis=1)).max() < FLOAT32_M
+    quaternion = np.array([v[0] for v in base["Transform3D:quaternion"]])
+    expected = np.stack([odom[f"q{a}"] for a in "xyzw"], axis=1)
+    assert np.abs(quaternion - expected).max() < 1e-6  # unit quaternions in float32
     for name in ("plots/filter/nis", "plots/gait/FR", "plots/normal_force/FR", "odom/path"):
         assert any(key.endswith(name) for key in entities), name
     summary = entities["static:/summary"]["TextDocument:text"][0][0]

@@ -33,6 +33,18 @@ def test_force_evidence_alone_is_a_clipped_logistic() -> None:
     assert out == pytest.approx([sigmoid(2.0), sigmoid(-1.0), sigmoid(4.0), 0.5], abs=1e-12)
 
 
+def test_a_spread_weakens_a_load_as_stance_evidence_never_its_absence() -> None:
+    """The efforts' spread sigma widens the force scale to sqrt(0.6^2 + sigma^2) where the load
+    is above its half (by hand: 0.8 N -> 1.0 N, 0.6 N -> 0.6 * sqrt(2)); a load below it
+    stays full swing evidence, a NaN spread is none."""
+    contacts = ContactFilter(MODEL)
+    forces = [3.6 + 2 * 0.6, 3.6 + 3 * 0.6, 3.6 - 0.6, 3.6 + 2 * 0.6]
+    spreads = [0.8, 0.6, 50.0, math.nan]
+    out = contacts.update(0.0, [None] * 4, (STILL, None), forces, None, spreads)
+    expected = [1.2 / 1.0, 1.8 / (0.6 * math.sqrt(2.0)), -1.0, 2.0]
+    assert out == pytest.approx([sigmoid(odds) for odds in expected], abs=1e-12)
+
+
 def test_the_transition_model_pulls_towards_even_odds() -> None:
     contacts = ContactFilter(MODEL)
     contacts.probabilities = [1.0, 0.0, 0.9, 0.5]

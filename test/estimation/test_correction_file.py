@@ -18,13 +18,16 @@ from a1_leg_fk.model.urdf import LegFkError
 A1 = Quadruped.from_urdf()
 TERMS = tuple((round(0.1 * j, 4), round(0.01 * j, 4), round(0.05 * j, 4)) for j in range(12))
 """Per joint: bias [N m], viscous [N m s/rad], Coulomb [N m], all within the bounds."""
+A1_KG = 12.458
+"""pybullet_data's a1.urdf: the sum of its links' masses [kg] (trunk 4.713, 4 x (hip 0.696,
+thigh 1.013, calf 0.166, toe 0.06), five 1 g links), by hand."""
 
 
 def written(tmp_path: Path, **changes: object) -> Path:
     """A calibration of the A1 (:data:`TERMS`, 1.5 kg of payload) with ``changes`` made to its
     document (``joint__NAME`` replaces one joint's entry)."""
     calibration = CorrectionFile(
-        A1.joint_names, TERMS, tuple((100.0, 0.5, 0.1) for _ in TERMS), 1.5, 0.4, "a run"
+        A1.joint_names, TERMS, tuple((100.0, 0.5, 0.1) for _ in TERMS), 1.5, 0.4, "a run", A1_KG
     )
     document = json.loads(calibration.text())
     for key, value in changes.items():
@@ -39,7 +42,7 @@ def written(tmp_path: Path, **changes: object) -> Path:
 
 def test_a_calibration_is_read_back_and_taken_off_as_it_is(tmp_path: Path) -> None:
     path = written(tmp_path)
-    calibration = read_correction_file(path, A1.joint_names, 12.0)
+    calibration = read_correction_file(path, A1.joint_names, A1_KG)
     assert calibration.terms == TERMS and calibration.payload_kg == 1.5
     estimator = ContactEstimator(A1, model_corrections=str(path))
     corrections = estimator.corrections
@@ -66,6 +69,8 @@ def test_a_calibration_is_read_back_and_taken_off_as_it_is(tmp_path: Path) -> No
         ({"payload_kg": 1e3}, "payload_kg 1000.0 is absurd"),
         ({"payload_kg": math.nan}, "payload_kg nan is absurd"),
         ({"format": "something else"}, "format is not"),
+        ({"urdf_mass_kg": 20.638}, "made for a robot whose URDF weighs 20.638 kg"),
+        ({"urdf_mass_kg": "a1"}, "urdf_mass_kg is not a number"),
     ],
 )
 def test_a_file_that_does_not_match_the_robot_is_refused(

@@ -95,11 +95,12 @@ def test_footholds_are_stances_kept_for_the_window() -> None:
     ground = LocalGround(window_s=1.0, max_footholds=3)
     assert ground.plane(0.0, 0.0) is None
     ground.update(0.0, [(0, (0.1, 0.1, 0.0)), (3, (-0.1, -0.1, 0.0))])
-    ground.update(0.1, [(0, (0.1, 0.1, 0.02)), (3, (-0.1, -0.1, 0.0))])
+    ground.update(0.1, [(0, (0.12, 0.1, 0.02)), (3, (-0.1, -0.1, 0.0))])
     assert np.allclose(ground.points(), [(0.1, 0.1, 0.0), (-0.1, -0.1, 0.0)])  # touchdowns
     ground.update(0.2, [(1, (0.1, -0.1, 0.0))])  # 0 and 3 lift: two footholds
     assert [foothold.samples for foothold in ground.footholds] == [2, 2]
-    assert np.allclose(ground.footholds[0].point, (0.1, 0.1, 0.01))  # the stance's mean
+    # the stance's mean (x, y) at its touchdown's anchored height, not the sinking foot's mean
+    assert np.allclose(ground.footholds[0].point, (0.11, 0.1, 0.0))
     assert len(ground.points()) == 3
     ground.update(1.25, [(1, (0.1, -0.1, 0.0))])  # 0.2 + 1.0 < 1.25: both expired
     assert len(ground.footholds) == 0 and len(ground.points()) == 1
@@ -123,7 +124,7 @@ def test_the_kept_fit_moved_to_the_base_is_the_fit_about_the_base() -> None:
     for: the same numbers as a fit about that point."""
     rng = np.random.default_rng(5)
     points = _on_plane(0.2, 0.12, -0.07, rng.normal(0.0, 0.01, 8))
-    ground = LocalGround(max_footholds=8)
+    ground = LocalGround(max_footholds=8, step_gate=1e-9)  # every foothold at its own height
     for stamp, point in enumerate(points):
         ground.update(stamp * 0.1, [(stamp % 4, point)])
     ground.update(0.8, [])
@@ -135,5 +136,47 @@ def test_the_kept_fit_moved_to_the_base_is_the_fit_about_the_base() -> None:
 
 
 def test_bad_settings_are_refused() -> None:
-    with pytest.raises(ValueError, match="window_s"):
+    with pytest.raises(ValueError, match="settings"):
         LocalGround(window_s=0.0)
+
+
+def test_touchdowns_are_anchored_on_the_ground_not_on_the_drifting_estimate() -> None:
+    """A trot's diagonals (0.2 s each, 0.1 m apart) over a floor with a 4 cm step up at x = 1 m,
+    the contact points carrying the estimate's drift (2 cm/s up, common to every foot of a
+    sample): a touchdown's height is taken against the standing feet's anchors, so the drift
+    cancels (but for the 10 ms between the last sample of the feet that lift and the first of
+    those that land: 0.2 mm a step); where the floor predicts it (level, the same tread) the
+    foothold takes the prediction, where a step lifts it, its own height: every anchor is the
+    truth's."""
+    ground = LocalGround()
+    for step in range(40):
+        pair = (0, 3) if step % 2 == 0 else (1, 2)
+        feet = []
+        for leg in pair:
+            x = 0.1 * step + (0.18 if leg < 2 else -0.18)
+            feet.append((leg, x, 0.13 if leg % 2 else -0.13, 0.04 if x > 1.0 else 0.0))
+        for t in (0.2 * step, 0.2 * step + 0.19):  # touchdown, the stance's last sample
+            ground.update(t, [(leg, (x, y, z + 0.02 * t)) for leg, x, y, z in feet])
+        anchored = ground.under([(leg, (x, y, math.nan)) for leg, x, y, _ in feet], 4)
+        for leg, x, _, z in feet:
+            assert anchored[leg] == pytest.approx((z, 0.0), abs=5e-4), (step, leg, x)
+
+
+def test_a_tilt_below_a_degree_is_taken_as_level() -> None:
+    """A trot over a flat floor seen through an IMU mounted 0.3° off (the noise model's mounting
+    error: every contact point's height tilted by tan 0.3° along x): the feet's differences show a
+    0.3° slope, which the anchors do not follow (a floor taken for a slope would climb 0.5 % of
+    the path); a 5° slope, which they do."""
+    for degrees, follows in ((0.3, False), (5.0, True)):
+        slope = math.tan(math.radians(degrees))
+        ground = LocalGround()
+        for step in range(30):
+            pair = (0, 3) if step % 2 == 0 else (1, 2)
+            feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
+                    for leg in pair]  # fmt: skip
+            for t in (0.2 * step, 0.2 * step + 0.19):
+                ground.update(t, [(leg, (x, y, slope * x)) for leg, x, y in feet])
+        heights = [z for _, _, z in ground.points()]
+        xs = [x for x, _, _ in ground.points()]
+        expected = [slope * x for x in xs] if follows else [heights[0]] * len(xs)
+        assert heights == pytest.approx(expected, abs=2e-3), degrees

@@ -125,3 +125,30 @@ def test_the_estimator_takes_online_off_or_a_file() -> None:
     assert ContactEstimator(a1_quadruped, model_corrections="off").corrections is None
     with pytest.raises(LegFkError, match="corrections file onlin: cannot be read"):
         ContactEstimator(a1_quadruped, model_corrections="onlin")  # neither mode nor a file
+
+
+def test_the_samples_taken_in_at_once_are_the_forgotten_least_squares() -> None:
+    """700 swing samples of FR's three joints (residual 0.3 - 0.1 q̇ - 0.4 tanh(q̇/0.1) N m with
+    noise), forgetting 0.5 s so it weighs: the fit equals the weighted least squares written
+    out by hand, weights exp(-(T - t_i) / 0.5 s), prior information (0.5/3)², (0.5/0.5)²,
+    (0.5/1.5)² (the noise over each bound, squared); the samples counted as they come."""
+    corrections = ModelCorrections(CorrectionSettings(forget_s=0.5))
+    rng = np.random.default_rng(3)
+    rates = rng.uniform(-5.0, 5.0, 700)
+    sign = np.tanh(rates / 0.1)
+    residuals = 0.3 - 0.1 * rates - 0.4 * sign + rng.normal(0.0, 0.05, 700)
+    for count, (residual, rate) in enumerate(zip(residuals.tolist(), rates.tolist()), 1):
+        for joint in range(3):
+            corrections.correct(joint, residual, rate)
+        corrections.learn(STEP_S, SWING, FEET, 0.05)
+        assert corrections.learnt_samples == 3 * count
+    corrections.solve()
+    weights = np.exp(-(700 - np.arange(1, 701)) * STEP_S / 0.5)
+    regressors = np.stack([np.ones(700), rates, sign], axis=1)
+    information = regressors.T @ (weights[:, None] * regressors)
+    information += np.diag([(0.5 / 3.0) ** 2, (0.5 / 0.5) ** 2, (0.5 / 1.5) ** 2])
+    theta = np.linalg.solve(information, regressors.T @ (weights * residuals))
+    for joint in range(3):
+        bias, viscous, coulomb = corrections.fit[joint]
+        assert np.allclose([bias, -viscous, -coulomb], theta, rtol=1e-9, atol=1e-12)
+    assert np.allclose(theta, [0.3, -0.1, -0.4], atol=0.02)

@@ -343,6 +343,21 @@ def test_one_configuration_equals_the_batch() -> None:
     assert np.isfinite(batch).all(axis=2).sum() == 30 * 4 - 2
 
 
+def test_the_legs_asked_for_are_the_batch_and_the_others_missing() -> None:
+    """``estimate_floats(..., legs)`` (the contact filter's effort doubt asks only for loaded
+    feet): each asked leg's force is the batch's, every other leg NaN and missing."""
+    quadruped = Quadruped.from_urdf()
+    statics = FootForces(quadruped)
+    rng = np.random.default_rng(5)
+    angles = np.array(list(STAND_LEG) * 4) + rng.uniform(-0.3, 0.3, 12)
+    efforts, gravity = rng.uniform(-10.0, 10.0, 12), [0.5, -0.3, -9.7]
+    batch = statics.estimate_batch(angles[None], efforts[None], gravity).forces[0]
+    legs = [True, False, False, True]
+    forces, missing, _ = statics.estimate_floats(angles.tolist(), efforts.tolist(), gravity, legs)
+    np.testing.assert_allclose(np.array(forces)[[0, 3]], batch[[0, 3]], rtol=1e-12, atol=1e-9)
+    assert np.isnan(np.array(forces)[[1, 2]]).all() and missing == [False, True, True, False]
+
+
 def test_urdf_masses_and_foot_spheres_are_read() -> None:
     """<inertial> mass and centre (defaults: 0 kg without <mass>, the link origin without
     <origin>), <collision> spheres; bad values name the link.

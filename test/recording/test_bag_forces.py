@@ -462,3 +462,19 @@ def test_a_corrections_file_of_another_robot_is_refused_in_one_line(
         assert cli.main(command) == 2, command[0]
         error = capsys.readouterr().err
         assert error.count("\n") == 1 and f"corrections file {other}" in error, error
+
+
+@pytest.mark.parametrize(
+    "given", [["--effort-scale", "5"], ["--effort-scale", "0.2"], ["--effort-latency-ms", "-1"]]
+)
+def test_calibrate_refuses_an_absurd_effort_scale_or_latency(
+    tmp_path: Path, given: list[str], capsys: pytest.CaptureFixture
+) -> None:
+    """One line naming the option and its range, exit 2, nothing written."""
+    out = tmp_path / "out.yaml"
+    arguments = ["calibrate", str(tmp_path / "bag"), *given, "--quiet", "-o", str(out)]
+    assert cli.main(arguments) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and f"{given[0]} {given[1]} is outside" in error, error
+    assert ("[0.5, 2]" if given[0] == "--effort-scale" else "[0, 20]") in error
+    assert not out.exists()

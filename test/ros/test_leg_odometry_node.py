@@ -172,7 +172,9 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("contacts", value="x")]
         )
-    with pytest.raises(LegFkError, match="parameter ground must be flat, none, local: 'stairs'"):
+    with pytest.raises(
+        LegFkError, match="parameter ground must be footholds, flat, none: 'stairs'"
+    ):
         LegOdometryNode(
             context=ros.context, parameter_overrides=[Parameter("ground", value="stairs")]
         )
@@ -180,6 +182,6 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         context=ros.context, parameter_overrides=[Parameter("contacts", value="kinematic")]
     )
     try:
-        assert node._feed.source == "kinematic" and node._feed.filter.ground == "flat"
+        assert node._feed.source == "kinematic" and node._feed.filter.ground == "footholds"
     finally:
         node.destroy_node()

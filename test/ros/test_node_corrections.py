@@ -27,15 +27,15 @@ OFFSET_NM = 0.5
     [("foot_fk_node", node_command), ("leg_odometry_node", odometry_node_command)],
 )
 def test_a_bad_model_corrections_is_refused_in_one_line(processes, executable, command) -> None:
-    process = processes.start(command("-p", "model_corrections:=file"))
+    process = processes.start(command("-p", "model_corrections:=files"))
     try:
         assert process.wait(30) == 2
     except subprocess.TimeoutExpired:
-        pytest.fail(f"{executable} kept running with model_corrections file")
+        pytest.fail(f"{executable} kept running with model_corrections files")
     output = processes.output(process)
     ours = [line for line in output.splitlines() if line.startswith(f"{executable}:")]
     assert ours == [
-        f"{executable}: parameter model_corrections must be one of online, off: 'file'"
+        f"{executable}: parameter model_corrections must be one of online, off, file: 'files'"
     ], output
     assert "Traceback" not in output
 

@@ -48,3 +48,12 @@ def test_everything_takes_the_waiting_rows() -> None:
     rows.foot(0, 5, (0.0, 0.0, -0.3))
     taken = rows.take(time.monotonic(), everything=True)
     assert taken is not None and taken[0].stamps_ns.tolist() == [5]
+
+
+def test_a_joint_state_without_the_robots_joints_makes_no_row() -> None:
+    rows = LiveRows(JOINTS)
+    rows.angles(7, ["gripper_joint"], (0.5,))
+    rows.angles(8, [], ())
+    assert rows.take(time.monotonic(), everything=True) is None
+    rows.foot(1, 9, (0.1, 0.0, -0.3))
+    assert rows.messages == 3  # every message counted (echo's drain waits on the count)

@@ -1,0 +1,171 @@
+"""Each foot's height above the local ground, for the contact filter's kinematic evidence (plain
+floats, per sample: the node runs it for every joint state).
+
+A flat-floor rule reads a foot's height against the lowest foot along gravity: on a slope, a foot
+on the higher side stands while it is "high" (a 5° slope lifts the A1's front feet 3 cm above its
+rear ones, twice the filter's even-odds height). Here the ground's slope is the plane through the
+recent footholds, fitted by the odometry's own rule (:class:`~a1_leg_fk.estimation.ground.
+LocalGround`), in a frame the contact estimate keeps by itself, without the odometry:
+
+- gravity-levelled: z up (minus ``down``), x the base's x along the horizontal, turned by a
+  heading ``psi`` [rad] integrated from the gyro's rate about z;
+- carried by the standing feet: the base moves by the mean displacement, in that frame, of the
+  standing feet (a standing foot is still) whose speed is within :data:`CARRY_GATE_MPS` of the
+  base's at the previous sample (a foot the estimate still holds while it lifts, or already
+  holds while it lands, moves differently: left out), else of the one closest to it; with none
+  standing (a flight), at the previous speed. The footholds left behind stay put.
+
+A slope within :data:`SIGNIFICANT` standard deviations of level (the plane's own covariance) is
+taken for level: on a flat floor the rule is the flat-floor rule, exactly. A foot's height [m] is
+then its contact point's height with the slope taken off (``z - gx x - gy y``), above the lowest
+foot's: the slope comes from the footholds, the heights from the feet now, so that the frame's
+slow vertical drift does not bias them. Before the first foothold there is no slope: None.
+Absurd input is kept out: a contact point farther than :data:`MAX_REACH_M` from the base is
+unknown, and a frame carried beyond :data:`MAX_FRAME_M` starts anew.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from a1_leg_fk.estimation.ground import LocalGround
+from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.model.legs import LEG_NAMES
+
+LEGS = len(LEG_NAMES)
+Vector = tuple[float, float, float]
+SIGNIFICANT = 2.0
+"""A slope smaller than this many of its standard deviations is taken for level."""
+MAX_REACH_M = 10.0
+"""[m] a contact point farther than this from the base along any axis is no foot (absurd input):
+unknown."""
+MAX_FRAME_M = 1.0e6
+"""[m] a frame whose base has gone farther (a gap of hours, absurd speeds) starts anew."""
+CARRY_GATE_MPS = 0.1
+"""[m/s] a standing foot carries the frame while its speed is this close to the base's."""
+
+
+class FootGround:
+    """The frame, the base's place in it, the footholds and the plane (see the module text)."""
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        """A new frame: no footholds, the base at its origin, still."""
+        self.ground = LocalGround()
+        self.psi = 0.0
+        """[rad] the heading of the levelled frame, from the gyro."""
+        self.base: list[float] = [0.0, 0.0, 0.0]
+        """[m] the base's origin in the frame, carried by the standing feet."""
+        self._offsets: list[Vector | None] = [None] * LEGS
+        self._velocity: Vector = (0.0, 0.0, 0.0)
+        """[m/s] the base's velocity in the frame at the previous sample."""
+        self._stamp_s = 0.0
+        self._slope: tuple[int, float, float] | None = None
+        """(the footholds' revision, dz/dx, dz/dy) of the plane last fitted."""
+
+    def heights(
+        self,
+        dt_s: float,
+        feet: Sequence[FootMotion | None],
+        down: Vector,
+        omega: Sequence[float],
+        standing: Sequence[bool],
+    ) -> list[float] | None:
+        """Each foot's contact point's height [m] above the lowest one's, the local ground's
+        slope taken off (NaN: unknown foot), after a sample ``dt_s`` [s] on: ``feet`` their
+        motions (base frame), ``down`` gravity's unit direction and ``omega`` the base's
+        angular velocity [rad/s] (base frame), ``standing`` which feet stood at the previous
+        sample (the filter's estimate). None before the first foothold.
+        """
+        dx, dy, dz = down
+        ux, uy, uz = -dx, -dy, -dz  # up
+        psi = self.psi + dt_s * (omega[0] * ux + omega[1] * uy + omega[2] * uz)
+        self.psi = psi if math.isfinite(psi) else self.psi  # a gyro's NaN: the heading kept
+        # x_L: the base's x made horizontal
+        ax, ay, az = 1.0 - ux * ux, -ux * uy, -ux * uz
+        norm = math.sqrt(ax * ax + ay * ay + az * az)
+        ax, ay, az = ax / norm, ay / norm, az / norm
+        bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax  # y_L = z_L x x_L
+        cos, sin = math.cos(self.psi), math.sin(self.psi)
+        offsets: list[Vector | None] = []
+        for foot in feet:
+            rx, ry, rz = foot.r if foot is not None else (math.nan,) * 3
+            if not (abs(rx) <= MAX_REACH_M and abs(ry) <= MAX_REACH_M and abs(rz) <= MAX_REACH_M):
+                offsets.append(None)  # NaN too
+                continue
+            x, y = ax * rx + ay * ry + az * rz, bx * rx + by * ry + bz * rz
+            offsets.append((cos * x - sin * y, sin * x + cos * y, ux * rx + uy * ry + uz * rz))
+        dt_s = max(dt_s, 0.0)
+        self._carry(offsets, standing, dt_s)
+        base = self.base
+        if not (abs(base[0]) <= MAX_FRAME_M and abs(base[1]) <= MAX_FRAME_M
+                and abs(base[2]) <= MAX_FRAME_M):  # fmt: skip
+            self.reset()
+            return None
+        self._stamp_s += dt_s
+        self.ground.update(
+            self._stamp_s,
+            [
+                (leg, (base[0] + o[0], base[1] + o[1], base[2] + o[2]))
+                for leg, o in enumerate(offsets)
+                if o is not None and standing[leg]
+            ],
+        )
+        slope = self._fitted()
+        if slope is None:
+            return None
+        _, gx, gy = slope
+        level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
+        known = [value for value in level if value == value]  # noqa: PLR0124 (NaN)
+        lowest = min(known) if known else math.nan
+        return [value - lowest for value in level]
+
+    def _carry(self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float) -> None:
+        """The base moved by the standing feet that move as it did (see the module text)."""
+        previous, self._offsets = self._offsets, offsets
+        if dt_s <= 0.0:
+            return
+        vx, vy, vz = self._velocity
+        moves: list[tuple[float, Vector]] = []
+        for leg, (now, before) in enumerate(zip(offsets, previous, strict=True)):
+            if now is not None and before is not None and standing[leg]:
+                mx, my, mz = (
+                    (before[0] - now[0]) / dt_s,
+                    (before[1] - now[1]) / dt_s,
+                    (before[2] - now[2]) / dt_s,
+                )
+                off = (mx - vx) * (mx - vx) + (my - vy) * (my - vy) + (mz - vz) * (mz - vz)
+                moves.append((off, (mx, my, mz)))
+        if moves:
+            gate = CARRY_GATE_MPS * CARRY_GATE_MPS
+            kept = [move for off, move in moves if off <= gate]
+            if not kept:
+                kept = [min(moves)[1]]
+            count = len(kept)
+            self._velocity = (
+                sum(move[0] for move in kept) / count,
+                sum(move[1] for move in kept) / count,
+                sum(move[2] for move in kept) / count,
+            )
+        base, (vx, vy, vz) = self.base, self._velocity
+        base[0] += vx * dt_s
+        base[1] += vy * dt_s
+        base[2] += vz * dt_s
+
+    def _fitted(self) -> tuple[int, float, float] | None:
+        """The plane's slope, fitted again only when its footholds changed (None: none yet)."""
+        ground = self.ground
+        if self._slope is None or self._slope[0] != ground.revision:
+            plane = ground.plane(self.base[0], self.base[1])
+            if plane is None:
+                self._slope = None
+                return None
+            gx, gy = plane.gradient
+            variance = plane.covariance[1][1] + plane.covariance[2][2]  # roll's and pitch's
+            if gx * gx + gy * gy <= SIGNIFICANT * SIGNIFICANT * variance:
+                gx, gy = 0.0, 0.0  # level, as far as the footholds can tell
+            self._slope = (ground.revision, gx, gy)
+        return self._slope

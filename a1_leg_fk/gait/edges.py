@@ -1,0 +1,221 @@
+"""A foot's stance edges placed by its heights: where it leaves the ground and where it lands.
+
+Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`` (n,) [s],
+``heights`` (n,) [m] above the ground plane, ``stance`` (n,) bool from the speeds' hysteresis.
+A foot unloads before it moves measurably and may slide while it pushes off, so the speeds place
+edges late or early; the heights place them (:func:`fit_edges`):
+
+* **Gross trim.** A stance's edge samples higher than its median height + the gross tolerance
+  (the noise tolerance plus the stance's own spread beyond the noise: a stance may sink and
+  bob) are moved to swing.
+* **Settle** (:func:`settle`). Each edge is then moved inwards while its sample stands higher
+  than the stance's level next to it (the median of the heights within :data:`EDGE_REFERENCE_S`
+  inwards) + the edge tolerance, and then outwards over the neighbours within that tolerance of
+  the level: the stance ends where the foot starts to rise and begins where it stops coming
+  down. The edge tolerance is the noise tolerance (:data:`EDGE_NOISE_DEVIATIONS` of the
+  heights' noise, robust, from consecutive stance samples; at least :data:`EDGE_NOISE_FLOOR_M`)
+  plus what the level lags a stance rising towards the edge by (its rise over the previous
+  :data:`EDGE_REFERENCE_S`, at most the drift): a stance that comes up to its edge faster than
+  the noise, standing above its median there (a soft foot unloading), is allowed its whole
+  drift; one that bobs up and comes down to its edge (the demo's) nothing, so its first
+  millimetres of swing are swing.
+* **Rise** (:func:`rise_start`). A liftoff is moved back to where the foot's rise starts: the
+  heights within :data:`RISE_S` after the stance, fitted as ``c (t - t0)^p`` (a foot that
+  leaves fast, ``p = 1``, or from rest, ``p = 2``), give ``t0``; at most :data:`BACK_S` back
+  (noise makes a foot rise three deviations before it is up; a walk's foot rises 0.1 mm only
+  some 6 ms after it left).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from a1_leg_fk.gait.phases import runs
+
+EDGE_NOISE_DEVIATIONS = 3.0
+EDGE_NOISE_FLOOR_M = 0.0001
+"""[m] A stance's edge tolerance is at least this (noise-free heights; chosen on the contact
+family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
+EDGE_REFERENCE_S = 0.02
+"""[s] A stance's level next to an edge is the median of its heights this close to it."""
+RISE_S = 0.01
+"""[s] A liftoff's rise is fitted over the heights this long after the stance's last sample."""
+BACK_S = 0.01
+"""[s] A liftoff is moved back by its rise's fit at most this far (a soft foot's slow rise)."""
+RISE_POWERS = (1.0, 1.5, 2.0, 3.0)
+"""The shapes a liftoff's rise is fitted with, ``(t - t0)^p``."""
+MIN_WINDOW = 4
+"""A level or a trend is taken over at least this many samples."""
+MAD_SIGMA = 1.4826
+"""A normal distribution's standard deviation per median absolute deviation."""
+
+
+def stance_noise(heights: np.ndarray, stance: np.ndarray) -> float:
+    """[m] The noise of a foot's stance heights: robust, from the differences of consecutive
+    stance samples away from the edges (so that neither a stance's slow drift, nor the levels of
+    different stances, nor its touchdowns and liftoffs count); 0 without such samples.
+    """
+    interior = stance[1:-2] & stance[2:-1] & stance[:-3] & stance[3:]  # no edge sample
+    steps = np.diff(heights)[1:-1][interior]
+    if not steps.size:
+        return 0.0
+    return MAD_SIGMA * float(np.median(np.abs(steps - np.median(steps)))) / math.sqrt(2.0)
+
+
+def fit_edges(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, noise_m: float
+) -> np.ndarray:
+    """``stance`` (n,) with each stance's edges placed by the ``heights`` [m] (module docstring;
+    ``times`` [s], the heights' ``noise_m`` [m]).
+    """
+    fitted = stance.copy()
+    base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)
+    for first, last, value in runs(stance):
+        if not value:
+            continue
+        inside = slice(first, last + 1)
+        interior = np.abs(times[inside] - times[inside].mean()) < (
+            0.5 * (times[last] - times[first]) - EDGE_REFERENCE_S
+        )
+        slack = (base, drift(heights[inside][interior], noise_m))
+        low = np.flatnonzero(heights[inside] <= np.median(heights[inside]) + sum(slack))
+        start, end = first + int(low[0]), first + int(low[-1])
+        bounds = ((start + end) // 2, float(np.median(heights[inside])))
+        start = settle(times, heights, start, 1, slack, bounds)
+        end = settle(times, heights, end, -1, slack, bounds)
+        end = rise_start(times, heights, end, bounds[0], base)
+        fitted[inside] = False
+        fitted[start : end + 1] = True
+    return fitted
+
+
+def drift(levels: np.ndarray, noise_m: float) -> float:
+    """[m] A stance's spread beyond the heights' noise ``noise_m`` [m]: the robust deviation of
+    its interior heights ``levels`` [m] (a soft foot sinks, a body bobs); 0 from fewer than
+    three.
+    """
+    if levels.size < 3:
+        return 0.0
+    spread = MAD_SIGMA * float(np.median(np.abs(levels - np.median(levels))))
+    return math.sqrt(max(spread**2 - noise_m**2, 0.0))
+
+
+def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:
+    """A liftoff's last stance sample ``end`` moved back to where the foot's rise starts: a
+    parabola fitted to the heights above the level next to the edge within :data:`RISE_S`
+    after it (a foot that leaves fast or rises from rest) is extrapolated back to where it
+    last reaches the level, or comes closest to it; not more than :data:`BACK_S` back, nor
+    past ``limit``. Kept where the last sample already stands above the level + ``base_m``
+    [m] (a soft foot rising as it unloads: the level lags) and where fewer than three samples
+    follow within :data:`RISE_S` (a low rate).
+    """
+    stop = int(np.searchsorted(times, times[end] + RISE_S, side="right"))
+    after = np.arange(end + 1, stop)
+    ground = level(times, heights, end, -1)
+    if after.size < 3 or heights[end] > ground + base_m:
+        return end
+    lift = heights[after] - ground
+    if (lift <= 0.0).any():
+        return end
+    start = times[end] + max(rise_onset(times[after] - times[end], lift), -BACK_S)
+    return int(min(max(np.searchsorted(times, start, side="right") - 1, limit), end))
+
+
+def rise_onset(dt: np.ndarray, lift: np.ndarray) -> float:
+    """[s] When a rise ``lift`` [m] > 0 at times ``dt`` [s] started: the onset of the power law
+    ``c (t - t0)^p`` (``p`` among :data:`RISE_POWERS`) that fits it best (least squares in
+    height; ``p = 1``: a foot that leaves fast, ``p = 2``: from rest).
+    """
+    best = (math.inf, float(dt[0]))
+    for power in RISE_POWERS:
+        slope, intercept = np.polyfit(dt, lift ** (1.0 / power), 1)
+        if slope <= 0.0:
+            continue
+        onset = -intercept / slope
+        error = float(np.sum(((slope * np.clip(dt - onset, 0.0, None)) ** power - lift) ** 2))
+        best = min(best, (error, float(onset)))
+    return best[1]
+
+
+def settle(
+    times: np.ndarray,
+    heights: np.ndarray,
+    edge: int,
+    inward: int,
+    slack: tuple[float, float],
+    bounds: tuple[int, float],
+) -> int:
+    """The stance edge sample from ``edge`` (``inward`` 1: a touchdown's, -1: a liftoff's):
+    moved inwards (not past ``limit``) while it stands higher than :func:`ceiling`, then
+    outwards over the neighbours no higher (``slack``: the noise tolerance and the stance's
+    drift [m]; ``bounds``: the sample not to move past and the stance's median height [m]). A
+    stance that comes up towards ``edge`` (a soft foot as it unloads, faster and faster) is
+    allowed its whole drift at every step: its level there stands above its median and rose by
+    more than the noise tolerance over :data:`EDGE_REFERENCE_S` (a stance that bobs up and comes
+    down to its edge does not); so is any stance at a rate too low to tell.
+    """
+    noise_m, drift_m = slack
+    limit, median_m = bounds
+    rise = lag(times, heights, edge, inward)
+    soft = rise is None or (level(times, heights, edge, inward) > median_m and rise > noise_m)
+    allowance = (drift_m, drift_m) if soft else (0.0, drift_m)
+    while edge != limit and (
+        heights[edge] > ceiling(times, heights, edge + inward, inward, noise_m, allowance)
+    ):
+        edge += inward
+    outward = edge - inward
+    while 0 <= outward < heights.size and (
+        heights[outward] <= ceiling(times, heights, edge, inward, noise_m, allowance)
+    ):
+        edge, outward = outward, outward - inward
+    return edge
+
+
+def ceiling(
+    times: np.ndarray,
+    heights: np.ndarray,
+    edge: int,
+    inward: int,
+    noise_m: float,
+    allowance: tuple[float, float],
+) -> float:
+    """[m] The highest a foot stands next to stance sample ``edge`` (on its side away from
+    ``inward``): the level there + the noise tolerance ``noise_m`` [m] + what the level lags a
+    stance rising towards the edge by (:func:`lag`), within ``allowance`` (least, most [m]).
+    """
+    least, most = allowance
+    behind = min(max(lag(times, heights, edge, inward) or 0.0, least), most)
+    return level(times, heights, edge, inward) + noise_m + behind
+
+
+def lag(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float | None:
+    """[m] How much the level next to stance sample ``edge`` rose towards it from the level
+    :data:`EDGE_REFERENCE_S` farther inwards; None where the stance is too short or the rate
+    too low for more than :data:`MIN_WINDOW` samples in that span.
+    """
+    here = _inwards(times, edge, inward, EDGE_REFERENCE_S)
+    width = here.stop - here.start
+    before = edge + inward * width
+    if width <= MIN_WINDOW or not 0 <= before < heights.size:
+        return None
+    return level(times, heights, edge, inward) - level(times, heights, before, inward)
+
+
+def level(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float:
+    """[m] The median height of the samples within :data:`EDGE_REFERENCE_S` of sample ``edge``
+    towards ``inward`` (1: later samples, -1: earlier), ``edge`` included.
+    """
+    return float(np.median(heights[_inwards(times, edge, inward, EDGE_REFERENCE_S)]))
+
+
+def _inwards(times: np.ndarray, edge: int, inward: int, span_s: float) -> slice:
+    """The samples within ``span_s`` [s] of sample ``edge`` towards ``inward``, ``edge``
+    included; at least :data:`MIN_WINDOW` where there are (a low rate).
+    """
+    if inward > 0:
+        stop = int(np.searchsorted(times, times[edge] + span_s, side="right"))
+        return slice(edge, max(stop, edge + MIN_WINDOW))
+    begin = int(np.searchsorted(times, times[edge] - span_s, side="left"))
+    return slice(max(min(begin, edge + 1 - MIN_WINDOW), 0), edge + 1)

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from a1_leg_fk.estimation.filter_model import FilterSettings, LegMeasurement
+from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.state_filter import StateFilter
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -36,7 +36,7 @@ def trot(
 ) -> tuple[np.ndarray, np.ndarray, StateFilter]:
     """The filter's vertical velocity error [m/s] and reported sigma [m/s] after every joint
     state past :data:`SETTLE_S`, and the filter."""
-    state = StateFilter(settings)
+    state = StateFilter(settings, FLAT)  # the floor is flat and known: the feet's heights hold z
     errors, sigmas = [], []
     stamp = 0
     for k in range(round(seconds * 1e9 / STEP_NS)):

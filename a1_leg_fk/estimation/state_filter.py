@@ -16,8 +16,9 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
   :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability plus the
   touchdown's vertical transient (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`,
-  since the foot's first joint state in stance); the stance feet's heights ``p_z + (R r)_z``
-  equal their footholds' anchored heights (``ground="footholds"``, the default,
+  since the foot's first joint state in stance; with ``give_s``, the larger of it and the feet's
+  measured give, :mod:`~a1_leg_fk.estimation.foot_give`); the stance feet's heights
+  ``p_z + (R r)_z`` equal their footholds' anchored heights (``ground="footholds"``, the default,
   :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
   taken at the first feet believed; standing
   still (every foot in stance, none moving) a zero-velocity update.
@@ -287,8 +288,8 @@ class StateFilter:
                 (measurement, touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9))
             )
         give = self.give.variance(len(feet))
-        if give:
-            feet = [(measurement, impact + give) for measurement, impact in feet]
+        if give:  # the touchdown's transient is a give too: the larger of the two, not their sum
+            feet = [(measurement, max(impact, give)) for measurement, impact in feet]
         return candidates, feet
 
     def _gate_feet(

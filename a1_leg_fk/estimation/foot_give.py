@@ -45,11 +45,16 @@ class FootGive:
         """The sum of the updates' corrections to the filter's vertical velocity [m/s]: the
         filter's velocity less it is the IMU's alone."""
         self._slow: float | None = None
+        """The feet's vertical velocity less the IMU's, low-passed over ``give_window_s``."""
         self._trend = 0.0
         """Its rate [m/s²]: an IMU bias not yet learnt makes the difference a ramp."""
-        """The feet's vertical velocity less the IMU's, low-passed over ``give_window_s``."""
         self.interval_s = 0.0
         """The time between the last two updates with standing feet [s]."""
+        self._landed_ns: int | None = None
+        """The accepted feet's last touchdown [ns]: the stance being measured."""
+        self._kept: list[tuple[float, float, float]] = []
+        """Its samples (seconds since the last, squared give, white noise's variance) while it
+        may yet be no stance (shorter than ``give_after_s``: a swing foot taken for standing)."""
 
     def corrected(self, correction_ms: float) -> None:
         """One update's correction to the filter's vertical velocity [m/s, world up]."""
@@ -62,6 +67,7 @@ class FootGive:
         residuals: list[tuple[float, float, float]],
         noises: list[tuple[tuple[float, ...], float]],
         accel_bias: list[float],
+        landed_ns: int,
     ) -> None:
         """One update's accepted feet (none, or ``give_s`` 0: nothing): their ``residuals`` [m/s,
         base frame] against the filter's velocity before the update and their ``noises``, each its
@@ -72,7 +78,9 @@ class FootGive:
         ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its covariance
         ``accel_bias``, 3 x 3 row-major [m²/s⁴], base frame) is not known to that noise over
         ``give_window_s`` (the filter's first seconds), the IMU's velocity is not the reference
-        yet: nothing is measured.
+        yet: nothing is measured. A stance (since the accepted feet's last touchdown ``landed_ns``
+        [ns]) counts from its touchdown on once it has lasted ``give_after_s``: a shorter one (a
+        swing foot taken for standing for a few joint states, a bounce) is no give.
         """
         if not (residuals and self.settings.give_s > 0.0):
             return
@@ -89,11 +97,12 @@ class FootGive:
         if quadratic(up, accel_bias) * self.settings.give_window_s**2 > white:
             self._slow = None
             return
-        self._observe(stamp_ns, along / total, white)
+        self._observe(stamp_ns, along / total, white, landed_ns)
 
-    def _observe(self, stamp_ns: int, residual_ms: float, white: float) -> None:
+    def _observe(self, stamp_ns: int, residual_ms: float, white: float, landed_ns: int) -> None:
         """The feet's weighted mean vertical residual [m/s] and its white noise's variance
-        [m²/s²] to the running means.
+        [m²/s²] to the high-pass and, once the stance since ``landed_ns`` has lasted
+        ``give_after_s``, to the mean square (its samples kept until then).
         """
         s = self.settings
         previous, self._stamp_ns = self._stamp_ns, stamp_ns
@@ -108,8 +117,21 @@ class FootGive:
         give = difference - self._slow - self._trend * seconds
         self._slow += self._trend * seconds + 2.0 * share * give
         self._trend += share * share / max(seconds, 1e-9) * give
-        square = min(give * give, CLIP * (max(self.square, 0.0) + white)) - white
-        self.square += _share(seconds, s.give_average_s) * (square - self.square)
+        if landed_ns != self._landed_ns:  # a new stance: the last one's samples, if kept, dropped
+            self._landed_ns = landed_ns
+            self._kept.clear()
+        self._kept.append((seconds, give * give, white))
+        if stamp_ns - landed_ns >= s.give_after_s * 1e9:  # a stance: its samples are give
+            self._count()
+
+    def _count(self) -> None:
+        """The kept samples to the give's mean square, each one's square clipped at :data:`CLIP`
+        times the variance so far, its white noise's variance taken off.
+        """
+        for seconds, square, white in self._kept:
+            counted = min(square, CLIP * (max(self.square, 0.0) + white)) - white
+            self.square += _share(seconds, self.settings.give_average_s) * (counted - self.square)
+        self._kept.clear()
 
     def variance(self, feet: int) -> float:
         """Each of ``feet`` standing feet's vertical variance for the give [m²/s²], ``n σ² 2τ /

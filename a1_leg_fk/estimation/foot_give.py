@@ -20,7 +20,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from a1_leg_fk.estimation.filter_model import FilterSettings
+import numpy as np
+
+from a1_leg_fk.estimation.filter_model import ACCEL_BIAS, FilterSettings
 
 CLIP = 4.0
 """A sample's squared give counts up to this times the variance so far (the give's and the white
@@ -65,18 +67,20 @@ class FootGive:
         stamp_ns: int,
         up: list[float],
         residuals: list[tuple[float, float, float]],
-        noises: list[tuple[tuple[float, ...], float]],
-        accel_bias: list[float],
+        noises: list[tuple[float, ...]],
+        transients: list[float],
+        covariance: np.ndarray,
         landed_ns: int,
     ) -> None:
         """One update's accepted feet (none, or ``give_s`` 0: nothing): their ``residuals`` [m/s,
-        base frame] against the filter's velocity before the update and their ``noises``, each its
-        3 x 3 row-major covariance [m²/s²] and the part of its variance along up that is no white
-        noise (the touchdown's and the give's); world ``up`` in the base frame. The residuals' mean
+        base frame] against the filter's velocity before the update, their ``noises``, each its
+        3 x 3 row-major covariance [m²/s²], and ``transients``, the part of each one's variance
+        along up that is no white noise (the touchdown's and the give's); world ``up`` in the base
+        frame. The residuals' mean
         along ``up``, weighted as the filter weighs them (a landing foot little), plus the
         corrections so far is the feet's vertical velocity less the IMU's; that mean's white noise,
-        ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its covariance
-        ``accel_bias``, 3 x 3 row-major [m²/s⁴], base frame) is not known to that noise over
+        ``Σ w² v / (Σ w)²``, is no give. While the accelerometer's bias (its block of the filter's
+        ``covariance``, [m²/s⁴], base frame) is not known to that noise over
         ``give_window_s`` (the filter's first seconds), the IMU's velocity is not the reference
         yet: nothing is measured. A stance (since the accepted feet's last touchdown ``landed_ns``
         [ns]) counts from its touchdown on once it has lasted ``give_after_s``: a shorter one (a
@@ -85,7 +89,7 @@ class FootGive:
         if not (residuals and self.settings.give_s > 0.0):
             return
         along = total = white = 0.0
-        for (x, y, z), (noise, transient) in zip(residuals, noises):
+        for (x, y, z), noise, transient in zip(residuals, noises, transients):
             variance = quadratic(up, noise)
             if not variance > 0.0:
                 return
@@ -94,7 +98,7 @@ class FootGive:
             total += weight
             white += weight * weight * max(variance - transient, 0.0)
         white /= total * total
-        if quadratic(up, accel_bias) * self.settings.give_window_s**2 > white:
+        if _bias_along(up, covariance) * self.settings.give_window_s**2 > white:
             self._slow = None
             return
         self._observe(stamp_ns, along / total, white, landed_ns)
@@ -149,6 +153,17 @@ def quadratic(up: list[float], matrix: Sequence[float]) -> float:
     return (
         a * ux * ux + d * uy * uy + f * uz * uz + 2.0 * (b * ux * uy + c * ux * uz + e * uy * uz)
     )
+
+
+def _bias_along(up: list[float], covariance: np.ndarray) -> float:
+    """The accelerometer bias' variance along ``up`` [m²/s⁴] in the filter's ``covariance``
+    (read entry by entry: cheaper than a copy of its block).
+    """
+    i = ACCEL_BIAS.start
+    item = covariance.item
+    a, b, c = item(i, i), item(i, i + 1), item(i, i + 2)
+    d, e, f = item(i + 1, i + 1), item(i + 1, i + 2), item(i + 2, i + 2)
+    return quadratic(up, (a, b, c, b, d, e, c, e, f))
 
 
 def _share(seconds: float, time_constant: float) -> float:

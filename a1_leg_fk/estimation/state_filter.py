@@ -252,10 +252,10 @@ class StateFilter:
         residuals = [stack.foot_residuals[k] for k in positions]
         noises = [stack.foot_noises[k] for k in positions]
         if self.settings.give_s > 0.0:  # the feet's give modelled
-            transients = [(noises[n], feet[k][1]) for n, k in enumerate(positions)]
-            bias = self.covariance[ACCEL_BIAS, ACCEL_BIAS].ravel().tolist()
-            landed = max((self._touchdowns[leg] or stamp_ns for leg in used), default=stamp_ns)
-            self.give.observe(stamp_ns, stack.up, residuals, transients, bias, landed)
+            transients = [feet[k][1] for k in positions]
+            landed = max([self._touchdowns[leg] or stamp_ns for leg in used] or [stamp_ns])
+            covariance, up = self.covariance, stack.up
+            self.give.observe(stamp_ns, up, residuals, noises, transients, covariance, landed)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k

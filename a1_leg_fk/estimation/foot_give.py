@@ -124,18 +124,22 @@ class FootGive:
         if landed_ns != self._landed_ns:  # a new stance: the last one's samples, if kept, dropped
             self._landed_ns = landed_ns
             self._kept.clear()
-        self._kept.append((seconds, give * give, white))
-        if stamp_ns - landed_ns >= s.give_after_s * 1e9:  # a stance: its samples are give
-            self._count()
+        if stamp_ns - landed_ns < s.give_after_s * 1e9:  # no stance yet: kept
+            self._kept.append((seconds, give * give, white))
+            return
+        if self._kept:  # a stance now: its first samples are give
+            for kept in self._kept:
+                self._count(*kept)
+            self._kept.clear()
+        self._count(seconds, give * give, white)
 
-    def _count(self) -> None:
-        """The kept samples to the give's mean square, each one's square clipped at :data:`CLIP`
-        times the variance so far, its white noise's variance taken off.
+    def _count(self, seconds: float, square: float, white: float) -> None:
+        """One sample ``seconds`` [s] after the last, its squared give [m²/s²] clipped at
+        :data:`CLIP` times the variance so far and its white noise's variance ``white`` taken off,
+        to the give's mean square.
         """
-        for seconds, square, white in self._kept:
-            counted = min(square, CLIP * (max(self.square, 0.0) + white)) - white
-            self.square += _share(seconds, self.settings.give_average_s) * (counted - self.square)
-        self._kept.clear()
+        counted = min(square, CLIP * (max(self.square, 0.0) + white)) - white
+        self.square += _share(seconds, self.settings.give_average_s) * (counted - self.square)
 
     def variance(self, feet: int) -> float:
         """Each of ``feet`` standing feet's vertical variance for the give [m²/s²], ``n σ² 2τ /

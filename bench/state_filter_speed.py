@@ -7,6 +7,8 @@ in stance, the IMU's orientation, gyro and accelerometer) again and again, the s
 
 - ``StateFilter step``: one IMU propagation, one update with two stance feet and the IMU's
   orientation, and the output sample: the filter's own work per joint state (goal <= 60 us);
+  ``StateFilter step, no give``: the same without the feet's give (``give_s`` 0), the ratio
+  printed (the give's cost, goal <= 1.1);
 - its parts: ``propagate``, ``update``, ``sample``;
 - ``OdometryFeed.step``: the whole per-joint-state work of ``leg_odometry_node`` without ROS (the
   contact estimate with efforts, the feet's motion and Jacobians, the filter);
@@ -20,7 +22,7 @@ import itertools
 from common import machine, median_seconds_per_call
 
 from a1_leg_fk.estimation.contact_estimator import ContactEstimator, ImuSample
-from a1_leg_fk.estimation.filter_model import LegMeasurement
+from a1_leg_fk.estimation.filter_model import FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.odometry import ImuReading
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
@@ -44,7 +46,8 @@ def main() -> None:
     feet, velocities = a1.fk(ANGLES), a1.foot_velocities(ANGLES, RATES)
     legs = [(feet[leg].tolist(), velocities[leg].tolist()) for leg in range(4)]
     state, feed, contacts = StateFilter(), OdometryFeed(a1), ContactEstimator(a1)
-    clock = {"filter": 0, "propagate": 0, "update": 0, "feed": 0, "contacts": 0}
+    rigid = StateFilter(FilterSettings(give_s=0.0))
+    clock = {"filter": 0, "rigid": 0, "propagate": 0, "update": 0, "feed": 0, "contacts": 0}
     stance = [
         LegMeasurement(FootMotion((0.3, 0.0, 0.0), (0.18, -0.13, -0.3), 0.3), 0.99, JJT),
         None,
@@ -52,6 +55,7 @@ def main() -> None:
         LegMeasurement(FootMotion((0.3, 0.0, 0.0), (-0.18, 0.13, -0.3), 0.3), 0.99, JJT),
     ]
     state.propagate(0, GYRO, FORCE, ORIENTATION)
+    rigid.propagate(0, GYRO, FORCE, ORIENTATION)
     imu = ImuReading(ORIENTATION, GYRO, specific_force=FORCE)
     sample = ImuSample((0.3, -0.2, -9.79), GYRO, FORCE)
 
@@ -61,8 +65,8 @@ def main() -> None:
         clock[name] += STEP_NS + next(jitter)
         return clock[name]
 
-    def step() -> None:
-        stamp = tick("filter")
+    def step(state: StateFilter = state, name: str = "filter") -> None:
+        stamp = tick(name)
         state.propagate(stamp, GYRO, FORCE)
         state.update(stamp, stance, ORIENTATION)
         state.sample(stamp, (0, 3), (0, 3))
@@ -75,6 +79,7 @@ def main() -> None:
     runs = median_seconds_per_call(
         {
             "StateFilter step": step,
+            "StateFilter step, no give": lambda: step(rigid, "rigid"),
             "StateFilter.propagate": lambda: state.propagate(tick("filter"), GYRO, FORCE),
             "StateFilter.update": lambda: state.update(tick("filter"), stance, ORIENTATION),
             "StateFilter.sample": lambda: state.sample(0, (0, 3), (0, 3)),
@@ -89,6 +94,8 @@ def main() -> None:
     print(f"\n  {'one sample':<36} {'us':>8} {'x fk':>6}")
     for name, seconds in runs.items():
         print(f"  {name:<36} {seconds * 1e6:8.1f} {seconds / fk:6.1f}")
+    give = runs["StateFilter step"] / runs["StateFilter step, no give"]
+    print(f"\n  the feet's give: StateFilter step {give:.3f}x its cost without it")
 
 
 if __name__ == "__main__":

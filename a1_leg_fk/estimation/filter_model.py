@@ -57,6 +57,20 @@ class FilterSettings:
     the foot compressed, then springing back), decaying over ``touchdown_s`` (0: none)."""
     touchdown_s: float = 0.03
     """The time constant [s] of the touchdown's vertical error."""
+    give_s: float = 0.02
+    """The correlation time [s] of the standing feet's give (their vertical velocity the IMU does
+    not confirm, measured: :mod:`~a1_leg_fk.estimation.foot_give`): PyBullet's mat-soft toes'
+    measured one; 0: not modelled (the filter as before it; docs/leg_odometry.md shows what the
+    give does on each family)."""
+    give_window_s: float = 0.2
+    """The give is the feet's vertical velocity less the IMU's, high-passed over this [s]."""
+    give_average_s: float = 1.0
+    """The give's mean square is averaged over this [s]."""
+    give_after_s: float = 0.1
+    """A stance (since the accepted feet's last touchdown) counts towards the give, from its
+    touchdown on, once it has lasted this long [s] (half a trot's stance): a shorter one, a swing
+    foot taken for standing for a few joint states (kinematic contacts on a step down), is no
+    give."""
     orientation_noise_rad: float = 0.01
     """The IMU orientation's standard deviation [rad] when its message gives none."""
     height_noise_m: float = 0.01

@@ -16,8 +16,9 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
   :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability plus the
   touchdown's vertical transient (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`,
-  since the foot's first joint state in stance); the stance feet's heights ``p_z + (R r)_z``
-  equal their footholds' anchored heights (``ground="footholds"``, the default,
+  since the foot's first joint state in stance; with ``give_s``, the larger of it and the feet's
+  measured give, :mod:`~a1_leg_fk.estimation.foot_give`); the stance feet's heights
+  ``p_z + (R r)_z`` equal their footholds' anchored heights (``ground="footholds"``, the default,
   :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
   taken at the first feet believed; standing
   still (every foot in stance, none moving) a zero-velocity update.
@@ -69,6 +70,7 @@ from a1_leg_fk.estimation.filter_model import (
 )
 from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.foot_gate import FootGate
+from a1_leg_fk.estimation.foot_give import FootGive
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of
 from a1_leg_fk.estimation.state_sample import floats_of, state_sample
@@ -112,6 +114,7 @@ class StateFilter:
         self._gyro: Vector = (0.0, 0.0, 0.0)
         self._touchdowns: list[int | None] = [None] * LEGS
         self.gate = FootGate(self.settings, self.counts)
+        self.give = FootGive(self.settings)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
@@ -246,11 +249,14 @@ class StateFilter:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
         positions = [candidates.index(leg) for leg in used]
-        spread = scattered(
-            [stack.foot_residuals[k] for k in positions],
-            [stack.foot_noises[k] for k in positions],
-            self.settings.gate_chi2,
-        )
+        residuals = [stack.foot_residuals[k] for k in positions]
+        noises = [stack.foot_noises[k] for k in positions]
+        if self.settings.give_s > 0.0:  # the feet's give modelled
+            transients = [feet[k][1] for k in positions]
+            landed = max([self._touchdowns[leg] or stamp_ns for leg in used] or [stamp_ns])
+            covariance, up = self.covariance, stack.up
+            self.give.observe(stamp_ns, up, residuals, noises, transients, covariance, landed)
+        spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k
             innovation[first : first + 3, first : first + 3] += spread * np.eye(3)
@@ -282,6 +288,9 @@ class StateFilter:
             feet.append(
                 (measurement, touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9))
             )
+        give = self.give.variance(len(feet))
+        if give:  # the touchdown's transient is a give too: the larger of the two, not their sum
+            feet = [(measurement, max(impact, give)) for measurement, impact in feet]
         return candidates, feet
 
     def _gate_feet(
@@ -320,6 +329,7 @@ class StateFilter:
         self.covariance = covariance
         self.rotation = self.rotation.dot(exp_so3(error[0:3].tolist()))
         self._nominal += error[3:]
+        self.give.corrected(float(error[5]))
 
     def _floats(self) -> tuple[list[list[float]], Vector, list[float]]:
         """The rotation's rows, ``Rᵀ v`` and the nominal state's first 9 values

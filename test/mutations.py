@@ -183,6 +183,12 @@ MUTATIONS = (
         "base = 10.0 * max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
     ),
     Mutation(
+        "a soft foot's unloading ramp not followed (the gait's lift-off partway up it)",
+        "a1_leg_fk/gait/edges.py",
+        "if rise is None or not rise > noise_m:",
+        "if True:",
+    ),
+    Mutation(
         "the load's noise floor / 10 (a lift-off's last newtons x 10 below it)",
         "a1_leg_fk/estimation/load_edges.py",
         "FLOOR_SIGMAS = 8.0",

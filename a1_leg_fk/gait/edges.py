@@ -19,6 +19,12 @@ edges late or early; the heights place them (:func:`fit_edges`):
   the noise, standing above its median there (a soft foot unloading), is allowed its whole
   drift; one that bobs up and comes down to its edge (the demo's) nothing, so its first
   millimetres of swing are swing.
+* **Ramp** (:func:`follow_ramp`). A liftoff whose stance comes up towards it faster than the
+  noise tolerance (its level rose by more over the previous :data:`EDGE_REFERENCE_S`: a soft
+  foot unloading, ~1 mm over its last 40 ms, which the settle stops partway up) is carried on
+  along that stance's line (fitted over the same span, refitted as the edge moves) while the
+  heights stay within the noise tolerance of it: the stance ends where the foot's rise leaves
+  the ramp.
 * **Rise** (:func:`~a1_leg_fk.estimation.stance_edges.rise_start`, the rule the contact
   smoother shares). A liftoff is moved back to where the foot's rise starts, fitted as
   ``c (t - t0)^p`` over the heights just after the stance.
@@ -78,10 +84,38 @@ def fit_edges(
         bounds = ((start + end) // 2, float(np.median(heights[inside])))
         start = settle(times, heights, start, 1, slack, bounds)
         end = settle(times, heights, end, -1, slack, bounds)
+        end = follow_ramp(times, heights, end, base)
         end = rise_start(times, heights, end, bounds[0], base)
         fitted[inside] = False
         fitted[start : end + 1] = True
     return fitted
+
+
+def follow_ramp(times: np.ndarray, heights: np.ndarray, end: int, noise_m: float) -> int:
+    """A liftoff's last stance sample ``end`` moved later while the next sample's height [m]
+    stays within the noise tolerance ``noise_m`` [m] above :func:`on_line` (the line through
+    the heights of the :data:`EDGE_REFERENCE_S` up to the edge, refitted at each step); only
+    where the stance rises towards ``end`` by more than that tolerance over that span
+    (:func:`lag`: a soft foot unloading), else kept.
+    """
+    rise = lag(times, heights, end, -1)
+    if rise is None or not rise > noise_m:  # NaN: unknown, kept
+        return end
+    ahead = end
+    while ahead + 1 < heights.size and (
+        heights[ahead + 1] <= on_line(times, heights, ahead) + noise_m
+    ):
+        ahead += 1
+    return ahead
+
+
+def on_line(times: np.ndarray, heights: np.ndarray, edge: int) -> float:
+    """[m] The height at the sample after ``edge`` of the straight line fitted to the heights
+    within :data:`EDGE_REFERENCE_S` up to ``edge``.
+    """
+    ramp = inwards(times, edge, -1, EDGE_REFERENCE_S)
+    slope, at_edge = np.polyfit(times[ramp] - times[edge], heights[ramp], 1)
+    return float(at_edge + slope * (times[edge + 1] - times[edge]))
 
 
 def drift(levels: np.ndarray, noise_m: float) -> float:

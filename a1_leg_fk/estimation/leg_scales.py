@@ -20,7 +20,7 @@ light legs, 0.73-0.82 where 0.9 was simulated). So ``λ`` is an instrumental-var
 ``λ = Σ W' (r - c) / Σ W' W``, the instrument ``W'`` the mean of the leg's ``W`` :data:`DELAY`
 samples before and after (its noise apart, a swing's torque changes little in a few ms): a
 sample is learnt :data:`DELAY` samples late, if it and the sample then are both surely in the
-air. Forgetting, prior, significance and bounds as the friction's
+air. Forgetting and prior as the friction's, its own bound and significance
 (:class:`~a1_leg_fk.estimation.model_corrections.CorrectionSettings`): the share taken off is
 the fit shrunk towards 0 by ``significance`` standard deviations (the fit's variance times the
 residual's, learnt), then held within ``±bound``: a leg as its URDF keeps ``a = 1``. ``λ W`` is

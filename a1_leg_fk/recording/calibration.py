@@ -112,7 +112,8 @@ def calibrate_recording(
     if corrections is None or corrections.learnt_samples == 0:
         raise LegFkError(
             f"{path}: never in swing: no foot was surely in the air (the contact filter's "
-            "stance below 5 % and the foot above the others), so no friction can be fitted; "
+            "stance below 5 % and the foot above the others), so no friction or inertia scale "
+            "can be fitted; "
             "record a few strides"
         )
     if standing.seconds < MIN_STANDING_S:

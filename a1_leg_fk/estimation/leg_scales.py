@@ -16,7 +16,7 @@ leg the share ``λ = 1 - a`` is fitted by least squares, its three joints togeth
 with the friction's own least squares seeing ``r - λ W``: alternating, the two reach the joint
 least squares' solution. ``W`` carries the joint rates' noise through ``dp/dt`` and ``r`` the same
 noise (``r = W - efforts``): plain least squares would read it as a share (on the family's noisy
-light legs, 0.73-0.82 where 0.9 was simulated). So ``λ`` is an instrumental-variables fit,
+light legs, 0.70-0.77 where 0.9 was simulated). So ``λ`` is an instrumental-variables fit,
 ``λ = Σ W' (r - c) / Σ W' W``, the instrument ``W'`` the mean of the leg's ``W`` :data:`DELAY`
 samples before and after (its noise apart, a swing's torque changes little in a few ms): a
 sample is learnt :data:`DELAY` samples late, if it and the sample then are both surely in the
@@ -41,7 +41,7 @@ DELAY = 2
 and after it: their noise is (nearly) independent of its own (the observer's lag is half a sample
 at 500 Hz), and a term in ``dW/dt`` (a lag) cancels in their mean. Measured on the family's light
 legs (fit, clean / noisy): 2 samples 0.87-0.91 / 0.88-0.92 of the simulated 0.9, 3 samples
-0.88-0.90 / 0.89-0.92; the least squares without an instrument 0.85-0.89 / 0.73-0.82."""
+0.88-0.92 / 0.89-0.92; the least squares without an instrument 0.85-0.89 / 0.70-0.77."""
 Triple = tuple[float, float, float]
 
 
@@ -112,7 +112,7 @@ class LegScales:
         with its torques ``W`` kept for the learning (``r - c = left + λ W``).
         """
         model, self._latest[leg] = self._latest[leg], None
-        if model is None:
+        if model is None or self.fixed:
             return
         share, before = self._share[leg], self._before[leg]
         w0, w1, w2 = model

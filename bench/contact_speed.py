@@ -12,7 +12,9 @@ its stamp advancing 2 ms each call, median of interleaved runs:
   feet's heights against the local ground's slope; two feet standing);
 - the model corrections (:mod:`a1_leg_fk.estimation.model_corrections`, online by default):
   ``ContactEstimator.step`` with them off, and their own work in a trot's worst case, two legs
-  surely in swing (12 residuals corrected, 6 joints learning);
+  surely in swing (12 residuals corrected, 6 joints learning); inside the observer, the legs'
+  inertia scales' (:mod:`a1_leg_fk.estimation.leg_scales`: 4 legs corrected and kept, 2
+  learning);
 - the baselines: ``FootForces.estimate_floats`` (the quasi-static forces of the old rule) and
   ``Quadruped.fk`` (one FK of the four legs).
 """
@@ -62,6 +64,15 @@ def main() -> None:
             corrections.correct(joint, EFFORTS[joint], RATES[joint])
         corrections.learn(STEP_S, swing, in_air, 0.05)
 
+    scales = ModelCorrections().scales
+    residual, model = (0.3, -0.5, 0.8), (1.2, -4.0, 3.1)  # N m
+
+    def scale() -> None:
+        for leg in range(4):
+            scales.keep(leg, scales.correct(leg, residual, model))
+        scales.learn(0, STEP_S)
+        scales.learn(3, STEP_S)
+
     def observe() -> None:
         clock["observer"] += STEP_S
         observer.step_floats(
@@ -98,6 +109,7 @@ def main() -> None:
             "ContactEstimator.step": estimate,
             "ContactEstimator.step, corrections off": estimate_without,
             "ModelCorrections: 12 corrected, 6 learning": correct_and_learn,
+            "LegScales: 4 legs corrected, 2 learning": scale,
             "MomentumObserver.step_floats": observe,
             "LegMotion.foot x4 + ContactFilter.update": fuse,
             "FootGround.heights (in the filter's update)": heights,

@@ -32,6 +32,7 @@ FAST_SUBSET = (
     "test/estimation/test_state_filter_motion.py",
     "test/estimation/test_filter_model.py",
     "test/estimation/test_momentum_observer.py",
+    "test/estimation/test_leg_scales.py",
     "test/estimation/test_contact_filter.py",
     "test/estimation/test_contact_estimator.py",
     "test/estimation/test_leg_odometry.py",
@@ -193,6 +194,18 @@ MUTATIONS = (
         "a1_leg_fk/estimation/load_edges.py",
         "FLOOR_SIGMAS = 8.0",
         "FLOOR_SIGMAS = 0.8",
+    ),
+    Mutation(
+        "the legs' inertia scale fitted without its instrument (plain least squares)",
+        "a1_leg_fk/estimation/leg_scales.py",
+        "z0, z1, z2 = 0.5 * (a0 + b0), 0.5 * (a1 + b1), 0.5 * (a2 + b2)  # the instrument",
+        "z0, z1, z2 = w0, w1, w2",
+    ),
+    Mutation(
+        "the legs' torque W without the efforts through the lag",
+        "a1_leg_fk/estimation/momentum_observer.py",
+        "r0, r1, r2 = scales.correct(slot, residual, (r0 + f0, r1 + f1, r2 + f2))",
+        "r0, r1, r2 = scales.correct(slot, residual, (r0, r1, r2))",
     ),
 )
 

@@ -1,6 +1,7 @@
 """``a1-leg-fk calibrate RECORDING -o FILE``: the model corrections (the joints' bias, viscous and
-Coulomb friction) and the payload fitted over a recorded run (:mod:`a1_leg_fk.recording.
-calibration`), written as the file ``bag | gait | odom --corrections FILE`` read.
+Coulomb friction, the legs' inertia scales) and the payload fitted over a recorded run
+(:mod:`a1_leg_fk.recording.calibration`), written as the file ``bag | gait | odom --corrections
+FILE`` read.
 """
 
 from __future__ import annotations
@@ -22,9 +23,11 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     """Register ``calibrate`` with the ``a1-leg-fk`` sub-commands."""
     calibrate = commands.add_parser(
         "calibrate",
-        help="a recorded run (ROS bag) -> the model corrections' file (joint friction, payload)",
+        help="a recorded run (ROS bag) -> the model corrections' file (joint friction, leg "
+        "inertia scales, payload)",
         description="Fit the joints' torque bias, viscous and Coulomb friction over the samples "
-        "in which a foot was surely in the air, and the payload over a standing phase (all four "
+        "in which a foot was surely in the air with each leg's inertia scale (its links' mass and "
+        "inertia over the URDF's), and the payload over a standing phase (all four "
         "feet down and still), from a recording with joint efforts, a few strides and a standing "
         "phase; write them with the fit's residuals to FILE, which bag, gait and odom read with "
         "--corrections FILE. Exit 0 written, 2 bad input or a recording that cannot identify "
@@ -98,6 +101,8 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
             f"{calibration.residuals[j][1]:.2f}->{calibration.residuals[j][2]:.2f}" for j in joints
         )
         print(f"{name}: {terms}   ({fits})")
+    scales = " ".join(f"{n} {v:.3f}" for n, v in zip(LEG_NAMES, calibration.inertia_scales))
+    print(f"legs:      inertia scales (mass and inertia over the URDF's) {scales}")
     print(
         f"payload:   {calibration.payload_kg:+.2f} kg over the URDF's mass, from "
         f"{calibration.standing_s:.2f} s of standing"

@@ -112,11 +112,12 @@ class ContactEstimator:
         scales :meth:`ContactModel.for_robot` of the URDF's weight and leg length) or
         ``"threshold"`` (touchdown and liftoff normal forces ``thresholds`` [N], None for
         :meth:`ContactThresholds.for_weight`'s defaults); ``model_corrections``: ``"online"``
-        learns and takes off the joints' friction and bias (:mod:`a1_leg_fk.estimation.
-        model_corrections`; the dynamic force model and the filter only), ``"off"``, or the path
-        of a calibration's file (:mod:`a1_leg_fk.estimation.correction_file`: its terms taken
-        off as they are, its payload added to the URDF's weight, its efforts' scale and latency
-        undone: :mod:`a1_leg_fk.estimation.effort_timing`).
+        learns and takes off the joints' friction and bias and the legs' inertia scales
+        (:mod:`a1_leg_fk.estimation.model_corrections`; the dynamic force model and the filter
+        only), ``"off"``, or the path of a calibration's file
+        (:mod:`a1_leg_fk.estimation.correction_file`: its terms and scales taken off as they
+        are, its payload added to the URDF's weight, its efforts' scale and latency undone:
+        :mod:`a1_leg_fk.estimation.effort_timing`).
         """
         for name, value, choices in (
             ("force model", force_model, FORCE_MODELS),
@@ -161,7 +162,9 @@ class ContactEstimator:
             self.observer.reset()
             self.observer.corrections = None
             if self.calibration is not None:
-                self.observer.corrections = ModelCorrections(fixed=self.calibration.terms)
+                self.observer.corrections = ModelCorrections(
+                    fixed=self.calibration.terms, scales=self.calibration.inertia_scales
+                )
             elif self.model_corrections == ONLINE and self.contact_rule == FILTER:
                 self.observer.corrections = ModelCorrections(self.correction_settings)
         self.filter = ContactFilter(self.model)

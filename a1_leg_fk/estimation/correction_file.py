@@ -1,12 +1,14 @@
 """A calibration's file of model corrections (``a1-leg-fk calibrate``, read by ``--corrections
 FILE``): per joint, by name, the bias [N m], viscous [N m s/rad] and Coulomb [N m] friction fitted
-over a recording's swing samples with the fit's residuals, and the payload [kg] its standing
-phase showed; without ROS.
+over a recording's swing samples with the fit's residuals, each leg's inertia scale (its
+links' mass and inertia over the URDF's, :mod:`a1_leg_fk.estimation.leg_scales`) and the
+payload [kg] its standing phase showed; without ROS.
 
 The file is YAML written in its JSON-compatible flow style (every YAML 1.2 reader reads it; the
 package reads it with the standard library). Reading it checks it against the robot: the same
 joints (by name, every one), finite values within :class:`CorrectionSettings`' bounds and signs
-(friction opposes motion), a payload between minus half and twice the URDF's mass, and the URDF's
+(friction opposes motion), inertia scales within ``1 ± scale_bound`` (a file without them: 1),
+a payload between minus half and twice the URDF's mass, and the URDF's
 mass it was made with (``urdf_mass_kg``, when the file gives it) within :data:`MASS_TOLERANCE` of
 the robot's: pybullet_data's A1 and Aliengo share their joint names, not their masses. Anything
 else is refused in one line naming the file and the culprit.
@@ -21,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from a1_leg_fk.estimation.model_corrections import CorrectionSettings
+from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
 
 FORMAT = "a1_leg_fk model corrections 1"
@@ -48,7 +51,8 @@ class CorrectionFile:
     ``urdf_mass_kg`` [kg] the URDF's mass it was made with (NaN: unknown, a file without it),
     ``effort_scale`` (the efforts reported over the motors' torques) and ``effort_latency_s`` [s]
     (how late they are): not fitted (calibrate writes 1 and 0), set by hand from what the
-    robot's maker or a bench test says (:mod:`a1_leg_fk.estimation.effort_timing`).
+    robot's maker or a bench test says (:mod:`a1_leg_fk.estimation.effort_timing`);
+    ``inertia_scales`` per leg (FR, FL, RR, RL) its links' mass and inertia over the URDF's.
     """
 
     joints: tuple[str, ...]
@@ -60,6 +64,7 @@ class CorrectionFile:
     urdf_mass_kg: float = math.nan
     effort_scale: float = 1.0
     effort_latency_s: float = 0.0
+    inertia_scales: tuple[float, ...] = (1.0,) * len(LEG_NAMES)
 
     def text(self) -> str:
         """The file's text."""
@@ -80,6 +85,9 @@ class CorrectionFile:
             "standing_s": round(self.standing_s, 3),
             "effort_scale": self.effort_scale,
             "effort_latency_s": self.effort_latency_s,
+            "leg_inertia_scales": dict(
+                zip(LEG_NAMES, (round(v, 4) for v in self.inertia_scales), strict=True)
+            ),
             "joints": joints,
         }
         return json.dumps(document, indent=2) + "\n"
@@ -131,7 +139,30 @@ def read_correction_file(
         str(document.get("source", "")),
         made_for,
         *_timing(where, document),
+        _scales(where, document.get("leg_inertia_scales")),
     )
+
+
+def _scales(where: str, entry: object) -> tuple[float, ...]:
+    """Per leg its inertia scale (``leg_inertia_scales``: a mapping of every leg's name, within
+    ``1 ± scale_bound``; absent: 1 for every leg, a file of before the scales).
+    """
+    if entry is None:
+        return (1.0,) * len(LEG_NAMES)
+    if not isinstance(entry, dict) or set(entry) != set(LEG_NAMES):
+        raise CorrectionFileError(
+            f"{where}: leg_inertia_scales must give each of {', '.join(LEG_NAMES)}: {entry!r}"
+        )
+    bound = CorrectionSettings().scale_bound
+    scales = tuple(
+        _number(where, f"leg_inertia_scales {leg}", entry[leg], 1.0 + bound) for leg in LEG_NAMES
+    )
+    for leg, scale in zip(LEG_NAMES, scales, strict=True):
+        if scale < 1.0 - bound:
+            raise CorrectionFileError(
+                f"{where}: leg_inertia_scales {leg} {scale} is absurd (at least {1.0 - bound:g})"
+            )
+    return scales
 
 
 def _timing(where: str, document: dict[str, object]) -> tuple[float, float]:

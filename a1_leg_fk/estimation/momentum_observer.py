@@ -63,16 +63,20 @@ NO_ROTATION = (0.0, 0.0, 0.0)
 
 
 class _LegState:
-    """One leg's observer between joint states: the latest stamp [s], momentum ``p`` [N m s]
-    and residual ``r`` [N m] (a fresh state: no stamp, so the next joint state starts it).
+    """One leg's observer between joint states: the latest stamp [s], momentum ``p`` [N m s],
+    residual ``r`` [N m] and ``efforts`` [N m], the efforts through the residual's lag (so
+    ``r + efforts`` is the URDF's torque ``W = M q̈ + C q̇ + g`` through it: the inertia scales'
+    regressor, :mod:`a1_leg_fk.estimation.leg_scales`); a fresh state: no stamp, so the next
+    joint state starts it.
     """
 
-    __slots__ = ("momentum", "residual", "stamp_s")
+    __slots__ = ("efforts", "momentum", "residual", "stamp_s")
 
     def __init__(self) -> None:
         self.stamp_s = math.nan
         self.momentum = (0.0, 0.0, 0.0)
         self.residual = (0.0, 0.0, 0.0)
+        self.efforts = (0.0, 0.0, 0.0)
 
 
 class MomentumObserver:
@@ -170,19 +174,21 @@ class MomentumObserver:
                         r0 = keep * r0 + change * (p0 - m0 - dt * e0)
                         r1 = keep * r1 + change * (p1 - m1 - dt * e1)
                         r2 = keep * r2 + change * (p2 - m2 - dt * e2)
+                        f0, f1, f2 = state.efforts
+                        state.efforts = (
+                            f0 + (1.0 - keep) * (t0 - f0),
+                            f1 + (1.0 - keep) * (t1 - f1),
+                            f2 + (1.0 - keep) * (t2 - f2),
+                        )
                     else:  # quasi-static: dp/dt = 0
                         r0, r1, r2 = -e0, -e1, -e2
+                        state.efforts = (t0, t1, t2)
                     state.stamp_s, state.momentum = stamp_s, (p0, p1, p2)
                     state.residual = (r0, r1, r2)
                 if not isfinite(r0 + r1 + r2):  # absurd values: start again
                     states[slot] = _LegState()
                 elif self.corrections is not None:
-                    correct = self.corrections.correct
-                    r0, r1, r2 = (
-                        correct(first, r0, d0),
-                        correct(first + 1, r1, d1),
-                        correct(first + 2, r2, d2),
-                    )
+                    r0, r1, r2 = self._corrected(slot, (r0, r1, r2), (d0, d1, d2))
             else:  # no rates: the quasi-static estimate
                 states[slot] = _LegState()
                 r0, r1, r2 = g0 - t0, g1 - t1, g2 - t2
@@ -200,6 +206,27 @@ class MomentumObserver:
             missing.append(not finite)
             singular.append(False)
         return out, missing, singular
+
+    def _corrected(
+        self, slot: int, residual: tuple[float, float, float], rates: tuple[float, float, float]
+    ) -> tuple[float, float, float]:
+        """Leg ``slot``'s residual [N m] with the model's corrections taken off: its inertia
+        scale's share of the URDF's torque (``r + efforts``, through the lag), then each
+        joint's friction at its ``rates`` [rad/s]; what is left kept for the scale's learning.
+        """
+        corrections = self.corrections
+        assert corrections is not None  # the caller's test
+        f0, f1, f2 = self._states[slot].efforts
+        r0, r1, r2 = residual
+        scales, correct, first = corrections.scales, corrections.correct, slot * JOINTS_PER_LEG
+        r0, r1, r2 = scales.correct(slot, residual, (r0 + f0, r1 + f1, r2 + f2))
+        left = (
+            correct(first, r0, rates[0]),
+            correct(first + 1, r1, rates[1]),
+            correct(first + 2, r2, rates[2]),
+        )
+        scales.keep(slot, left)
+        return left
 
     def step_batch(
         self,

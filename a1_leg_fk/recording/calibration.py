@@ -5,7 +5,8 @@ One pass of the force and contact pipeline (the bag tools' and the node's) with 
 learning without forgetting: every joint's bias, viscous and Coulomb terms are the least squares
 over every sample in which its foot was surely in the air (each shrunk by three of its standard
 deviations, as online, with the variance of the fit's own residual), with the residual's RMS
-before and after the fit. The payload: while all
+before and after the fit; each leg's inertia scale as learnt by the end
+(:mod:`a1_leg_fk.estimation.leg_scales`). The payload: while all
 four feet stand (the filter's probability of stance at least :data:`STANDING_PROBABILITY`) and
 are still (each foot slower than :data:`STILL_MPS` in the base frame), the normal forces' sum is
 the robot's weight; its mean over the URDF's weight, in kg. A recording that cannot identify
@@ -111,7 +112,8 @@ def calibrate_recording(
     if corrections is None or corrections.learnt_samples == 0:
         raise LegFkError(
             f"{path}: never in swing: no foot was surely in the air (the contact filter's "
-            "stance below 5 % and the foot above the others), so no friction can be fitted; "
+            "stance below 5 % and the foot above the others), so no friction or inertia scale "
+            "can be fitted; "
             "record a few strides"
         )
     if standing.seconds < MIN_STANDING_S:
@@ -134,4 +136,5 @@ def calibrate_recording(
         urdf_mass,
         scale,
         latency_s,
+        tuple(corrections.scales.scales),
     )

@@ -71,6 +71,15 @@ def test_a_calibration_is_read_back_and_taken_off_as_it_is(tmp_path: Path) -> No
         ({"format": "something else"}, "format is not"),
         ({"urdf_mass_kg": 20.638}, "made for a robot whose URDF weighs 20.638 kg"),
         ({"urdf_mass_kg": "a1"}, "urdf_mass_kg is not a number"),
+        ({"leg_inertia_scales": {"FR": 0.9}}, "leg_inertia_scales must give each of FR, FL"),
+        (
+            {"leg_inertia_scales": {"FR": 0.9, "FL": 3.0, "RR": 1.0, "RL": 1.0}},
+            "leg_inertia_scales FL 3.0 is absurd",
+        ),
+        (
+            {"leg_inertia_scales": {"FR": 0.2, "FL": 1.0, "RR": 1.0, "RL": 1.0}},
+            "leg_inertia_scales FR 0.2 is absurd",
+        ),
     ],
 )
 def test_a_file_that_does_not_match_the_robot_is_refused(
@@ -92,3 +101,21 @@ def test_negative_friction_and_an_unreadable_file_are_refused(tmp_path: Path) ->
     (tmp_path / "text.yaml").write_text("bias: [1, 2")
     with pytest.raises(LegFkError, match="cannot be read"):
         read_correction_file(tmp_path / "text.yaml", A1.joint_names, 12.0)
+
+
+def test_the_legs_inertia_scales_are_read_back_and_applied(tmp_path: Path) -> None:
+    """A file's per-leg scales reach the observer as they are (FR 15 % lighter: 0.15 of the
+    URDF's torque W taken off, by hand); a file without them (of before the scales) gives 1."""
+    scales = {"FR": 0.85, "FL": 1.0, "RR": 1.2, "RL": 0.95}
+    path = written(tmp_path, leg_inertia_scales=scales)
+    estimator = ContactEstimator(A1, model_corrections=str(path))
+    corrections = estimator.corrections
+    assert corrections is not None and corrections.scales.scales == list(scales.values())
+    residual = corrections.scales.correct(0, (1.0, 2.0, 3.0), (10.0, -20.0, 5.0))
+    assert residual == pytest.approx((1.0 - 1.5, 2.0 + 3.0, 3.0 - 0.75), abs=1e-12)
+    assert "0.850,1.000,1.200,0.950" in corrections.line()
+    without = written(tmp_path)
+    document = json.loads(without.read_text())
+    del document["leg_inertia_scales"]
+    without.write_text(json.dumps(document))
+    assert read_correction_file(without, A1.joint_names, A1_KG).inertia_scales == (1.0,) * 4

@@ -57,7 +57,7 @@ class CorrectionSettings:
     samples move the estimate (the prior is the bounds, as standard deviations);
     ``scale_bound``, the largest ``|1 - a|`` of a leg's inertia scale ``a``
     (:mod:`a1_leg_fk.estimation.leg_scales`) and ``scale_significance``, its shrinking in
-    standard deviations.
+    standard deviations; ``learn_scales``, whether those scales are learnt (else 1, or a file's).
     """
 
     swing_probability: float = 0.05
@@ -70,6 +70,11 @@ class CorrectionSettings:
     scale_significance: float = 1.0
     """Tuned on the mismatch family's tuned runs (docs/forces.md): at 3 (the friction's) the
     light legs keep 1.20 % of their swing samples called stance, at 1 0.92 %."""
+    learn_scales: bool = False
+    """Off online: learnt live, the scales took the tuned light legs to 99.02 % but cost both
+    held-out runs (a1_trot_turn+everything 97.84 -> 97.18 %, go2_walk+payload_scale 99.63 ->
+    99.52 %: late efforts read as a scale), so they are fitted by ``calibrate`` (on: its
+    settings) and given in its file (docs/forces.md)."""
 
     def __post_init__(self) -> None:
         values = (
@@ -133,7 +138,8 @@ class ModelCorrections:
         self.settings = settings or CorrectionSettings()
         self.fixed = fixed is not None
         noise = self.settings.noise_nm
-        given = (scales or [1.0] * len(LEG_NAMES)) if self.fixed else None
+        learnt = self.settings.learn_scales and not self.fixed
+        given = None if learnt else (scales or [1.0] * len(LEG_NAMES))
         settings = self.settings
         self.scales = LegScales(
             settings.forget_s, noise, settings.scale_bound, settings.scale_significance, given

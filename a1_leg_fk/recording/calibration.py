@@ -34,8 +34,9 @@ from a1_leg_fk.recording.blocks import iter_foot_blocks
 from a1_leg_fk.recording.foot_block import FootBlock
 from a1_leg_fk.recording.reader import RecordingChoices, close_recording, open_recording
 
-CALIBRATION = CorrectionSettings(forget_s=1e9)
-"""The corrections' settings over a recording: no forgetting (1e9 s), the rest the online ones."""
+CALIBRATION = CorrectionSettings(forget_s=1e9, learn_scales=True)
+"""The corrections' settings over a recording: no forgetting (1e9 s), the legs' inertia scales
+learnt (online they are not), the rest the online ones."""
 STANDING_PROBABILITY = 0.95
 STILL_MPS = 0.02
 """[m/s] A foot slower than this relative to the base is still."""

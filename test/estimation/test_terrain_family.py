@@ -35,10 +35,11 @@ UNMET = {
     "go2_rough_1cm": "contacts without efforts 94.32 %",
     "a1_slope_down_10": "contacts without efforts 94.89 %; " + NOISY_SLOPE.format("0.75-0.85"),
     "go2_slope_down_8": "contacts without efforts 93.58 %; " + NOISY_SLOPE.format("0.77-0.82"),
-    "a1_stairs_up_3cm": CONTACTS.format(97.66, 91.76),
+    "a1_stairs_up_3cm": CONTACTS.format(97.11, 91.76),
     "a1_stairs_down_4cm": CONTACTS.format(97.65, 86.23)
     + "; vertical drift 2.31 % clean kinematic",
-    "go2_stairs_down_6cm": CONTACTS.format(96.10, 87.08),
+    "go2_stairs_down_6cm": CONTACTS.format(96.09, 87.08),
+    "go2_stairs_up_4cm": CONTACTS.format(96.01, 74.26) + " (1.10 % swing called stance)",
     "a1_heightmap": "contacts without efforts 93.96 %",
     "a1_position_flat": "contacts 96.69 % with efforts (3.28 % swing called stance), 85.70 % "
     "without; within 3 sigma 87-91 %; kinematic clean: RMSE 0.037, burst 0.204 m/s, 2.2 % "
@@ -54,9 +55,10 @@ a1_rigid_toes, a1_slope_up_5, go2_slope_up_5 and a1_mat_toes (the feet's give: w
 0.63 % is 0.05 % with the feet's give."""
 GROUND_UNMET = {
     "go2_slope_down_8": "slope off by up to 1.53° (p95 1.37°)",
-    "a1_stairs_up_3cm": "slope off by up to 3.30° (the plane through footholds on two treads)",
+    "a1_stairs_up_3cm": "slope off by up to 3.54° (the plane through footholds on two treads)",
     "a1_stairs_down_4cm": "slope off by up to 6.22°",
-    "go2_stairs_down_6cm": "slope off by up to 10.17°, height 3.29 cm",
+    "go2_stairs_down_6cm": "slope off by up to 10.18°, height 3.29 cm",
+    "go2_stairs_up_4cm": "slope off by up to 7.40° (p95 4.04°)",
 }
 """Runs whose local ground misses its goal (strict xfail): on stairs the plane through the recent
 footholds spans two or three treads, the rays' plane under the root one or two; go2_slope_down_8

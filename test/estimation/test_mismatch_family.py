@@ -26,21 +26,26 @@ from sensor_noise import with_noise
 from a1_leg_fk.kinematics.quadruped import Quadruped
 
 UNMET = {
-    "a1_trot_turn+light_legs~noise": "98.89 %, 1.01 % swing called stance (the clean run meets "
-    "the goals with the legs' inertia scales: 97.58 %, 2.36 % without them; docs/forces.md)",
-    "a1_trot_slow+scale_latency": "97.73 %, 2.11 % swing called stance, forces 7.02 % of the "
+    "a1_trot_turn+light_legs": "97.58 % agreement, 2.36 % swing called stance: the lighter "
+    "legs' inertia error (not a friction term; 254 of the 329 swing samples called stance in "
+    "the last fifth of swing). The legs' inertia scales learnt live reach 99.02 %, 0.92 % but "
+    "cost both held-out latency runs (a1_trot_turn+everything 97.84 -> 97.18 %, "
+    "go2_walk+payload_scale 99.63 -> 99.52 %: a late effort reads as a scale), so online they "
+    "are not learnt; calibrate fits them and its file gives them (docs/forces.md)",
+    "a1_trot_turn+light_legs~noise": "97.92 %, 1.98 % swing called stance (as the clean run; "
+    "98.89 %, 1.01 % with the scales learnt live)",
+    "a1_trot_slow+scale_latency": "95.53 %, 4.47 % swing called stance, forces 6.37 % of the "
     "weight: the 3 ms latency (undone causally with the true 3 ms and x0.9 given: 98.60 %, "
     "1.05 %, 4.49 %; a latency budget in the filter's force noise costs exact robots 0.6 "
     "points, a scale budget gains 0.66 for 15 us per joint state) and the scale, which a "
-    "payload hides; the legs' inertia scales read the x0.9 as 0.83-0.85 (docs/forces.md)",
-    "a1_trot_slow+scale_latency~noise": "97.76 %, 2.07 %, forces 7.70 % of the weight",
-    "a1_trot_turn+everything": "97.18 %, 2.66 % swing called stance, forces 7.09 % of the "
-    "weight (latency, scale and the payload's 3 kg; 97.84 %, 2.01 % without the legs' inertia "
-    "scales, which add swing samples called stance in the 20 ms after liftoffs, where the 3 ms "
-    "late efforts still carry the stance torque)",
-    "a1_trot_turn+everything~noise": "97.28 %, 2.57 %, forces 6.84 % of the weight",
-    "go2_trot+scale_latency": "98.71 %, 1.14 % swing called stance (x1.07, 2 ms late)",
-    "go2_trot+scale_latency~noise": "98.68 %, 1.16 % swing called stance",
+    "payload hides; the legs' inertia scales learnt live read the x0.9 as 0.83-0.85 (97.73 %, "
+    "2.11 %; docs/forces.md)",
+    "a1_trot_slow+scale_latency~noise": "96.38 %, 3.57 %, forces 7.11 % of the weight",
+    "a1_trot_turn+everything": "97.84 %, 2.01 % swing called stance, forces 7.09 % of the "
+    "weight (latency, scale and the payload's 3 kg)",
+    "a1_trot_turn+everything~noise": "97.88 %, 1.96 %, forces 6.87 % of the weight",
+    "go2_trot+scale_latency": "98.75 %, 1.11 % swing called stance (x1.07, 2 ms late)",
+    "go2_trot+scale_latency~noise": "98.74 %, 1.07 % swing called stance",
 }
 """Runs (with the corrections online) that miss a goal: their measured figures."""
 

@@ -348,10 +348,14 @@ class ModelCorrections:
             if self.fixed
             else f"online, learnt from {self.learnt_samples} joint samples in swing"
         )
-        scales = values["leg_inertia_scales"]
+        scales = (
+            f"the legs' inertia scales (FR,FL,RR,RL): {values['leg_inertia_scales']}"
+            if self.fixed or self.settings.learn_scales
+            else "the legs' inertia scales 1, not learnt online (calibrate fits them)"
+        )
         return (
             f"model corrections: {source}; per joint bias [N m], viscous [N m s/rad], "
-            f"Coulomb [N m]: {legs}; the legs' inertia scales (FR,FL,RR,RL): {scales}"
+            f"Coulomb [N m]: {legs}; {scales}"
         )
 
 

@@ -152,3 +152,4 @@ def test_online_the_scales_are_not_learnt(tmp_path: Path) -> None:
     0.1-0.7 points with it learnt live); its friction is still learnt."""
     corrections, _ = swing(lighter_a1(0.85, tmp_path), True, settings=CorrectionSettings())
     assert corrections.scales.scales == [1.0, 1.0, 1.0, 1.0]
+    assert corrections.line().endswith("inertia scales 1, not learnt online (calibrate fits them)")

@@ -107,6 +107,12 @@ class LegScales:
             residual[2] - share * model[2],
         )
 
+    def applied(self, leg: int) -> bool:
+        """Whether leg slot ``leg``'s scale can change its residual: learnt, or given other than
+        1 (a fixed scale of 1, the online default, takes nothing off and keeps nothing).
+        """
+        return not self.fixed or self._share[leg] != 0.0
+
     def keep(self, leg: int, left: Triple) -> None:
         """The residual [N m] left of leg slot ``leg`` after every correction (friction too),
         with its torques ``W`` kept for the learning (``r - c = left + λ W``).

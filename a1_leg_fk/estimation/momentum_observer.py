@@ -219,13 +219,15 @@ class MomentumObserver:
         f0, f1, f2 = self._states[slot].efforts
         r0, r1, r2 = residual
         scales, correct, first = corrections.scales, corrections.correct, slot * JOINTS_PER_LEG
-        r0, r1, r2 = scales.correct(slot, residual, (r0 + f0, r1 + f1, r2 + f2))
+        if scales.applied(slot):
+            r0, r1, r2 = scales.correct(slot, residual, (r0 + f0, r1 + f1, r2 + f2))
         left = (
             correct(first, r0, rates[0]),
             correct(first + 1, r1, rates[1]),
             correct(first + 2, r2, rates[2]),
         )
-        scales.keep(slot, left)
+        if not scales.fixed:  # fixed scales learn nothing: nothing to keep
+            scales.keep(slot, left)
         return left
 
     def step_batch(

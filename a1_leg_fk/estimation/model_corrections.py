@@ -91,14 +91,18 @@ class CorrectionSettings:
 
 
 BATCH = (24, 512)
-"""Joint samples kept as they come (five floats each) before they are taken into the twelve
+"""Joint samples kept as they come (by leg: :data:`KEPT`) before they are taken into the twelve
 least squares at once (numpy) and the joints that learnt solved: an eighth of the samples learnt
 so far, within these bounds, so the first strides are solved as often as one by one (every ~8
 samples of a joint) and a long run every ~0.2-0.35 s of a trot at 500 Hz, against a forgetting of
 seconds. Taken one by one (the first way written) the least squares cost about twice as much per
 sample (bench/contact_speed.py)."""
-KEPT = 5
-"""Floats kept per joint sample."""
+KEPT = 2 * JOINTS_PER_LEG + 2
+"""Floats kept per leg sample: its joints' residuals [N m] and rates [rad/s] (r0, q̇0, r1, ...),
+the leg's slot and the sample's step [s] (its joints' finiteness and learning clocks are found
+in the batch)."""
+NONE = (math.nan,) * (2 * JOINTS_PER_LEG)
+"""A leg's latest residuals and rates when none came (not finite: not learnt)."""
 INFO = [0, 1, 2, 1, 3, 4, 2, 4, 5]
 """The regressors' information (3x3) from a joint's sums (:class:`ModelCorrections`)."""
 ZERO_TERMS = (0.0, 0.0, 0.0)
@@ -154,19 +158,21 @@ class ModelCorrections:
         self._diagonal = np.tile(self._prior, (JOINT_COUNT, 1))
         self._variance = np.full(JOINT_COUNT, noise**2)
         self._applied = [ZERO_TERMS] * JOINT_COUNT
-        self._latest: list[tuple[float, float] | None] = [None] * JOINT_COUNT
-        """Per joint, the latest raw residual [N m] and rate [rad/s] (None: none)."""
+        self._latest = list(NONE * len(LEG_NAMES))
+        """Per joint, the latest raw residual [N m] and rate [rad/s], flat (NaN: none)."""
         self._kept: list[float] = []
-        """The samples not yet taken in, five floats each: joint, residual [N m], rate [rad/s],
-        the joint's learning clock after it and the sample's step of it [s]."""
-        self._clock = [0.0] * JOINT_COUNT
-        """Per joint, its learning time [s]: the sum of its samples' steps (forgetting's time)."""
+        """The leg samples not yet taken in, :data:`KEPT` floats each."""
+        self._clock = np.zeros(JOINT_COUNT)
+        """Per joint, its learning time [s]: the sum of its samples' steps (forgetting's time),
+        up to the samples taken in."""
         self._taken = np.zeros(JOINT_COUNT)
         """Per joint, its learning clock when the sums were last taken in [s]."""
         self.learnt_samples = 0
         """Joint samples the least squares took (kept or taken in)."""
         self._taken_samples = 0
         """Joint samples taken into the sums."""
+        self._due = BATCH[0]
+        """:attr:`learnt_samples` at which the kept are taken in: :data:`BATCH`'s rule."""
         for joint, (bias, viscous, coulomb) in enumerate(fixed or ()):
             self._applied[joint] = (bias, -viscous, -coulomb)
 
@@ -174,7 +180,8 @@ class ModelCorrections:
         """The residual [N m] of slot ``joint`` with its correction at ``rate`` [rad/s] taken
         off; the raw one kept for :meth:`learn`.
         """
-        self._latest[joint] = (residual, rate)
+        latest, index = self._latest, 2 * joint
+        latest[index], latest[index + 1] = residual, rate
         bias, viscous, coulomb = self._applied[joint]
         if coulomb == 0.0:
             return residual - (bias + viscous * rate)
@@ -199,23 +206,25 @@ class ModelCorrections:
             return
         lowest, step = max(depths), min(dt_s, 1.0)
         latest, threshold = self._latest, self.settings.swing_probability
-        kept, clock = self._kept, self._clock
-        before = len(kept)
+        kept, width = self._kept, 2 * JOINTS_PER_LEG
         for leg, foot in enumerate(feet):
             if foot is None or not probabilities[leg] < threshold:
                 continue
             if not lowest - foot.depth > height_half_m:
                 continue
             self.scales.learn(leg, step)
-            for joint in range(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG):
-                sample = latest[joint]
-                if sample is not None and math.isfinite(sample[0] + sample[1]):
-                    clock[joint] += step
-                    kept.extend((joint, sample[0], sample[1], clock[joint], step))
-                latest[joint] = None
-        self.learnt_samples += (len(kept) - before) // KEPT
-        least, most = BATCH
-        if len(kept) >= KEPT * min(most, max(least, self._taken_samples // 8)):
+            first = leg * width
+            sample = latest[first : first + width]
+            latest[first : first + width] = NONE
+            kept += sample
+            kept += (leg, step)
+            r0, q0, r1, q1, r2, q2 = sample
+            if math.isfinite((r0 + q0) + (r1 + q1) + (r2 + q2)):  # only if each joint's is
+                self.learnt_samples += JOINTS_PER_LEG
+            else:
+                pairs = zip(sample[::2], sample[1::2], strict=True)
+                self.learnt_samples += sum(math.isfinite(r + q) for r, q in pairs)
+        if self.learnt_samples >= self._due:
             self._take_in()
 
     def _take_in(self) -> None:
@@ -225,16 +234,14 @@ class ModelCorrections:
         learnt solved.
         """
         forget_s = self.settings.forget_s
-        data = np.fromiter(self._kept, float, len(self._kept)).reshape(-1, KEPT)
-        self._kept.clear()
-        joint, residual, rate = data[:, 0].astype(np.intp), data[:, 1], data[:, 2]
-        now = np.array(self._clock)
-        weight = np.exp((data[:, 3] - now[joint]) / forget_s)
+        joint, (residual, rate), clock, step = self._samples()
+        now = self._clock
+        weight = np.exp((clock - now[joint]) / forget_s)
         sign = np.tanh(rate / self.settings.smooth_rate)
         theta = self._theta[joint]
         error = residual - (theta[:, 0] + theta[:, 1] * rate + theta[:, 2] * sign)
         wr, ws, wy = weight * rate, weight * sign, weight * residual
-        keep = -np.expm1(-data[:, 4] / forget_s)  # 1 - f per sample
+        keep = -np.expm1(-step / forget_s)  # 1 - f per sample
         columns = np.stack(
             [weight, wr, ws, wr * rate, wr * sign, ws * sign, wy, wy * rate, wy * sign,
              wy * residual, weight * keep * error * error],
@@ -246,7 +253,31 @@ class ModelCorrections:
         self._sums = decay[:, None] * self._sums + sums[:10].T
         self._variance = decay * self._variance + sums[10]
         self._taken_samples += len(joint)
+        least, most = BATCH
+        self._due = self._taken_samples + min(most, max(least, self._taken_samples // 8))
         self._solve(learnt.any(axis=0))
+
+    def _samples(self) -> tuple[np.ndarray, ...]:
+        """The joint samples kept (the leg samples split, in order, the non-finite dropped):
+        their joint slots, residuals [N m], rates [rad/s], joints' learning clocks after them
+        and steps [s]; the kept cleared and the joints' clocks advanced (each the running sum of
+        its steps in order, as one by one: np.cumsum adds in order, and a 0 adds nothing).
+        """
+        data = np.fromiter(self._kept, float, len(self._kept)).reshape(-1, KEPT)
+        self._kept.clear()
+        rows, legs, every = len(data), data[:, -2].astype(np.intp), np.arange(len(data))
+        pairs = data[:, :-2].reshape(rows, JOINTS_PER_LEG, 2)  # per joint: r, q̇
+        finite = np.isfinite(pairs[:, :, 0] + pairs[:, :, 1])  # (rows, 3)
+        steps = np.where(finite, data[:, -1:], 0.0)
+        table = np.zeros((rows + 1, len(LEG_NAMES), JOINTS_PER_LEG))  # a column per joint
+        table[0], table[every + 1, legs] = self._clock.reshape(table[0].shape), steps
+        running = np.cumsum(table, axis=0)
+        self._clock = running[-1].ravel()
+        joints = legs[:, None] * JOINTS_PER_LEG + np.arange(JOINTS_PER_LEG)
+        clocks = running[every + 1, legs]
+        if finite.all():  # the usual: no masks
+            return joints.ravel(), pairs.reshape(-1, 2).T.copy(), clocks.ravel(), steps.ravel()
+        return joints[finite], pairs[finite].T.copy(), clocks[finite], steps[finite]
 
     def _solve(self, joints: np.ndarray) -> None:
         """The parameters, their covariance's diagonal and the terms taken off of the
@@ -313,7 +344,7 @@ class ModelCorrections:
 
     def solve(self) -> None:
         """Take in the samples kept and solve every joint's least squares now."""
-        if self._kept:
+        if self.learnt_samples > self._taken_samples:
             self._take_in()
 
     @property

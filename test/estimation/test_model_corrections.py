@@ -143,12 +143,53 @@ def test_the_samples_taken_in_at_once_are_the_forgotten_least_squares() -> None:
         corrections.learn(STEP_S, SWING, FEET, 0.05)
         assert corrections.learnt_samples == 3 * count
     corrections.solve()
-    weights = np.exp(-(700 - np.arange(1, 701)) * STEP_S / 0.5)
-    regressors = np.stack([np.ones(700), rates, sign], axis=1)
-    information = regressors.T @ (weights[:, None] * regressors)
-    information += np.diag([(0.5 / 3.0) ** 2, (0.5 / 0.5) ** 2, (0.5 / 1.5) ** 2])
-    theta = np.linalg.solve(information, regressors.T @ (weights * residuals))
+    theta = forgotten_least_squares(rates, residuals)
     for joint in range(3):
         bias, viscous, coulomb = corrections.fit[joint]
         assert np.allclose([bias, -viscous, -coulomb], theta, rtol=1e-9, atol=1e-12)
     assert np.allclose(theta, [0.3, -0.1, -0.4], atol=0.02)
+
+
+def forgotten_least_squares(rates: np.ndarray, residuals: np.ndarray) -> np.ndarray:
+    """Bias, viscous and Coulomb terms fitted to one joint's samples written out by hand: weights
+    exp(-(T - t_i) / 0.5 s) with t_i = i x 2 ms (its own learning time), prior information
+    (0.5/3)², (0.5/0.5)², (0.5/1.5)² (the noise over each bound, squared)."""
+    count = len(rates)
+    weights = np.exp(-(count - np.arange(1, count + 1)) * STEP_S / 0.5)
+    regressors = np.stack([np.ones(count), rates, np.tanh(rates / 0.1)], axis=1)
+    information = regressors.T @ (weights[:, None] * regressors)
+    information += np.diag([(0.5 / 3.0) ** 2, (0.5 / 0.5) ** 2, (0.5 / 1.5) ** 2])
+    theta: np.ndarray = np.linalg.solve(information, regressors.T @ (weights * residuals))
+    return theta
+
+
+def test_a_joints_missing_or_non_finite_samples_are_skipped_and_stop_its_clock_alone() -> None:
+    """FR's three joints swing 700 samples; the knee's residual is NaN every 5th sample, the
+    hip's rate infinite every 3rd, the thigh never corrected every 4th (no sample): each joint's
+    fit is the forgotten least squares of its own finite samples alone, its learning time
+    advancing only with them (the others unaffected), and the samples counted as they come."""
+    corrections = ModelCorrections(CorrectionSettings(forget_s=0.5))
+    rng = np.random.default_rng(5)
+    rates = rng.uniform(-5.0, 5.0, (700, 3))
+    residuals = 0.3 - 0.1 * rates - 0.4 * np.tanh(rates / 0.1) + rng.normal(0.0, 0.05, (700, 3))
+    kept = np.ones((700, 3), bool)
+    kept[::3, 0], kept[::4, 1], kept[::5, 2] = False, False, False
+    count = 0
+    for n in range(700):
+        for joint in range(3):
+            rate, residual = float(rates[n, joint]), float(residuals[n, joint])
+            if joint == 0 and not kept[n, 0]:
+                rate = math.inf
+            if joint == 2 and not kept[n, 2]:
+                residual = math.nan
+            if joint != 1 or kept[n, 1]:
+                corrections.correct(joint, residual, rate)
+        corrections.learn(STEP_S, SWING, FEET, 0.05)
+        count += int(kept[n].sum())
+        assert corrections.learnt_samples == count
+    corrections.solve()
+    for joint in range(3):
+        mine = kept[:, joint]
+        theta = forgotten_least_squares(rates[mine, joint], residuals[mine, joint])
+        bias, viscous, coulomb = corrections.fit[joint]
+        assert np.allclose([bias, -viscous, -coulomb], theta, rtol=1e-9, atol=1e-12), joint

@@ -1,6 +1,7 @@
 """The package's layout rules, read from the source (``ast``, nothing imported): no import circle,
 lower layers never import higher ones, only ``ros/`` and ``cli/`` import rclpy, no module over
-400 lines, and every relative link in the README and docs/ resolves."""
+400 lines, CONTRIBUTING.md's layout names every module, and every relative link in the README
+and docs/ resolves."""
 
 from __future__ import annotations
 
@@ -119,6 +120,20 @@ def test_the_layer_table_knows_every_subpackage() -> None:
     tops = {".".join(name.split(".")[:2]) for name in MODULES}
     known = {prefix for group in LAYERS for prefix in group}
     assert tops <= known, f"not in LAYERS: {sorted(tops - known)}"
+
+
+def test_contributing_names_every_module() -> None:
+    """CONTRIBUTING.md's layout names each module of the package (by file name; ``cli/`` is
+    "one module per command", ``__init__`` and ``__main__`` files go without saying)."""
+    layout = (ROOT / "CONTRIBUTING.md").read_text()
+    unnamed = [
+        str(path.relative_to(PACKAGE))
+        for path in MODULES.values()
+        if not path.name.startswith("__")
+        and path.parent.name != "cli"
+        and not re.search(rf"(?<![\w/]){re.escape(path.name)}", layout)
+    ]
+    assert not unnamed, f"CONTRIBUTING.md's layout does not name: {unnamed}"
 
 
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")

@@ -40,8 +40,10 @@ FEET = "feet"
 @dataclass(frozen=True)
 class GaitScore:
     """One run under one evidence, per leg (FR, FL, RR, RL): duty factors (the gait report's,
-    PyBullet's, the estimate's), the median touchdown and lift-off errors [ms] over the true
-    events, the report's stances per true stride, and the blips the minimum-phase rule removed.
+    PyBullet's, the estimate's), the median touchdown and lift-off errors [ms] over the run's true
+    events (every leg's together: the issue's goal, as test/contact_scoring.py scores the
+    estimate's) and the worst leg's own median, the report's stances per true stride, and the
+    blips the minimum-phase rule removed.
     """
 
     duty: np.ndarray
@@ -49,6 +51,7 @@ class GaitScore:
     estimate_duty: np.ndarray | None  # None for FEET: no estimate
     touchdown_ms: float
     liftoff_ms: float
+    worst_leg_ms: tuple[float, float]  # (touchdown, lift-off): the largest of the legs' medians
     stances_per_stride: float
     blips: tuple[Blips, ...]
 
@@ -63,13 +66,15 @@ class GaitScore:
         bridged = sum(b.bridged for b in self.blips)
         return (
             f"{name:22s} {evidence:9s} {np.abs(self.duty - self.true_duty).max():6.3f} {versus} "
-            f"{self.touchdown_ms:6.1f} {self.liftoff_ms:6.1f} {self.stances_per_stride:6.3f} "
+            f"{self.touchdown_ms:6.1f} {self.liftoff_ms:6.1f} {self.worst_leg_ms[0]:6.1f} "
+            f"{self.worst_leg_ms[1]:6.1f} {self.stances_per_stride:6.3f} "
             f"{dropped:5d} {bridged:5d}"
         )
 
 
 HEADER = (
     f"{'run':22s} {'evidence':9s} {'|d-pb|':>6s} {'|d-e|':>6s} {'td ms':>6s} {'lo ms':>6s} "
+    f"{'td leg':>6s} {'lo leg':>6s} "
     f"{'st/str':>6s} {'drop':>5s} {'bridg':>5s}"
 )
 
@@ -112,12 +117,17 @@ def events(times: np.ndarray, state: np.ndarray, rising: bool) -> np.ndarray:
     return 0.5 * (times[change - 1] + times[change])
 
 
-def _median_error_ms(true: list[float], found: list[float]) -> float:
-    """Median over ``true`` event times [s] of the distance to the nearest ``found`` [ms]."""
+def _errors_ms(true: list[float], found: list[float]) -> np.ndarray:
+    """Per ``true`` event time [s], the distance to the nearest ``found`` [ms] (inf: none)."""
     if not found:
-        return float("inf")
+        return np.full(max(len(true), 1), np.inf)
     nearest = np.abs(np.subtract.outer(np.array(true), np.array(found))).min(axis=1)
-    return 1000.0 * float(np.median(nearest))
+    return 1000.0 * nearest
+
+
+def _median(errors: np.ndarray) -> float:
+    """The median [ms] of event errors (inf if any leg found none)."""
+    return float(np.median(errors)) if np.isfinite(errors).all() else float("inf")
 
 
 def score_gait(run: ContactRun, evidence: str, smoothed: bool = True) -> GaitScore:
@@ -148,9 +158,9 @@ def score_gait(run: ContactRun, evidence: str, smoothed: bool = True) -> GaitSco
             estimate_duty[leg] = (probabilities[used, leg] >= 0.5).mean()
         ons = [a for a, _ in metrics.stance_s]
         offs = [b for _, b in metrics.stance_s]
-        touchdown_errors.append(_median_error_ms(downs.tolist(), ons))
+        touchdown_errors.append(_errors_ms(downs.tolist(), ons))
         inside = (ups > downs[0]) & (ups < downs[-1])
-        liftoff_errors.append(_median_error_ms(ups[inside].tolist(), offs))
+        liftoff_errors.append(_errors_ms(ups[inside].tolist(), offs))
         for start, end in zip(downs[:-1][regular], downs[1:][regular]):
             stances += sum(start - EVENT_MARGIN_S <= a < end - EVENT_MARGIN_S for a in ons)
         strides += int(regular.sum())
@@ -158,8 +168,12 @@ def score_gait(run: ContactRun, evidence: str, smoothed: bool = True) -> GaitSco
         duty,
         true_duty,
         None if probabilities is None else estimate_duty,
-        float(np.max(touchdown_errors)),
-        float(np.max(liftoff_errors)),
+        _median(np.concatenate(touchdown_errors)),
+        _median(np.concatenate(liftoff_errors)),
+        (
+            max(_median(errors) for errors in touchdown_errors),
+            max(_median(errors) for errors in liftoff_errors),
+        ),
         stances / strides,
         blips,
     )

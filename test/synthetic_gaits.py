@@ -98,3 +98,38 @@ def synthetic(
         feet[:, leg] = np.column_stack((x, y, GROUND_Z0_M + a * x + b * y + radius_dz + lift))
         truth.append([(on, on + duty * PERIOD_S) for on in touchdowns])
     return stamps + 1234.5, feet + rng.normal(0.0, NOISE_M, feet.shape), truth
+
+
+SLOW_RISE_S = 0.01
+"""[s] How long a walk's foot rises slowly from rest before its swing proper (the contact
+family's walks: 0.24 mm at 10 ms, then ~20x steeper)."""
+
+
+def slow_rise(after_s: np.ndarray) -> np.ndarray:
+    """[m] A walk's foot height ``after_s`` [s] after it left (0 before): 2 m/s^2 t^2 for
+    :data:`SLOW_RISE_S` (0.2 mm), then 24 m/s^2 on top of 40 mm/s, up to 60 mm."""
+    late = after_s - SLOW_RISE_S
+    lift = np.where(late < 0.0, 2.0 * after_s**2, 2e-4 + 0.04 * late + 24.0 * late**2)
+    return np.where(after_s > 0.0, np.clip(lift, 0.0, 0.06), 0.0)
+
+
+def slow_rise_walk(
+    noise_m: float, seconds: float = 12.0, seed: int = 3
+) -> tuple[np.ndarray, np.ndarray, list[list[float]]]:
+    """(stamps [s], world feet (N, 4, 3) [m], true liftoff times [s] per leg) of a walk at 500 Hz
+    (period 0.6 s, duty 0.75) whose feet rise as :func:`slow_rise` and land as its mirror image,
+    with ``noise_m`` [m] of Gaussian noise; each leg's events 0.7 ms later than the previous
+    leg's, off the sampling grid."""
+    period, stance = 0.6, 0.45
+    stamps = np.arange(0.0, seconds, 0.002)
+    feet = np.zeros((stamps.size, 4, 3))
+    feet[:, :, :2] = HIPS_XY
+    liftoffs = []
+    for leg, phase in enumerate(PHASES["walk"]):
+        shift = phase * period + 0.0007 * leg
+        since = np.mod(stamps - shift, period) - stance
+        feet[:, leg, 2] = np.minimum(slow_rise(since), slow_rise(period - stance - since))
+        downs = np.arange(-1.0, seconds / period + 1.0) * period + shift
+        liftoffs.append([d + stance for d in downs if d > 0.1 and d + stance < seconds - 0.1])
+    noise = np.random.default_rng(seed).normal(0.0, noise_m, feet.shape)
+    return stamps, feet + noise, liftoffs

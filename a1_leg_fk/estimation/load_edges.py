@@ -22,7 +22,13 @@ two rules may lengthen it, never shorten it:
   (1.4826 times the median of its absolute value) over every foot's swing samples within
   :data:`NOISE_S` either side of the stance's end; without :data:`MIN_NOISE_SAMPLES` of them,
   this rule is off there. On a clean simulation the floor is a fraction of a newton; with a
-  real robot's sensor noise it is tens of newtons, and this rule does nothing.
+  real robot's sensor noise it is tens of newtons, and this rule does nothing;
+- **a dip**: a swing after the stance that ends in the next stance within :data:`MAX_LOADED_S`
+  and whose load stays above :data:`DIP_SIGMAS` times the same noise on every sample stands
+  (a foot whose load dips to a fraction of a newton without ever reaching zero: the walk's
+  first stride). A swing's load hovers around zero, so the whole swing above this lower floor
+  is a foot still loaded, where the floor above, which carries a stance on sample by sample,
+  would take the load's last newtons for it.
 
 The load is the estimated normal force with the momentum observer's first-order lag undone
 (:func:`unlagged`): right after a foot lifts, the observer still shows a newton or so decaying
@@ -47,8 +53,11 @@ zero."""
 FLOOR_SIGMAS = 8.0
 """A load above this many times its noise is a foot still loaded."""
 MAX_LOADED_S = 0.1
-"""[s] The longest a stance is carried on by its load above the noise floor (the transition's
-mean time between changes)."""
+"""[s] The longest a stance is carried on by its load above the noise floor, or a dip bridged
+(the transition's mean time between changes)."""
+DIP_SIGMAS = 4.0
+"""A swing between two stances whose load stays above this many times its noise is a dip (2
+to 6 met the same goals on the contact family's tuned runs, docs/forces.md)."""
 NOISE_S = 0.4
 """[s] The swing samples the load's noise is taken over, either side of a stance's end."""
 MIN_NOISE_SAMPLES = 20
@@ -93,7 +102,9 @@ def loaded_stance(
     for last, leg in zip(*np.nonzero(ends), strict=True):
         floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
         if floor is not None:
-            _above_floor(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
+            leg_rows = (stamps_s, loads[:, leg], stance[:, leg])
+            _above_floor(result, leg_rows, last, leg, floor)
+            _dip(result, leg_rows, last, leg, floor)
         _ramp(result, stamps_s, loads[:, leg], last, leg)
     return result
 
@@ -131,6 +142,29 @@ def _above_floor(
     ):
         result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
         k += 1
+
+
+def _dip(
+    result: np.ndarray,
+    leg_rows: tuple[np.ndarray, np.ndarray, np.ndarray],
+    last: int,
+    leg: int,
+    noise_n: float,
+) -> None:
+    """The swing after row ``last`` stands where it is a dip: it ends in a stance within
+    :data:`MAX_LOADED_S` and its load stays above :data:`DIP_SIGMAS` times ``noise_n`` [N] on
+    every sample; ``leg_rows`` as :func:`_above_floor`'s.
+    """
+    stamps_s, loads, stance = leg_rows
+    stop = int(np.searchsorted(stamps_s, stamps_s[last] + MAX_LOADED_S, side="right"))
+    following = np.flatnonzero(stance[last + 1 : stop])
+    if not following.size:
+        return
+    gap = slice(last + 1, last + 1 + int(following[0]))
+    if not (loads[gap] > DIP_SIGMAS * noise_n).all():  # NaN: unknown, no dip
+        return
+    for k in range(gap.start, gap.stop):
+        result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
 
 
 def _ramp(

@@ -85,6 +85,26 @@ def test_a_dip_that_never_unloads_is_bridged_and_a_swing_is_kept() -> None:
     assert not (stance & swing).any()
 
 
+def test_a_dip_under_the_floor_that_never_reaches_zero_is_bridged() -> None:
+    """go2_walk's first stride, built: loads with 0.06 N of noise (the floor 8 x 0.06 = 0.48 N),
+    stances at 30 N, one dipping from 3 N down to 0.4 N and back over 50 ms (under the floor
+    for its middle 10 ms, never at zero: the foot stands), another the same but at zero for two
+    samples in its middle (the foot left). The first stands; the second keeps its swing on the
+    samples at zero, as every swing keeps its own from its second sample on."""
+    rng = np.random.default_rng(36)
+    true = np.tile(np.r_[np.full(100, 30.0), np.zeros(100)], 10)
+    dip, touched = slice(430, 455), slice(630, 655)  # inside the third and fourth stances
+    true[dip] = true[touched] = 0.4 + 2.6 * np.abs(np.linspace(-1.0, 1.0, 25))
+    true[641:643] = 0.0
+    loads = (true + rng.normal(0.0, 0.06, true.size))[:, None].repeat(LEGS, axis=1)
+    stance = stance_of(rows_of(loads, np.zeros(loads.shape)))
+    assert stance[dip].all()
+    assert not stance[641:643].any()
+    swing = (true == 0.0)[:, None].repeat(LEGS, axis=1)
+    swing[np.flatnonzero(np.diff(true == 0.0, prepend=False))] = False  # each swing's first
+    assert not (stance & swing).any()
+
+
 def test_the_observers_lag_is_no_load() -> None:
     """A load stepping from 30 N to 0 seen through the observer's lag (1 ms: 4.1, 0.55, 0.07 N
     on the samples after the step) with 0.02 N of noise: the lag undone, the stance ends at most

@@ -36,12 +36,6 @@ FORCE_EARLY = (
     "0.3 N on the clean run (its load above the noise floor carries the stance on) but not "
     "under 2 N of force noise (the floor is 8 x 2.1 N there)"
 )
-WALK_START = (
-    "false swings in the walk's first stride (PyBullet's load dips to 0.4-3 N while the feet "
-    "touch) split it in two stances: the smoothed estimate bridges "
-    "RR's (38 ms, down to 1.7 N, above its noise floor) but not RL's (52 ms, down to 0.4 N, "
-    "under the floor there, 8 x 0.063 N); the causal estimate bridges neither"
-)
 FEET_LATE = (
     "the feet's heights: a walk's foot rises from rest, slowly for its first 10-12 ms (0.03 mm "
     "at 4 ms, 0.15-0.4 mm at 10 ms, under the noise tolerance of 3 deviations, 0.25-0.28 mm), "
@@ -51,7 +45,6 @@ FEET_LATE = (
 UNMET = {
     ("go2_trot+noise", FORCE, EVENTS): "touchdown 0 ms, lift-off 6 ms (early)",
     ("a1_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 7 ms",
-    ("go2_walk", FORCE, STANCES): "1.045 stances per stride",
     ("go2_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 7 ms",
 }
 """Goals not met, by (run, evidence, goal): the measured number (max over legs)."""
@@ -72,11 +65,9 @@ def scored(family):
     return get
 
 
-def cause_of(evidence: str, goal: str) -> str:
-    """Why ``goal`` is unmet under ``evidence``."""
-    if evidence == FEET:
-        return FEET_LATE
-    return WALK_START if goal in (SAME, STANCES) else FORCE_EARLY
+def cause_of(evidence: str) -> str:
+    """Why a goal is unmet under ``evidence``."""
+    return FEET_LATE if evidence == FEET else FORCE_EARLY
 
 
 def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> list:
@@ -88,7 +79,7 @@ def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> li
                 continue
             for evidence in evidences:
                 measured = UNMET.get((name, evidence, goal))
-                reason = f"{cause_of(evidence, goal)}: {measured}"
+                reason = f"{cause_of(evidence)}: {measured}"
                 marks = [pytest.mark.xfail(strict=True, reason=reason)] if measured else []
                 out.append(
                     pytest.param(name, evidence, marks=marks, id=f"{held}-{name}-{evidence}")

@@ -9,13 +9,17 @@ the foot still carries a little load: a few ms early where the load ramps down s
 it lingers below that share for a while (a foot unloading slowly, or dipping to a few newtons
 while it stands). With the whole recording at hand the load itself can place that end. Where a
 stance of a foot with force evidence ends (its last sample of log-odds >= 0, the next below),
-two rules may lengthen it, never shorten it:
+three rules may lengthen it, never shorten it:
 
 - **the unloading ramp**: a line fitted to the load over the :data:`RAMP_WINDOW_S` up to the
   stance's last sample; where it falls to zero within :data:`RAMP_REACH_S` after it, the samples
-  up to there stand with the probability that the line's load is above zero (its value over its
+  up to there stand with the probability that their load is above zero (its value over its
   standard error, through the normal distribution), as long as that value is at least
-  :data:`RAMP_CONFIDENCE` standard errors;
+  :data:`RAMP_CONFIDENCE` standard errors. A sample's load is the line's extrapolation and the
+  sample's own load weighted by their inverse variances (the line's standard error there; the
+  spread of the line's residuals for the sample): a load that falls off a cliff, as a trotting
+  foot's does in its last sample, is not carried on by the line, and one that follows it is
+  carried with more confidence;
 - **the load above the noise floor**: the samples right after the stance whose load stays above
   :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
   last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread
@@ -198,14 +202,27 @@ def _ramp(
         return
     k = last + 1
     while k < len(stamps_s) and (dt := float(stamps_s[k]) - end_s) <= RAMP_REACH_S:
-        load = offset + slope * dt
-        error = math.sqrt(
-            max(variance * (1.0 / count + (dt - t_mean) * (dt - t_mean) / spread), 1e-24)
+        load, error = _with_own(
+            (offset + slope * dt, variance * (1.0 / count + (dt - t_mean) ** 2 / spread)),
+            (float(loads[k]), variance),
         )
         if load <= RAMP_CONFIDENCE * error:
             break
         result[k, leg] = max(result[k, leg], _above_zero(load / error))
         k += 1
+
+
+def _with_own(line: tuple[float, float], own: tuple[float, float]) -> tuple[float, float]:
+    """A sample's load [N] and its standard error [N] from the ramp's ``line`` (extrapolated
+    load, its variance [N^2]) and its ``own`` (measured load, variance): their inverse-variance
+    weighted mean (the line's alone where the sample's load is not finite).
+    """
+    (line_n, line_var), (own_n, own_var) = line, own
+    line_var, own_var = max(line_var, 1e-24), max(own_var, 1e-24)
+    if not math.isfinite(own_n):
+        return line_n, math.sqrt(line_var)
+    weight = 1.0 / line_var + 1.0 / own_var
+    return (line_n / line_var + own_n / own_var) / weight, math.sqrt(1.0 / weight)
 
 
 def _above_zero(z: float) -> float:

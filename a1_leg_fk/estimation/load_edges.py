@@ -106,9 +106,7 @@ def loaded_stance(
     for last, leg in zip(*np.nonzero(ends), strict=True):
         floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
         if floor is not None:
-            leg_rows = (stamps_s, loads[:, leg], stance[:, leg])
-            _above_floor(result, leg_rows, last, leg, floor)
-            _dip(result, leg_rows, last, leg, floor)
+            _carried(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
         _ramp(result, stamps_s, loads[:, leg], last, leg)
     return result
 
@@ -124,50 +122,30 @@ def _noise(
     return 1.4826 * float(np.median(np.abs(values)))
 
 
-def _above_floor(
+def _carried(
     result: np.ndarray,
     leg_rows: tuple[np.ndarray, np.ndarray, np.ndarray],
     last: int,
     leg: int,
     noise_n: float,
 ) -> None:
-    """The swing samples after row ``last`` whose load stays above the floor stand
-    (:data:`FLOOR_SIGMAS` times ``noise_n`` [N]); ``leg_rows``: the stamps [s], the leg's loads
-    [N] and its stance before these rules.
-    """
-    stamps_s, loads, stance = leg_rows
-    floor = FLOOR_SIGMAS * noise_n
-    k = last + 1
-    while (
-        k < len(stamps_s)
-        and not stance[k]
-        and loads[k] > floor
-        and stamps_s[k] - stamps_s[last] <= MAX_LOADED_S
-    ):
-        result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
-        k += 1
-
-
-def _dip(
-    result: np.ndarray,
-    leg_rows: tuple[np.ndarray, np.ndarray, np.ndarray],
-    last: int,
-    leg: int,
-    noise_n: float,
-) -> None:
-    """The swing after row ``last`` stands where it is a dip: it ends in a stance within
-    :data:`MAX_LOADED_S` and its load stays above :data:`DIP_SIGMAS` times ``noise_n`` [N] on
-    every sample; ``leg_rows`` as :func:`_above_floor`'s.
+    """The swing samples after row ``last`` that the load carries stand, within
+    :data:`MAX_LOADED_S`: those whose load stays above the floor (:data:`FLOOR_SIGMAS` times
+    ``noise_n`` [N]), or the whole swing where it is a dip (it ends in a stance, its load above
+    :data:`DIP_SIGMAS` times ``noise_n`` on every sample); ``leg_rows``: the stamps [s], the
+    leg's loads [N] and its stance before these rules.
     """
     stamps_s, loads, stance = leg_rows
     stop = int(np.searchsorted(stamps_s, stamps_s[last] + MAX_LOADED_S, side="right"))
-    following = np.flatnonzero(stance[last + 1 : stop])
-    if not following.size:
-        return
-    gap = slice(last + 1, last + 1 + int(following[0]))
-    if not (loads[gap] > DIP_SIGMAS * noise_n).all():  # NaN: unknown, no dip
-        return
-    for k in range(gap.start, gap.stop):
+    standing = np.flatnonzero(stance[last + 1 : stop])
+    end = last + 1 + int(standing[0]) if standing.size else stop
+    swing = loads[last + 1 : end]
+    above = swing > FLOOR_SIGMAS * noise_n  # NaN: unknown, not above
+    if standing.size and (swing > DIP_SIGMAS * noise_n).all():
+        count = swing.size
+    else:
+        count = swing.size if above.all() else int(np.argmin(above))
+    for k in range(last + 1, last + 1 + count):
         result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
 
 

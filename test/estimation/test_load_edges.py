@@ -8,6 +8,7 @@ the transition's switch probability), so the right answer is the load's own zero
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
 from a1_leg_fk.estimation.load_edges import unlagged
@@ -102,21 +103,27 @@ def test_a_dip_that_never_unloads_is_bridged_and_a_swing_is_kept() -> None:
     assert not (stance & swing).any()
 
 
-def test_a_dip_under_the_floor_that_never_reaches_zero_is_bridged() -> None:
-    """go2_walk's first stride, built: loads with 0.06 N of noise (the floor 8 x 0.06 = 0.48 N),
-    stances at 30 N, one dipping from 3 N down to 0.4 N and back over 50 ms (under the floor
-    for its middle 10 ms, never at zero: the foot stands), another the same but at zero for two
-    samples in its middle (the foot left). The first stands; the second keeps its swing on the
-    samples at zero, as every swing keeps its own from its second sample on."""
+def dip_loads() -> tuple[np.ndarray, np.ndarray, slice, slice]:
+    """(N, 4) loads [N] with 0.06 N of noise (the floor 8 x 0.06 = 0.48 N): stances at 30 N,
+    one dipping from 3 N down to 0.4 N and back over 50 ms (under the floor for its middle 10
+    ms, never at zero: the foot stands), another the same but at zero for two samples in its
+    middle (the foot left); the true loads (N,), the dip's rows and the rows at zero."""
     rng = np.random.default_rng(36)
     true = np.tile(np.r_[np.full(100, 30.0), np.zeros(100)], 10)
-    dip, touched = slice(430, 455), slice(630, 655)  # inside the third and fourth stances
+    dip, touched, left = slice(430, 455), slice(630, 655), slice(641, 643)
     true[dip] = true[touched] = 0.4 + 2.6 * np.abs(np.linspace(-1.0, 1.0, 25))
-    true[641:643] = 0.0
+    true[left] = 0.0
     loads = (true + rng.normal(0.0, 0.06, true.size))[:, None].repeat(LEGS, axis=1)
+    return loads, true, dip, left
+
+
+def test_a_dip_under_the_floor_that_never_reaches_zero_is_bridged() -> None:
+    """go2_walk's first stride, built (:func:`dip_loads`): the dip stands; the other keeps its
+    swing on the samples at zero, as every swing keeps its own from its second sample on."""
+    loads, true, dip, left = dip_loads()
     stance = stance_of(rows_of(loads, np.zeros(loads.shape)))
     assert stance[dip].all()
-    assert not stance[641:643].any()
+    assert not stance[left].any()
     swing = (true == 0.0)[:, None].repeat(LEGS, axis=1)
     swing[np.flatnonzero(np.diff(true == 0.0, prepend=False))] = False  # each swing's first
     assert not (stance & swing).any()
@@ -153,12 +160,18 @@ def test_unlagged_inverts_a_first_order_lag() -> None:
     np.testing.assert_allclose(unlagged(lagged, stamps, OBSERVER_LAG_S)[1:], load[1:], atol=1e-9)
 
 
-def test_windows_give_the_whole_pass_with_loads() -> None:
+@pytest.mark.parametrize("case", ["ramps", "dips"])
+def test_windows_give_the_whole_pass_with_loads(case: str) -> None:
     """Blocks of 7 rows through the fixed-lag smoother against one pass over every row, on
-    noisy loads with ramps: the loads' rules see the same rows (their history kept), the same
-    stance on every row."""
-    loads, _ = gait_loads(np.random.default_rng(11), 1.1)
-    rows = rows_of(loads, np.full(loads.shape, -3.5))
+    noisy loads with ramps, and on loads with dips (:func:`dip_loads`): the loads' rules see the
+    same rows (their history kept, their look ahead within the lag), the same stance on every
+    row."""
+    if case == "ramps":
+        loads = gait_loads(np.random.default_rng(11), 1.1)[0]
+        rows = rows_of(loads, np.full(loads.shape, -3.5))
+    else:
+        loads = dip_loads()[0]
+        rows = rows_of(loads, np.zeros(loads.shape))
     whole = stance_of(rows, OBSERVER_LAG_S)
     smoother, parts = FixedLagSmoother(force_lag_s=OBSERVER_LAG_S), []
     for start in range(0, len(rows), 7):  # a block's end lands inside many stances' ends

@@ -9,20 +9,30 @@ the foot still carries a little load: a few ms early where the load ramps down s
 it lingers below that share for a while (a foot unloading slowly, or dipping to a few newtons
 while it stands). With the whole recording at hand the load itself can place that end. Where a
 stance of a foot with force evidence ends (its last sample of log-odds >= 0, the next below),
-two rules may lengthen it, never shorten it:
+three rules may lengthen it, never shorten it:
 
 - **the unloading ramp**: a line fitted to the load over the :data:`RAMP_WINDOW_S` up to the
   stance's last sample; where it falls to zero within :data:`RAMP_REACH_S` after it, the samples
-  up to there stand with the probability that the line's load is above zero (its value over its
+  up to there stand with the probability that their load is above zero (its value over its
   standard error, through the normal distribution), as long as that value is at least
-  :data:`RAMP_CONFIDENCE` standard errors;
+  :data:`RAMP_CONFIDENCE` standard errors. A sample's load is the line's extrapolation and the
+  sample's own load weighted by their inverse variances (the line's standard error there; the
+  spread of the line's residuals for the sample): a load that falls off a cliff, as a trotting
+  foot's does in its last sample, is not carried on by the line, and one that follows it is
+  carried with more confidence;
 - **the load above the noise floor**: the samples right after the stance whose load stays above
   :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
   last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread
   (1.4826 times the median of its absolute value) over every foot's swing samples within
   :data:`NOISE_S` either side of the stance's end; without :data:`MIN_NOISE_SAMPLES` of them,
   this rule is off there. On a clean simulation the floor is a fraction of a newton; with a
-  real robot's sensor noise it is tens of newtons, and this rule does nothing.
+  real robot's sensor noise it is tens of newtons, and this rule does nothing;
+- **a dip**: a swing after the stance that ends in the next stance within :data:`MAX_LOADED_S`
+  and whose load stays above :data:`DIP_SIGMAS` times the same noise on every sample stands
+  (a foot whose load dips to a fraction of a newton without ever reaching zero: the walk's
+  first stride). A swing's load hovers around zero, so the whole swing above this lower floor
+  is a foot still loaded, where the floor above, which carries a stance on sample by sample,
+  would take the load's last newtons for it.
 
 The load is the estimated normal force with the momentum observer's first-order lag undone
 (:func:`unlagged`): right after a foot lifts, the observer still shows a newton or so decaying
@@ -47,8 +57,11 @@ zero."""
 FLOOR_SIGMAS = 8.0
 """A load above this many times its noise is a foot still loaded."""
 MAX_LOADED_S = 0.1
-"""[s] The longest a stance is carried on by its load above the noise floor (the transition's
-mean time between changes)."""
+"""[s] The longest a stance is carried on by its load above the noise floor, or a dip bridged
+(the transition's mean time between changes)."""
+DIP_SIGMAS = 4.0
+"""A swing between two stances whose load stays above this many times its noise is a dip (2
+to 6 met the same goals on the contact family's tuned runs, docs/forces.md)."""
 NOISE_S = 0.4
 """[s] The swing samples the load's noise is taken over, either side of a stance's end."""
 MIN_NOISE_SAMPLES = 20
@@ -93,7 +106,7 @@ def loaded_stance(
     for last, leg in zip(*np.nonzero(ends), strict=True):
         floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
         if floor is not None:
-            _above_floor(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
+            _carried(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
         _ramp(result, stamps_s, loads[:, leg], last, leg)
     return result
 
@@ -109,28 +122,31 @@ def _noise(
     return 1.4826 * float(np.median(np.abs(values)))
 
 
-def _above_floor(
+def _carried(
     result: np.ndarray,
     leg_rows: tuple[np.ndarray, np.ndarray, np.ndarray],
     last: int,
     leg: int,
     noise_n: float,
 ) -> None:
-    """The swing samples after row ``last`` whose load stays above the floor stand
-    (:data:`FLOOR_SIGMAS` times ``noise_n`` [N]); ``leg_rows``: the stamps [s], the leg's loads
-    [N] and its stance before these rules.
+    """The swing samples after row ``last`` that the load carries stand, within
+    :data:`MAX_LOADED_S`: those whose load stays above the floor (:data:`FLOOR_SIGMAS` times
+    ``noise_n`` [N]), or the whole swing where it is a dip (it ends in a stance, its load above
+    :data:`DIP_SIGMAS` times ``noise_n`` on every sample); ``leg_rows``: the stamps [s], the
+    leg's loads [N] and its stance before these rules.
     """
     stamps_s, loads, stance = leg_rows
-    floor = FLOOR_SIGMAS * noise_n
-    k = last + 1
-    while (
-        k < len(stamps_s)
-        and not stance[k]
-        and loads[k] > floor
-        and stamps_s[k] - stamps_s[last] <= MAX_LOADED_S
-    ):
+    stop = int(np.searchsorted(stamps_s, stamps_s[last] + MAX_LOADED_S, side="right"))
+    standing = np.flatnonzero(stance[last + 1 : stop])
+    end = last + 1 + int(standing[0]) if standing.size else stop
+    swing = loads[last + 1 : end]
+    above = swing > FLOOR_SIGMAS * noise_n  # NaN: unknown, not above
+    if standing.size and (swing > DIP_SIGMAS * noise_n).all():
+        count = swing.size
+    else:
+        count = swing.size if above.all() else int(np.argmin(above))
+    for k in range(last + 1, last + 1 + count):
         result[k, leg] = max(result[k, leg], _above_zero(loads[k] / max(noise_n, 1e-12)))
-        k += 1
 
 
 def _ramp(
@@ -164,14 +180,27 @@ def _ramp(
         return
     k = last + 1
     while k < len(stamps_s) and (dt := float(stamps_s[k]) - end_s) <= RAMP_REACH_S:
-        load = offset + slope * dt
-        error = math.sqrt(
-            max(variance * (1.0 / count + (dt - t_mean) * (dt - t_mean) / spread), 1e-24)
+        load, error = _with_own(
+            (offset + slope * dt, variance * (1.0 / count + (dt - t_mean) ** 2 / spread)),
+            (float(loads[k]), variance),
         )
         if load <= RAMP_CONFIDENCE * error:
             break
         result[k, leg] = max(result[k, leg], _above_zero(load / error))
         k += 1
+
+
+def _with_own(line: tuple[float, float], own: tuple[float, float]) -> tuple[float, float]:
+    """A sample's load [N] and its standard error [N] from the ramp's ``line`` (extrapolated
+    load, its variance [N^2]) and its ``own`` (measured load, variance): their inverse-variance
+    weighted mean (the line's alone where the sample's load is not finite).
+    """
+    (line_n, line_var), (own_n, own_var) = line, own
+    line_var, own_var = max(line_var, 1e-24), max(own_var, 1e-24)
+    if not math.isfinite(own_n):
+        return line_n, math.sqrt(line_var)
+    weight = 1.0 / line_var + 1.0 / own_var
+    return (line_n / line_var + own_n / own_var) / weight, math.sqrt(1.0 / weight)
 
 
 def _above_zero(z: float) -> float:

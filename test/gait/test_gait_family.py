@@ -32,29 +32,16 @@ TUNED = ("a1_trot_fast", "a1_pronk", "go2_trot", "a1_walk")
 HELD_OUT = tuple(name for name in SPECS if name not in TUNED)
 DUTY, SAME, EVENTS, STANCES = "duty vs PyBullet", "duty vs estimate", "events", "stances"
 DUTY_GOAL, SAME_GOAL, EVENT_GOAL_MS = 0.02, 0.005, 4.0
-FORCE_EARLY = (
-    "the smoothed force estimate's lift-off is early here (the worst leg's signed median -6 ms): "
-    "PyBullet's foot carries 0.3-0.9 N for its last 4-6 ms, which the estimate follows within "
-    "0.3 N on the clean run (its load above the noise floor carries the stance on) but not "
-    "under 2 N of force noise (the floor is 8 x 2.1 N there)"
-)
-WALK_START = (
-    "false swings in the walk's first stride (PyBullet's load dips to 0.4-3 N while the feet "
-    "touch) split it in two stances: the smoothed estimate bridges "
-    "RR's (38 ms, down to 1.7 N, above its noise floor) but not RL's (52 ms, down to 0.4 N, "
-    "under the floor there, 8 x 0.063 N); the causal estimate bridges neither"
-)
 FEET_LATE = (
     "the feet's heights: a walk's foot rises from rest, slowly for its first 10-12 ms (0.03 mm "
     "at 4 ms, 0.15-0.4 mm at 10 ms, under the noise tolerance of 3 deviations, 0.25-0.28 mm), "
     "then fast; in sensor noise the rise's fitted onset lands on the fast part, late (signed "
-    "per-leg medians: a1_walk+noise +4/+7/+1/+6 ms, go2_walk+noise FL +7 ms)"
+    "per-leg medians +4/+7/+1/+6 ms)"
 )
 UNMET = {
-    ("a1_walk+noise", FEET, EVENTS): "touchdown 2 ms, lift-off 6 ms (the worst leg's 7)",
-    ("go2_walk", FORCE, STANCES): "1.045 stances per stride",
+    ("a1_walk+noise", FEET, EVENTS): f"{FEET_LATE}: touchdown 2 ms, lift-off 6 ms (worst leg 7)",
 }
-"""Goals not met, by (run, evidence, goal): the measured number (max over legs)."""
+"""Goals not met, by (run, evidence, goal): why, and the measured number."""
 
 
 @pytest.fixture(scope="session")
@@ -72,13 +59,6 @@ def scored(family):
     return get
 
 
-def cause_of(evidence: str, goal: str) -> str:
-    """Why ``goal`` is unmet under ``evidence``."""
-    if evidence == FEET:
-        return FEET_LATE
-    return WALK_START if goal in (SAME, STANCES) else FORCE_EARLY
-
-
 def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> list:
     """One parameter per (run, evidence), tuned then held out; a strict xfail where unmet."""
     out = []
@@ -87,9 +67,8 @@ def cases(goal: str, evidences: tuple[str, ...], clean_only: bool = False) -> li
             if clean_only and name.endswith("+noise"):
                 continue
             for evidence in evidences:
-                measured = UNMET.get((name, evidence, goal))
-                reason = f"{cause_of(evidence, goal)}: {measured}"
-                marks = [pytest.mark.xfail(strict=True, reason=reason)] if measured else []
+                reason = UNMET.get((name, evidence, goal))
+                marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
                 out.append(
                     pytest.param(name, evidence, marks=marks, id=f"{held}-{name}-{evidence}")
                 )

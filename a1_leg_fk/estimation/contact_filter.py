@@ -15,8 +15,9 @@ that no single sample decides alone:
   low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
   ``(height_half_m - h) / height_scale_m``;
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
-  ``height_half_m``):
-  the distance between the base velocity this foot gives if it were still
+  ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
+  on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
+  not the ground's): the distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
@@ -165,10 +166,12 @@ class ContactFilter:
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # falling, no foot stands however low and still it is: the kinematics' stance is weak
         heights = None
+        standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
-            standing = [p >= 0.5 for p in self.probabilities]
             heights = self.ground.heights(dt_s, feet, down, omega, standing)
-        kinematic, taken = _kinematic(model, feet, omega, forced, common < -1.0, heights)
+        kinematic, taken = _kinematic(
+            model, feet, (omega, standing), (forced, common < -1.0), heights
+        )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
@@ -209,15 +212,15 @@ def gait_phase_prior(names: Sequence[str], probabilities: Sequence[float]) -> li
 def _kinematic(
     model: ContactModel,
     feet: Sequence[FootMotion | None],
-    omega: Sequence[float],
-    forced: Sequence[bool],
-    falling: bool,
+    motion: tuple[Sequence[float], Sequence[bool]],
+    force: tuple[Sequence[bool], bool],
     ground: Sequence[float] | None,
 ) -> tuple[list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
-    the feet whose force is evidence too (``forced``), and for all while the base is
-    ``falling``; and the heights [m] it took (NaN: unknown): above the lowest foot, or from
-    ``ground`` (the slope taken off) where that is lower.
+    the feet whose force is evidence too (``force``: per foot, and whether the base is falling,
+    then for all); and the heights [m] it took (NaN: unknown): above the lowest foot, or from
+    ``ground`` (the slope taken off) where that is lower. ``motion``: the base's angular velocity
+    [rad/s, base frame] and which feet stood at the previous sample (the speeds' reference).
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -226,13 +229,13 @@ def _kinematic(
             lowest, known = foot.depth, True
     if not isfinite(lowest):
         return [0.0] * LEGS, [math.nan] * LEGS
-    wx, wy, wz = omega
+    (wx, wy, wz), standing = motion
+    forced, falling = force
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
     stance_cap = model.max_kinematic_stance
     speed_half, speed_scale = model.speed_half_mps, model.speed_scale_mps
     velocities: list[Vector | None] = [None] * LEGS
     heights = [math.nan] * LEGS
-    low, sx, sy, sz = 0, 0.0, 0.0, 0.0  # the low feet with a velocity: count and sums
     for leg, foot in enumerate(feet):
         if foot is None:
             continue
@@ -244,30 +247,51 @@ def _kinematic(
         vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
         if isfinite(vx + vy + vz):
             velocities[leg] = (vx, vy, vz)
-            if height < half:
-                low, sx, sy, sz = low + 1, sx + vx, sy + vy, sz + vz
+    references = _references(velocities, [h < half for h in heights], standing)
     out = []
     for leg in range(LEGS):
         cap = stance_cap if falling or forced[leg] else limit
-        height, velocity = heights[leg], velocities[leg]
+        height, velocity, reference = heights[leg], velocities[leg], references[leg]
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # _clip written out: per foot and sample
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-        if velocity is not None:
-            mine = height < half  # its own velocity is in the sums: leave it out
-            others = low - mine
-            if others:
-                vx, vy, vz = velocity
-                dx = vx - (sx - mine * vx) / others
-                dy = vy - (sy - mine * vy) / others
-                dz = vz - (sz - mine * vz) / others
-                speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
-                x = (speed_half - speed) / speed_scale  # _clip, written out too
-                if x == x:  # noqa: PLR0124 (NaN: no evidence)
-                    evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+        if velocity is not None and reference is not None:
+            (vx, vy, vz), (gx, gy, gz) = velocity, reference
+            dx, dy, dz = vx - gx, vy - gy, vz - gz
+            speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
+            x = (speed_half - speed) / speed_scale  # _clip, written out too
+            if x == x:  # noqa: PLR0124 (NaN: no evidence)
+                evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         out.append(evidence)
     return out, heights
+
+
+def _references(
+    velocities: Sequence[Vector | None], low: Sequence[bool], standing: Sequence[bool]
+) -> list[Vector | None]:
+    """Per foot, the ground's velocity its speed is taken against [m/s, base frame]: the mean
+    base velocity of the other ``low`` feet with a velocity that the filter held ``standing`` at
+    the previous sample, or of the other low feet when none of those stood (None: no other low
+    foot). A swing foot skimming rough ground is low too, and moves: the standing feet leave
+    it out of the mean.
+    """
+    out: list[Vector | None] = []
+    for leg in range(LEGS):
+        others = [
+            (velocity, standing[o])
+            for o, velocity in enumerate(velocities)
+            if o != leg and low[o] and velocity is not None
+        ]
+        kept = [velocity for velocity, stood in others if stood] or [v for v, _ in others]
+        if not kept:
+            out.append(None)
+            continue
+        sx = sy = sz = 0.0
+        for vx, vy, vz in kept:
+            sx, sy, sz = sx + vx, sy + vy, sz + vz
+        out.append((sx / len(kept), sy / len(kept), sz / len(kept)))
+    return out
 
 
 def _clip(log_ratio: float, limit: float, cap: float) -> float:

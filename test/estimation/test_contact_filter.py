@@ -57,6 +57,24 @@ def test_kinematics_say_swing_strongly_and_stance_weakly_beside_a_force() -> Non
     assert alone[0] == pytest.approx(sigmoid(height_odds + speed_odds))
 
 
+def test_speeds_are_taken_against_the_feet_that_stood() -> None:
+    """Rough ground: FR and RL stood at the previous sample and are still; FL, a swing foot
+    skimming a bump 1 cm above them (within ``height_half_m``: low), moves at 1 m/s. Against
+    the mean of every other low foot FR would move 0.5 m/s (log-odds (0.32 - 0.5) / 0.08 =
+    -2.25: called swing in mid-stance); against the feet that stood it is still (+4)."""
+    feet = [foot(0.3), foot(0.29, (1.0, 0.0, 0.0)), foot(0.2), foot(0.3)]
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.9, 0.1, 0.1, 0.9]
+    out = contacts.update(0.0, feet, (STILL, None))
+    height_odds = MODEL.height_half_m / MODEL.height_scale_m  # 4: at the lowest foot's height
+    speed_odds = MODEL.speed_half_mps / MODEL.speed_scale_mps  # 4: still against RL
+    stood = math.log(0.9 / 0.1)
+    assert out[0] == pytest.approx(sigmoid(stood + height_odds + speed_odds))
+    assert out[3] == pytest.approx(out[0])
+    fl_height_odds = (MODEL.height_half_m - 0.01) / MODEL.height_scale_m  # 1.5
+    assert out[1] == pytest.approx(sigmoid(-stood + fl_height_odds - MODEL.max_log_ratio))
+
+
 def test_free_fall_lifts_every_foot() -> None:
     feet = [foot(0.3)] * 4  # all low and still: the kinematics alone would say stance
     contacts = ContactFilter(MODEL)

@@ -13,7 +13,12 @@ that no single sample decides alone:
 - its *height* [m] above the lowest foot along gravity, or above the lowest foot with the local
   ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), whichever is lower (a foot
   low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
-  ``(height_half_m - h) / height_scale_m``;
+  ``(height_half_m - h) / height_scale_m``; for a foot the filter holds standing, at most
+  ``(r_half - r) / rise_scale_m`` once its rise ``r`` above its own foothold
+  (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
+  ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
+  lower tread is "low" against the others well after its liftoff; against its own foothold it
+  is not);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
@@ -42,6 +47,7 @@ from math import exp, isfinite, sqrt
 from typing import NamedTuple
 
 from a1_leg_fk.estimation.foot_ground import FootGround
+from a1_leg_fk.estimation.foot_rise import FootRise
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -65,10 +71,14 @@ class ContactModel:
     height_scale_m: float
     speed_half_mps: float
     speed_scale_mps: float
+    rise_half_m: float
+    rise_scale_m: float
     fall_half_mps2: float = 0.3 * STANDARD_GRAVITY
     fall_scale_mps2: float = 0.05 * STANDARD_GRAVITY
     max_log_ratio: float = 4.0
     max_kinematic_stance: float = 0.5
+    rise_spread_factor: float = 3.0
+    """The rise at even odds is at least this many times the standing feet's spread."""
     phase_weight: float = 1.0
 
     def __post_init__(self) -> None:
@@ -89,6 +99,8 @@ class ContactModel:
             height_scale_m=HEIGHT_SCALE_SHARE * leg_length_m,
             speed_half_mps=SPEED_HALF_PER_S * leg_length_m,
             speed_scale_mps=SPEED_SCALE_PER_S * leg_length_m,
+            rise_half_m=RISE_HALF_SHARE * leg_length_m,
+            rise_scale_m=RISE_SCALE_SHARE * leg_length_m,
         )
 
 
@@ -98,6 +110,9 @@ FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.03, 0.005
 """Normal force at even odds, and per unit of log-odds, as shares of the weight."""
 HEIGHT_HALF_SHARE, HEIGHT_SCALE_SHARE = 0.04, 0.01
 """Height above the lowest foot at even odds, and per unit of log-odds, in leg lengths."""
+RISE_HALF_SHARE, RISE_SCALE_SHARE = 0.00375, 0.00125
+"""A standing foot's rise above its own foothold at even odds (at least), and per unit of
+log-odds, in leg lengths (1.5 and 0.5 mm on the A1)."""
 SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
 """Speed over the ground at even odds, and per unit of log-odds, in leg lengths per second."""
 
@@ -170,7 +185,11 @@ class ContactFilter:
         if down is not None:
             heights = self.ground.heights(dt_s, feet, down, omega, standing)
         kinematic, taken = _kinematic(
-            model, feet, (omega, standing), (forced, common < -1.0), heights
+            model,
+            feet,
+            (omega, standing),
+            (forced, common < -1.0),
+            (heights, _rise_caps(model, self.ground.rise) if down is not None else None),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
@@ -214,13 +233,15 @@ def _kinematic(
     feet: Sequence[FootMotion | None],
     motion: tuple[Sequence[float], Sequence[bool]],
     force: tuple[Sequence[bool], bool],
-    ground: Sequence[float] | None,
+    terrain: tuple[Sequence[float] | None, Sequence[float] | None],
 ) -> tuple[list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too (``force``: per foot, and whether the base is falling,
     then for all); and the heights [m] it took (NaN: unknown): above the lowest foot, or from
-    ``ground`` (the slope taken off) where that is lower. ``motion``: the base's angular velocity
-    [rad/s, base frame] and which feet stood at the previous sample (the speeds' reference).
+    ``terrain``'s first (the slope taken off) where that is lower; its second caps each foot's
+    height log-odds (a foot risen above its own foothold: :func:`_rise_caps`). ``motion``: the
+    base's angular velocity [rad/s, base frame] and which feet stood at the previous sample (the
+    speeds' reference).
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -231,6 +252,7 @@ def _kinematic(
         return [0.0] * LEGS, [math.nan] * LEGS
     (wx, wy, wz), standing = motion
     forced, falling = force
+    ground, caps = terrain
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
     stance_cap = model.max_kinematic_stance
     speed_half, speed_scale = model.speed_half_mps, model.speed_scale_mps
@@ -255,6 +277,8 @@ def _kinematic(
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # _clip written out: per foot and sample
+            if caps is not None and caps[leg] < x:  # risen above its own foothold
+                x = caps[leg]
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         if velocity is not None and reference is not None:
             (vx, vy, vz), (gx, gy, gz) = velocity, reference
@@ -265,6 +289,21 @@ def _kinematic(
                 evidence += -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
         out.append(evidence)
     return out, heights
+
+
+def _rise_caps(model: ContactModel, rise: FootRise) -> list[float]:
+    """Per foot, the most its height log-odds may say once it has risen above its own foothold
+    (:mod:`a1_leg_fk.estimation.foot_rise`) by more than the even-odds rise, ``rise_half_m`` or
+    ``rise_spread_factor`` times the standing feet's spread where that is more:
+    ``(half - rise) / rise_scale_m`` (below 0: swing); +inf (no cap) for a foot below it, or
+    with no foothold (held in swing, unknown).
+    """
+    half = max(model.rise_half_m, model.rise_spread_factor * rise.spread_m)
+    caps = []
+    for risen in rise.rises:
+        x = (half - risen) / model.rise_scale_m
+        caps.append(x if x < 0.0 else math.inf)  # NaN: no foothold, no cap
+    return caps
 
 
 def _references(

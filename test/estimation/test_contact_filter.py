@@ -75,6 +75,31 @@ def test_speeds_are_taken_against_the_feet_that_stood() -> None:
     assert out[1] == pytest.approx(sigmoid(-stood + fl_height_odds - MODEL.max_log_ratio))
 
 
+def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:
+    """Four feet stand still 0.3 m under the base; then FL rises 3 mm, still "low" against the
+    others (height log-odds (16 - 3) / 4 = +3.25). Against its own foothold it is 3 mm up: past
+    the even-odds rise (1.5 mm, 0.375 % of the leg; the standing feet's spread, 0.1 mm, x 3 is
+    less), so its height says (1.5 - 3) / 0.5 = -3 instead. Its speed (still against the still
+    feet that stood) adds +4. The other feet keep their +4 height. The evidence kept for a
+    smoother leaves the cap out (it follows the filter's own state): +3.25 + 4."""
+    down = (0.0, 0.0, -1.0)
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.99] * 4
+    before = contacts.update(0.002, [foot(0.3)] * 4, (STILL, None), down=down)[1]
+    out = contacts.update(
+        0.002, [foot(0.3), foot(0.297), foot(0.3), foot(0.3)], (STILL, None), down=down
+    )
+    assert MODEL.rise_half_m == pytest.approx(0.0015) and MODEL.rise_scale_m == pytest.approx(5e-4)
+    limit = MODEL.max_log_ratio
+    assert contacts.evidence.heights[1] == pytest.approx(0.003)
+    assert contacts.evidence.kinematic[1] == pytest.approx((0.016 - 0.003) / 0.004 + limit)
+    assert contacts.evidence.kinematic[0] == pytest.approx(2 * limit)
+    assert contacts.evidence.total[1] == pytest.approx(contacts.evidence.kinematic[1])
+    prior = before + (1.0 - math.exp(-0.002 / MODEL.switch_time_s)) * (1.0 - 2.0 * before)
+    rise_odds = (0.0015 - 0.003) / 5e-4
+    assert out[1] == pytest.approx(sigmoid(math.log(prior / (1.0 - prior)) + rise_odds + limit))
+
+
 def test_free_fall_lifts_every_foot() -> None:
     feet = [foot(0.3)] * 4  # all low and still: the kinematics alone would say stance
     contacts = ContactFilter(MODEL)

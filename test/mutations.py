@@ -96,8 +96,8 @@ MUTATIONS = (
     Mutation(
         "contact filter's speeds against every low foot, not the feet that stood",
         "a1_leg_fk/estimation/contact_filter.py",
-        "kept = [velocity for velocity, stood in others if stood] or [v for v, _ in others]",
-        "kept = [v for v, _ in others]",
+        "stood = [velocity for velocity, was in others if was and not forced[leg]]",
+        "stood = []",
     ),
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",

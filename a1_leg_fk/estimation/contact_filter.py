@@ -245,8 +245,12 @@ def _kinematic(
     then for all); and the heights [m] it took (NaN: unknown): above the lowest foot, or from
     ``terrain``'s first (the slope taken off) where that is lower; its second caps each foot's
     height log-odds (a foot risen above its own foothold: :func:`_rise_caps`), and how much
-    that cap lowered each foot's evidence (<= 0). ``motion``: the base's angular velocity [rad/s,
-    base frame] and which feet stood at the previous sample (the speeds' reference).
+    that cap lowered each foot's evidence (<= 0). The cap, and the speeds against the feet that
+    stood, are for the feet without a force: with one, the causal filter's liftoffs moved ahead
+    of the smoothed ones by 1-2 foot-samples on three runs of the contact family (the smoother
+    with efforts no better than the causal filter), so a forced foot keeps the flat rules.
+    ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
+    previous sample (the speeds' reference).
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -274,7 +278,7 @@ def _kinematic(
         vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
         if isfinite(vx + vy + vz):
             velocities[leg] = (vx, vy, vz)
-    references = _references(velocities, [h < half for h in heights], standing)
+    references = _references(velocities, [h < half for h in heights], standing, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
         cap = stance_cap if falling or forced[leg] else limit
@@ -283,7 +287,7 @@ def _kinematic(
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # _clip written out: per foot and sample
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-            if caps is not None and caps[leg] < x:  # risen above its own foothold
+            if caps is not None and caps[leg] < x and not forced[leg]:  # risen: see below
                 x = caps[leg]
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
                 lowered[leg], evidence = risen - evidence, risen
@@ -314,13 +318,17 @@ def _rise_caps(model: ContactModel, rise: FootRise) -> list[float]:
 
 
 def _references(
-    velocities: Sequence[Vector | None], low: Sequence[bool], standing: Sequence[bool]
+    velocities: Sequence[Vector | None],
+    low: Sequence[bool],
+    standing: Sequence[bool],
+    forced: Sequence[bool],
 ) -> list[Vector | None]:
     """Per foot, the ground's velocity its speed is taken against [m/s, base frame]: the mean
     base velocity of the other ``low`` feet with a velocity that the filter held ``standing`` at
     the previous sample, or of the other low feet when none of those stood (None: no other low
     foot). A swing foot skimming rough ground is low too, and moves: the standing feet leave
-    it out of the mean.
+    it out of the mean. A foot whose force is evidence (``forced``) takes all the other low
+    feet: its force places its edges (see :func:`_kinematic`).
     """
     out: list[Vector | None] = []
     for leg in range(LEGS):
@@ -329,7 +337,8 @@ def _references(
             for o, velocity in enumerate(velocities)
             if o != leg and low[o] and velocity is not None
         ]
-        kept = [velocity for velocity, stood in others if stood] or [v for v, _ in others]
+        stood = [velocity for velocity, was in others if was and not forced[leg]]
+        kept = stood or [v for v, _ in others]
         if not kept:
             out.append(None)
             continue

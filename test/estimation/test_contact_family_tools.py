@@ -37,9 +37,8 @@ def test_bag_tool_gives_the_pipelines_contacts(family, name, tmp_path: Path) -> 
     rows = list(csv.DictReader(out.open()))
     ours = np.array([[float(row[c]) for c in CONTACT_COLUMNS] for row in rows])
     expected, _ = estimate(run, robot_of(run), FORCE)
-    # the bag's stamps are the run's rounded to whole nanoseconds: dt differs by < 1e-9 s; the
-    # feet's rise above their footholds (log-odds per 0.5 mm) makes that up to 4.2e-7 (2 samples)
-    np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-6)
+    # the bag's stamps are the run's rounded to whole nanoseconds: dt differs by < 1e-9 s
+    np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-7)
     agree = float(((ours > 0.5) == run.contacts)[run.gait].mean())
     print(f"{name}: the bag tool's contacts agree with PyBullet's on {100 * agree:.2f} %")
     assert agree >= 0.985

@@ -102,8 +102,8 @@ MUTATIONS = (
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",
         "a1_leg_fk/estimation/contact_filter.py",
-        "if caps is not None and caps[leg] < x:",
-        "if caps is not None and caps[leg] < x - math.inf:",
+        "if caps is not None and caps[leg] < x and not forced[leg]:",
+        "if caps is not None and caps[leg] < x - math.inf and not forced[leg]:",
     ),
     Mutation(
         "FR <-> FL Jacobian products swapped in the odometry feed",

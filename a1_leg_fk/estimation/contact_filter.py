@@ -282,7 +282,9 @@ def _kinematic(
             velocities[leg] = (vx, vy, vz)
     low = [h < half for h in heights]
     references = _references(velocities, low, standing, forced)
-    flats = _references(velocities, low, [False] * LEGS, forced)  # against every low foot
+    flats = references  # against every low foot: the same where every low foot stood
+    if not all(forced) and not all(stood for stood, down in zip(standing, low) if down):
+        flats = _references(velocities, low, [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
         cap = stance_cap if falling or forced[leg] else limit
@@ -298,7 +300,7 @@ def _kinematic(
         if velocity is not None:
             speed = _speed_odds(velocity, reference, model, cap)
             evidence += speed
-            if flats[leg] != reference:  # the flat rule's speed, for the smoother
+            if flats is not references and flats[leg] != reference:  # for the smoother
                 lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap)
         out.append(evidence)
     return out, heights, lowered
@@ -346,22 +348,24 @@ def _references(
     it out of the mean. A foot whose force is evidence (``forced``) takes all the other low
     feet: its force places its edges (see :func:`_kinematic`).
     """
+    sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]  # (count, x, y, z): low; low and standing
+    for o, velocity in enumerate(velocities):
+        if low[o] and velocity is not None:
+            for total in sums if standing[o] else sums[:1]:
+                total[0] += 1
+                total[1] += velocity[0]
+                total[2] += velocity[1]
+                total[3] += velocity[2]
     out: list[Vector | None] = []
-    for leg in range(LEGS):
-        others = [
-            (velocity, standing[o])
-            for o, velocity in enumerate(velocities)
-            if o != leg and low[o] and velocity is not None
-        ]
-        stood = [velocity for velocity, was in others if was and not forced[leg]]
-        kept = stood or [v for v, _ in others]
-        if not kept:
-            out.append(None)
-            continue
-        sx = sy = sz = 0.0
-        for vx, vy, vz in kept:
-            sx, sy, sz = sx + vx, sy + vy, sz + vz
-        out.append((sx / len(kept), sy / len(kept), sz / len(kept)))
+    for leg, velocity in enumerate(velocities):
+        mine = low[leg] and velocity is not None  # its own velocity is in the sums: leave it out
+        if not forced[leg] and sums[1][0] > (mine and standing[leg]):
+            (count, sx, sy, sz), minus = sums[1], mine and standing[leg]
+        else:
+            (count, sx, sy, sz), minus = sums[0], mine
+        if minus and velocity is not None:
+            count, sx, sy, sz = count - 1, sx - velocity[0], sy - velocity[1], sz - velocity[2]
+        out.append(None if count == 0 else (sx / count, sy / count, sz / count))
     return out
 
 

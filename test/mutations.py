@@ -38,6 +38,7 @@ FAST_SUBSET = (
     "test/estimation/test_leg_odometry.py",
     "test/estimation/test_leg_order.py",
     "test/estimation/test_foot_ground.py",
+    "test/estimation/test_foot_rise.py",
     "test/estimation/test_ground.py",
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
@@ -91,6 +92,18 @@ MUTATIONS = (
         "a1_leg_fk/estimation/contact_filter.py",
         "odds += _clip(force, limit, limit)",
         "odds += _clip(0.0 * force, limit, limit)",
+    ),
+    Mutation(
+        "contact filter's speeds against every low foot, not the feet that stood",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "stood = [velocity for velocity, was in others if was and not forced[leg]]",
+        "stood = []",
+    ),
+    Mutation(
+        "contact filter's rise above a foot's own foothold ignored",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "if caps is not None and caps[leg] < x and not forced[leg]:",
+        "if caps is not None and caps[leg] < x - math.inf and not forced[leg]:",
     ),
     Mutation(
         "FR <-> FL Jacobian products swapped in the odometry feed",

@@ -23,6 +23,8 @@ taken for level: on a flat floor the rule is the flat-floor rule, exactly. A foo
 then its contact point's height with the slope taken off (``z - gx x - gy y``), above the lowest
 foot's: the slope comes from the footholds, the heights from the feet now, so that the frame's
 slow vertical drift does not bias them. Before the first foothold there is no slope: None.
+The standing feet's heights in the frame, the slope taken off (level before there is one), also
+give each its rise above its own foothold (:mod:`a1_leg_fk.estimation.foot_rise`).
 Absurd input is kept out: a contact point farther than :data:`MAX_REACH_M` from the base is
 unknown, and a frame carried beyond :data:`MAX_FRAME_M` starts anew.
 """
@@ -32,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from a1_leg_fk.estimation.foot_rise import FootRise
 from a1_leg_fk.estimation.ground import LocalGround
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -68,6 +71,9 @@ class FootGround:
         self._stamp_s = 0.0
         self._slope: tuple[int, float, float] | None = None
         """(the footholds' revision, dz/dx, dz/dy) of the plane last fitted."""
+        self.rise = FootRise()
+        """The standing feet's rises above their own footholds (level while there is no
+        slope yet)."""
 
     def heights(
         self,
@@ -122,9 +128,17 @@ class FootGround:
         slope = self._slope
         if slope is None or slope[0] != self.ground.revision:
             slope = self._fitted()
-            if slope is None:
-                return None
-        _, gx, gy = slope
+        gx, gy = (0.0, 0.0) if slope is None else slope[1:]
+        self.rise.update(
+            dt_s,
+            [
+                math.nan if o is None else pz + o[2] - gx * (px + o[0]) - gy * (py + o[1])
+                for o in offsets
+            ],
+            standing,
+        )
+        if slope is None:
+            return None
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
         lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
         return [value - lowest for value in level]

@@ -57,6 +57,49 @@ def test_kinematics_say_swing_strongly_and_stance_weakly_beside_a_force() -> Non
     assert alone[0] == pytest.approx(sigmoid(height_odds + speed_odds))
 
 
+def test_speeds_are_taken_against_the_feet_that_stood() -> None:
+    """Rough ground: FR and RL stood at the previous sample and are still; FL, a swing foot
+    skimming a bump 1 cm above them (within ``height_half_m``: low), moves at 1 m/s. Against
+    the mean of every other low foot FR would move 0.5 m/s (log-odds (0.32 - 0.5) / 0.08 =
+    -2.25: called swing in mid-stance); against the feet that stood it is still (+4)."""
+    feet = [foot(0.3), foot(0.29, (1.0, 0.0, 0.0)), foot(0.2), foot(0.3)]
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.9, 0.1, 0.1, 0.9]
+    out = contacts.update(0.0, feet, (STILL, None))
+    height_odds = MODEL.height_half_m / MODEL.height_scale_m  # 4: at the lowest foot's height
+    speed_odds = MODEL.speed_half_mps / MODEL.speed_scale_mps  # 4: still against RL
+    stood = math.log(0.9 / 0.1)
+    assert out[0] == pytest.approx(sigmoid(stood + height_odds + speed_odds))
+    assert out[3] == pytest.approx(out[0])
+    fl_height_odds = (MODEL.height_half_m - 0.01) / MODEL.height_scale_m  # 1.5
+    assert out[1] == pytest.approx(sigmoid(-stood + fl_height_odds - MODEL.max_log_ratio))
+
+
+def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:
+    """Four feet stand still 0.3 m under the base; then FL rises 3 mm, still "low" against the
+    others (height log-odds (16 - 3) / 4 = +3.25). Against its own foothold it is 3 mm up: past
+    the even-odds rise (1.5 mm, 0.375 % of the leg; the standing feet's spread, 0.1 mm, x 3 is
+    less), so its height says (1.5 - 3) / 0.5 = -3 instead. Its speed (still against the still
+    feet that stood) adds +4. The other feet keep their +4 height. The evidence kept for a
+    smoother leaves the cap out (it follows the filter's own state): +3.25 + 4."""
+    down = (0.0, 0.0, -1.0)
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.99] * 4
+    before = contacts.update(0.002, [foot(0.3)] * 4, (STILL, None), down=down)[1]
+    out = contacts.update(
+        0.002, [foot(0.3), foot(0.297), foot(0.3), foot(0.3)], (STILL, None), down=down
+    )
+    assert MODEL.rise_half_m == pytest.approx(0.0015) and MODEL.rise_scale_m == pytest.approx(5e-4)
+    limit = MODEL.max_log_ratio
+    assert contacts.evidence.heights[1] == pytest.approx(0.003)
+    assert contacts.evidence.kinematic[1] == pytest.approx((0.016 - 0.003) / 0.004 + limit)
+    assert contacts.evidence.kinematic[0] == pytest.approx(2 * limit)
+    assert contacts.evidence.total[1] == pytest.approx(contacts.evidence.kinematic[1])
+    prior = before + (1.0 - math.exp(-0.002 / MODEL.switch_time_s)) * (1.0 - 2.0 * before)
+    rise_odds = (0.0015 - 0.003) / 5e-4
+    assert out[1] == pytest.approx(sigmoid(math.log(prior / (1.0 - prior)) + rise_odds + limit))
+
+
 def test_free_fall_lifts_every_foot() -> None:
     feet = [foot(0.3)] * 4  # all low and still: the kinematics alone would say stance
     contacts = ContactFilter(MODEL)

@@ -1,8 +1,9 @@
 """``foot_fk_node``'s contacts over real DDS on a held-out run of the contact family
 (test/contact_runs.py): the Go2-like model's fast trot with sensor noise, its joint states (with
-efforts) and IMU (orientation, gyro, accelerometer) streamed at 500 Hz. The node's
+efforts, and without: the kinematic evidence alone, with the feet's rises above their own
+footholds) and IMU (orientation, gyro, accelerometer) streamed at 500 Hz. The node's
 ``foot_contacts`` equal ``a1-leg-fk bag --forces`` on a bag of the same stream (plumbing), and
-PyBullet's contacts judge them: the issue's goals on the streamed gait.
+PyBullet's contacts judge them: the issues' goals on the streamed gait.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ def rows_of(run: ContactRun) -> int:
     return int(np.searchsorted(run.stamps_s, run.gait_start_s + SECONDS))
 
 
-def messages(run: ContactRun, row: int) -> tuple[Imu, JointState]:
+def messages(run: ContactRun, row: int, efforts: bool) -> tuple[Imu, JointState]:
     stamp = stamp_of(run, row)
     imu = Imu()
     imu.header.stamp.sec, imu.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
@@ -49,15 +50,18 @@ def messages(run: ContactRun, row: int) -> tuple[Imu, JointState]:
         name=list(run.joint_names),
         position=run.angles[row].tolist(),
         velocity=run.rates[row].tolist(),
-        effort=run.torques[row].tolist(),
+        effort=run.torques[row].tolist() if efforts else [],
     )
     joints.header.stamp = imu.header.stamp
     return imu, joints
 
 
-def bag_contacts(run: ContactRun, rows: int, folder: Path) -> dict[int, list[float]]:
-    """``a1-leg-fk bag --forces --imu --causal`` on the stream: {stamp: probabilities}."""
-    bag = write_run_bag(folder / "in", run, rows=rows)
+def bag_contacts(
+    run: ContactRun, rows: int, folder: Path, efforts: bool
+) -> dict[int, list[float]]:
+    """``a1-leg-fk bag --forces --imu --causal`` on the stream (``--contacts`` without efforts):
+    {stamp: probabilities}."""
+    bag = write_run_bag(folder / "in", run, efforts=efforts, rows=rows)
     out = folder / "out"
     arguments = [
         "bag",
@@ -66,7 +70,7 @@ def bag_contacts(run: ContactRun, rows: int, folder: Path) -> dict[int, list[flo
         "/joint_states",
         "--imu",
         "/imu",
-        "--forces",
+        "--forces" if efforts else "--contacts",
         "--causal",
     ]
     assert cli.main([*arguments, "--urdf", run.urdf_path, "--output-bag", str(out)]) == 0
@@ -80,9 +84,12 @@ def bag_contacts(run: ContactRun, rows: int, folder: Path) -> dict[int, list[flo
     return contacts
 
 
-def test_node_contacts_on_a_held_out_run(run, ros, processes, tmp_path: Path) -> None:
+@pytest.mark.parametrize("efforts", [True, False], ids=["efforts", "kinematic"])
+def test_node_contacts_on_a_held_out_run(run, ros, processes, tmp_path: Path, efforts) -> None:
+    """With efforts the contact issue's goals (98.5 %, <= 1 % swing called stance); without,
+    issue 34's (95 %: 97.00 % measured on these 3 s, 96.83 % over the whole run)."""
     rows = rows_of(run)
-    expected = bag_contacts(run, rows, tmp_path)
+    expected = bag_contacts(run, rows, tmp_path, efforts)
     node = processes.start(
         node_command("-p", "enable_verify:=false", "-p", f"urdf_file:={run.urdf_path}")
     )
@@ -96,7 +103,7 @@ def test_node_contacts_on_a_held_out_run(run, ros, processes, tmp_path: Path) ->
     ros.node.create_subscription(JointState, "foot_contacts", take, QoSProfile(depth=10000))
     stream = SensorStream(ros, "foot_contacts")
     assert stream.ready, processes.output(node)
-    stream.send(rows, lambda row: messages(run, row), lambda: len(contacts))
+    stream.send(rows, lambda row: messages(run, row, efforts), lambda: len(contacts))
     assert ros.spin_until(lambda: len(contacts) >= rows, 30.0), (
         f"{len(contacts)} of {rows} contact messages\n{processes.output(node)}"
     )
@@ -108,5 +115,8 @@ def test_node_contacts_on_a_held_out_run(run, ros, processes, tmp_path: Path) ->
     stance, truth = ours[gait] >= 0.5, run.contacts[:rows][gait]
     agree = (stance == truth).mean()
     print(f"{RUN}+noise over DDS: {gait.sum()} gait samples, stance agrees {agree:.2%}")
-    assert agree >= 0.985
-    assert (stance & ~truth).mean() <= 0.01
+    if efforts:
+        assert agree >= 0.985
+        assert (stance & ~truth).mean() <= 0.01
+    else:
+        assert agree >= 0.95

@@ -3,11 +3,12 @@ c (y - y₀) [m, odom] fitted by least squares to where the stance feet touched,
 covariance; the height under the base, the plane's normal and tilt (what an MPC plans on).
 
 A foothold is one foot's stance: the mean (x, y) of its contact points (the foot's centre less its
-rolling radius, straight down) in odom, at its anchored height. :class:`LocalGround` keeps the
-footholds of the last ``window_s`` seconds, at most ``max_footholds``, and fits the plane with a
-Gaussian prior on the slopes (zero, ``slope_prior``): footholds fewer than three or in a line
-leave the slope across them level and uncertain. The fit's noise is the residual RMS, at least
-``min_sigma_m``.
+rolling radius, straight down) in odom, at its anchored height there (a rolling foot's point moves
+a few mm over a stance: its touchdown's anchor carried along the slope it landed on).
+:class:`LocalGround` keeps the footholds of the last ``window_s`` seconds, at most
+``max_footholds``, and fits the plane with a Gaussian prior on the slopes (zero,
+``slope_prior``): footholds fewer than three or in a line leave the slope across them level and
+uncertain. The fit's noise is the residual RMS, at least ``min_sigma_m``.
 
 The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
 touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,
@@ -121,6 +122,17 @@ def _fit(
 
 
 Covariance = tuple[tuple[float, float, float], ...]
+Grade = tuple[float, float]
+"""A ground's slope (dz/dx, dz/dy)."""
+LEVEL: Grade = (0.0, 0.0)
+
+
+def _carried(anchor: Point, grade: Grade, point: Sequence[float]) -> float:
+    """The height [m] of the ground a stance landed on at ``anchor`` [m, odom] with slope
+    ``grade``, under ``point`` (x, y) [m, odom]: a rolling foot's contact point moves along the
+    stance (a few mm on a trot), and on a slope its ground's height with it.
+    """
+    return anchor[2] + grade[0] * (point[0] - anchor[0]) + grade[1] * (point[1] - anchor[1])
 
 
 def _plane(solution: Sequence[float], covariance: Covariance, count: int) -> GroundPlane:
@@ -186,9 +198,10 @@ class LocalGround:
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
         """The ended stances, oldest first."""
-        self._open: dict[int, tuple[Point, list[float], int, float]] = {}
-        """Per standing leg: its touchdown point [m] (at its anchored height), the sums of its
-        contact points' x, y and z, their count and its contact point's last height."""
+        self._open: dict[int, tuple[Point, Grade, list[float], int, Point]] = {}
+        """Per standing leg: its touchdown point [m] (at its anchored height), the slope it landed
+        on (:meth:`_carried`), the sums of its contact points' x, y and z, their count and its
+        contact point's last [m]."""
         self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
         """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
         self._changed = False
@@ -210,10 +223,11 @@ class LocalGround:
             self.slope.add(stamp_s, list(standing.values()))
         lifted = {}
         for leg in [leg for leg in self._open if leg not in standing]:
-            touchdown, total, count, last_z = self._open.pop(leg)
-            lifted[leg] = (last_z, touchdown[2])
-            height = touchdown[2] if self.anchored else total[2] / count
-            mean = (total[0] / count, total[1] / count, height)
+            touchdown, grade, total, count, last = self._open.pop(leg)
+            lifted[leg] = (last[2], _carried(touchdown, grade, last))
+            mean = (total[0] / count, total[1] / count, total[2] / count)
+            if self.anchored:
+                mean = (mean[0], mean[1], _carried(touchdown, grade, mean))
             self.footholds.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
@@ -224,11 +238,11 @@ class LocalGround:
             if opened is None:
                 landed.append((leg, point))
                 continue
-            total = opened[1]
+            total = opened[2]
             total[0] += point[0]
             total[1] += point[1]
             total[2] += point[2]
-            opened_now[leg] = (opened[0], total, opened[2] + 1, point[2])
+            opened_now[leg] = (opened[0], opened[1], total, opened[3] + 1, point)
         if landed:
             self._land(landed, standing, lifted)
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
@@ -246,18 +260,23 @@ class LocalGround:
         (:meth:`_touchdown`) against the feet that stood before this sample and stand on
         (``standing``, not ``landed``), else the ``lifted`` ones; or kept at their own heights.
         """
-        kept = {leg: (point[2], self._open[leg][0][2]) for leg, point in standing.items()
-                if leg in self._open}  # fmt: skip
+        kept = {leg: (point[2], _carried(self._open[leg][0], self._open[leg][1], point))
+                for leg, point in standing.items() if leg in self._open}  # fmt: skip
         for leg, point in landed:
-            own = self._touchdown(point, kept or lifted) if self.anchored else point[2]
-            self._open[leg] = ((point[0], point[1], own), list(point), 1, point[2])
+            own, grade = (point[2], LEVEL)
+            if self.anchored:
+                own, grade = self._touchdown(point, kept or lifted)
+            self._open[leg] = ((point[0], point[1], own), grade, list(point), 1, point)
             self._changed = True
             self.revision += 1
 
-    def _touchdown(self, point: Point, others: dict[int, tuple[float, float]]) -> float:
-        """The anchored height [m] of a foot landing at ``point`` [m, odom]: :meth:`_anchor` of
-        its height against the ``others``' anchors (per other foot its contact point's height now
-        or as it lifted, and its anchor [m]: the estimate's offset cancels), or its own.
+    def _touchdown(
+        self, point: Point, others: dict[int, tuple[float, float]]
+    ) -> tuple[float, Grade]:
+        """The anchored height [m] and slope of a foot landing at ``point`` [m, odom]:
+        :meth:`_anchor` of its height against the ``others``' anchors (per other foot its contact
+        point's height now or as it lifted, and its anchor carried there [m]: the estimate's
+        offset cancels), or its own.
         """
         if not others:
             return self._anchor(point)
@@ -270,10 +289,11 @@ class LocalGround:
         """
         return self.slope.gradient()
 
-    def predicted(self, x: float, y: float) -> list[tuple[float, float]]:
-        """The anchored ground's heights at (x, y) [m, odom] and their variances [m²] from the
-        nearest anchored foothold (per foothold, so a staircase's treads stay apart), carried
-        along :meth:`gradient` (a slope) and level (a tread); none before the first foothold.
+    def predicted(self, x: float, y: float) -> list[tuple[float, float, Grade]]:
+        """The anchored ground's heights at (x, y) [m, odom], their variances [m²] and slopes
+        (dz/dx, dz/dy) from the nearest anchored foothold (per foothold, so a staircase's treads
+        stay apart), carried along :meth:`gradient` (a slope) and level (a tread); none before
+        the first foothold.
         """
         anchors = self.points()
         if not anchors:
@@ -281,26 +301,27 @@ class LocalGround:
         px, py, pz = min(anchors, key=lambda p: (p[0] - x) ** 2 + (p[1] - y) ** 2)
         (gx, gy), (cxx, cxy, cyy) = self.gradient()
         if gx * gx + gy * gy <= LEVEL_SLOPE**2:
-            return [(pz, 0.0)]
+            return [(pz, 0.0, LEVEL)]
         dx, dy = x - px, y - py
         spread = cxx * dx * dx + 2.0 * cxy * dx * dy + cyy * dy * dy
-        return [(pz + gx * dx + gy * dy, spread), (pz, 0.0)]
+        return [(pz + gx * dx + gy * dy, spread, (gx, gy)), (pz, 0.0, LEVEL)]
 
-    def _anchor(self, point: Point) -> float:
-        """The anchored height [m] of a touchdown at ``point`` [m, odom]: the prediction nearer
-        to it, where it agrees within :attr:`step_gate` sigmas (the prediction's and
-        :meth:`touchdown_sigma_m`); its own where neither does (a step), or with no prediction.
+    def _anchor(self, point: Point) -> tuple[float, Grade]:
+        """The anchored height [m] of a touchdown at ``point`` [m, odom] and the slope its stance
+        stands on: the prediction nearer to it, where it agrees within :attr:`step_gate` sigmas
+        (the prediction's and :meth:`touchdown_sigma_m`); its own where neither does (a step, a
+        tread: level), or with no prediction.
         """
         predictions = self.predicted(point[0], point[1])
         if not predictions:
-            return point[2]
-        height, variance = min(predictions, key=lambda p: abs(point[2] - p[0]))
+            return point[2], LEVEL
+        height, variance, grade = min(predictions, key=lambda p: abs(point[2] - p[0]))
         off = point[2] - height
         noise = self.touchdown_sigma_m()
         if variance <= self.min_sigma_m**2:  # a confident prediction: the offset is noise's
             self._offsets.append(abs(off))
         agrees = off * off <= self.step_gate**2 * (variance + noise * noise)
-        return height if agrees else point[2]
+        return (height, grade) if agrees else (point[2], LEVEL)
 
     def touchdown_sigma_m(self) -> float:
         """[m] a touchdown's height noise: ``min_sigma_m``, or where larger the robust scatter
@@ -318,14 +339,15 @@ class LocalGround:
     ) -> list[tuple[float, float] | None]:
         """Per leg of ``legs``, the ground's height [m, odom] under its foot and its variance
         [m²] (what the state filter holds a stance foot to, ``ground: footholds``): a standing
-        foot's anchored height (no variance: the anchor is the ground), else the plane's under
-        its contact point in ``feet`` (leg, point [m, odom]); None: no foot, or no ground yet.
+        foot's anchor carried to its contact point (no variance: the anchor is the ground), else
+        the plane's under its contact point in ``feet`` (leg, point [m, odom]); None: no foot, or
+        no ground yet.
         """
         grounds: list[tuple[float, float] | None] = [None] * legs
         for leg, (x, y, _) in feet:
             opened = self._open.get(leg)
             if opened is not None:
-                grounds[leg] = (opened[0][2], 0.0)
+                grounds[leg] = (_carried(opened[0], opened[1], (x, y)), 0.0)
                 continue
             plane = self.plane(x, y)
             if plane is not None:

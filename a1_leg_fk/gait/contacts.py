@@ -40,8 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.gait.edges import fit_edges, stance_noise
+from a1_leg_fk.gait.edges import EDGE_NOISE_DEVIATIONS, fit_edges, stance_noise
 from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, segment_slices, stances_of
+from a1_leg_fk.gait.pooled_rise import pooled_liftoffs
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -249,8 +250,9 @@ def detect_contacts(
     for slot in range(legs):
         for rows in segments[slot]:
             noise = stance_noise(heights[rows, slot], stance[rows, slot])
-            stance[rows, slot] = fit_edges(
-                times[rows], heights[rows, slot], stance[rows, slot], noise
+            fitted = fit_edges(times[rows], heights[rows, slot], stance[rows, slot], noise)
+            stance[rows, slot] = pooled_liftoffs(
+                times[rows], heights[rows, slot], fitted, EDGE_NOISE_DEVIATIONS * noise
             )
     stances = tuple(stances_of(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())

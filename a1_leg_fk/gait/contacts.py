@@ -26,7 +26,9 @@ when it is near the ground and nearly still:
 * **Edges** (:func:`a1_leg_fk.gait.edges.fit_edges`). The speeds place edges late or early (a
   foot unloads before it moves, may slide as it pushes off); the heights place them: a stance
   ends where the foot starts to rise above the stance's level next to the edge and begins where
-  it stops coming down. An edge time is the midpoint
+  it stops coming down. A leg whose feet rise slowly from rest (a walk's) has its liftoffs
+  placed by its strides' pooled rise (:func:`a1_leg_fk.gait.pooled_rise.pooled_liftoffs`: one
+  liftoff's heights cannot place such a rise in sensor noise). An edge time is the midpoint
   between the last sample of one phase and the first of the next (unbiased on a sampling grid);
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
 

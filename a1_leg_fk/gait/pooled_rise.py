@@ -18,11 +18,11 @@ already placed by :func:`a1_leg_fk.gait.edges.fit_edges`.
   stance (a level and a drift: a tilted base frame makes a standing foot's height drift) plus
   ``a (t - t0)^2`` after ``t0`` (:func:`pooled_onset`, ``t0`` scanned).
 * **Place.** Where that rise is slow (it takes more than :data:`SLOW_S` to reach the edges'
-  noise tolerance), each aligned stance ends at its crossing + ``t0``; a fast rise (a trot's),
-  fewer than :data:`MIN_STRIDES` strides, fewer than :data:`MIN_SHARE` of the leg's interior
-  stances, fewer samples than :data:`MIN_SAMPLES_SLOW` per :data:`SLOW_S`, or a noise tolerance
-  as high as :data:`FIT_TOP_M` (a rise that noisy cannot be aligned, nor fitted), keep their
-  edges.
+  noise tolerance, and :data:`MIN_RISING` samples resolve it), each aligned stance ends at its
+  crossing + ``t0``; a fast rise (a trot's), fewer than :data:`MIN_STRIDES` strides, fewer than
+  :data:`MIN_SHARE` of the leg's interior stances, fewer samples than :data:`MIN_SAMPLES_SLOW`
+  per :data:`SLOW_S`, or a noise tolerance as high as :data:`FIT_TOP_M` (a rise that noisy
+  cannot be aligned, nor fitted), keep their edges.
 """
 
 from __future__ import annotations
@@ -58,6 +58,10 @@ SLOW_S = 0.004
 MIN_SAMPLES_SLOW = 2.0
 """Pooled only where the samples (their median step) come at least this often per :data:`SLOW_S`
 (500 Hz and faster): coarser ones cannot tell a slow rise's start from a fast one's."""
+MIN_RISING = 2
+"""A pooled rise is fitted only where at least this many of its samples stand between the mean's
+noise tolerance (the edges' over the square root of the strides) and :data:`FIT_TOP_M`: a rise
+that crosses that band within one sample is a fast one, its onset not resolved."""
 MIN_STRIDES = 3
 """A leg's liftoffs are pooled over at least this many strides."""
 MIN_SHARE = 0.5
@@ -82,8 +86,12 @@ def pooled_liftoffs(
         return stance
     grid = np.arange(-round(FIT_S / step), 1) * step
     curves = [np.interp(at + grid, times, heights) - ground for *_, ground, at in strides]
-    fitted = pooled_onset(grid, np.mean(curves, axis=0))
+    mean = np.mean(curves, axis=0)
+    fitted = pooled_onset(grid, mean)
     if fitted is None or math.sqrt(tolerance_m / fitted[1]) <= SLOW_S:
+        return stance
+    resolved = (mean > tolerance_m / math.sqrt(len(strides))) & (mean <= FIT_TOP_M)
+    if np.count_nonzero(resolved & (grid > fitted[0])) < MIN_RISING:
         return stance
     placed = stance.copy()
     for first, last, _, at in strides:
@@ -112,7 +120,7 @@ def aligned_strides(
         stop = int(np.searchsorted(times, times[last] + CROSSING_S, side="right"))
         goal = level(times, heights, last, -1) + CROSSING_M
         up = np.flatnonzero(heights[last + 1 : stop] > goal)
-        if not up.size:
+        if not up.size or not heights[last] <= goal:  # none, or up already at the edge
             continue
         above = last + 1 + int(up[0])
         share = (goal - heights[above - 1]) / (heights[above] - heights[above - 1])
@@ -133,6 +141,8 @@ def pooled_onset(grid: np.ndarray, rise: np.ndarray) -> tuple[float, float] | No
     top = np.flatnonzero(rise > FIT_TOP_M)
     stop = int(top[0]) if top.size else grid.size
     times, heights = grid[:stop], rise[:stop]
+    if stop < MIN_WINDOW:
+        return None
     best: tuple[float, float, float] | None = None
     for onset in np.arange(times[0] + MIN_STANCE_S, times[-1], ONSET_STEP_S):
         rising = np.clip(times - onset, 0.0, None) ** 2

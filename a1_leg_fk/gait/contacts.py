@@ -26,7 +26,9 @@ when it is near the ground and nearly still:
 * **Edges** (:func:`a1_leg_fk.gait.edges.fit_edges`). The speeds place edges late or early (a
   foot unloads before it moves, may slide as it pushes off); the heights place them: a stance
   ends where the foot starts to rise above the stance's level next to the edge and begins where
-  it stops coming down. An edge time is the midpoint
+  it stops coming down. A leg whose feet rise slowly from rest (a walk's) has its liftoffs
+  placed by its strides' pooled rise (:func:`a1_leg_fk.gait.pooled_rise.pooled_liftoffs`: one
+  liftoff's heights cannot place such a rise in sensor noise). An edge time is the midpoint
   between the last sample of one phase and the first of the next (unbiased on a sampling grid);
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
 
@@ -40,8 +42,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.gait.edges import fit_edges, stance_noise
+from a1_leg_fk.gait.edges import EDGE_NOISE_DEVIATIONS, fit_edges, stance_noise
 from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, segment_slices, stances_of
+from a1_leg_fk.gait.pooled_rise import pooled_liftoffs
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -249,8 +252,9 @@ def detect_contacts(
     for slot in range(legs):
         for rows in segments[slot]:
             noise = stance_noise(heights[rows, slot], stance[rows, slot])
-            stance[rows, slot] = fit_edges(
-                times[rows], heights[rows, slot], stance[rows, slot], noise
+            fitted = fit_edges(times[rows], heights[rows, slot], stance[rows, slot], noise)
+            stance[rows, slot] = pooled_liftoffs(
+                times[rows], heights[rows, slot], fitted, EDGE_NOISE_DEVIATIONS * noise
             )
     stances = tuple(stances_of(times, stance[:, slot], segments[slot]) for slot in range(legs))
     gaps = int((~valid.all(axis=1)).sum())

@@ -155,16 +155,14 @@ def test_liftoff_where_the_rise_starts_in_noise(swing) -> None:
     assert duty <= 0.02
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 39: a walk's foot rising 0.2 mm in its first 10 ms under 0.09 mm of noise: "
-    "per-leg medians 3.6-7.0 ms late (the family's noisy walks: +4/+7/+1/+6 ms)",
-)
-def test_a_slow_rise_in_noise_is_placed_at_its_start() -> None:
+@pytest.mark.parametrize("seed", [3, 1, 2])
+def test_a_slow_rise_in_noise_is_placed_at_its_start(seed) -> None:
     """A walk's feet rise 2 m/s^2 t^2 for 10 ms (0.2 mm: two deviations of the 0.09 mm noise),
     then ~20x steeper (test/synthetic_gaits.py ``slow_rise``): every leg's median liftoff within
-    the issue's 4 ms of the constructed one."""
-    stamps, feet, liftoffs = slow_rise_walk(0.00009)
+    the issue's 4 ms of the constructed one, on three noise draws. One liftoff's heights cannot
+    place it (per-leg medians 3.6-7.6 ms late on these seeds); the leg's strides pooled
+    (a1_leg_fk.gait.pooled_rise) place it 0.3-3.0 ms off."""
+    stamps, feet, liftoffs = slow_rise_walk(0.00009, seed=seed)
     contacts, _ = analyze_gait(stamps, feet)
     for leg, stances in enumerate(contacts.stances):
         offs = np.array([s.t_off for s in stances if s.liftoff_observed])

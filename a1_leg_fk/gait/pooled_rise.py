@@ -1,0 +1,154 @@
+"""A foot's liftoffs placed by its strides' pooled rise: where a leg's feet rise slowly from rest
+(a walk's: ~0.002 mm/ms^2 t^2 for their first 10-12 ms, 0.03 mm at 4 ms) one lift-off's heights
+in sensor noise (0.09 mm) cannot place it, but the leg's strides together can.
+
+Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`` (n,) [s],
+``heights`` (n,) [m] above the ground plane, ``stance`` (n,) bool with each stance's edges
+already placed by :func:`a1_leg_fk.gait.edges.fit_edges`.
+
+* **Align.** Each interior stance that does not rise towards its liftoff (a soft foot unloading:
+  :func:`a1_leg_fk.gait.edges.lag`) is aligned where its foot first stands :data:`CROSSING_M`
+  above the stance's level (within :data:`CROSSING_S` after the liftoff): in noise a
+  millimetre's crossing time scatters by 0.3-1 ms, and a regular gait's foot reaches it the same
+  time after it left, stride after stride (PyBullet's walks: within 0.3 ms).
+* **Pool.** Their heights over the :data:`FIT_S` up to that crossing, less each stride's level
+  (the median over :data:`LEVEL_S` before its crossing), are averaged: the noise shrinks by the
+  square root of the strides.
+* **Fit.** The mean rise is fitted, up to where it first stands :data:`FIT_TOP_M` up, as a
+  stance (a level and a drift: a tilted base frame makes a standing foot's height drift) plus
+  ``a (t - t0)^2`` after ``t0`` (:func:`pooled_onset`, ``t0`` scanned).
+* **Place.** Where that rise is slow (it takes more than :data:`SLOW_S` to reach the edges'
+  noise tolerance, and :data:`MIN_RISING` samples resolve it), each aligned stance ends at its
+  crossing + ``t0``; a fast rise (a trot's), fewer than :data:`MIN_STRIDES` strides, fewer than
+  :data:`MIN_SHARE` of the leg's interior stances, fewer samples than :data:`MIN_SAMPLES_SLOW`
+  per :data:`SLOW_S`, or a noise tolerance as high as :data:`FIT_TOP_M` (a rise that noisy
+  cannot be aligned, nor fitted), keep their edges.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from a1_leg_fk.estimation.stance_edges import EDGE_NOISE_FLOOR_M, MIN_WINDOW, level, runs
+from a1_leg_fk.gait.edges import lag
+
+CROSSING_M = 0.001
+"""[m] A liftoff's rise is aligned where the foot first stands this far above the stance's level
+(0.8 and 1.2 mm met the same goals on the gait family: docs/gait.md)."""
+CROSSING_S = 0.04
+"""[s] That crossing is looked for this long after the stance's last sample."""
+LEVEL_S = (0.07, 0.03)
+"""[s] A stride's level is the median of its stance heights from this long to this long before
+its crossing."""
+FIT_S = 0.05
+"""[s] The pooled rise is fitted from this long before the crossing (0.04 and 0.06 s: the same
+goals met)."""
+FIT_TOP_M = 0.0004
+"""[m] ... up to where the pooled rise first stands this high (0.3 and 0.5 mm: the same goals
+met); a walk's rise steepens some twentyfold past ~0.3-0.5 mm."""
+ONSET_STEP_S = 0.0001
+"""[s] The onset is scanned at this step, from :data:`MIN_STANCE_S` after the fit's start."""
+MIN_STANCE_S = 0.004
+"""[s] The fit keeps at least this much stance before the onset."""
+SLOW_S = 0.004
+"""[s] A rise that takes longer than this to reach the noise tolerance from its onset is slow
+(6 ms: the same goals met)."""
+MIN_SAMPLES_SLOW = 2.0
+"""Pooled only where the samples (their median step) come at least this often per :data:`SLOW_S`
+(500 Hz and faster): coarser ones cannot tell a slow rise's start from a fast one's."""
+MIN_RISING = 2
+"""A pooled rise is fitted only where at least this many of its samples stand between the mean's
+noise tolerance (the edges' over the square root of the strides) and :data:`FIT_TOP_M`: a rise
+that crosses that band within one sample is a fast one, its onset not resolved."""
+MIN_STRIDES = 3
+"""A leg's liftoffs are pooled over at least this many strides."""
+MIN_SHARE = 0.5
+"""... and at least this share of its interior stances (a soft foot's, mostly left out, keeps
+its own edges)."""
+
+
+def pooled_liftoffs(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
+) -> np.ndarray:
+    """``stance`` (n,) with the liftoffs of a leg whose feet rise slowly moved to their strides'
+    pooled rise onset (module docstring); ``tolerance_m`` [m] is the edges' noise tolerance
+    (at least :data:`EDGE_NOISE_FLOOR_M`), also what a soft stance rises by.
+    """
+    step = float(np.median(np.diff(times))) if times.size > 1 else math.inf
+    tolerance_m = max(tolerance_m, EDGE_NOISE_FLOOR_M)
+    if not (round(SLOW_S / step, 6) >= MIN_SAMPLES_SLOW and tolerance_m < FIT_TOP_M):
+        return stance
+    strides = aligned_strides(times, heights, stance, tolerance_m)
+    interior = [on and first > 0 and last < stance.size - 1 for first, last, on in runs(stance)]
+    if len(strides) < max(MIN_STRIDES, MIN_SHARE * sum(interior)):
+        return stance
+    grid = np.arange(-round(FIT_S / step), 1) * step
+    curves = [np.interp(at + grid, times, heights) - ground for *_, ground, at in strides]
+    mean = np.mean(curves, axis=0)
+    fitted = pooled_onset(grid, mean)
+    if fitted is None or math.sqrt(tolerance_m / fitted[1]) <= SLOW_S:
+        return stance
+    resolved = (mean > tolerance_m / math.sqrt(len(strides))) & (mean <= FIT_TOP_M)
+    if np.count_nonzero(resolved & (grid > fitted[0])) < MIN_RISING:
+        return stance
+    placed = stance.copy()
+    for first, last, _, at in strides:
+        end = int(np.searchsorted(times, at + fitted[0], side="right")) - 1
+        placed[first : last + 1] = False
+        placed[first : max(end, (first + last) // 2) + 1] = True
+    return placed
+
+
+def aligned_strides(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
+) -> list[tuple[int, int, float, float]]:
+    """``(first, last, level [m], crossing [s])`` of each interior stance whose foot does not
+    rise towards its liftoff by more than ``tolerance_m`` [m] (:func:`lag`) and, within
+    :data:`CROSSING_S` after it, first stands :data:`CROSSING_M` above the level next to its
+    edge (the crossing, interpolated between samples); the level is the median of its heights
+    within :data:`LEVEL_S` before the crossing (kept to the stance).
+    """
+    strides = []
+    for first, last, on in runs(stance):
+        if not on or first == 0 or last == stance.size - 1:
+            continue
+        rise = lag(times, heights, last, -1)
+        if rise is not None and rise > tolerance_m:
+            continue
+        stop = int(np.searchsorted(times, times[last] + CROSSING_S, side="right"))
+        goal = level(times, heights, last, -1) + CROSSING_M
+        up = np.flatnonzero(heights[last + 1 : stop] > goal)
+        if not up.size or not heights[last] <= goal:  # none, or up already at the edge
+            continue
+        above = last + 1 + int(up[0])
+        share = (goal - heights[above - 1]) / (heights[above] - heights[above - 1])
+        at = float(times[above - 1] + share * (times[above] - times[above - 1]))
+        window = (times >= at - LEVEL_S[0]) & (times <= at - LEVEL_S[1])
+        window[:first] = False
+        if window.sum() >= MIN_WINDOW:
+            strides.append((first, last, float(np.median(heights[window])), at))
+    return strides
+
+
+def pooled_onset(grid: np.ndarray, rise: np.ndarray) -> tuple[float, float] | None:
+    """``(t0 [s], a [m/s^2])`` of the stance-then-rise that fits ``rise`` [m] at times ``grid``
+    [s] best (least squares) up to where it first stands :data:`FIT_TOP_M` up: ``b + c t`` plus
+    ``a (t - t0)^2`` after ``t0`` (``a > 0``), ``t0`` scanned at :data:`ONSET_STEP_S` from
+    :data:`MIN_STANCE_S` after the first time; None without such a fit.
+    """
+    top = np.flatnonzero(rise > FIT_TOP_M)
+    stop = int(top[0]) if top.size else grid.size
+    times, heights = grid[:stop], rise[:stop]
+    if stop < MIN_WINDOW:
+        return None
+    best: tuple[float, float, float] | None = None
+    for onset in np.arange(times[0] + MIN_STANCE_S, times[-1], ONSET_STEP_S):
+        rising = np.clip(times - onset, 0.0, None) ** 2
+        shape = np.column_stack((np.ones_like(times), times, rising))
+        coefficients = np.linalg.lstsq(shape, heights, rcond=None)[0]
+        error = float(np.sum((shape @ coefficients - heights) ** 2))
+        if coefficients[2] > 0.0 and (best is None or error < best[0]):
+            best = (error, float(onset), float(coefficients[2]))
+    return None if best is None else best[1:]

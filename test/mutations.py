@@ -42,6 +42,7 @@ FAST_SUBSET = (
     "test/estimation/test_ground.py",
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
+    "test/gait/test_pooled_rise.py",
     "test/estimation/test_load_edges.py",
     "test/estimation/test_stance_edges.py",
     "test/estimation/test_contact_smoother.py",
@@ -219,6 +220,24 @@ MUTATIONS = (
         "a1_leg_fk/estimation/momentum_observer.py",
         "r0, r1, r2 = scales.correct(slot, residual, (r0 + f0, r1 + f1, r2 + f2))",
         "r0, r1, r2 = scales.correct(slot, residual, (r0, r1, r2))",
+    ),
+    Mutation(
+        "the strides' pooled rise fitted without the stance's drift",
+        "a1_leg_fk/gait/pooled_rise.py",
+        "shape = np.column_stack((np.ones_like(times), times, rising))",
+        "shape = np.column_stack((np.ones_like(times), 0.0 * times, rising))",
+    ),
+    Mutation(
+        "the load's dip never bridged",
+        "a1_leg_fk/estimation/load_edges.py",
+        "if standing.size and (swing > DIP_SIGMAS * noise_n).all():",
+        "if False:",
+    ),
+    Mutation(
+        "a standing foot's ground not carried along the slope it landed on",
+        "a1_leg_fk/estimation/ground.py",
+        "return anchor[2] + grade[0] * (point[0] - anchor[0]) + grade[1] * (point[1] - anchor[1])",
+        "return anchor[2]",
     ),
 )
 

@@ -46,7 +46,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
-from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
+from a1_leg_fk.estimation.pooled_rise import pooled_liftoffs
+from a1_leg_fk.estimation.stance_edges import (
+    CONTEXT_S,
+    EDGE_NOISE_DEVIATIONS,
+    placed_edges,
+    stance_noise,
+)
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -163,13 +169,16 @@ def smoothed_stance(
     return placed_stance(rows, stance, force_lag_s), filtered
 
 
-def placed_stance(rows: EvidenceRows, log_odds: np.ndarray, force_lag_s: float) -> np.ndarray:
+def placed_stance(
+    rows: EvidenceRows, log_odds: np.ndarray, force_lag_s: float, since: int = 0
+) -> np.ndarray:
     """(N, 4) log-odds of stance: the posterior ``log_odds`` with the stances' edges placed, by
-    the heights for feet without force evidence (:func:`height_edges`) and by the loads for
-    those with it (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the normal forces
-    with their lag ``force_lag_s`` [s] undone).
+    the heights for feet without force evidence (:func:`height_edges`, liftoffs pooled from row
+    ``since`` on) and by the loads for those with it
+    (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the normal forces with their lag
+    ``force_lag_s`` [s] undone).
     """
-    result = height_edges(rows, log_odds)
+    result = height_edges(rows, log_odds, since)
     if rows.forced.any():
         loads = unlagged(rows.normals, rows.stamps_s, force_lag_s)
         result = loaded_stance(result, rows.stamps_s, loads, rows.forced)
@@ -186,17 +195,23 @@ def posterior(
     return force_liftoffs(smoothed, filtered, rows.forced), filtered
 
 
-def height_edges(rows: EvidenceRows, log_odds: np.ndarray) -> np.ndarray:
+def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np.ndarray:
     """(N, 4) log-odds of stance: ``log_odds``, with the edges of each stance (log-odds >= 0) of
     a foot without force evidence placed by its heights
     (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; a stance at the first row began
-    before it); a row they move to swing takes its log-odds reversed.
+    before it), then the liftoffs of the stances that end at row ``since`` or later by the
+    pooled rise of the leg's stances over the :data:`POOL_S` before
+    (:func:`~a1_leg_fk.estimation.pooled_rise.pooled_liftoffs`, ``gait``'s rule); a row they
+    move to swing takes its log-odds reversed.
     """
     times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
     stance = log_odds >= 0.0
     result = log_odds.copy()
     for leg in range(LEGS):
-        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg])
+        heights = rows.heights[:, leg]
+        placed = placed_edges(times, heights, stance[:, leg])
+        tolerance = EDGE_NOISE_DEVIATIONS * stance_noise(heights, placed)
+        placed = pooled_liftoffs(times, heights, placed, tolerance, (POOL_S, since))
         moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
         result[moved, leg] = -log_odds[moved, leg]
     return result
@@ -243,7 +258,14 @@ def smoothing_line(smoothed: bool) -> str:
     return "smoothing: none, the causal filter's contacts as the node has them (--causal)"
 
 
-KEPT_S = max(HISTORY_S, CONTEXT_S)
+POOL_S = 6.0
+"""[s] A liftoff is pooled with its leg's stances that ended this long before it (at least the
+three strides :data:`~a1_leg_fk.estimation.pooled_rise.MIN_STRIDES` of a walk's 1.5-2 s
+stride)."""
+POOL_MARGIN_S = 3.0
+"""[s] The rows kept before the oldest pooled stance's end: its stance and the level before it
+(a stance longer than this is left out of the windows' pools, not of one pass's)."""
+KEPT_S = max(HISTORY_S, CONTEXT_S, POOL_S + POOL_MARGIN_S)
 """[s] The rows already taken that the edges' rules may look back at."""
 
 
@@ -289,7 +311,7 @@ class FixedLagSmoother:
         before = len(self.history)
         every = np.vstack([self.history_odds, odds])
         done = before + count
-        stance = placed_stance(rows, every, self.force_lag_s)[before:done]
+        stance = placed_stance(rows, every, self.force_lag_s, before)[before:done]
         self._keep(rows[:done], every[:done])
         self.start = filtered[count - 1]
         self.pending = self.pending[count:]

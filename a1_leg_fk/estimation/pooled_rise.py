@@ -4,13 +4,14 @@ in sensor noise (0.09 mm) cannot place it, but the leg's strides together can.
 
 Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`` (n,) [s],
 ``heights`` (n,) [m] above the ground plane, ``stance`` (n,) bool with each stance's edges
-already placed by :func:`a1_leg_fk.gait.edges.fit_edges`.
+already placed (by :func:`a1_leg_fk.gait.edges.fit_edges` for ``gait``, by
+:func:`a1_leg_fk.estimation.stance_edges.placed_edges` for the contact smoother).
 
 * **Align.** Each interior stance that does not rise towards its liftoff (a soft foot unloading:
-  :func:`a1_leg_fk.gait.edges.lag`) is aligned where its foot first stands :data:`CROSSING_M`
-  above the stance's level (within :data:`CROSSING_S` after the liftoff): in noise a
-  millimetre's crossing time scatters by 0.3-1 ms, and a regular gait's foot reaches it the same
-  time after it left, stride after stride (PyBullet's walks: within 0.3 ms).
+  :func:`~a1_leg_fk.estimation.stance_edges.lag`) is aligned where its foot first stands
+  :data:`CROSSING_M` above the stance's level (within :data:`CROSSING_S` after the liftoff): in
+  noise a millimetre's crossing time scatters by 0.3-1 ms, and a regular gait's foot reaches it
+  the same time after it left, stride after stride (PyBullet's walks: within 0.3 ms).
 * **Pool.** Their heights over the :data:`FIT_S` up to that crossing, less each stride's level
   (the median over :data:`LEVEL_S` before its crossing), are averaged: the noise shrinks by the
   square root of the strides.
@@ -31,8 +32,7 @@ import math
 
 import numpy as np
 
-from a1_leg_fk.estimation.stance_edges import EDGE_NOISE_FLOOR_M, MIN_WINDOW, level, runs
-from a1_leg_fk.gait.edges import lag
+from a1_leg_fk.estimation.stance_edges import EDGE_NOISE_FLOOR_M, MIN_WINDOW, lag, level, runs
 
 CROSSING_M = 0.001
 """[m] A liftoff's rise is aligned where the foot first stands this far above the stance's level
@@ -60,8 +60,10 @@ MIN_SAMPLES_SLOW = 2.0
 (500 Hz and faster): coarser ones cannot tell a slow rise's start from a fast one's."""
 MIN_RISING = 2
 """A pooled rise is fitted only where at least this many of its samples stand between the mean's
-noise tolerance (the edges' over the square root of the strides) and :data:`FIT_TOP_M`: a rise
-that crosses that band within one sample is a fast one, its onset not resolved."""
+noise tolerance (the edges' over the square root of the strides, at least
+:data:`~a1_leg_fk.estimation.stance_edges.EDGE_NOISE_FLOOR_M`: noise-free heights, such as the
+contact filter's of the lowest foot, exactly 0, have no noise to shrink) and :data:`FIT_TOP_M`:
+a rise that crosses that band within one sample is a fast one, its onset not resolved."""
 MIN_STRIDES = 3
 """A leg's liftoffs are pooled over at least this many strides."""
 MIN_SHARE = 0.5
@@ -70,40 +72,103 @@ its own edges)."""
 
 
 def pooled_liftoffs(
-    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
+    times: np.ndarray,
+    heights: np.ndarray,
+    stance: np.ndarray,
+    tolerance_m: float,
+    recent: tuple[float, int] | None = None,
 ) -> np.ndarray:
     """``stance`` (n,) with the liftoffs of a leg whose feet rise slowly moved to their strides'
     pooled rise onset (module docstring); ``tolerance_m`` [m] is the edges' noise tolerance
-    (at least :data:`EDGE_NOISE_FLOOR_M`), also what a soft stance rises by.
+    (at least :data:`EDGE_NOISE_FLOOR_M`), also what a soft stance rises by. ``recent``
+    ``(span [s], from)``: each stance ending at or after sample ``from`` is pooled with the
+    leg's stances that ended within ``span`` before it (itself included; the contact smoother's
+    windows), the others kept; None: the whole run's pooled once (``gait``).
     """
     step = float(np.median(np.diff(times))) if times.size > 1 else math.inf
     tolerance_m = max(tolerance_m, EDGE_NOISE_FLOOR_M)
     if not (round(SLOW_S / step, 6) >= MIN_SAMPLES_SLOW and tolerance_m < FIT_TOP_M):
         return stance
     strides = aligned_strides(times, heights, stance, tolerance_m)
-    interior = [on and first > 0 and last < stance.size - 1 for first, last, on in runs(stance)]
-    if len(strides) < max(MIN_STRIDES, MIN_SHARE * sum(interior)):
-        return stance
+    ends = [times[last] for first, last, on in runs(stance) if interior(stance, first, last, on)]
     grid = np.arange(-round(FIT_S / step), 1) * step
-    curves = [np.interp(at + grid, times, heights) - ground for *_, ground, at in strides]
+    placed = stance.copy()
+    for pool, placing in pools(times, strides, recent):
+        seen = ends if recent is None else within(ends, times[pool[-1][1]], recent[0])
+        onset = pool_onset(times, heights, pool, (grid, tolerance_m), len(seen))
+        if onset is None:
+            continue
+        for first, last, _, at in placing:
+            end = int(np.searchsorted(times, at + onset, side="right")) - 1
+            placed[first : last + 1] = False
+            placed[first : max(end, (first + last) // 2) + 1] = True
+    return placed
+
+
+def interior(stance: np.ndarray, first: int, last: int, on: bool) -> bool:
+    """Whether the run ``first``..``last`` of ``stance`` is a stance with both edges observed."""
+    return on and first > 0 and last < stance.size - 1
+
+
+def within(ends: list[float], end_s: float, span_s: float) -> list[float]:
+    """The times ``ends`` [s] from ``span_s`` [s] before ``end_s`` up to it."""
+    return [end for end in ends if end_s - span_s <= end <= end_s]
+
+
+Stride = tuple[int, int, float, float]
+"""``(first, last, level [m], crossing [s])`` of an aligned stance (:func:`aligned_strides`)."""
+
+
+def pools(
+    times: np.ndarray, strides: list[Stride], recent: tuple[float, int] | None
+) -> list[tuple[list[Stride], list[Stride]]]:
+    """``(pooled, placed)`` stride lists: every stride pooled and placed at once (``recent``
+    None), or each stride ending at or after sample ``recent[1]`` placed by the strides ending
+    within ``recent[0]`` [s] before it.
+    """
+    if recent is None:
+        return [(strides, strides)]
+    span_s, since = recent
+    lasts = [float(times[last]) for _, last, *_ in strides]
+    return [
+        (
+            [other for other, end in zip(strides, lasts) if lasts[k] - span_s <= end <= lasts[k]],
+            [stride],
+        )
+        for k, stride in enumerate(strides)
+        if stride[1] >= since
+    ]
+
+
+def pool_onset(
+    times: np.ndarray,
+    heights: np.ndarray,
+    pool: list[Stride],
+    fit: tuple[np.ndarray, float],
+    stances: int,
+) -> float | None:
+    """[s] The onset, from the crossing, of the mean rise of the strides ``pool`` (``fit``: the
+    grid [s] it is sampled on and the edges' noise tolerance [m]), out of ``stances`` interior
+    stances; None where it is not a slow rise that the pool resolves (module docstring).
+    """
+    grid, tolerance_m = fit
+    if len(pool) < max(MIN_STRIDES, MIN_SHARE * stances):
+        return None
+    curves = [np.interp(at + grid, times, heights) - ground for *_, ground, at in pool]
     mean = np.mean(curves, axis=0)
     fitted = pooled_onset(grid, mean)
     if fitted is None or math.sqrt(tolerance_m / fitted[1]) <= SLOW_S:
-        return stance
-    resolved = (mean > tolerance_m / math.sqrt(len(strides))) & (mean <= FIT_TOP_M)
+        return None
+    floor = max(tolerance_m / math.sqrt(len(pool)), EDGE_NOISE_FLOOR_M)
+    resolved = (mean > floor) & (mean <= FIT_TOP_M)
     if np.count_nonzero(resolved & (grid > fitted[0])) < MIN_RISING:
-        return stance
-    placed = stance.copy()
-    for first, last, _, at in strides:
-        end = int(np.searchsorted(times, at + fitted[0], side="right")) - 1
-        placed[first : last + 1] = False
-        placed[first : max(end, (first + last) // 2) + 1] = True
-    return placed
+        return None
+    return fitted[0]
 
 
 def aligned_strides(
     times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
-) -> list[tuple[int, int, float, float]]:
+) -> list[Stride]:
     """``(first, last, level [m], crossing [s])`` of each interior stance whose foot does not
     rise towards its liftoff by more than ``tolerance_m`` [m] (:func:`lag`) and, within
     :data:`CROSSING_S` after it, first stands :data:`CROSSING_M` above the level next to its
@@ -112,7 +177,7 @@ def aligned_strides(
     """
     strides = []
     for first, last, on in runs(stance):
-        if not on or first == 0 or last == stance.size - 1:
+        if not interior(stance, first, last, on):
             continue
         rise = lag(times, heights, last, -1)
         if rise is not None and rise > tolerance_m:

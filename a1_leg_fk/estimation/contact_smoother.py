@@ -46,13 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
-from a1_leg_fk.estimation.pooled_rise import pooled_liftoffs
-from a1_leg_fk.estimation.stance_edges import (
-    CONTEXT_S,
-    EDGE_NOISE_DEVIATIONS,
-    placed_edges,
-    stance_noise,
-)
+from a1_leg_fk.estimation.pooled_rise import recent_liftoffs
+from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -201,7 +196,7 @@ def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np
     (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; a stance at the first row began
     before it), then the liftoffs of the stances that end at row ``since`` or later by the
     pooled rise of the leg's stances over the :data:`POOL_S` before
-    (:func:`~a1_leg_fk.estimation.pooled_rise.pooled_liftoffs`, ``gait``'s rule); a row they
+    (:func:`~a1_leg_fk.estimation.pooled_rise.recent_liftoffs`, ``gait``'s rule); a row they
     move to swing takes its log-odds reversed.
     """
     times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
@@ -210,8 +205,7 @@ def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np
     for leg in range(LEGS):
         heights = rows.heights[:, leg]
         placed = placed_edges(times, heights, stance[:, leg])
-        tolerance = EDGE_NOISE_DEVIATIONS * stance_noise(heights, placed)
-        placed = pooled_liftoffs(times, heights, placed, tolerance, (POOL_S, since))
+        placed = recent_liftoffs(times, heights, placed, POOL_S, since)
         moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
         result[moved, leg] = -log_odds[moved, leg]
     return result

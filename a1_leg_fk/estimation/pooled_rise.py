@@ -32,7 +32,15 @@ import math
 
 import numpy as np
 
-from a1_leg_fk.estimation.stance_edges import EDGE_NOISE_FLOOR_M, MIN_WINDOW, lag, level, runs
+from a1_leg_fk.estimation.stance_edges import (
+    EDGE_NOISE_DEVIATIONS,
+    EDGE_NOISE_FLOOR_M,
+    MIN_WINDOW,
+    lag,
+    level,
+    runs,
+    stance_noise,
+)
 
 CROSSING_M = 0.001
 """[m] A liftoff's rise is aligned where the foot first stands this far above the stance's level
@@ -72,36 +80,51 @@ its own edges)."""
 
 
 def pooled_liftoffs(
-    times: np.ndarray,
-    heights: np.ndarray,
-    stance: np.ndarray,
-    tolerance_m: float,
-    recent: tuple[float, int] | None = None,
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
 ) -> np.ndarray:
     """``stance`` (n,) with the liftoffs of a leg whose feet rise slowly moved to their strides'
     pooled rise onset (module docstring); ``tolerance_m`` [m] is the edges' noise tolerance
-    (at least :data:`EDGE_NOISE_FLOOR_M`), also what a soft stance rises by. ``recent``
-    ``(span [s], from)``: each stance ending at or after sample ``from`` is pooled with the
-    leg's stances that ended within ``span`` before it (itself included; the contact smoother's
-    windows), the others kept; None: the whole run's pooled once (``gait``).
+    (at least :data:`EDGE_NOISE_FLOOR_M`), also what a soft stance rises by.
     """
     step = float(np.median(np.diff(times))) if times.size > 1 else math.inf
     tolerance_m = max(tolerance_m, EDGE_NOISE_FLOOR_M)
     if not (round(SLOW_S / step, 6) >= MIN_SAMPLES_SLOW and tolerance_m < FIT_TOP_M):
         return stance
     strides = aligned_strides(times, heights, stance, tolerance_m)
-    ends = [times[last] for first, last, on in runs(stance) if interior(stance, first, last, on)]
+    stances = sum(interior(stance, first, last, on) for first, last, on in runs(stance))
     grid = np.arange(-round(FIT_S / step), 1) * step
+    onset = pool_onset(times, heights, strides, (grid, tolerance_m), stances)
+    if onset is None:
+        return stance
     placed = stance.copy()
-    for pool, placing in pools(times, strides, recent):
-        seen = ends if recent is None else within(ends, times[pool[-1][1]], recent[0])
-        onset = pool_onset(times, heights, pool, (grid, tolerance_m), len(seen))
-        if onset is None:
+    for first, last, _, at in strides:
+        end = int(np.searchsorted(times, at + onset, side="right")) - 1
+        placed[first : last + 1] = False
+        placed[first : max(end, (first + last) // 2) + 1] = True
+    return placed
+
+
+def recent_liftoffs(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, span_s: float, since: int = 0
+) -> np.ndarray:
+    """``stance`` (n,) with the liftoff of each stance ending at sample ``since`` or later
+    placed by :func:`pooled_liftoffs` over the samples from ``span_s`` [s] before its end to
+    :data:`CROSSING_S` after it, with those samples' noise tolerance
+    (:data:`~a1_leg_fk.estimation.stance_edges.EDGE_NOISE_DEVIATIONS` of
+    :func:`~a1_leg_fk.estimation.stance_edges.stance_noise`): the leg's recent strides, so a
+    window that holds them gives what one pass does (the contact smoother's rule).
+    """
+    placed = stance.copy()
+    for first, last, on in runs(stance):
+        if not interior(stance, first, last, on) or last < since:
             continue
-        for first, last, _, at in placing:
-            end = int(np.searchsorted(times, at + onset, side="right")) - 1
-            placed[first : last + 1] = False
-            placed[first : max(end, (first + last) // 2) + 1] = True
+        begin = int(np.searchsorted(times, times[last] - span_s))
+        recent = slice(begin, int(np.searchsorted(times, times[last] + CROSSING_S, "right")))
+        noise = stance_noise(heights[recent], stance[recent])
+        pooled = pooled_liftoffs(
+            times[recent], heights[recent], stance[recent], EDGE_NOISE_DEVIATIONS * noise
+        )
+        placed[first : last + 1] = pooled[first - begin : last + 1 - begin]
     return placed
 
 
@@ -110,34 +133,8 @@ def interior(stance: np.ndarray, first: int, last: int, on: bool) -> bool:
     return on and first > 0 and last < stance.size - 1
 
 
-def within(ends: list[float], end_s: float, span_s: float) -> list[float]:
-    """The times ``ends`` [s] from ``span_s`` [s] before ``end_s`` up to it."""
-    return [end for end in ends if end_s - span_s <= end <= end_s]
-
-
 Stride = tuple[int, int, float, float]
 """``(first, last, level [m], crossing [s])`` of an aligned stance (:func:`aligned_strides`)."""
-
-
-def pools(
-    times: np.ndarray, strides: list[Stride], recent: tuple[float, int] | None
-) -> list[tuple[list[Stride], list[Stride]]]:
-    """``(pooled, placed)`` stride lists: every stride pooled and placed at once (``recent``
-    None), or each stride ending at or after sample ``recent[1]`` placed by the strides ending
-    within ``recent[0]`` [s] before it.
-    """
-    if recent is None:
-        return [(strides, strides)]
-    span_s, since = recent
-    lasts = [float(times[last]) for _, last, *_ in strides]
-    return [
-        (
-            [other for other, end in zip(strides, lasts) if lasts[k] - span_s <= end <= lasts[k]],
-            [stride],
-        )
-        for k, stride in enumerate(strides)
-        if stride[1] >= since
-    ]
 
 
 def pool_onset(
@@ -156,11 +153,13 @@ def pool_onset(
         return None
     curves = [np.interp(at + grid, times, heights) - ground for *_, ground, at in pool]
     mean = np.mean(curves, axis=0)
+    floor = max(tolerance_m / math.sqrt(len(pool)), EDGE_NOISE_FLOOR_M)
+    resolved = (mean > floor) & (mean <= FIT_TOP_M)
+    if np.count_nonzero(resolved) < MIN_RISING:  # not resolved, whatever the onset
+        return None
     fitted = pooled_onset(grid, mean)
     if fitted is None or math.sqrt(tolerance_m / fitted[1]) <= SLOW_S:
         return None
-    floor = max(tolerance_m / math.sqrt(len(pool)), EDGE_NOISE_FLOOR_M)
-    resolved = (mean > floor) & (mean <= FIT_TOP_M)
     if np.count_nonzero(resolved & (grid > fitted[0])) < MIN_RISING:
         return None
     return fitted[0]
@@ -208,12 +207,15 @@ def pooled_onset(grid: np.ndarray, rise: np.ndarray) -> tuple[float, float] | No
     times, heights = grid[:stop], rise[:stop]
     if stop < MIN_WINDOW:
         return None
-    best: tuple[float, float, float] | None = None
-    for onset in np.arange(times[0] + MIN_STANCE_S, times[-1], ONSET_STEP_S):
-        rising = np.clip(times - onset, 0.0, None) ** 2
-        shape = np.column_stack((np.ones_like(times), times, rising))
-        coefficients = np.linalg.lstsq(shape, heights, rcond=None)[0]
-        error = float(np.sum((shape @ coefficients - heights) ** 2))
-        if coefficients[2] > 0.0 and (best is None or error < best[0]):
-            best = (error, float(onset), float(coefficients[2]))
-    return None if best is None else best[1:]
+    onsets = np.arange(times[0] + MIN_STANCE_S, times[-1], ONSET_STEP_S)
+    if not onsets.size:
+        return None
+    rising = np.clip(times[None, :] - onsets[:, None], 0.0, None) ** 2
+    shapes = np.stack(np.broadcast_arrays(np.ones_like(times), times, rising), axis=-1)
+    coefficients = np.linalg.pinv(shapes, rcond=float(np.finfo(float).eps) * stop) @ heights
+    errors = np.sum((shapes @ coefficients[:, :, None] - heights[:, None]) ** 2, axis=(1, 2))
+    rises = coefficients[:, 2] > 0.0
+    if not rises.any():
+        return None
+    best = int(np.flatnonzero(rises)[np.argmin(errors[rises])])
+    return float(onsets[best]), float(coefficients[best, 2])

@@ -31,8 +31,11 @@ FAST = ("a1_trot_fast+noise", "go2_trot_fast+noise")
 suite."""
 MISSED = {
     ("a1_trot_turn", KINEMATIC): "98.29 %, swing as stance 1.31 %",
-    ("a1_trot_turn+noise", KINEMATIC): "swing as stance 1.18 %",
-    ("a1_walk+noise", KINEMATIC): "liftoff 8 ms",
+    ("a1_walk+noise", KINEMATIC): (
+        "liftoff 6 ms (per leg +0/+6/+2/+24: RL's height over the lowest foot stays exactly 0 "
+        "until 12 ms before it is 1 mm up, 30 ms after it left, so its pooled rise is a fast "
+        "one and places nothing; docs/forces.md)"
+    ),
     ("a1_pronk", KINEMATIC): "92.50 %, push-offs as swing 7.21 %, liftoff 26 ms, duty 0.082",
     ("a1_pronk+noise", KINEMATIC): "92.00 %, push-offs as swing 7.63 %, liftoff 32 ms, duty 0.080",
     ("go2_walk+noise", KINEMATIC): (

@@ -191,6 +191,12 @@ MUTATIONS = (
         "heights[start - 1] > ground + EDGE_NOISE_FLOOR_M",
     ),
     Mutation(
+        "the contact smoother's liftoffs not pooled (each stance's own rise fit alone)",
+        "a1_leg_fk/estimation/contact_smoother.py",
+        "placed = recent_liftoffs(times, heights, placed, POOL_S, since)",
+        "placed = placed",
+    ),
+    Mutation(
         "the gait's edge tolerance x 10",
         "a1_leg_fk/gait/edges.py",
         "base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",

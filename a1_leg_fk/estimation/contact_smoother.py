@@ -256,7 +256,7 @@ POOL_S = 10.0
 """[s] A liftoff is pooled with its leg's stances that ended this long before it (a walk's
 strides are 2 s: four or five of them; 4, 6, 8 and 10 s tried on the contact family's tuned
 runs, a1_walk with noise seeds 7, 1-5, 11, 12 liftoffs 8 6 10 8 8 8 6 6 ms without pooling,
-6 4 4 6 8 6 5 4 with 10 s: docs/forces.md)."""
+6 4 4 6 8 6 4 4 with 10 s: docs/forces.md)."""
 POOL_MARGIN_S = 3.0
 """[s] The rows kept before the oldest pooled stance's end: its stance and the level before it
 (a stance longer than this is left out of the windows' pools, not of one pass's)."""

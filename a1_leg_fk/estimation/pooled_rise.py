@@ -88,44 +88,86 @@ def pooled_liftoffs(
     """
     step = float(np.median(np.diff(times))) if times.size > 1 else math.inf
     tolerance_m = max(tolerance_m, EDGE_NOISE_FLOOR_M)
-    if not (round(SLOW_S / step, 6) >= MIN_SAMPLES_SLOW and tolerance_m < FIT_TOP_M):
+    if not poolable(step, tolerance_m):
         return stance
     strides = aligned_strides(times, heights, stance, tolerance_m)
     stances = sum(interior(stance, first, last, on) for first, last, on in runs(stance))
-    grid = np.arange(-round(FIT_S / step), 1) * step
-    onset = pool_onset(times, heights, strides, (grid, tolerance_m), stances)
+    onset = pool_onset(times, heights, strides, (grid_of(step), tolerance_m), stances)
     if onset is None:
         return stance
     placed = stance.copy()
-    for first, last, _, at in strides:
-        end = int(np.searchsorted(times, at + onset, side="right")) - 1
-        placed[first : last + 1] = False
-        placed[first : max(end, (first + last) // 2) + 1] = True
+    for stride in strides:
+        place(placed, times, stride, onset)
     return placed
 
 
 def recent_liftoffs(
     times: np.ndarray, heights: np.ndarray, stance: np.ndarray, span_s: float, since: int = 0
 ) -> np.ndarray:
-    """``stance`` (n,) with the liftoff of each stance ending at sample ``since`` or later
-    placed by :func:`pooled_liftoffs` over the samples from ``span_s`` [s] before its end to
-    :data:`CROSSING_S` after it, with those samples' noise tolerance
+    """``stance`` (n,) with the liftoff of each stance that may end at sample ``since`` or later
+    (its last sample at most :data:`CROSSING_S` before it) placed as :func:`pooled_liftoffs`
+    places it over the samples from ``span_s`` [s] before its end to :data:`CROSSING_S` after
+    it (the stances within, up to it), with those samples' noise tolerance
     (:data:`~a1_leg_fk.estimation.stance_edges.EDGE_NOISE_DEVIATIONS` of
     :func:`~a1_leg_fk.estimation.stance_edges.stance_noise`): the leg's recent strides, so a
     window that holds them gives what one pass does (the contact smoother's rule).
     """
+    strides = crossing_strides(times, heights, stance)
+    ends = [(first, last) for first, last, on in runs(stance) if interior(stance, first, last, on)]
+    from_s = times[since] - CROSSING_S if since < times.size else math.inf
     placed = stance.copy()
-    for first, last, on in runs(stance):
-        if not interior(stance, first, last, on) or last < since:
+    for stride, rise in strides:
+        last = stride[1]
+        if times[last] < from_s:
             continue
         begin = int(np.searchsorted(times, times[last] - span_s))
         recent = slice(begin, int(np.searchsorted(times, times[last] + CROSSING_S, "right")))
+        step = float(np.median(np.diff(times[recent])))
         noise = stance_noise(heights[recent], stance[recent])
-        pooled = pooled_liftoffs(
-            times[recent], heights[recent], stance[recent], EDGE_NOISE_DEVIATIONS * noise
-        )
-        placed[first : last + 1] = pooled[first - begin : last + 1 - begin]
+        tolerance_m = max(EDGE_NOISE_DEVIATIONS * noise, EDGE_NOISE_FLOOR_M)
+        if not poolable(step, tolerance_m) or not stands(rise, tolerance_m):
+            continue
+        pool = [
+            other
+            for other, lift in strides
+            if begin < other[0] and other[1] <= last and stands(lift, tolerance_m)
+        ]
+        stances = sum(begin < first and end <= last for first, end in ends)
+        onset = pool_onset(times, heights, pool, (grid_of(step), tolerance_m), stances)
+        if onset is not None:
+            place(placed, times, stride, onset)
     return placed
+
+
+def poolable(step_s: float, tolerance_m: float) -> bool:
+    """Whether samples ``step_s`` [s] apart with a noise tolerance ``tolerance_m`` [m] can resolve
+    a slow rise (:data:`MIN_SAMPLES_SLOW`, :data:`FIT_TOP_M`).
+    """
+    return round(SLOW_S / step_s, 6) >= MIN_SAMPLES_SLOW and tolerance_m < FIT_TOP_M
+
+
+def grid_of(step_s: float) -> np.ndarray:
+    """[s] The times, from the crossing, the pooled rise is sampled at: :data:`FIT_S` before it
+    up to it, ``step_s`` [s] apart.
+    """
+    return np.arange(-round(FIT_S / step_s), 1) * step_s
+
+
+def place(placed: np.ndarray, times: np.ndarray, stride: Stride, onset: float) -> None:
+    """End the stance of ``stride`` in ``placed`` at its crossing + ``onset`` [s]: not before its
+    middle sample, past its last where the onset comes later (an edge the heights put early).
+    """
+    first, last, _, at = stride
+    end = int(np.searchsorted(times, at + onset, side="right")) - 1
+    placed[first : last + 1] = False
+    placed[first : max(end, (first + last) // 2) + 1] = True
+
+
+def stands(rise: float | None, tolerance_m: float) -> bool:
+    """Whether a stance that rose by ``rise`` [m] towards its liftoff (:func:`lag`; None: unknown)
+    is no soft foot unloading: not more than ``tolerance_m`` [m].
+    """
+    return rise is None or not rise > tolerance_m
 
 
 def interior(stance: np.ndarray, first: int, last: int, on: bool) -> bool:
@@ -168,18 +210,28 @@ def pool_onset(
 def aligned_strides(
     times: np.ndarray, heights: np.ndarray, stance: np.ndarray, tolerance_m: float
 ) -> list[Stride]:
-    """``(first, last, level [m], crossing [s])`` of each interior stance whose foot does not
-    rise towards its liftoff by more than ``tolerance_m`` [m] (:func:`lag`) and, within
+    """The :func:`crossing_strides` whose foot does not rise towards its liftoff by more than
+    ``tolerance_m`` [m] (:func:`stands`).
+    """
+    return [
+        stride
+        for stride, rise in crossing_strides(times, heights, stance)
+        if stands(rise, tolerance_m)
+    ]
+
+
+def crossing_strides(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray
+) -> list[tuple[Stride, float | None]]:
+    """``(first, last, level [m], crossing [s])`` of each interior stance whose foot, within
     :data:`CROSSING_S` after it, first stands :data:`CROSSING_M` above the level next to its
-    edge (the crossing, interpolated between samples); the level is the median of its heights
-    within :data:`LEVEL_S` before the crossing (kept to the stance).
+    edge (the crossing, interpolated between samples), and what it rose by towards its liftoff
+    (:func:`lag`); the level is the median of its heights within :data:`LEVEL_S` before the
+    crossing (kept to the stance).
     """
     strides = []
     for first, last, on in runs(stance):
         if not interior(stance, first, last, on):
-            continue
-        rise = lag(times, heights, last, -1)
-        if rise is not None and rise > tolerance_m:
             continue
         stop = int(np.searchsorted(times, times[last] + CROSSING_S, side="right"))
         goal = level(times, heights, last, -1) + CROSSING_M
@@ -192,7 +244,8 @@ def aligned_strides(
         window = (times >= at - LEVEL_S[0]) & (times <= at - LEVEL_S[1])
         window[:first] = False
         if window.sum() >= MIN_WINDOW:
-            strides.append((first, last, float(np.median(heights[window])), at))
+            stride = (first, last, float(np.median(heights[window])), at)
+            strides.append((stride, lag(times, heights, last, -1)))
     return strides
 
 

@@ -42,7 +42,7 @@ FAST_SUBSET = (
     "test/estimation/test_ground.py",
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
-    "test/gait/test_pooled_rise.py",
+    "test/estimation/test_pooled_rise.py",
     "test/estimation/test_load_edges.py",
     "test/estimation/test_stance_edges.py",
     "test/estimation/test_contact_smoother.py",
@@ -192,6 +192,12 @@ MUTATIONS = (
         "heights[start - 1] > ground + EDGE_NOISE_FLOOR_M",
     ),
     Mutation(
+        "the contact smoother's liftoffs not pooled (each stance's own rise fit alone)",
+        "a1_leg_fk/estimation/contact_smoother.py",
+        "placed = recent_liftoffs(times, heights, placed, POOL_S, since)",
+        "placed = placed",
+    ),
+    Mutation(
         "the gait's edge tolerance x 10",
         "a1_leg_fk/gait/edges.py",
         "base = max(EDGE_NOISE_DEVIATIONS * noise_m, EDGE_NOISE_FLOOR_M)",
@@ -223,9 +229,9 @@ MUTATIONS = (
     ),
     Mutation(
         "the strides' pooled rise fitted without the stance's drift",
-        "a1_leg_fk/gait/pooled_rise.py",
-        "shape = np.column_stack((np.ones_like(times), times, rising))",
-        "shape = np.column_stack((np.ones_like(times), 0.0 * times, rising))",
+        "a1_leg_fk/estimation/pooled_rise.py",
+        "np.broadcast_arrays(np.ones_like(times), times, rising)",
+        "np.broadcast_arrays(np.ones_like(times), 0.0 * times, rising)",
     ),
     Mutation(
         "the load's dip never bridged",

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
+from a1_leg_fk.estimation.pooled_rise import recent_liftoffs
 from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
@@ -163,13 +164,16 @@ def smoothed_stance(
     return placed_stance(rows, stance, force_lag_s), filtered
 
 
-def placed_stance(rows: EvidenceRows, log_odds: np.ndarray, force_lag_s: float) -> np.ndarray:
+def placed_stance(
+    rows: EvidenceRows, log_odds: np.ndarray, force_lag_s: float, since: int = 0
+) -> np.ndarray:
     """(N, 4) log-odds of stance: the posterior ``log_odds`` with the stances' edges placed, by
-    the heights for feet without force evidence (:func:`height_edges`) and by the loads for
-    those with it (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the normal forces
-    with their lag ``force_lag_s`` [s] undone).
+    the heights for feet without force evidence (:func:`height_edges`, liftoffs pooled from row
+    ``since`` on) and by the loads for those with it
+    (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the normal forces with their lag
+    ``force_lag_s`` [s] undone).
     """
-    result = height_edges(rows, log_odds)
+    result = height_edges(rows, log_odds, since)
     if rows.forced.any():
         loads = unlagged(rows.normals, rows.stamps_s, force_lag_s)
         result = loaded_stance(result, rows.stamps_s, loads, rows.forced)
@@ -186,17 +190,22 @@ def posterior(
     return force_liftoffs(smoothed, filtered, rows.forced), filtered
 
 
-def height_edges(rows: EvidenceRows, log_odds: np.ndarray) -> np.ndarray:
+def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np.ndarray:
     """(N, 4) log-odds of stance: ``log_odds``, with the edges of each stance (log-odds >= 0) of
     a foot without force evidence placed by its heights
     (:func:`~a1_leg_fk.estimation.stance_edges.placed_edges`; a stance at the first row began
-    before it); a row they move to swing takes its log-odds reversed.
+    before it), then the liftoffs of the stances that end at row ``since`` or later by the
+    pooled rise of the leg's stances over the :data:`POOL_S` before
+    (:func:`~a1_leg_fk.estimation.pooled_rise.recent_liftoffs`, ``gait``'s rule); a row they
+    move to swing takes its log-odds reversed.
     """
     times = np.maximum.accumulate(rows.stamps_s) if len(rows) else rows.stamps_s
     stance = log_odds >= 0.0
     result = log_odds.copy()
     for leg in range(LEGS):
-        placed = placed_edges(times, rows.heights[:, leg], stance[:, leg])
+        heights = rows.heights[:, leg]
+        placed = placed_edges(times, heights, stance[:, leg])
+        placed = recent_liftoffs(times, heights, placed, POOL_S, since)
         moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
         result[moved, leg] = -log_odds[moved, leg]
     return result
@@ -243,7 +252,15 @@ def smoothing_line(smoothed: bool) -> str:
     return "smoothing: none, the causal filter's contacts as the node has them (--causal)"
 
 
-KEPT_S = max(HISTORY_S, CONTEXT_S)
+POOL_S = 10.0
+"""[s] A liftoff is pooled with its leg's stances that ended this long before it (a walk's
+strides are 2 s: four or five of them; 4, 6, 8 and 10 s tried on the contact family's tuned
+runs, a1_walk with noise seeds 7, 1-5, 11, 12 liftoffs 8 6 10 8 8 8 6 6 ms without pooling,
+6 4 4 6 8 6 4 4 with 10 s: docs/forces.md)."""
+POOL_MARGIN_S = 3.0
+"""[s] The rows kept before the oldest pooled stance's end: its stance and the level before it
+(a stance longer than this is left out of the windows' pools, not of one pass's)."""
+KEPT_S = max(HISTORY_S, CONTEXT_S, POOL_S + POOL_MARGIN_S)
 """[s] The rows already taken that the edges' rules may look back at."""
 
 
@@ -289,7 +306,7 @@ class FixedLagSmoother:
         before = len(self.history)
         every = np.vstack([self.history_odds, odds])
         done = before + count
-        stance = placed_stance(rows, every, self.force_lag_s)[before:done]
+        stance = placed_stance(rows, every, self.force_lag_s, before)[before:done]
         self._keep(rows[:done], every[:done])
         self.start = filtered[count - 1]
         self.pending = self.pending[count:]

@@ -32,6 +32,9 @@ import math
 
 import numpy as np
 
+EDGE_NOISE_DEVIATIONS = 3.0
+"""A foot's heights' noise tolerance is this many deviations of their noise
+(:func:`stance_noise`)."""
 EDGE_NOISE_FLOOR_M = 0.0001
 """[m] A stance's edge tolerance is at least this (noise-free heights; chosen on the contact
 family's tuned runs among 0.05, 0.1, 0.2, 0.5 mm, docs/gait.md)."""
@@ -64,6 +67,8 @@ LANDING_S = 0.1
 STANCE_REFERENCE_S = 0.2
 """[s] A stance's height, for a late rise, is the median of its heights this long before its
 last sample."""
+MAD_SIGMA = 1.4826
+"""A normal distribution's standard deviation per median absolute deviation."""
 CONTEXT_S = STANCE_REFERENCE_S
 """[s] How far back from a stance's last sample these rules look: with this much of the samples
 before a window, its edges are those of one pass over every sample."""
@@ -196,3 +201,28 @@ def inwards(times: np.ndarray, edge: int, inward: int, span_s: float) -> slice:
         return slice(edge, max(stop, edge + MIN_WINDOW))
     begin = int(np.searchsorted(times, times[edge] - span_s, side="left"))
     return slice(max(min(begin, edge + 1 - MIN_WINDOW), 0), edge + 1)
+
+
+def lag(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float | None:
+    """[m] How much the level next to stance sample ``edge`` rose towards it from the level
+    :data:`EDGE_REFERENCE_S` farther inwards; None where the stance is too short or the rate
+    too low for more than :data:`MIN_WINDOW` samples in that span.
+    """
+    here = inwards(times, edge, inward, EDGE_REFERENCE_S)
+    width = here.stop - here.start
+    before = edge + inward * width
+    if width <= MIN_WINDOW or not 0 <= before < heights.size:
+        return None
+    return level(times, heights, edge, inward) - level(times, heights, before, inward)
+
+
+def stance_noise(heights: np.ndarray, stance: np.ndarray) -> float:
+    """[m] The noise of a foot's stance heights: robust, from the differences of consecutive
+    stance samples away from the edges (so that neither a stance's slow drift, nor the levels of
+    different stances, nor its touchdowns and liftoffs count); 0 without such samples.
+    """
+    interior = stance[1:-2] & stance[2:-1] & stance[:-3] & stance[3:]  # no edge sample
+    steps = np.diff(heights)[1:-1][interior]
+    if not steps.size:
+        return 0.0
+    return MAD_SIGMA * float(np.median(np.abs(steps - np.median(steps)))) / math.sqrt(2.0)

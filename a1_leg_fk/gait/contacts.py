@@ -27,7 +27,7 @@ when it is near the ground and nearly still:
   foot unloads before it moves, may slide as it pushes off); the heights place them: a stance
   ends where the foot starts to rise above the stance's level next to the edge and begins where
   it stops coming down. A leg whose feet rise slowly from rest (a walk's) has its liftoffs
-  placed by its strides' pooled rise (:func:`a1_leg_fk.gait.pooled_rise.pooled_liftoffs`: one
+  placed by its strides' pooled rise (:func:`a1_leg_fk.estimation.pooled_rise.pooled_liftoffs`: one
   liftoff's heights cannot place such a rise in sensor noise). An edge time is the midpoint
   between the last sample of one phase and the first of the next (unbiased on a sampling grid);
   at the start/end of the data or of a gap it is that sample's time and the edge is not observed.
@@ -42,9 +42,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from a1_leg_fk.gait.edges import EDGE_NOISE_DEVIATIONS, fit_edges, stance_noise
+from a1_leg_fk.estimation.pooled_rise import pooled_liftoffs
+from a1_leg_fk.estimation.stance_edges import EDGE_NOISE_DEVIATIONS, stance_noise
+from a1_leg_fk.gait.edges import fit_edges
 from a1_leg_fk.gait.phases import Blips, Stance, apply_min_phase, segment_slices, stances_of
-from a1_leg_fk.gait.pooled_rise import pooled_liftoffs
 from a1_leg_fk.gait.thresholds import ContactThresholds, height_thresholds, speed_thresholds
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError

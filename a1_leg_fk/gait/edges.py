@@ -37,30 +37,16 @@ import math
 import numpy as np
 
 from a1_leg_fk.estimation.stance_edges import (
+    EDGE_NOISE_DEVIATIONS,
     EDGE_NOISE_FLOOR_M,
     EDGE_REFERENCE_S,
-    MIN_WINDOW,
+    MAD_SIGMA,
     inwards,
+    lag,
     level,
     rise_start,
     runs,
 )
-
-EDGE_NOISE_DEVIATIONS = 3.0
-MAD_SIGMA = 1.4826
-"""A normal distribution's standard deviation per median absolute deviation."""
-
-
-def stance_noise(heights: np.ndarray, stance: np.ndarray) -> float:
-    """[m] The noise of a foot's stance heights: robust, from the differences of consecutive
-    stance samples away from the edges (so that neither a stance's slow drift, nor the levels of
-    different stances, nor its touchdowns and liftoffs count); 0 without such samples.
-    """
-    interior = stance[1:-2] & stance[2:-1] & stance[:-3] & stance[3:]  # no edge sample
-    steps = np.diff(heights)[1:-1][interior]
-    if not steps.size:
-        return 0.0
-    return MAD_SIGMA * float(np.median(np.abs(steps - np.median(steps)))) / math.sqrt(2.0)
 
 
 def fit_edges(
@@ -178,16 +164,3 @@ def ceiling(
     least, most = allowance
     behind = min(max(lag(times, heights, edge, inward) or 0.0, least), most)
     return level(times, heights, edge, inward) + noise_m + behind
-
-
-def lag(times: np.ndarray, heights: np.ndarray, edge: int, inward: int) -> float | None:
-    """[m] How much the level next to stance sample ``edge`` rose towards it from the level
-    :data:`EDGE_REFERENCE_S` farther inwards; None where the stance is too short or the rate
-    too low for more than :data:`MIN_WINDOW` samples in that span.
-    """
-    here = inwards(times, edge, inward, EDGE_REFERENCE_S)
-    width = here.stop - here.start
-    before = edge + inward * width
-    if width <= MIN_WINDOW or not 0 <= before < heights.size:
-        return None
-    return level(times, heights, edge, inward) - level(times, heights, before, inward)

@@ -161,7 +161,7 @@ def test_a_slow_rise_in_noise_is_placed_at_its_start(seed) -> None:
     then ~20x steeper (test/synthetic_gaits.py ``slow_rise``): every leg's median liftoff within
     the issue's 4 ms of the constructed one, on three noise draws. One liftoff's heights cannot
     place it (per-leg medians 3.6-7.6 ms late on these seeds); the leg's strides pooled
-    (a1_leg_fk.gait.pooled_rise) place it 0.3-3.0 ms off."""
+    (a1_leg_fk.estimation.pooled_rise) place it 0.3-3.0 ms off."""
     stamps, feet, liftoffs = slow_rise_walk(0.00009, seed=seed)
     contacts, _ = analyze_gait(stamps, feet)
     for leg, stances in enumerate(contacts.stances):

@@ -1,4 +1,4 @@
-"""A leg's liftoffs placed by its strides' pooled rise (a1_leg_fk.gait.pooled_rise), on rises
+"""A leg's liftoffs placed by its strides' pooled rise (a1_leg_fk.estimation.pooled_rise), on rises
 built here: the fit's onset against the constructed one, and a fast rise (a trot's) that keeps
 the edges the heights gave it. The walk-like slow rise in noise, end to end, is
 test/gait/test_gait_edges.py's ``test_a_slow_rise_in_noise_is_placed_at_its_start``.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from a1_leg_fk.gait.pooled_rise import pooled_liftoffs, pooled_onset
+from a1_leg_fk.estimation.pooled_rise import pooled_liftoffs, pooled_onset
 
 STEP_S = 0.002  # 500 Hz, the contact family's rate
 

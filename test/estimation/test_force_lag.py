@@ -42,7 +42,7 @@ def test_small_forces_and_noise_pass_as_they_are() -> None:
     before the sample) are not sharpened: undone, a 2 N noise would grow by 1.17x and a slow
     tail cross even odds early (the noisy pronk lost 0.2 point of agreement)."""
     rng = np.random.default_rng(3)
-    forces = list(np.clip(rng.normal(0.0, 2.0, 50), -8.0, 8.0)) + [20.0, 10.0, 5.0, 2.0]
+    forces = [*np.clip(rng.normal(0.0, 2.0, 50), -8.0, 8.0).tolist(), 20.0, 10.0, 5.0, 2.0]
     tails = LagTails(LAG_S, HALF_N)
     out = [tails.evidence(DT_S, [f, 0.0, 0.0, 0.0])[0] for f in forces]
     assert out == forces

@@ -60,8 +60,10 @@ class LagTails:
         previous, self.previous = self.previous, list(normals)
         if not (previous and self.lag_s > 0.0 and dt_s > 0.0 and math.isfinite(dt_s)):
             return list(normals)
-        keep = math.exp(-dt_s / self.lag_s)
-        return [
-            undo_lag(now, before, keep) if keep * before > self.half_n else now
-            for now, before in zip(normals, previous, strict=True)
-        ]
+        keep, half = math.exp(-dt_s / self.lag_s), self.half_n
+        out = list(normals)
+        for leg, (now, before) in enumerate(zip(normals, previous, strict=True)):
+            if keep * before > half:  # the tail alone above even odds
+                undone = undo_lag(now, before, keep)
+                out[leg] = undone if undone < half else now
+        return out

@@ -283,9 +283,7 @@ def _kinematic(
     low = [h < half for h in heights]
     references = _references(velocities, low, standing, forced)
     flats = references  # against every low foot: the same where every low foot stood
-    unforced_differ = not all(forced) and not all(s for s, down in zip(standing, low) if down)
-    forced_differ = any(forced) and (_stepped(low, standing) or not all(low))
-    if unforced_differ or forced_differ:
+    if standing != low:  # the same feet low and standing: the same references
         flats = _references(velocities, low, [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
@@ -357,13 +355,16 @@ def _references(
     sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
     # (count, x, y, z): low; low and standing; standing
     for o, velocity in enumerate(velocities):
-        if velocity is not None:
-            for total, member in zip(sums, (low[o], low[o] and standing[o], standing[o])):
-                if member:
-                    total[0] += 1
-                    total[1] += velocity[0]
-                    total[2] += velocity[1]
-                    total[3] += velocity[2]
+        if velocity is None:
+            continue
+        for total in (
+            sums if low[o] and standing[o] else sums[:1] if low[o] else sums[2:] if standing[o]
+            else ()
+        ):  # fmt: skip
+            total[0] += 1
+            total[1] += velocity[0]
+            total[2] += velocity[1]
+            total[3] += velocity[2]
     out: list[Vector | None] = []
     for leg, velocity in enumerate(velocities):
         known = velocity is not None  # its own velocity is in the sums: leave it out

@@ -46,24 +46,30 @@ class LagTails:
         ``half_n`` [N]: the filter's force at even odds.
         """
         self.lag_s, self.half_n = lag_s, half_n
-        self.previous: list[float] = []
+        self.previous: tuple[float, ...] = ()
         """The latest sample's normal forces [N] as the observer gave them (none yet: empty)."""
+        self._keep = (math.nan, 0.0)  # (dt [s], exp(-dt / lag)) of the latest step
 
     def reset(self) -> None:
         """Forget the previous sample (a new pass over a recording)."""
-        self.previous = []
+        self.previous = ()
 
-    def evidence(self, dt_s: float, normals: Sequence[float]) -> list[float]:
+    def evidence(self, dt_s: float, normals: Sequence[float]) -> Sequence[float]:
         """The forces [N] the filter takes from ``normals`` [N] (NaN: none), ``dt_s`` [s]
-        after the previous sample (not a positive finite step: as they are).
+        after the previous sample (no positive step: as they are; ``normals`` itself where
+        nothing is undone).
         """
-        previous, self.previous = self.previous, list(normals)
-        if not (previous and self.lag_s > 0.0 and dt_s > 0.0 and math.isfinite(dt_s)):
-            return list(normals)
-        keep, half = math.exp(-dt_s / self.lag_s), self.half_n
-        out = list(normals)
-        for leg, (now, before) in enumerate(zip(normals, previous, strict=True)):
+        previous, self.previous = self.previous, tuple(normals)
+        if not (previous and self.lag_s > 0.0 and dt_s > 0.0):
+            return normals
+        if self._keep[0] != dt_s:
+            self._keep = (dt_s, math.exp(-dt_s / self.lag_s))
+        keep, half = self._keep[1], self.half_n
+        out = normals
+        for leg, before in enumerate(previous):
             if keep * before > half:  # the tail alone above even odds
-                undone = undo_lag(now, before, keep)
-                out[leg] = undone if undone < half else now
+                undone = undo_lag(normals[leg], before, keep)
+                if undone < half:
+                    out = list(out)
+                    out[leg] = undone
         return out

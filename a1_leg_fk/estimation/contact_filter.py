@@ -22,7 +22,9 @@ that no single sample decides alone:
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
-  not the ground's): the distance between the base velocity this foot gives if it were still
+  not the ground's); for a foot with a force, every other low foot while it and the feet that
+  stood are all low, else the feet that stood at any height (a staircase's other treads): the
+  distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
@@ -345,16 +347,15 @@ def _references(
     base velocity of the other feet with a velocity that the filter held ``standing`` at the
     previous sample, the ``low`` ones among them for a foot without a force, or of the other
     low feet when none of those stood (None: no other low foot). A swing foot skimming rough
-    ground is low too, and moves: the standing feet leave it out of the mean. A foot whose force
-    is evidence (``forced``) takes every other low foot while it and every standing foot are low
-    (flat ground: its force places its edges, see :func:`_kinematic`), else the standing feet at
-    any height: on stairs a foot stands on another tread than the lowest foot's, and the low
-    feet are swing feet coming down to the lowest tread (see :func:`_stepped`).
+    ground is low too, and moves: the standing feet leave it out. A foot whose force is evidence
+    (``forced``) takes every other low foot while it and every standing foot are low (flat
+    ground: its force places its edges, see :func:`_kinematic`), else the standing feet at any
+    height: on stairs a foot stands on another tread than the lowest's, and the low feet are
+    swing feet coming down to the lowest tread.
     """
-    stepped = _stepped(low, standing)
+    stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
     sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
-    # (count, x, y, z): low; low and standing; standing
-    for o, velocity in enumerate(velocities):
+    for o, velocity in enumerate(velocities):  # (count, x, y, z): low; low, standing; standing
         if velocity is None:
             continue
         for total in (
@@ -379,13 +380,6 @@ def _references(
             count, sx, sy, sz = count - 1, sx - velocity[0], sy - velocity[1], sz - velocity[2]
         out.append(None if count == 0 else (sx / count, sy / count, sz / count))
     return out
-
-
-def _stepped(low: Sequence[bool], standing: Sequence[bool]) -> bool:
-    """Whether a foot the filter held standing is not low: the feet do not stand on one level
-    (a staircase's treads; on flat ground every standing foot is low).
-    """
-    return any(stood and not down for stood, down in zip(standing, low, strict=True))
 
 
 def _clip(log_ratio: float, limit: float, cap: float) -> float:

@@ -28,6 +28,7 @@ from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.correction_file import read_correction_file
 from a1_leg_fk.estimation.effort_timing import EffortTiming
+from a1_leg_fk.estimation.force_lag import LagTails
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.model_corrections import (
     DEFAULT_MODEL_CORRECTIONS,
@@ -151,6 +152,8 @@ class ContactEstimator:
         payload = self.calibration.payload_kg if self.calibration is not None else 0.0
         weight = (self.statics.total_mass_kg + payload) * STANDARD_GRAVITY
         self.model = ContactModel.for_robot(weight, leg_length_m(quadruped))
+        self.tails = LagTails(self.force_lag_s, self.model.force_half_n)
+        """The filter's force evidence: the observer's lag undone where a loaded foot lets go."""
         self.rule = ContactRule(ContactThresholds.for_weight(weight, *thresholds))
         self.reset()
 
@@ -168,6 +171,7 @@ class ContactEstimator:
             elif self.model_corrections == ONLINE and self.contact_rule == FILTER:
                 self.observer.corrections = ModelCorrections(self.correction_settings)
         self.filter = ContactFilter(self.model)
+        self.tails.reset()
         self.timing.reset()
         self.rule = ContactRule(self.rule.thresholds)
         self.counts = EvidenceCounts()
@@ -212,15 +216,18 @@ class ContactEstimator:
         dt = stamp_s - self._stamp_s
         self._stamp_s = stamp_s if not dt < 0.0 else self._stamp_s
         with_force = efforts is not None and any(n == n for n in normals)  # noqa: PLR0124 (NaN)
+        evidence = None  # the filter's forces: none without efforts
         if with_force:
             self.counts.force += 1
+            evidence = self.tails.evidence(dt, normals)
         else:
             self.counts.kinematic += 1
+            self.tails.reset()
         probabilities = self.filter.update(
             dt if math.isfinite(dt) else 0.0,
             motions,
             (imu.angular_velocity or NO_ROTATION, imu.specific_force),
-            normals if with_force else None,
+            evidence,
             phase_prior,
             down=down,
         )

@@ -22,7 +22,9 @@ that no single sample decides alone:
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
-  not the ground's): the distance between the base velocity this foot gives if it were still
+  not the ground's); for a foot with a force, every other low foot while it and the feet that
+  stood are all low, else the feet that stood at any height (a staircase's other treads): the
+  distance between the base velocity this foot gives if it were still
   (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
   speed_scale_mps``;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
@@ -283,7 +285,7 @@ def _kinematic(
     low = [h < half for h in heights]
     references = _references(velocities, low, standing, forced)
     flats = references  # against every low foot: the same where every low foot stood
-    if not all(forced) and not all(stood for stood, down in zip(standing, low) if down):
+    if standing != low:  # the same feet low and standing: the same references
         flats = _references(velocities, low, [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
@@ -342,28 +344,39 @@ def _references(
     forced: Sequence[bool],
 ) -> list[Vector | None]:
     """Per foot, the ground's velocity its speed is taken against [m/s, base frame]: the mean
-    base velocity of the other ``low`` feet with a velocity that the filter held ``standing`` at
-    the previous sample, or of the other low feet when none of those stood (None: no other low
-    foot). A swing foot skimming rough ground is low too, and moves: the standing feet leave
-    it out of the mean. A foot whose force is evidence (``forced``) takes all the other low
-    feet: its force places its edges (see :func:`_kinematic`).
+    base velocity of the other feet with a velocity that the filter held ``standing`` at the
+    previous sample, the ``low`` ones among them for a foot without a force, or of the other
+    low feet when none of those stood (None: no other low foot). A swing foot skimming rough
+    ground is low too, and moves: the standing feet leave it out. A foot whose force is evidence
+    (``forced``) takes every other low foot while it and every standing foot are low (flat
+    ground: its force places its edges, see :func:`_kinematic`), else the standing feet at any
+    height: on stairs a foot stands on another tread than the lowest's, and the low feet are
+    swing feet coming down to the lowest tread.
     """
-    sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]  # (count, x, y, z): low; low and standing
-    for o, velocity in enumerate(velocities):
-        if low[o] and velocity is not None:
-            for total in sums if standing[o] else sums[:1]:
-                total[0] += 1
-                total[1] += velocity[0]
-                total[2] += velocity[1]
-                total[3] += velocity[2]
+    stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
+    sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
+    for o, velocity in enumerate(velocities):  # (count, x, y, z): low; low, standing; standing
+        if velocity is None:
+            continue
+        for total in (
+            sums if low[o] and standing[o] else sums[:1] if low[o] else sums[2:] if standing[o]
+            else ()
+        ):  # fmt: skip
+            total[0] += 1
+            total[1] += velocity[0]
+            total[2] += velocity[1]
+            total[3] += velocity[2]
     out: list[Vector | None] = []
     for leg, velocity in enumerate(velocities):
-        mine = low[leg] and velocity is not None  # its own velocity is in the sums: leave it out
-        if not forced[leg] and sums[1][0] > (mine and standing[leg]):
-            (count, sx, sy, sz), minus = sums[1], mine and standing[leg]
-        else:
-            (count, sx, sy, sz), minus = sums[0], mine
-        if minus and velocity is not None:
+        known = velocity is not None  # its own velocity is in the sums: leave it out
+        chosen = 1  # low and standing
+        if forced[leg]:
+            chosen = 0 if low[leg] and not stepped else 2  # low; standing
+        mine = known and standing[leg] and (chosen == 2 or low[leg])
+        if chosen == 0 or not sums[chosen][0] > mine:
+            chosen, mine = 0, known and low[leg]
+        count, sx, sy, sz = sums[chosen]
+        if mine and velocity is not None:
             count, sx, sy, sz = count - 1, sx - velocity[0], sy - velocity[1], sz - velocity[2]
         out.append(None if count == 0 else (sx / count, sy / count, sz / count))
     return out

@@ -46,6 +46,8 @@ import math
 
 import numpy as np
 
+from a1_leg_fk.estimation.force_lag import undo_lag
+
 RAMP_WINDOW_S = 0.010
 """[s] The load's samples a stance's unloading ramp is fitted over, up to its last sample."""
 RAMP_REACH_S = 0.008
@@ -83,7 +85,7 @@ def unlagged(normals: np.ndarray, stamps_s: np.ndarray, lag_s: float) -> np.ndar
     dt = np.diff(stamps_s)[:, None]
     with np.errstate(over="ignore", invalid="ignore"):
         keep = np.exp(-np.maximum(dt, 0.0) / lag_s)
-        undone = (normals[1:] - keep * normals[:-1]) / (1.0 - keep)
+        undone = undo_lag(normals[1:], normals[:-1], keep)
     usable = np.isfinite(undone) & (dt > 0.0)
     result: np.ndarray = np.vstack([normals[:1], np.where(usable, undone, normals[1:])])
     return result

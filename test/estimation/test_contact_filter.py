@@ -43,13 +43,21 @@ def test_the_transition_model_pulls_towards_even_odds() -> None:
 
 
 def test_kinematics_say_swing_strongly_and_stance_weakly_beside_a_force() -> None:
-    # three feet on the ground, still; FL 5 cm up and moving 1 m/s against the others
+    """Three feet on the ground, still, held standing; FL 5 cm up and moving 1 m/s against
+    them, held in swing (a foot held standing 5 cm above the others would be one on a higher
+    tread, and a speed reference: see the staircase's test)."""
     feet = [foot(0.3), foot(0.25, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
     contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.9, 0.1, 0.9, 0.9]
     out = contacts.update(0.0, feet, (STILL, None), [MODEL.force_half_n] * 4)  # forces even
     low_still = 2 * MODEL.max_kinematic_stance  # height and speed, each capped
+    stood = math.log(0.9 / 0.1)
     assert out == pytest.approx(
-        [sigmoid(low_still), sigmoid(-2 * MODEL.max_log_ratio), *[sigmoid(low_still)] * 2]
+        [
+            sigmoid(stood + low_still),
+            sigmoid(-stood - 2 * MODEL.max_log_ratio),
+            *[sigmoid(stood + low_still)] * 2,
+        ]
     )
     alone = ContactFilter(MODEL).update(0.0, feet, (STILL, None))  # no force: symmetric clip
     height_odds = MODEL.height_half_m / MODEL.height_scale_m  # 4: at the lowest foot's height
@@ -73,6 +81,28 @@ def test_speeds_are_taken_against_the_feet_that_stood() -> None:
     assert out[3] == pytest.approx(out[0])
     fl_height_odds = (MODEL.height_half_m - 0.01) / MODEL.height_scale_m  # 1.5
     assert out[1] == pytest.approx(sigmoid(-stood + fl_height_odds - MODEL.max_log_ratio))
+
+
+def test_a_foot_with_a_force_on_a_higher_tread_is_still_against_the_standing_feet() -> None:
+    """A staircase, forces for every foot: FR stands on a tread 3 cm above RL's (both held
+    standing, both still); FL, in swing, comes down to RL's tread at 1 m/s, 5 mm above it (low);
+    RR swings 10 cm up. FR is not low (height log-odds (16 - 30) / 4 = -3.5). Against every
+    other low foot (RL and FL, mean 0.5 m/s) FR would move 0.5 m/s, (0.32 - 0.5) / 0.08 = -2.25
+    more: with its 50 N (+4) and the prior of a foot that stood, called swing in mid-stance.
+    As a standing foot stands off the low feet's level, its speed is taken against the feet that
+    stood, at any height: RL, still, +0.5 (capped beside a force). RL, low, takes FR the same
+    way (still: +0.5 on its +0.5 height)."""
+    feet = [foot(0.27), foot(0.295, (0.0, 0.0, -1.0)), foot(0.2), foot(0.3)]
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.9, 0.1, 0.1, 0.9]
+    out = contacts.update(0.0, feet, (STILL, None), [50.0, 0.0, 0.0, 50.0])
+    stood, cap, limit = math.log(0.9 / 0.1), MODEL.max_kinematic_stance, MODEL.max_log_ratio
+    fr_height = (MODEL.height_half_m - 0.03) / MODEL.height_scale_m
+    assert fr_height == pytest.approx(-3.5)
+    assert out[0] == pytest.approx(sigmoid(stood + limit + fr_height + cap))
+    assert out[3] == pytest.approx(sigmoid(stood + limit + 2 * cap))
+    flat = (MODEL.speed_half_mps - 0.5) / MODEL.speed_scale_mps  # against RL and FL
+    assert contacts.evidence.kinematic[0] == pytest.approx(fr_height + flat)  # the smoother's
 
 
 def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:

@@ -97,8 +97,8 @@ MUTATIONS = (
     Mutation(
         "contact filter's speeds against every low foot, not the feet that stood",
         "a1_leg_fk/estimation/contact_filter.py",
-        "stood = [velocity for velocity, was in others if was and not forced[leg]]",
-        "stood = []",
+        "references = _references(velocities, low, standing, forced)",
+        "references = _references(velocities, low, [False] * LEGS, forced)",
     ),
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",

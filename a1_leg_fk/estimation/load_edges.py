@@ -47,6 +47,7 @@ import math
 import numpy as np
 
 from a1_leg_fk.estimation.force_lag import undo_lag
+from a1_leg_fk.estimation.stance_edges import MAD_SIGMA
 
 RAMP_WINDOW_S = 0.010
 """[s] The load's samples a stance's unloading ramp is fitted over, up to its last sample."""
@@ -121,7 +122,7 @@ def _noise(
     values = loads[lo:hi][swing[lo:hi]]
     if values.size < MIN_NOISE_SAMPLES:
         return None
-    return 1.4826 * float(np.median(np.abs(values)))
+    return MAD_SIGMA * float(np.median(np.abs(values)))
 
 
 def _carried(

@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from a1_leg_fk.estimation.stance_edges import MAD_SIGMA
 from a1_leg_fk.model.urdf import LegFkError
 
 MIN_SAMPLES = 20
@@ -39,7 +40,6 @@ SPEED_MARGIN = 1.5
 """The slow mode's top: this percentile of its speeds, times this margin [m/s]."""
 HEIGHT_SPREAD = 4.0
 """Robust deviations of the slow samples' heights above their median that still count as down."""
-MAD_TO_SIGMA = 1.4826
 
 
 def otsu_split(values: np.ndarray) -> float:
@@ -79,7 +79,7 @@ def height_top(heights: np.ndarray) -> float | None:
     if finite.size < MIN_SAMPLES:
         return None
     median = float(np.median(finite))
-    deviation = MAD_TO_SIGMA * float(np.median(np.abs(finite - median)))
+    deviation = MAD_SIGMA * float(np.median(np.abs(finite - median)))
     return median + HEIGHT_SPREAD * deviation
 
 

@@ -47,7 +47,7 @@ import numpy as np
 
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
 from a1_leg_fk.estimation.pooled_rise import recent_liftoffs
-from a1_leg_fk.estimation.stance_edges import CONTEXT_S, placed_edges
+from a1_leg_fk.estimation.stance_edges import CONTEXT_S, against_standing, placed_edges
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -204,7 +204,8 @@ def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np
     result = log_odds.copy()
     for leg in range(LEGS):
         heights = rows.heights[:, leg]
-        placed = placed_edges(times, heights, stance[:, leg])
+        against = against_standing(times, rows.heights, stance, leg)
+        placed = placed_edges(times, heights, stance[:, leg], against)
         placed = recent_liftoffs(times, heights, placed, POOL_S, since)
         moved = stance[:, leg] & ~placed & ~rows.forced[:, leg]
         result[moved, leg] = -log_odds[moved, leg]

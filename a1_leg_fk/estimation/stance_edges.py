@@ -5,7 +5,7 @@ its rise starts (a liftoff). The one place of these rules for ``gait``'s own kin
 foot along gravity).
 
 Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`` (n,) [s],
-``heights`` (n,) [m], ``stance`` (n,) bool.
+``heights`` (n,) [m], ``stance`` (n,) bool (:func:`against_standing`: every leg's, (n, legs)).
 
 * **Rise** (:func:`rise_start`). A liftoff is moved back to where the foot's rise starts: the
   heights within :data:`RISE_S` after the stance, fitted as ``c (t - t0)^p`` (a foot that leaves
@@ -22,8 +22,16 @@ Pure numpy (no ROS, no file I/O); one leg, one gap-free run of samples: ``times`
   the lowest foot, which steps and then settles by a millimetre as another foot lands (its
   contact sinks in under the impact): a level, as ``gait``'s edges take it, would follow that
   settling; the descent rate does not.
+* **Against the standing feet** (:func:`against_standing`, the contact smoother's). Against the
+  lowest foot, the lowest foot itself has a height of exactly 0 until it stands above the next
+  one (a walk's hind foot, 1 mm below the others: 20 ms after it left), and a foot's height
+  steps when another lands; against the mean height of the feet that stood throughout the
+  stance's last :data:`STANCE_REFERENCE_S` it does neither. The late rise is also looked for in
+  those heights, its onset no earlier than the last sample that still stands at the stance's
+  height (:func:`still_level`: in noise a fitted power law may extrapolate 20 ms back), and
+  the earlier end is kept.
 
-:func:`placed_edges` applies both to every stance of a mask (the contact smoother's rule).
+:func:`placed_edges` applies them to every stance of a mask (the contact smoother's rule).
 """
 
 from __future__ import annotations
@@ -82,11 +90,15 @@ def runs(mask: np.ndarray) -> list[tuple[int, int, bool]]:
     return [(int(a), int(b), bool(mask[a])) for a, b in zip(firsts, lasts)]
 
 
-def placed_edges(times: np.ndarray, heights: np.ndarray, stance: np.ndarray) -> np.ndarray:
+def placed_edges(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, against: np.ndarray | None = None
+) -> np.ndarray:
     """``stance`` (n,) with each stance's touchdown moved later by :func:`landing_start` and its
-    liftoff earlier by :func:`late_rise`, then :func:`rise_start` (with the tolerance
-    :data:`EDGE_NOISE_FLOOR_M`), never past the stance's middle sample; the edges at the run's
-    borders are not observed and stay. Heights [m] NaN near an edge leave it where it is.
+    liftoff earlier by :func:`late_rise` (in ``heights`` or, where earlier, in ``against``: the
+    foot's heights [m] against the standing feet, :func:`against_standing`), then
+    :func:`rise_start` (with the tolerance :data:`EDGE_NOISE_FLOOR_M`), never past the stance's
+    middle sample; the edges at the run's borders are not observed and stay. Heights [m] NaN
+    near an edge leave it where it is.
     """
     placed = stance.copy()
     for first, last, value in runs(stance):
@@ -98,10 +110,32 @@ def placed_edges(times: np.ndarray, heights: np.ndarray, stance: np.ndarray) -> 
             start = landing_start(times, heights, first, middle)
         if last < stance.size - 1:
             end = late_rise(times, heights, (first, last), middle)
+            if against is not None:
+                risen = late_rise(times, against, (first, last), middle)
+                end = min(end, max(risen, still_level(times, against, (first, last), middle)))
             end = rise_start(times, heights, end, middle, EDGE_NOISE_FLOOR_M)
         placed[first:start] = False
         placed[end + 1 : last + 1] = False
     return placed
+
+
+def against_standing(
+    times: np.ndarray, heights: np.ndarray, stance: np.ndarray, leg: int
+) -> np.ndarray:
+    """(n,) [m] Foot ``leg``'s heights against the standing feet: on each of its stances in
+    ``stance`` (n, legs) bool, its ``heights`` (n, legs) [m] less the mean of those of the other
+    feet that stand throughout the stance's last :data:`STANCE_REFERENCE_S`; NaN elsewhere and
+    on a stance without such feet (a trot's other pair lands as it leaves).
+    """
+    against = np.full(times.size, math.nan)
+    others = [other for other in range(stance.shape[1]) if other != leg]
+    for first, last, value in runs(stance[:, leg]):
+        since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
+        standing = [other for other in others if stance[since : last + 1, other].all()]
+        if value and standing:
+            rows = slice(first, last + 1)
+            against[rows] = heights[rows, leg] - heights[rows][:, standing].mean(axis=1)
+    return against
 
 
 def landing_start(times: np.ndarray, heights: np.ndarray, first: int, limit: int) -> int:
@@ -132,11 +166,10 @@ def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], l
     ``limit``.
     """
     first, last = stance
-    since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
-    ground = float(np.median(heights[since : last + 1]))
+    ground = stance_height(times, heights, first, last)
     if not heights[last] > ground + LIFT_M:  # NaN: unknown, kept
         return last
-    begin = max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))
+    begin = span_start(times, last, limit)
     start = last
     while start > begin and heights[start - 1] > ground + 0.5 * LIFT_M:
         start -= 1
@@ -146,6 +179,34 @@ def late_rise(times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], l
     onset = rise_onset(times[rising] - times[last], heights[rising] - ground)
     end = int(np.searchsorted(times, times[last] + onset, side="right")) - 1
     return min(max(end, limit), last)
+
+
+def still_level(
+    times: np.ndarray, heights: np.ndarray, stance: tuple[int, int], limit: int
+) -> int:
+    """The last sample within :data:`RISE_SPAN_S` before the end of the stance on samples
+    ``stance`` (first, last), not before ``limit``, where the foot stands at or below the
+    stance's height (:func:`stance_height`): it has not risen yet, whatever a fitted rise
+    extrapolates back to; ``limit`` where there is none (NaN: unknown).
+    """
+    first, last = stance
+    ground = stance_height(times, heights, first, last)
+    begin = span_start(times, last, limit)
+    level_samples = np.flatnonzero(heights[begin : last + 1] <= ground)
+    return begin + int(level_samples[-1]) if level_samples.size else limit
+
+
+def span_start(times: np.ndarray, last: int, limit: int) -> int:
+    """The first sample within :data:`RISE_SPAN_S` before sample ``last``, not before ``limit``."""
+    return max(limit, int(np.searchsorted(times, times[last] - RISE_SPAN_S, side="left")))
+
+
+def stance_height(times: np.ndarray, heights: np.ndarray, first: int, last: int) -> float:
+    """[m] The height of the stance on samples ``first`` to ``last``: the median of its heights
+    within :data:`STANCE_REFERENCE_S` before its last sample.
+    """
+    since = max(first, int(np.searchsorted(times, times[last] - STANCE_REFERENCE_S)))
+    return float(np.median(heights[since : last + 1]))
 
 
 def rise_start(times: np.ndarray, heights: np.ndarray, end: int, limit: int, base_m: float) -> int:

@@ -16,6 +16,7 @@ from a1_leg_fk.estimation.contact_smoother import (
     EvidenceRows,
     FixedLagSmoother,
     force_liftoffs,
+    placed_stance,
     probabilities,
     smooth,
     smoothed_stance,
@@ -260,3 +261,48 @@ def windowed(rows: EvidenceRows, block: int = 137) -> np.ndarray:
         parts.append(smoother.take(smoother.final_rows()))
     parts.append(smoother.take(len(smoother.pending)))
     return np.concatenate(parts)
+
+
+def lowest_foot_leaving(noise_m: float, seed: int) -> tuple[np.ndarray, EvidenceRows]:
+    """(stamps [s], rows) of four feet 2 ms apart: three standing at 0 throughout, the fourth
+    standing 1 mm below them (a tilted base frame's hind foot) and leaving at 0.4001 s, rising
+    from rest as 2 m/s^2 t^2 (5 mm in 50 ms, a walk's foot); ``noise_m`` [m] of Gaussian noise
+    on every foot's height; the rows' heights over the lowest foot, as the contact filter takes
+    them."""
+    stamps = np.arange(0.0, 0.6, STEP_S)
+    feet = np.zeros((stamps.size, LEGS))
+    feet[:, 3] = -0.001 + 2.0 * np.clip(stamps - LOWEST_LIFTOFF_S, 0.0, None) ** 2
+    feet += np.random.default_rng(seed).normal(0.0, noise_m, feet.shape)
+    return stamps, kinematic_rows(stamps, feet - feet.min(axis=1, keepdims=True), forced=False)
+
+
+LOWEST_LIFTOFF_S = 0.4001
+"""[s] When :func:`lowest_foot_leaving`'s fourth foot leaves (off the 2 ms grid)."""
+
+
+def lowest_foot_end_ms(noise_m: float, seed: int) -> float:
+    """[ms] From the true liftoff of :func:`lowest_foot_leaving`'s fourth foot to the last
+    sample of its stance placed by the heights, the posterior holding it 50 ms longer (and the
+    others throughout)."""
+    stamps, rows = lowest_foot_leaving(noise_m, seed)
+    odds = np.full((stamps.size, LEGS), 3.0)
+    odds[stamps > LOWEST_LIFTOFF_S + 0.05, 3] = -3.0
+    placed = placed_stance(rows, odds, 0.0) >= 0.0
+    assert placed[:, :3].all()  # the standing feet keep standing
+    return 1000 * float(stamps[np.flatnonzero(placed[:, 3])[-1]] - LOWEST_LIFTOFF_S)
+
+
+def test_the_lowest_foot_ends_its_stance_where_it_left() -> None:
+    """The lowest foot's height over the lowest foot is exactly 0 until it stands above the
+    others (22 ms after it left, 1 mm up); against the feet standing throughout, its stance
+    ends where it left, within a sample (against the lowest foot alone: 18 ms late)."""
+    assert abs(lowest_foot_end_ms(0.0, 0)) <= 1000 * STEP_S
+
+
+def test_a_noisy_lowest_foot_does_not_end_its_stance_before_it_left() -> None:
+    """With 0.09 mm of noise on every foot (30 seeds), no stance of the lowest foot ends more
+    than 10 ms before it left (the rise fitted in noise alone extrapolates back: 11 of 30
+    ended 18-22 ms early), nor later than the 10 ms the samples need to resolve its rise."""
+    ends = [lowest_foot_end_ms(0.00009, seed) for seed in range(30)]
+    assert min(ends) >= -10.0
+    assert max(ends) <= 10.0 + 1e-6

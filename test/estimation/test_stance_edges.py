@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from synthetic_gaits import slow_rise_walk
 
-from a1_leg_fk.estimation.stance_edges import placed_edges
+from a1_leg_fk.estimation.stance_edges import against_standing, placed_edges
 
 STEP_S = 0.002
 LIFTOFF_S = 0.3001
@@ -57,3 +57,21 @@ def test_a_late_stance_on_a_slow_rise_ends_where_it_started() -> None:
         ends = stamps[:-1][np.diff(placed.astype(np.int8)) == -1] + 0.5 * STEP_S
         errors += [1000 * float(np.abs(ends - liftoff).min()) for liftoff in leg_liftoffs]
     assert np.median(errors) <= 4.0
+
+
+def test_heights_against_the_feet_standing_throughout() -> None:
+    """Foot 0 stands twice; feet 1 and 2 stand through the first stance's last 0.2 s, foot 3
+    lands 0.1 s before its end: against them the first stance's heights are foot 0's less the
+    mean of feet 1 and 2's; through the second only foot 3 stands; its swing has none (NaN)."""
+    times = np.arange(0.0, 1.0, STEP_S)
+    heights = np.stack([np.sin(times), times, 2 * times, np.full(times.size, 5.0)], axis=1)
+    stance = np.zeros((times.size, 4), dtype=bool)
+    stance[:, 0] = (times < 0.5) | (times > 0.7)
+    stance[times < 0.6, 1] = True
+    stance[times < 0.55, 2] = True
+    stance[times > 0.4, 3] = True
+    against = against_standing(times, heights, stance, 0)
+    first, second = times < 0.5, times > 0.7
+    np.testing.assert_allclose(against[first], np.sin(times[first]) - 1.5 * times[first])
+    np.testing.assert_allclose(against[second], np.sin(times[second]) - 5.0)
+    assert np.isnan(against[~first & ~second]).all()

@@ -13,9 +13,11 @@ points with any body but the robot is > 0; the root's pose and velocity; the ter
 straight below the root (a ray) and the local ground plane (least squares through rays on a
 0.6 m × 0.4 m grid about the root, heading-free: world x, y): its height at the root and its
 gradient dz/dx, dz/dy. World frame: z up, the robot starts at the origin heading +x. On a
-staircase that plane is not the ground a controller plans on (its slope swings between 0.6 and
-1.33 times the staircase's as the root passes the treads): the terrain scorer's truth there is
-the staircase's own profile averaged over one tread (:func:`terrain_scoring.stair_ground`).
+staircase that plane is not the ground a controller plans on: as the root passes the treads its
+height swings 0.3 rises about the treads' middle line (0.3 m treads; 0.15 and 0.2 rises on 0.4
+and 0.5 m ones) and its slope 0.8-1.33 and 0.67-1.33 times the staircase's (0.4, 0.5 m treads).
+The terrain scorer's truth there is the staircase averaged over one tread
+(:func:`terrain_scoring.stair_ground`).
 
 The gait sees the trunk's pose against that plane (roll and pitch of the root in the plane's
 frame, the root's height above it minus the foot radius): a controller that knows the ground, so

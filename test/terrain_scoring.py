@@ -125,9 +125,9 @@ def stair_ground(terrain: Terrain, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
     the staircase averaged over one tread (:func:`stair_profile`), not through its treads. Its
     height [m] at the root (N,) and gradient (N, 2): the staircase's mean slope, rise over run,
     wherever the grid spans treads alone, and level on the landings. The rays' own plane through
-    the treads tilts 0.6-1.0 times that as the root passes the edges on 0.3 m treads, 0.8-1.33
-    times on 0.4 m ones and 0.67-1.33 times on 0.5 m ones (its height 1.2, 0.6 and 0.8 cm off
-    this one's)."""
+    the treads swings about it as the root passes the edges: its height by 0.3, 0.15 and 0.2
+    rises on 0.3, 0.4 and 0.5 m treads, its slope 0.8-1.33 and 0.67-1.33 times this one's on
+    0.4 and 0.5 m treads (on 0.3 m ones, the rays half a tread apart, it is this one's)."""
     along = np.array(sorted({dx for dx, _ in GRID}))  # the plane is level across the stairs
     heights = stair_profile(terrain, np.asarray(x, dtype=float)[:, None] + along, True)
     centred = along - along.mean()

@@ -8,7 +8,11 @@ a few mm over a stance: its touchdown's anchor carried along the slope it landed
 :class:`LocalGround` keeps the footholds of the last ``window_s`` seconds, at most
 ``max_footholds``, and fits the plane with a Gaussian prior on the slopes (zero,
 ``slope_prior``): footholds fewer than three or in a line leave the slope across them level and
-uncertain. The fit's noise is the residual RMS, at least ``min_sigma_m``.
+uncertain. The fit's noise is the residual RMS, at least ``min_sigma_m``
+(:mod:`a1_leg_fk.estimation.ground_plane`). The plane reported (:meth:`LocalGround.reported`: the
+node's ``ground``, the odom CSV's and plot's) leaves out the stances shorter than
+:data:`MIN_FOOTHOLD_S`; the one a landing foot is held to (:meth:`LocalGround.plane`) takes them.
+On a staircase either samples the treads where the feet landed: a plane, not the treads.
 
 The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
 touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,

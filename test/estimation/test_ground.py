@@ -5,6 +5,7 @@ window, and the contact points of a turned base."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -206,6 +207,16 @@ def test_a_rolling_foot_on_a_slope_keeps_its_ground_from_stance_to_stance() -> N
         assert z == pytest.approx(slope * x, abs=1.5e-3)
 
 
+def _trot_step(ground: LocalGround, step: int, height: Callable[[float], float]) -> None:
+    """Step ``step`` of a trot 0.1 m a step (FR and RL, then FL and RR, 0.36 m apart along x,
+    0.26 m across; each stance 0.19 s long in two samples) on the ground ``height`` (x) [m]."""
+    pair = (0, 3) if step % 2 == 0 else (1, 2)
+    feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
+            for leg in pair]  # fmt: skip
+    for t in (0.2 * step, 0.2 * step + 0.19):
+        ground.update(t, [(leg, (x, y, height(x))) for leg, x, y in feet])
+
+
 def test_unanchored_footholds_keep_their_measured_heights() -> None:
     """``anchored=False`` (the contact filter's footholds): a foothold is its stance's mean
     contact point, height too (a foot sinking 2 cm: 1 cm), and a trot onto an 8° ramp (flat to
@@ -219,11 +230,7 @@ def test_unanchored_footholds_keep_their_measured_heights() -> None:
     slope = math.tan(math.radians(8.0))
     ground = LocalGround(anchored=False)
     for step in range(30):
-        pair = (0, 3) if step % 2 == 0 else (1, 2)
-        feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
-                for leg in pair]  # fmt: skip
-        for t in (0.2 * step, 0.2 * step + 0.19):
-            ground.update(t, [(leg, (x, y, slope * max(x - 0.3, 0.0))) for leg, x, y in feet])
+        _trot_step(ground, step, lambda x: slope * max(x - 0.3, 0.0))
     assert min(x for x, _, _ in ground.points()) > 0.3
     plane = ground.plane(3.0, 0.0)
     assert plane is not None
@@ -239,11 +246,7 @@ def test_the_reported_plane_leaves_out_a_stance_too_short_to_be_a_foothold() -> 
     slope = math.tan(math.radians(10.0))
     ground = LocalGround(anchored=False)
     for step in range(12):
-        pair = (0, 3) if step % 2 == 0 else (1, 2)
-        feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
-                for leg in pair]  # fmt: skip
-        for t in (0.2 * step, 0.2 * step + 0.19):
-            ground.update(t, [(leg, (x, y, slope * x)) for leg, x, y in feet])
+        _trot_step(ground, step, lambda x: slope * x)
         if step == 10:  # leg 1 (swinging) touches 2 cm high for 10 ms
             flicker = (0.1 * step + 0.25, 0.13, slope * (0.1 * step + 0.25) + 0.02)
             for t in (0.2 * step + 0.192, 0.2 * step + 0.198):

@@ -303,13 +303,13 @@ class LocalGround:
     def reported(self, x: float, y: float) -> GroundPlane | None:
         """The local ground reported at (x, y) [m, odom] (the node's ``ground``, the odom CSV's
         columns): the plane through the :attr:`settled` footholds and the standing feet's
-        touchdowns, the stances shorter than :data:`MIN_FOOTHOLD_S` left out; None before the
-        first stance.
+        touchdowns, the stances shorter than :data:`MIN_FOOTHOLD_S` left out unless they are all
+        there is (the ground once known stays known); None before the first stance.
         """
         if self._reported is None or self._reported[0] != self.revision:
             standing = [opened[0] for opened in self._open.values()]
             points = [foothold.point for foothold in self.settled] + standing
-            self._reported = (self.revision, self._fitted(points))
+            self._reported = (self.revision, self._fitted(points or self.points()))
         return _at(self._reported[1], x, y)
 
     def _fitted(self, points: list[Point]) -> Fit | None:

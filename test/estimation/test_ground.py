@@ -258,3 +258,16 @@ def test_the_reported_plane_leaves_out_a_stance_too_short_to_be_a_foothold() -> 
     assert reported.gradient[0] == pytest.approx(slope, abs=0.002)
     assert reported.height_m == pytest.approx(slope * 1.2, abs=0.001)
     assert abs(every.gradient[0] - slope) > 0.005
+
+
+def test_a_short_stance_alone_still_gives_the_reported_ground() -> None:
+    """The first foot to land flickers (10 ms) and lifts; no foot stands for a while: the
+    reported ground is that stance's (a level plane at its 0.3 m), not none, until a foothold
+    that counts comes."""
+    ground = LocalGround()
+    ground.update(0.0, [(0, (0.2, -0.1, 0.3))])
+    ground.update(0.01, [])
+    assert not ground.settled and len(ground.footholds) == 1
+    reported = ground.reported(0.0, 0.0)
+    assert reported is not None and reported.height_m == pytest.approx(0.3)
+    assert reported.gradient == pytest.approx((0.0, 0.0), abs=1e-9)

@@ -245,6 +245,12 @@ MUTATIONS = (
         "return anchor[2] + grade[0] * (point[0] - anchor[0]) + grade[1] * (point[1] - anchor[1])",
         "return anchor[2]",
     ),
+    Mutation(
+        "the reported ground takes the contact estimate's flickers (every stance a foothold)",
+        "a1_leg_fk/estimation/ground.py",
+        "if stamp_s - since >= MIN_FOOTHOLD_S:",
+        "if True:",
+    ),
 )
 
 

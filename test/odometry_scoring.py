@@ -11,7 +11,7 @@ import numpy as np
 from contact_runs import ContactRun
 from pybullet_sim import rotation_matrices
 
-from a1_leg_fk.estimation.ground import GroundPlane
+from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.odometry import ImuReading, OdometrySample
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.estimation.odometry_smoother import OdometrySmoother

@@ -16,9 +16,9 @@ from odometry_scoring import Errors, errors, feed_samples
 from odometry_scoring import estimate as odometry
 from odometry_scoring import misses as odometry_misses
 from sensor_noise import with_noise
-from terrain_runs import TerrainRun
+from terrain_runs import GRID, Terrain, TerrainRun
 
-from a1_leg_fk.estimation.ground import GroundPlane
+from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
 from a1_leg_fk.kinematics.foot_forces import FootForces
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
@@ -102,49 +102,100 @@ def misses(scores: TerrainScores) -> list[str]:
     return found
 
 
+FIRST_EDGE_M = 0.45
+"""[m, world x] a staircase's first edge (:func:`terrain_runs.build_terrain`)."""
+
+
+def stair_profile(terrain: Terrain, x: np.ndarray, tread_mean: bool = False) -> np.ndarray:
+    """A staircase's height [m] at world ``x`` [m] (any shape): its treads' (the rays'), or with
+    ``tread_mean`` averaged over one tread's depth about ``x`` (a ramp through the treads'
+    middles, level on the landings, bending over one tread at either end)."""
+    edges = FIRST_EDGE_M + terrain.run_m * np.arange(terrain.steps)
+    offsets = (np.asarray(x, dtype=float)[..., None] - edges) / terrain.run_m
+    climbed = np.clip(offsets + 0.5, 0.0, 1.0) if tread_mean else (offsets >= 0.0).astype(float)
+    result: np.ndarray = max(0.0, -terrain.rise_m * terrain.steps) + terrain.rise_m * climbed.sum(
+        axis=-1
+    )
+    return result
+
+
+def stair_ground(terrain: Terrain, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ground a controller plans on over a staircase, below roots at world ``x`` (N,) [m]:
+    the rays' plane (least squares at :data:`terrain_runs.GRID`'s offsets about the root) through
+    the staircase averaged over one tread (:func:`stair_profile`), not through its treads. Its
+    height [m] at the root (N,) and gradient (N, 2): the staircase's mean slope, rise over run,
+    wherever the grid spans treads alone, and level on the landings. The rays' own plane through
+    the treads swings about it as the root passes the edges: its height by 0.3, 0.15 and 0.2
+    rises on 0.3, 0.4 and 0.5 m treads, its slope 0.8-1.33 and 0.67-1.33 times this one's on
+    0.4 and 0.5 m treads (on 0.3 m ones, the rays half a tread apart, it is this one's)."""
+    along = np.array(sorted({dx for dx, _ in GRID}))  # the plane is level across the stairs
+    heights = stair_profile(terrain, np.asarray(x, dtype=float)[:, None] + along, True)
+    centred = along - along.mean()
+    slope = heights @ centred / float(centred @ centred)
+    height = heights.mean(axis=1) - slope * along.mean()
+    return height, np.column_stack([slope, np.zeros_like(slope)])
+
+
 @dataclass(frozen=True)
 class GroundErrors:
     """The live local ground against the truth's (``TerrainRun``: the plane through rays about
-    the root), after the first stride: the worst and the 95th-percentile angle between the
-    normals [deg], and of the error of the base's height above the ground [m]; the share of
-    samples with a plane."""
+    the root; on a staircase :func:`stair_ground`'s), after the first stride: the worst and the
+    95th-percentile angle between the normals [deg], and of the error of the base's height above
+    the ground [m]; the share of samples with a plane; the worst angle [deg] where the truth's
+    slope has not changed over the last stride (a staircase's flight or landing, not its ends
+    passing under the robot: footholds cannot see a step the feet have not reached)."""
 
     worst_deg: float
     p95_deg: float
     worst_height_m: float
     p95_height_m: float
     coverage: float
+    steady_worst_deg: float
 
     def row(self, name: str) -> str:
         return (
             f"{name:<18} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
             f"{100 * self.worst_height_m:7.2f} {100 * self.p95_height_m:7.2f} "
-            f"{100 * self.coverage:6.1f}"
+            f"{100 * self.coverage:6.1f} {self.steady_worst_deg:7.2f}"
         )
 
 
-GROUND_HEADER = f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6}"
+GROUND_HEADER = (
+    f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6} "
+    f"{'steady°':>7}"
+)
+STEADY_RAD = 1e-4
+"""A truth's gradient that moved less than this over the last stride is steady."""
 
 
-def ground_errors(terrain: TerrainRun, after_s: float, **options: Any) -> GroundErrors:
+def ground_errors(
+    terrain: TerrainRun, after_s: float, stride_s: float = 0.4, **options: Any
+) -> GroundErrors:
     """The odometry feed's local ground (efforts, clean sensors; ``options``: the feed's) on a run,
-    from ``after_s`` [s] after the gait's start on."""
+    from ``after_s`` [s] after the gait's start on, against the rays' plane (on a staircase
+    :func:`stair_ground`'s); steady where the truth held over the last ``stride_s`` [s]."""
     run = terrain.run
     quadruped = Quadruped.from_urdf(run.urdf_path)
     feed = OdometryFeed(quadruped, **options)
     planes: list[GroundPlane | None] = []
     samples = feed_samples(feed, quadruped, run, run.quaternions, run.torques, planes=planes)
     scored = run.stamps_s >= run.gait_start_s + after_s
-    angles, heights = [], []
-    true_normals = np.column_stack([-terrain.plane_gradients, np.ones(len(run.stamps_s))])
+    angles, heights, steady = [], [], []
+    lag = max(1, round(stride_s / float(np.median(np.diff(run.stamps_s)))))
+    true_heights, true_gradients = terrain.plane_heights, terrain.plane_gradients
+    if terrain.terrain.kind == "stairs":
+        true_heights, true_gradients = stair_ground(terrain.terrain, run.base_positions[:, 0])
+    true_normals = np.column_stack([-true_gradients, np.ones(len(run.stamps_s))])
     true_normals /= np.linalg.norm(true_normals, axis=1, keepdims=True)
-    true_above = run.base_positions[:, 2] - terrain.plane_heights
+    true_above = run.base_positions[:, 2] - true_heights
     for row in np.flatnonzero(scored):
         plane = planes[row]
         if plane is None:
             continue
         cosine = float(np.clip(np.dot(plane.normal, true_normals[row]), -1.0, 1.0))
         angles.append(math.degrees(math.acos(cosine)))
+        held = true_gradients[max(0, row - lag) : row + 1]
+        steady.append(float(np.ptp(held, axis=0).max()) < STEADY_RAD)
         heights.append(abs(samples[row].position[2] - plane.height_m - true_above[row]))
     return GroundErrors(
         max(angles),
@@ -152,4 +203,5 @@ def ground_errors(terrain: TerrainRun, after_s: float, **options: Any) -> Ground
         max(heights),
         float(np.percentile(heights, 95)),
         len(angles) / int(scored.sum()),
+        max((a for a, kept in zip(angles, steady) if kept), default=math.nan),
     )

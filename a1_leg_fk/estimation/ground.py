@@ -8,7 +8,11 @@ a few mm over a stance: its touchdown's anchor carried along the slope it landed
 :class:`LocalGround` keeps the footholds of the last ``window_s`` seconds, at most
 ``max_footholds``, and fits the plane with a Gaussian prior on the slopes (zero,
 ``slope_prior``): footholds fewer than three or in a line leave the slope across them level and
-uncertain. The fit's noise is the residual RMS, at least ``min_sigma_m``.
+uncertain. The fit's noise is the residual RMS, at least ``min_sigma_m``
+(:mod:`a1_leg_fk.estimation.ground_plane`). The plane reported (:meth:`LocalGround.reported`: the
+node's ``ground``, the odom CSV's and plot's) leaves out the stances shorter than
+:data:`MIN_FOOTHOLD_S`; the one a landing foot is held to (:meth:`LocalGround.plane`) takes them.
+On a staircase either samples the treads where the feet landed: a plane, not the treads.
 
 The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
 touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,
@@ -31,19 +35,23 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.estimation.ground_plane import (
+    DEFAULT_MIN_SIGMA_M,
+    DEFAULT_SLOPE_PRIOR,
+    Covariance,
+    GroundPlane,
+    Point,
+    fit,
+    moved,
+    plane_of,
+)
 from a1_leg_fk.estimation.ground_slope import GroundSlope
 from a1_leg_fk.kinematics.frames import Quaternion, rotate
-
-Point = tuple[float, float, float]
 
 DEFAULT_WINDOW_S = 2.0
 """[s] how long a foothold counts after its stance ended."""
 DEFAULT_MAX_FOOTHOLDS = 8
 """The footholds kept (a trot's last two strides of four feet)."""
-DEFAULT_SLOPE_PRIOR = math.tan(math.radians(30.0))
-"""The slopes' prior standard deviation (dz/dx, dz/dy): a 30° incline is one sigma."""
-DEFAULT_MIN_SIGMA_M = 0.005
-"""[m] the footholds' height noise at least (a compliant foot's sink, the contact's roll)."""
 DEFAULT_STEP_GATE = 3.0
 """A touchdown this many standard deviations off the anchored ground's prediction is a step."""
 DEFAULT_SLOPE_TIME_S = 2.0
@@ -54,27 +62,11 @@ SCATTER_TOUCHDOWNS = 16
 """The touchdowns whose offsets from a confident prediction scale the touchdowns' noise."""
 CORRELATION_S = 0.2
 """[s] the span one stance's height differences count as one measurement over."""
-
-
-class GroundPlane(NamedTuple):
-    """The local ground at a point (x₀, y₀) [m, odom]: ``height_m`` its z there, ``gradient``
-    (dz/dx, dz/dy), ``normal`` the unit normal (up), ``roll`` and ``pitch`` [rad] the tilt that
-    turns odom's z onto the normal (R = Ry(pitch) Rx(roll)), ``covariance`` the 3×3 covariance of
-    (height [m], roll, pitch [rad]) and ``footholds`` how many were fitted.
-    """
-
-    height_m: float
-    gradient: tuple[float, float]
-    normal: Point
-    roll: float
-    pitch: float
-    covariance: tuple[tuple[float, float, float], ...]
-    footholds: int
-
-    @property
-    def slope_deg(self) -> float:
-        """The inclination [deg]: the normal's angle from odom's z."""
-        return math.degrees(math.atan(math.hypot(*self.gradient)))
+MIN_FOOTHOLD_S = 0.05
+"""[s] the shortest stance the reported plane takes for a foothold (:meth:`LocalGround.reported`):
+a shorter one is the contact estimate's flicker as a foot lands or scuffs (a trot's stance lasts
+0.2-0.3 s), and its point, taken before the foot settled, tilted the plane (go2_slope_up_5: 0.92°
+off the 5° slope with it, 0.01° without)."""
 
 
 class Foothold(NamedTuple):
@@ -87,41 +79,6 @@ class Foothold(NamedTuple):
     stamp_s: float
 
 
-def fit_plane(
-    points: Sequence[Point],
-    at: tuple[float, float],
-    slope_prior: float = DEFAULT_SLOPE_PRIOR,
-    min_sigma_m: float = DEFAULT_MIN_SIGMA_M,
-) -> GroundPlane | None:
-    """The plane through ``points`` [m] (least squares with the slope prior, see the module text)
-    at ``at`` (x₀, y₀) [m]; None without points.
-    """
-    if not points:
-        return None
-    solution, covariance = _fit(np.asarray(points, dtype=float), at, slope_prior, min_sigma_m)
-    return _plane(solution, covariance, len(points))
-
-
-def _fit(
-    data: np.ndarray, at: tuple[float, float], slope_prior: float, min_sigma_m: float
-) -> tuple[tuple[float, float, float], Covariance]:
-    """(a, b, c) of the plane through (n, 3) ``data`` about ``at`` and their covariance."""
-    design = np.column_stack([np.ones(len(data)), data[:, 0] - at[0], data[:, 1] - at[1]])
-    heights = data[:, 2]
-    prior = np.diag([0.0, 1.0, 1.0]) / slope_prior**2
-    sigma2 = min_sigma_m**2
-    for _ in range(2):  # the residuals' variance, then the fit with it
-        information = design.T @ design / sigma2 + prior
-        solution = np.linalg.solve(information, design.T @ heights / sigma2)
-        residual = heights - design @ solution
-        freedom = max(len(data) - 3, 1)
-        sigma2 = max(float(residual @ residual) / freedom, min_sigma_m**2)
-    covariance = np.linalg.inv(design.T @ design / sigma2 + prior)
-    a, b, c = (float(value) for value in solution)
-    return (a, b, c), tuple((float(r[0]), float(r[1]), float(r[2])) for r in covariance)
-
-
-Covariance = tuple[tuple[float, float, float], ...]
 Grade = tuple[float, float]
 """A ground's slope (dz/dx, dz/dy)."""
 LEVEL: Grade = (0.0, 0.0)
@@ -133,41 +90,6 @@ def _carried(anchor: Point, grade: Grade, point: Sequence[float]) -> float:
     stance (a few mm on a trot), and on a slope its ground's height with it.
     """
     return anchor[2] + grade[0] * (point[0] - anchor[0]) + grade[1] * (point[1] - anchor[1])
-
-
-def _plane(solution: Sequence[float], covariance: Covariance, count: int) -> GroundPlane:
-    """The :class:`GroundPlane` of (a, b, c) and their 3×3 covariance (plain floats: the bag
-    tool asks for one per row).
-    """
-    a, b, c = solution
-    norm2 = 1.0 + b * b + c * c
-    norm, along = math.sqrt(norm2), math.sqrt(1.0 + b * b)
-    # d(height, roll, pitch) / d(a, b, c): rows (1, 0, 0), (0, j11, j12), (0, j21, 0)
-    j11, j12, j21 = -b * c / (norm2 * along), along / norm2, -1.0 / (1.0 + b * b)
-    (s00, s01, s02), (_, s11, s12), (_, _, s22) = covariance
-    t01, t02 = j11 * s01 + j12 * s02, j21 * s01
-    t11 = j11 * j11 * s11 + 2.0 * j11 * j12 * s12 + j12 * j12 * s22
-    t12, t22 = j21 * (j11 * s11 + j12 * s12), j21 * j21 * s11
-    return GroundPlane(
-        a,
-        (b, c),
-        (-b / norm, -c / norm, 1.0 / norm),
-        math.atan2(c, along),
-        -math.atan(b),
-        ((s00, t01, t02), (t01, t11, t12), (t02, t12, t22)),
-        count,
-    )
-
-
-def _moved(
-    solution: Sequence[float], covariance: Covariance, dx: float, dy: float
-) -> tuple[tuple[float, float, float], Covariance]:
-    """(a, b, c) and their covariance of the same plane about a point (dx, dy) [m] away."""
-    a, b, c = solution
-    (s00, s01, s02), (_, s11, s12), (_, _, s22) = covariance
-    m01, m02 = s01 + dx * s11 + dy * s12, s02 + dx * s12 + dy * s22
-    m00 = s00 + dx * (s01 + m01) + dy * (s02 + m02)
-    return (a + b * dx + c * dy, b, c), ((m00, m01, m02), (m01, s11, s12), (m02, s12, s22))
 
 
 class LocalGround:
@@ -198,12 +120,15 @@ class LocalGround:
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
         """The ended stances, oldest first."""
-        self._open: dict[int, tuple[Point, Grade, list[float], int, Point]] = {}
+        self.settled: deque[Foothold] = deque(maxlen=max_footholds)
+        """The ended stances of at least :data:`MIN_FOOTHOLD_S`, oldest first."""
+        self._open: dict[int, tuple[Point, Grade, list[float], int, Point, float]] = {}
         """Per standing leg: its touchdown point [m] (at its anchored height), the slope it landed
-        on (:meth:`_carried`), the sums of its contact points' x, y and z, their count and its
-        contact point's last [m]."""
-        self._fit: tuple[tuple[float, float], Point, Covariance, int] | None = None
-        """The plane's centre (x, y) [m], (a, b, c) there, their covariance, the points fitted."""
+        on (:meth:`_carried`), the sums of its contact points' x, y and z, their count, its
+        contact point's last [m] and its touchdown's stamp [s]."""
+        self._fit: Fit | None = None
+        self._reported: tuple[int, Fit | None] | None = None
+        """:meth:`reported`'s fit and the :attr:`revision` it was made at."""
         self._changed = False
         self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
         """The last touchdowns' absolute offsets from the prediction [m]."""
@@ -223,12 +148,14 @@ class LocalGround:
             self.slope.add(stamp_s, list(standing.values()))
         lifted = {}
         for leg in [leg for leg in self._open if leg not in standing]:
-            touchdown, grade, total, count, last = self._open.pop(leg)
+            touchdown, grade, total, count, last, since = self._open.pop(leg)
             lifted[leg] = (last[2], _carried(touchdown, grade, last))
             mean = (total[0] / count, total[1] / count, total[2] / count)
             if self.anchored:
                 mean = (mean[0], mean[1], _carried(touchdown, grade, mean))
             self.footholds.append(Foothold(mean, count, stamp_s))
+            if stamp_s - since >= MIN_FOOTHOLD_S:
+                self.settled.append(Foothold(mean, count, stamp_s))
             self._changed = True
             self.revision += 1
         opened_now = self._open
@@ -242,21 +169,26 @@ class LocalGround:
             total[0] += point[0]
             total[1] += point[1]
             total[2] += point[2]
-            opened_now[leg] = (opened[0], opened[1], total, opened[3] + 1, point)
+            opened_now[leg] = (opened[0], opened[1], total, opened[3] + 1, point, opened[5])
         if landed:
-            self._land(landed, standing, lifted)
+            self._land(stamp_s, landed, standing, lifted)
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
             self._changed = True
             self.revision += 1
+        while self.settled and stamp_s - self.settled[0].stamp_s > self.window_s:
+            self.settled.popleft()
+            self.revision += 1
 
     def _land(
         self,
+        stamp_s: float,
         landed: list[tuple[int, Point]],
         standing: dict[int, Point],
         lifted: dict[int, tuple[float, float]],
     ) -> None:
-        """Open the stances of the ``landed`` legs (slot, contact point [m, odom]), anchored
+        """Open the stances of the ``landed`` legs (slot, contact point [m, odom]) at ``stamp_s``
+        [s], anchored
         (:meth:`_touchdown`) against the feet that stood before this sample and stand on
         (``standing``, not ``landed``), else the ``lifted`` ones; or kept at their own heights.
         """
@@ -266,7 +198,7 @@ class LocalGround:
             own, grade = (point[2], LEVEL)
             if self.anchored:
                 own, grade = self._touchdown(point, kept or lifted)
-            self._open[leg] = ((point[0], point[1], own), grade, list(point), 1, point)
+            self._open[leg] = ((point[0], point[1], own), grade, list(point), 1, point, stamp_s)
             self._changed = True
             self.revision += 1
 
@@ -360,20 +292,47 @@ class LocalGround:
         return [foothold.point for foothold in self.footholds] + standing
 
     def plane(self, x: float, y: float) -> GroundPlane | None:
-        """The plane at (x, y) [m, odom]; None before the first stance."""
+        """The plane through :meth:`points` at (x, y) [m, odom] (what :meth:`under` holds a
+        landing foot to, and the contacts' slope); None before the first stance.
+        """
         if self._changed or self._fit is None:
             self._changed = False
-            points = self.points()
-            if not points:
-                self._fit = None
-                return None
-            data = np.asarray(points, dtype=float)
-            centre = (float(data[:, 0].mean()), float(data[:, 1].mean()))
-            solution, covariance = _fit(data, centre, self.slope_prior, self.min_sigma_m)
-            self._fit = (centre, solution, covariance, len(points))
-        centre, solution, covariance, count = self._fit
-        moved, spread = _moved(solution, covariance, x - centre[0], y - centre[1])
-        return _plane(moved, spread, count)
+            self._fit = self._fitted(self.points())
+        return _at(self._fit, x, y)
+
+    def reported(self, x: float, y: float) -> GroundPlane | None:
+        """The local ground reported at (x, y) [m, odom] (the node's ``ground``, the odom CSV's
+        columns): the plane through the :attr:`settled` footholds and the standing feet's
+        touchdowns, the stances shorter than :data:`MIN_FOOTHOLD_S` left out unless they are all
+        there is (the ground once known stays known); None before the first stance.
+        """
+        if self._reported is None or self._reported[0] != self.revision:
+            standing = [opened[0] for opened in self._open.values()]
+            points = [foothold.point for foothold in self.settled] + standing
+            self._reported = (self.revision, self._fitted(points or self.points()))
+        return _at(self._reported[1], x, y)
+
+    def _fitted(self, points: list[Point]) -> Fit | None:
+        """The plane through ``points`` [m, odom] about their centre; None without points."""
+        if not points:
+            return None
+        data = np.asarray(points, dtype=float)
+        centre = (float(data[:, 0].mean()), float(data[:, 1].mean()))
+        solution, covariance = fit(data, centre, self.slope_prior, self.min_sigma_m)
+        return centre, solution, covariance, len(points)
+
+
+Fit = tuple[tuple[float, float], tuple[float, float, float], Covariance, int]
+"""A plane's centre (x, y) [m], (a, b, c) there, their covariance and the points fitted."""
+
+
+def _at(fitted: Fit | None, x: float, y: float) -> GroundPlane | None:
+    """The ``fitted`` plane moved to (x, y) [m, odom]; None without one."""
+    if fitted is None:
+        return None
+    centre, solution, covariance, count = fitted
+    there, spread = moved(solution, covariance, x - centre[0], y - centre[1])
+    return plane_of(there, spread, count)
 
 
 def contact_points(

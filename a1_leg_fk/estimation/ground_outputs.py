@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 
-from a1_leg_fk.estimation.ground import GroundPlane, Point
+from a1_leg_fk.estimation.ground_plane import GroundPlane, Point
 
 GROUND_COLUMNS = (
     "ground_height_m",

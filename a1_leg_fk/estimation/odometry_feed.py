@@ -38,7 +38,8 @@ from a1_leg_fk.estimation.filter_model import (
     stands,
 )
 from a1_leg_fk.estimation.force_pass import ForcePass
-from a1_leg_fk.estimation.ground import GroundPlane, LocalGround, contact_points
+from a1_leg_fk.estimation.ground import LocalGround, contact_points
+from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
 from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, ModelCorrections
@@ -200,7 +201,7 @@ class OdometryFeed:
         stood): its height [m, odom], normal, tilt and their covariance.
         """
         position = sample.position
-        return self.ground.plane(position[0], position[1])
+        return self.ground.reported(position[0], position[1])
 
     def _filtered(
         self,

@@ -5,17 +5,13 @@ window, and the contact points of a turned base."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
-from a1_leg_fk.estimation.ground import (
-    DEFAULT_MIN_SIGMA_M,
-    DEFAULT_SLOPE_PRIOR,
-    LocalGround,
-    contact_points,
-    fit_plane,
-)
+from a1_leg_fk.estimation.ground import LocalGround, contact_points
+from a1_leg_fk.estimation.ground_plane import DEFAULT_MIN_SIGMA_M, DEFAULT_SLOPE_PRIOR, fit_plane
 
 FOOTHOLDS = [(x, y) for x in (-0.2, -0.05, 0.1, 0.25) for y in (-0.13, 0.13)]
 """[m] two strides of a trot's footholds about the base (odom x, y)."""
@@ -211,6 +207,16 @@ def test_a_rolling_foot_on_a_slope_keeps_its_ground_from_stance_to_stance() -> N
         assert z == pytest.approx(slope * x, abs=1.5e-3)
 
 
+def _trot_step(ground: LocalGround, step: int, height: Callable[[float], float]) -> None:
+    """Step ``step`` of a trot 0.1 m a step (FR and RL, then FL and RR, 0.36 m apart along x,
+    0.26 m across; each stance 0.19 s long in two samples) on the ground ``height`` (x) [m]."""
+    pair = (0, 3) if step % 2 == 0 else (1, 2)
+    feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
+            for leg in pair]  # fmt: skip
+    for t in (0.2 * step, 0.2 * step + 0.19):
+        ground.update(t, [(leg, (x, y, height(x))) for leg, x, y in feet])
+
+
 def test_unanchored_footholds_keep_their_measured_heights() -> None:
     """``anchored=False`` (the contact filter's footholds): a foothold is its stance's mean
     contact point, height too (a foot sinking 2 cm: 1 cm), and a trot onto an 8° ramp (flat to
@@ -224,12 +230,44 @@ def test_unanchored_footholds_keep_their_measured_heights() -> None:
     slope = math.tan(math.radians(8.0))
     ground = LocalGround(anchored=False)
     for step in range(30):
-        pair = (0, 3) if step % 2 == 0 else (1, 2)
-        feet = [(leg, 0.1 * step + (0.18 if leg < 2 else -0.18), 0.13 if leg % 2 else -0.13)
-                for leg in pair]  # fmt: skip
-        for t in (0.2 * step, 0.2 * step + 0.19):
-            ground.update(t, [(leg, (x, y, slope * max(x - 0.3, 0.0))) for leg, x, y in feet])
+        _trot_step(ground, step, lambda x: slope * max(x - 0.3, 0.0))
     assert min(x for x, _, _ in ground.points()) > 0.3
     plane = ground.plane(3.0, 0.0)
     assert plane is not None
     assert plane.gradient[0] == pytest.approx(slope, abs=0.002)
+
+
+def test_the_reported_plane_leaves_out_a_stance_too_short_to_be_a_foothold() -> None:
+    """A trot up a 10° slope (footholds on z = tan 10° x, each stance 0.19 s), and one foot's
+    stance of 10 ms, 2 cm above the slope (the contact estimate's flicker as a foot lands before
+    it settles): the reported plane keeps the slope, tan 10° = 0.1763, within 0.002 and the
+    height under the base within 1 mm; the plane through every stance (what the filter holds a
+    landing foot to, unchanged) is tilted by the flicker (0.1846 here)."""
+    slope = math.tan(math.radians(10.0))
+    ground = LocalGround(anchored=False)
+    for step in range(12):
+        _trot_step(ground, step, lambda x: slope * x)
+        if step == 10:  # leg 1 (swinging) touches 2 cm high for 10 ms
+            flicker = (0.1 * step + 0.25, 0.13, slope * (0.1 * step + 0.25) + 0.02)
+            for t in (0.2 * step + 0.192, 0.2 * step + 0.198):
+                ground.update(t, [(1, flicker)])
+            ground.update(0.2 * step + 0.199, [])
+    assert all(foothold.point != flicker for foothold in ground.settled)
+    reported, every = ground.reported(1.2, 0.0), ground.plane(1.2, 0.0)
+    assert reported is not None and every is not None
+    assert reported.gradient[0] == pytest.approx(slope, abs=0.002)
+    assert reported.height_m == pytest.approx(slope * 1.2, abs=0.001)
+    assert abs(every.gradient[0] - slope) > 0.005
+
+
+def test_a_short_stance_alone_still_gives_the_reported_ground() -> None:
+    """The first foot to land flickers (10 ms) and lifts; no foot stands for a while: the
+    reported ground is that stance's (a level plane at its 0.3 m), not none, until a foothold
+    that counts comes."""
+    ground = LocalGround()
+    ground.update(0.0, [(0, (0.2, -0.1, 0.3))])
+    ground.update(0.01, [])
+    assert not ground.settled and len(ground.footholds) == 1
+    reported = ground.reported(0.0, 0.0)
+    assert reported is not None and reported.height_m == pytest.approx(0.3)
+    assert reported.gradient == pytest.approx((0.0, 0.0), abs=1e-9)

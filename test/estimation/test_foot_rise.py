@@ -1,6 +1,7 @@
 """Each standing foot's rise above its own foothold, by hand: the foothold follows a foot that
-gives under load, a foot held in swing has none (a touchdown on a higher tread starts a new one),
-and the standing feet's spread is their RMS rise averaged over 0.5 s."""
+gives under load, a foot held in swing has none (a touchdown on a higher tread starts a new one)
+until it has landed (stayed within the band for 20 ms), and the standing feet's spread is their
+RMS rise averaged over 0.5 s."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import math
 
 import pytest
 
-from a1_leg_fk.estimation.foot_rise import SPREAD_TIME_S, FootRise
+from a1_leg_fk.estimation.foot_rise import LANDED_S, SPREAD_TIME_S, FootRise
 
 NAN = math.nan
 
@@ -41,3 +42,23 @@ def test_the_spread_is_the_standing_feets_rms_rise_over_half_a_second() -> None:
     share = 0.002 / SPREAD_TIME_S
     expected = math.sqrt(2e-6 * (1.0 - (1.0 - share) ** steps))
     assert rise.spread_m == pytest.approx(expected, rel=1e-9)
+
+
+def test_a_swing_foot_lands_once_it_stays_within_the_band_for_20_ms() -> None:
+    """FL held in swing: 4 cm up and still within 1 mm (the band 1.5 mm) it has landed after
+    20 ms (rise 0); FR drifting 1 mm per sample never does (the top of a swing's arc); RL comes
+    down from 1 cm to 4 mm in 2 mm steps, then stays: its 20 ms count from where it stopped."""
+    assert LANDED_S == 0.02
+    rise = FootRise()
+    standing = [False, False, True, False]
+    heights = [
+        [0.001 * n, 0.04 + 0.001 * (n % 2), 0.0, max(0.01 - 0.002 * n, 0.004)] for n in range(15)
+    ]
+    landed = []
+    for row in heights:
+        rise.update(0.002, row, standing, band_m=0.0015)
+        landed.append([leg for leg in range(4) if rise.rises[leg] == 0.0 and not standing[leg]])
+    assert all(0 not in legs for legs in landed)
+    assert [1 in legs for legs in landed] == [False] * 10 + [True] * 5  # 10 samples after the 1st
+    assert [3 in legs for legs in landed] == [False] * 13 + [True] * 2  # 4 mm from the 4th
+    assert math.isnan(rise.footholds[1])  # landed: no foothold until the filter holds it standing

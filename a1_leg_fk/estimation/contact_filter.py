@@ -190,7 +190,7 @@ class ContactFilter:
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
-            band = self.ground.rise.half_m(model.rise_half_m, model.rise_spread_factor)
+            band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             heights = self.ground.heights(dt_s, feet, down, omega, standing, band)
         kinematic, taken, lowered = _kinematic(
             model,
@@ -330,12 +330,13 @@ def _speed_odds(
 
 def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:
     """Per foot, its rise log-odds ``(half - rise) / rise_scale_m`` above its own foothold
-    (:mod:`a1_leg_fk.estimation.foot_rise`; ``half``: :meth:`FootRise.half_m`): below 0 (risen
+    (:mod:`a1_leg_fk.estimation.foot_rise`; ``half`` the larger of ``rise_half_m`` and
+    ``rise_spread_factor`` times the standing feet's spread): below 0 (risen
     past even odds), the most its height log-odds may say; from 0 up (at its own level: standing
     and not risen, or held in swing and landed), its height above the others says no swing (at
     least 0); NaN for a foot with neither (in the air, unknown).
     """
-    half = rise.half_m(model.rise_half_m, model.rise_spread_factor)
+    half = max(model.rise_half_m, model.rise_spread_factor * rise.spread_m)
     return [(half - risen) / model.rise_scale_m for risen in rise.rises]
 
 

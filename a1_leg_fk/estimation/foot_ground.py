@@ -133,10 +133,8 @@ class FootGround:
         gx, gy = (0.0, 0.0) if slope is None else slope[1:]
         self.rise.update(
             dt_s,
-            [
-                math.nan if o is None else pz + o[2] - gx * (px + o[0]) - gy * (py + o[1])
-                for o in offsets
-            ],
+            [None if o is None else (px + o[0], py + o[1], pz + o[2]) for o in offsets],
+            (gx, gy),
             standing,
             band_m,
         )

@@ -13,12 +13,16 @@ higher tread is no rise.
 
 The heights are the contact points' along gravity, in the contact estimate's own carried frame
 (:class:`~a1_leg_fk.estimation.foot_ground.FootGround`), with the local ground's slope taken
-off, so a foot rolling along a slope does not rise. What standing feet do while they stand
+off, so a foot rolling along a slope does not rise; a foothold is kept as a point and the rise
+taken from it with today's slope, so that a slope fitted anew does not move a standing foot (on
+stairs the plane through footholds on two treads jumps by degrees: taken off about the frame's
+origin, metres away, it lifted standing feet by centimetres, and the spread of a1_stairs_down_4cm
+grew to 5 mm, at times 27). What standing feet do while they stand
 (they roll, give and unload, and the frame carried by them wanders a little) sets the scale:
 the *spread* is the RMS of the standing feet's rises, averaged over :data:`SPREAD_TIME_S`.
 
 A foot the filter holds in swing that has *landed* stands at its own level too: one whose
-height has stayed within a band (the contact filter's even-odds rise) of where it was for
+height has stayed within a band (the contact filter's least even-odds rise) of where it was for
 :data:`LANDED_S` has a rise of 0 (no foothold yet: that starts once the filter holds it
 standing). A swing foot does not hover: at the top of its arc it passes through the A1's
 1.5 mm band in under 10 ms (the family's trots), while a foot that landed on a higher tread
@@ -34,6 +38,7 @@ from collections.abc import Sequence
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
+Vector = tuple[float, float, float]
 SPREAD_TIME_S = 0.5
 """[s] the time constant of the standing feet's mean squared rise (the spread)."""
 LANDED_S = 0.02
@@ -46,59 +51,74 @@ class FootRise:
     """The feet's footholds, rises and the standing feet's spread (see the module text)."""
 
     def __init__(self) -> None:
-        self.footholds = [math.nan] * LEGS
-        """[m] each standing foot's foothold height in the frame (NaN: not standing)."""
+        self.footholds: list[Vector | None] = [None] * LEGS
+        """[m] each standing foot's foothold, a point in the frame (None: not standing)."""
         self.rises = [math.nan] * LEGS
         """[m] each standing foot's height above its foothold (NaN: not standing, unknown)."""
         self.spread_m = 0.0
         """[m] the standing feet's RMS rise, averaged over :data:`SPREAD_TIME_S`."""
         self._mean_square = 0.0
-        self._levels = [math.nan] * LEGS
-        """[m] where each foot held in swing last left its band (NaN: standing, unknown)."""
+        self._levels: list[Vector | None] = [None] * LEGS
+        """[m] where each foot held in swing last left its band (None: standing, unknown)."""
         self._level_s = [0.0] * LEGS
         """[s] how long each foot held in swing has stayed within the band of its level."""
 
     def update(
         self,
         dt_s: float,
-        heights: Sequence[float],
+        points: Sequence[Vector | None],
+        slope: tuple[float, float],
         standing: Sequence[bool],
         band_m: float = 0.0,
     ) -> None:
-        """A sample ``dt_s`` [s] on: the feet's ``heights`` [m] in the frame (NaN: unknown),
-        ``standing`` which feet the filter held standing at the previous sample; ``band_m`` [m]
-        how far a foot held in swing may move and still land (0: only a foot exactly still).
+        """A sample ``dt_s`` [s] on: the feet's contact ``points`` [m] in the frame (None:
+        unknown), the local ground's ``slope`` (dz/dx, dz/dy; 0, 0: level), ``standing`` which
+        feet the filter held standing at the previous sample; ``band_m`` [m] how far a foot held
+        in swing may move and still land (0: only a foot exactly still). Heights are taken
+        between a foot's two points with today's slope: a slope fitted anew (on stairs it jumps
+        by degrees) does not move a standing foot, however far the frame's origin.
         """
         footholds, rises = self.footholds, self.rises
         squares = []
-        for leg, height in enumerate(heights):
-            if not (standing[leg] and math.isfinite(height)):
-                footholds[leg] = rises[leg] = math.nan
-                self._land(leg, height, max(dt_s, 0.0), band_m)
+        for leg, point in enumerate(points):
+            if not (standing[leg] and point is not None):
+                footholds[leg], rises[leg] = None, math.nan
+                self._land(leg, point, slope, (max(dt_s, 0.0), band_m))
                 continue
-            self._levels[leg] = math.nan
-            if not footholds[leg] <= height:  # a new foothold (NaN), or the foot gave
-                footholds[leg] = height
-            rises[leg] = rise = height - footholds[leg]
+            self._levels[leg] = None
+            rise = _above(point, footholds[leg], slope)
+            if not rise >= 0.0:  # a new foothold (NaN), or the foot gave
+                footholds[leg], rise = point, 0.0
+            rises[leg] = rise
             squares.append(rise * rise)
         if squares:
             share = min(1.0, max(dt_s, 0.0) / SPREAD_TIME_S)
             self._mean_square += share * (sum(squares) / len(squares) - self._mean_square)
             self.spread_m = math.sqrt(self._mean_square)
 
-    def half_m(self, floor_m: float, spread_factor: float) -> float:
-        """The even-odds rise [m] above a foot's own foothold, within which a swing foot lands
-        too: ``floor_m``, or ``spread_factor`` times the standing feet's spread if more.
+    def _land(
+        self,
+        leg: int,
+        point: Vector | None,
+        slope: tuple[float, float],
+        step: tuple[float, float],
+    ) -> None:
+        """A foot held in swing (or unknown: None) at ``point``: its time within the band of
+        its level (``step``: the sample's dt [s] and the band [m]), and a rise of 0 once that is
+        :data:`LANDED_S`.
         """
-        return max(floor_m, spread_factor * self.spread_m)
-
-    def _land(self, leg: int, height: float, dt_s: float, band_m: float) -> None:
-        """A foot held in swing (or unknown: NaN) at ``height`` [m]: its time within
-        ``band_m`` of its level, and a rise of 0 once that is :data:`LANDED_S`.
-        """
-        if not abs(height - self._levels[leg]) <= band_m:  # moved out of the band (NaN too)
-            self._levels[leg], self._level_s[leg] = height, 0.0
+        dt_s, band_m = step
+        if point is None or not abs(_above(point, self._levels[leg], slope)) <= band_m:
+            self._levels[leg], self._level_s[leg] = point, 0.0  # moved out of the band
             return
         self._level_s[leg] += dt_s
         if self._level_s[leg] >= LANDED_S:
             self.rises[leg] = 0.0
+
+
+def _above(point: Vector, base: Vector | None, slope: tuple[float, float]) -> float:
+    """[m] how far ``point`` is above ``base`` (None: NaN) with the ``slope`` taken off."""
+    if base is None:
+        return math.nan
+    gx, gy = slope
+    return point[2] - base[2] - gx * (point[0] - base[0]) - gy * (point[1] - base[1])

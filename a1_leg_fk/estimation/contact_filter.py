@@ -18,10 +18,8 @@ that no single sample decides alone:
   (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
   ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
   lower tread is "low" against the others well after its liftoff; against its own foothold it
-  is not); and no swing (at least 0) for a foot at its own level, however high above the
-  others: standing and not risen past ``r_half``, or held in swing and *landed*, its height
-  within ``r_half`` of where it was for 20 ms (a foot that landed on a higher tread: a
-  staircase's rise is no evidence of swing);
+  is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
+  of where it came down to for 20 ms: a staircase's rise is no evidence of swing);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
@@ -301,7 +299,7 @@ def _kinematic(
             x = (half - height) / scale  # _clip written out: per foot and sample
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
             rise = math.nan if rises is None or forced[leg] else rises[leg]  # see below
-            if x > rise < 0.0 or rise >= 0.0 > x:  # risen; at its own level, however high
+            if x > rise < 0.0 or x < 0.0 < rise == math.inf:  # risen; landed, however high
                 x = min(rise, 0.0)
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
                 lowered[leg], evidence = risen - evidence, risen
@@ -331,13 +329,13 @@ def _speed_odds(
 def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:
     """Per foot, its rise log-odds ``(half - rise) / rise_scale_m`` above its own foothold
     (:mod:`a1_leg_fk.estimation.foot_rise`; ``half`` the larger of ``rise_half_m`` and
-    ``rise_spread_factor`` times the standing feet's spread): below 0 (risen
-    past even odds), the most its height log-odds may say; from 0 up (at its own level: standing
-    and not risen, or held in swing and landed), its height above the others says no swing (at
-    least 0); NaN for a foot with neither (in the air, unknown).
+    ``rise_spread_factor`` times the standing feet's spread): below 0 (risen past even odds),
+    the most its height log-odds may say; else +inf for a foot that landed (its height says no
+    swing: at least 0); NaN, or a rise's odds from 0 up: no bound.
     """
     half = max(model.rise_half_m, model.rise_spread_factor * rise.spread_m)
-    return [(half - risen) / model.rise_scale_m for risen in rise.rises]
+    odds = [(half - risen) / model.rise_scale_m for risen in rise.rises]
+    return [math.inf if on and not x < 0.0 else x for x, on in zip(odds, rise.landed, strict=True)]
 
 
 def _references(

@@ -82,11 +82,29 @@ class FootRise:
         between a foot's two points with today's slope: a slope fitted anew (on stairs it jumps
         by degrees) does not move a standing foot, however far the frame's origin.
         """
-        footholds, rises = self.footholds, self.rises
+        footholds, rises, levels, level_s = self.footholds, self.rises, self._levels, self._level_s
+        gx, gy = slope
+        dt_s = max(dt_s, 0.0)
         squares = []
         for leg, point in enumerate(points):
-            self._land(leg, point, slope, (max(dt_s, 0.0), band_m))
-            if not (standing[leg] and point is not None):
+            if point is None:
+                levels[leg], footholds[leg], rises[leg] = None, None, math.nan
+                self.landed[leg] = self._down[leg] = False
+                continue
+            x, y, z = point
+            level = levels[leg]  # where it came to, the slope taken off (inlined: per sample)
+            above = (
+                math.nan
+                if level is None
+                else z - level[2] - gx * (x - level[0]) - gy * (y - level[1])
+            )
+            if not abs(above) <= band_m:  # moved out of the band
+                levels[leg], level_s[leg] = point, 0.0
+                self._down[leg] = above < 0.0  # came down to it (not: rose to the top of an arc)
+            else:
+                level_s[leg] += dt_s
+            self.landed[leg] = self._down[leg] and level_s[leg] >= LANDED_S
+            if not standing[leg]:
                 footholds[leg], rises[leg] = None, math.nan
                 continue
             rise = _above(point, footholds[leg], slope)
@@ -95,28 +113,9 @@ class FootRise:
             rises[leg] = rise
             squares.append(rise * rise)
         if squares:
-            share = min(1.0, max(dt_s, 0.0) / SPREAD_TIME_S)
+            share = min(1.0, dt_s / SPREAD_TIME_S)
             self._mean_square += share * (sum(squares) / len(squares) - self._mean_square)
             self.spread_m = math.sqrt(self._mean_square)
-
-    def _land(
-        self,
-        leg: int,
-        point: Vector | None,
-        slope: tuple[float, float],
-        step: tuple[float, float],
-    ) -> None:
-        """A foot at ``point`` (None: unknown): its time within the band of its level
-        (``step``: the sample's dt [s] and the band [m]), and whether it has landed.
-        """
-        dt_s, band_m = step
-        above = math.nan if point is None else _above(point, self._levels[leg], slope)
-        if not abs(above) <= band_m:  # moved out of the band (unknown: NaN)
-            self._levels[leg], self._level_s[leg] = point, 0.0
-            self._down[leg] = above < 0.0  # came down to it (not: rose to the top of an arc)
-        else:
-            self._level_s[leg] += dt_s
-        self.landed[leg] = self._down[leg] and self._level_s[leg] >= LANDED_S
 
 
 def _above(point: Vector, base: Vector | None, slope: tuple[float, float]) -> float:

@@ -103,8 +103,26 @@ MUTATIONS = (
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",
         "a1_leg_fk/estimation/contact_filter.py",
-        "if caps is not None and caps[leg] < x and not forced[leg]:",
-        "if caps is not None and caps[leg] < x - math.inf and not forced[leg]:",
+        "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
+        "if x > rise < -math.inf or x < 0.0 < rise == math.inf:",
+    ),
+    Mutation(
+        "a landed foot's height above the others still says swing",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
+        "if x > rise < 0.0:",
+    ),
+    Mutation(
+        "a foot lands at the top of an arc it rose to",
+        "a1_leg_fk/estimation/foot_rise.py",
+        "self._down[leg] = above < 0.0",
+        "self._down[leg] = above == above",
+    ),
+    Mutation(
+        "a foot's rise taken about the frame's origin, not its foothold",
+        "a1_leg_fk/estimation/foot_rise.py",
+        "- gx * (point[0] - base[0]) - gy * (point[1] - base[1])",
+        "- gx * point[0] - gy * point[1]",
     ),
     Mutation(
         "FR <-> FL Jacobian products swapped in the odometry feed",

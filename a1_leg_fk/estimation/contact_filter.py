@@ -18,7 +18,8 @@ that no single sample decides alone:
   (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
   ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
   lower tread is "low" against the others well after its liftoff; against its own foothold it
-  is not);
+  is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
+  of where it came down to for 20 ms: a staircase's rise is no evidence of swing);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
@@ -122,8 +123,8 @@ SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
 class SampleEvidence(NamedTuple):
     """One sample's transition and evidence per foot, as the filter used them: the probability
     ``switch`` of a change of state since the previous sample, the kinematic (height and speed)
-    log-likelihood ratios by the flat rules (without the caps of the feet's rises above their
-    footholds, the speeds against every low foot: the filter's own rules follow its own state),
+    log-likelihood ratios by the flat rules (without the feet's rises above their own footholds
+    or levels, the speeds against every low foot: the filter's own rules follow its own state),
     whether the foot's force was evidence, the ``total``
     log-likelihood ratio (kinematic as kept here, force or free fall, phase prior) and the feet's
     ``heights`` [m] the kinematic evidence took (above the lowest foot along gravity, or above
@@ -187,13 +188,14 @@ class ContactFilter:
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
-            heights = self.ground.heights(dt_s, feet, down, omega, standing)
+            band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
+            heights = self.ground.heights(dt_s, feet, down, omega, standing, band)
         kinematic, taken, lowered = _kinematic(
             model,
             feet,
             (omega, standing),
             (forced, common < -1.0),
-            (heights, _rise_caps(model, self.ground.rise) if down is not None else None),
+            (heights, _rise_odds(model, self.ground.rise) if down is not None else None),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
@@ -209,7 +211,7 @@ class ContactFilter:
             posterior.append(1.0 / (1.0 + exp(-odds)))
             totals.append(odds - prior - lowered[leg])
         self.probabilities = posterior
-        # the smoother's evidence by the flat rules: the rise caps and the speeds against the
+        # the smoother's evidence by the flat rules: the rise rules and the speeds against the
         # feet that stood follow this filter's own state (the feet it holds standing), which a
         # backward pass does not share (with the caps, 7 smoothed runs without efforts fell
         # below 98 %; with the speeds, 12 lost 0.01-0.67 point)
@@ -247,13 +249,14 @@ def _kinematic(
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too (``force``: per foot, and whether the base is falling,
     then for all); and the heights [m] it took (NaN: unknown): above the lowest foot, or from
-    ``terrain``'s first (the slope taken off) where that is lower; its second caps each foot's
-    height log-odds (a foot risen above its own foothold: :func:`_rise_caps`); and how far each
-    foot's evidence is from the flat rules' (no cap, speeds against every low foot), which the
-    smoother takes. The cap, and the speeds against the feet that stood, are for the feet without
-    a force: with one, the causal filter's liftoffs moved ahead
-    of the smoothed ones by 1-2 foot-samples on three runs of the contact family (the smoother
-    with efforts no better than the causal filter), so a forced foot keeps the flat rules.
+    ``terrain``'s first (the slope taken off) where that is lower; its second bounds each foot's
+    height log-odds (a foot risen above its own foothold, or at its own level:
+    :func:`_rise_odds`); and how far each foot's evidence is from the flat rules' (no rise rule,
+    speeds against every low foot), which the smoother takes. The rise rules and the speeds
+    against the feet that stood are for the feet without a force: with one, the causal
+    filter's liftoffs moved ahead of the smoothed ones by 1-2 foot-samples on three runs of the
+    contact family (the smoother with efforts no better than the causal filter), so a forced
+    foot keeps the flat rules.
     ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
     previous sample (the speeds' reference).
     """
@@ -266,7 +269,7 @@ def _kinematic(
         return [0.0] * LEGS, [math.nan] * LEGS, [0.0] * LEGS
     (wx, wy, wz), standing = motion
     forced, falling = force
-    ground, caps = terrain
+    ground, rises = terrain
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
     stance_cap = model.max_kinematic_stance
     velocities: list[Vector | None] = [None] * LEGS
@@ -295,8 +298,9 @@ def _kinematic(
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # _clip written out: per foot and sample
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-            if caps is not None and caps[leg] < x and not forced[leg]:  # risen: see below
-                x = caps[leg]
+            rise = math.nan if rises is None or forced[leg] else rises[leg]  # see below
+            if x > rise < 0.0 or x < 0.0 < rise == math.inf:  # risen; landed, however high
+                x = min(rise, 0.0)
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
                 lowered[leg], evidence = risen - evidence, risen
         if velocity is not None:
@@ -322,19 +326,16 @@ def _speed_odds(
     return _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model.max_log_ratio, cap)
 
 
-def _rise_caps(model: ContactModel, rise: FootRise) -> list[float]:
-    """Per foot, the most its height log-odds may say once it has risen above its own foothold
-    (:mod:`a1_leg_fk.estimation.foot_rise`) by more than the even-odds rise, ``rise_half_m`` or
-    ``rise_spread_factor`` times the standing feet's spread where that is more:
-    ``(half - rise) / rise_scale_m`` (below 0: swing); +inf (no cap) for a foot below it, or
-    with no foothold (held in swing, unknown).
+def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:
+    """Per foot, its rise log-odds ``(half - rise) / rise_scale_m`` above its own foothold
+    (:mod:`a1_leg_fk.estimation.foot_rise`; ``half`` the larger of ``rise_half_m`` and
+    ``rise_spread_factor`` times the standing feet's spread): below 0 (risen past even odds),
+    the most its height log-odds may say; else +inf for a foot that landed (its height says no
+    swing: at least 0); NaN, or a rise's odds from 0 up: no bound.
     """
     half = max(model.rise_half_m, model.rise_spread_factor * rise.spread_m)
-    caps = []
-    for risen in rise.rises:
-        x = (half - risen) / model.rise_scale_m
-        caps.append(x if x < 0.0 else math.inf)  # NaN: no foothold, no cap
-    return caps
+    odds = [(half - risen) / model.rise_scale_m for risen in rise.rises]
+    return [math.inf if on and not x < 0.0 else x for x, on in zip(odds, rise.landed, strict=True)]
 
 
 def _references(

@@ -82,12 +82,14 @@ class FootGround:
         down: Vector,
         omega: Sequence[float],
         standing: Sequence[bool],
+        band_m: float = 0.0,
     ) -> list[float] | None:
         """Each foot's contact point's height [m] above the lowest one's, the local ground's
         slope taken off (NaN: unknown foot), after a sample ``dt_s`` [s] on: ``feet`` their
         motions (base frame), ``down`` gravity's unit direction and ``omega`` the base's
         angular velocity [rad/s] (base frame), ``standing`` which feet stood at the previous
-        sample (the filter's estimate). None before the first foothold.
+        sample (the filter's estimate), ``band_m`` [m] the band within which a foot held in
+        swing lands (:meth:`FootRise.update`). None before the first foothold.
         """
         dx, dy, dz = down
         ux, uy, uz = -dx, -dy, -dz  # up
@@ -131,11 +133,10 @@ class FootGround:
         gx, gy = (0.0, 0.0) if slope is None else slope[1:]
         self.rise.update(
             dt_s,
-            [
-                math.nan if o is None else pz + o[2] - gx * (px + o[0]) - gy * (py + o[1])
-                for o in offsets
-            ],
+            [None if o is None else (px + o[0], py + o[1], pz + o[2]) for o in offsets],
+            (gx, gy),
             standing,
+            band_m,
         )
         if slope is None:
             return None

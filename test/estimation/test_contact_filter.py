@@ -174,3 +174,29 @@ def test_a_gait_phase_message_gives_each_named_foot_its_probability() -> None:
         assert [None if math.isnan(p) else p for p in prior] == [
             None if math.isnan(p) else p for p in expected
         ], (names, values)
+
+
+def test_a_swing_foot_that_landed_on_a_higher_tread_stands() -> None:
+    """Three feet stand still 0.3 m under the base; FL, held in swing, comes down in 5 mm steps
+    onto a tread 4 cm up and stays there, still. Its height above the others says swing ((16 -
+    40) / 4 = -6, clipped to -4), its speed against the standing feet stance (+4): the odds only
+    drift toward even with the transition model and never cross (go2_stairs_up_4cm's front
+    feet: 75 %). Once it has stayed within the even-odds rise (1.5 mm) of where it came down to
+    for 20 ms it has landed: its height says no swing (0), its speed +4, and the filter holds it
+    standing at once (28 ms after its first sample); a tread's rise is no evidence of swing."""
+    down = (0.0, 0.0, -1.0)
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.99, 0.01, 0.99, 0.99]
+    limit, switch = MODEL.max_log_ratio, 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
+    p, stamps = 0.01, []
+    for n in range(1, 31):  # 60 ms at 500 Hz
+        depth = min(0.24 + 0.005 * n, 0.26)  # there at the 4th sample
+        feet = [foot(0.3), foot(depth), foot(0.3), foot(0.3)]
+        out = contacts.update(0.002, feet, (STILL, None), down=down)
+        prior = p + switch * (1.0 - 2.0 * p)
+        landed = n >= 14  # the 4th sample's level, 20 ms (10 samples) on
+        p = sigmoid(math.log(prior / (1.0 - prior)) + (limit if landed else 0.0))
+        assert out[1] == pytest.approx(p, rel=1e-9), n
+        stamps.append(0.002 * n if out[1] >= 0.5 else math.nan)
+    assert min(s for s in stamps if s == s) == pytest.approx(0.028)  # noqa: PLR0124
+    assert contacts.evidence.kinematic[1] == pytest.approx(0.0)  # the smoother's: the flat rules

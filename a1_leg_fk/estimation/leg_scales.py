@@ -46,14 +46,15 @@ Triple = tuple[float, float, float]
 
 
 class _Sample:
-    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], and whether
-    it was surely in the air (set when the leg learns).
+    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], ``moving``
+    per joint whether its rate is beyond the stiction band (1.0, else 0.0), and whether it was
+    surely in the air (set when the leg learns).
     """
 
-    __slots__ = ("in_air", "model", "target")
+    __slots__ = ("in_air", "model", "moving", "target")
 
-    def __init__(self, model: Triple, target: Triple) -> None:
-        self.model, self.target, self.in_air = model, target, False
+    def __init__(self, model: Triple, target: Triple, moving: Triple) -> None:
+        self.model, self.target, self.moving, self.in_air = model, target, moving, False
 
 
 class LegScales:
@@ -72,13 +73,16 @@ class LegScales:
         bound: float,
         significance: float,
         fixed: Sequence[float] | None = None,
+        band: float = 0.0,
     ) -> None:
         """``forget_s`` [s] the forgetting's time constant (of learning time), ``noise_nm`` [N m]
         the residual's prior noise, ``bound`` the largest ``|1 - a|`` (the prior's standard
         deviation too), ``significance`` the shrinking in standard deviations; ``fixed``: per
-        leg its scale ``a`` taken as it is (None: learnt).
+        leg its scale ``a`` taken as it is (None: learnt); ``band`` [rad/s]: a joint slower than
+        this is in stiction, its sample not learnt from (see :meth:`keep`).
         """
         self.forget_s, self.bound, self.significance = forget_s, bound, significance
+        self.band = band
         self.fixed = fixed is not None
         self._prior = (noise_nm / bound) ** 2
         """The prior's information on λ, times the noise's variance [N² m²]."""
@@ -113,9 +117,11 @@ class LegScales:
         """
         return not self.fixed or self._share[leg] != 0.0
 
-    def keep(self, leg: int, left: Triple) -> None:
+    def keep(self, leg: int, left: Triple, rates: Triple) -> None:
         """The residual [N m] left of leg slot ``leg`` after every correction (friction too),
-        with its torques ``W`` kept for the learning (``r - c = left + λ W``).
+        with its torques ``W`` kept for the learning (``r - c = left + λ W``), at its joints'
+        ``rates`` [rad/s]: a joint slower than :attr:`band` is in stiction, its friction
+        anything up to its Coulomb term (not the smooth sign's value), so it is not learnt from.
         """
         model, self._latest[leg] = self._latest[leg], None
         if model is None or self.fixed:
@@ -123,7 +129,10 @@ class LegScales:
         share, before = self._share[leg], self._before[leg]
         w0, w1, w2 = model
         target = (left[0] + share * w0, left[1] + share * w1, left[2] + share * w2)
-        before.append(_Sample(model, target))
+        q0, q1, q2 = rates
+        band = self.band
+        moving = (float(abs(q0) > band), float(abs(q1) > band), float(abs(q2) > band))
+        before.append(_Sample(model, target, moving))
         if len(before) > 2 * DELAY + 1:
             del before[0]
 
@@ -140,13 +149,15 @@ class LegScales:
             return
         (w0, w1, w2), (y0, y1, y2) = before[DELAY].model, before[DELAY].target
         (a0, a1, a2), (b0, b1, b2) = before[0].model, before[-1].model
-        z0, z1, z2 = 0.5 * (a0 + b0), 0.5 * (a1 + b1), 0.5 * (a2 + b2)  # the instrument
-        if not math.isfinite(y0 + y1 + y2 + w0 + w1 + w2 + z0 + z1 + z2):
+        m0, m1, m2 = before[DELAY].moving  # the joints out of stiction: only they are learnt
+        z0, z1, z2 = 0.5 * m0 * (a0 + b0), 0.5 * m1 * (a1 + b1), 0.5 * m2 * (a2 + b2)
+        moving = m0 + m1 + m2
+        if not (moving and math.isfinite(y0 + y1 + y2 + w0 + w1 + w2 + z0 + z1 + z2)):
             return
         sums, fit = self._sums[leg], self._fit[leg]
         keep = math.exp(-step_s / self.forget_s)
-        error = (y0 - fit * w0) ** 2 + (y1 - fit * w1) ** 2 + (y2 - fit * w2) ** 2
-        self._variance[leg] = keep * self._variance[leg] + (1.0 - keep) * error / 3.0
+        error = m0 * (y0 - fit * w0) ** 2 + m1 * (y1 - fit * w1) ** 2 + m2 * (y2 - fit * w2) ** 2
+        self._variance[leg] = keep * self._variance[leg] + (1.0 - keep) * error / moving
         sums[0] = keep * sums[0] + z0 * w0 + z1 * w1 + z2 * w2
         sums[1] = keep * sums[1] + z0 * y0 + z1 * y1 + z2 * y2
         sums[2] = keep * sums[2] + z0 * z0 + z1 * z1 + z2 * z2

@@ -217,7 +217,8 @@ class ModelCorrections:
                 continue
             if not lowest - foot.depth > height_half_m:
                 continue
-            self.scales.learn(leg, step)
+            joints = self._applied[leg * JOINTS_PER_LEG : (leg + 1) * JOINTS_PER_LEG]
+            self.scales.learn(leg, step, any(coulomb != 0.0 for _, _, coulomb in joints))
             first = leg * width
             sample = latest[first : first + width]
             latest[first : first + width] = NONE

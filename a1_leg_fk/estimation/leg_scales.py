@@ -23,7 +23,10 @@ sample is learnt :data:`DELAY` samples late, if it and the sample then are both 
 air. Forgetting and prior as the friction's, its own bound and significance
 (:class:`~a1_leg_fk.estimation.model_corrections.CorrectionSettings`): the share taken off is
 the fit shrunk towards 0 by ``significance`` standard deviations (the fit's variance times the
-residual's, learnt), then held within ``±bound``: a leg as its URDF keeps ``a = 1``. ``λ W`` is
+residual's, learnt), then held within ``±bound``: a leg as its URDF keeps ``a = 1``. Where the
+leg shows Coulomb friction, its joints slower than the smooth sign's width are left out: a stuck
+joint's friction holds whatever its motor leaves, a share of ``W`` that is not mass (an Aliengo
+trotting in place read 0.78-0.80 for exact legs, docs/forces.md). ``λ W`` is
 taken off every residual, stance included (``W`` is the leg's own dynamics there too), which is
 the observer run on the leg's mass matrix and gravity terms scaled by ``a``.
 """

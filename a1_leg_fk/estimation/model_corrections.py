@@ -145,14 +145,8 @@ class ModelCorrections:
         learnt = self.settings.learn_scales and not self.fixed
         given = None if learnt else (scales or [1.0] * len(LEG_NAMES))
         settings = self.settings
-        self.scales = LegScales(
-            settings.forget_s,
-            noise,
-            settings.scale_bound,
-            settings.scale_significance,
-            given,
-            settings.smooth_rate,
-        )
+        scale = (settings.scale_bound, settings.scale_significance)
+        self.scales = LegScales(settings.forget_s, noise, *scale, given, settings.smooth_rate)
         """Each leg's inertia scale, learnt when its joints learn."""
         self._prior = np.array([(bound / noise) ** 2 for bound in self.settings.bounds])
         """The prior's variance per parameter, over the noise's."""

@@ -49,9 +49,9 @@ Triple = tuple[float, float, float]
 
 
 class _Sample:
-    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], ``moving``
-    per joint whether its rate is beyond the stiction band, and whether it was
-    surely in the air (set when the leg learns).
+    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], per joint
+    whether its rate was beyond the stiction band (``moving``), and whether it was surely in the
+    air (set when the leg learns).
     """
 
     __slots__ = ("in_air", "model", "moving", "target")

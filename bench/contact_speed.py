@@ -66,10 +66,11 @@ def main() -> None:
 
     scales = ModelCorrections().scales
     residual, model = (0.3, -0.5, 0.8), (1.2, -4.0, 3.1)  # N m
+    rates = (0.4, -6.0, 9.0)  # rad/s
 
     def scale() -> None:
         for leg in range(4):
-            scales.keep(leg, scales.correct(leg, residual, model))
+            scales.keep(leg, scales.correct(leg, residual, model), rates)
         scales.learn(0, STEP_S)
         scales.learn(3, STEP_S)
 

@@ -23,7 +23,10 @@ sample is learnt :data:`DELAY` samples late, if it and the sample then are both 
 air. Forgetting and prior as the friction's, its own bound and significance
 (:class:`~a1_leg_fk.estimation.model_corrections.CorrectionSettings`): the share taken off is
 the fit shrunk towards 0 by ``significance`` standard deviations (the fit's variance times the
-residual's, learnt), then held within ``±bound``: a leg as its URDF keeps ``a = 1``. ``λ W`` is
+residual's, learnt), then held within ``±bound``: a leg as its URDF keeps ``a = 1``. Where the
+leg shows Coulomb friction, its joints slower than the smooth sign's width are left out: a stuck
+joint's friction holds whatever its motor leaves, a share of ``W`` that is not mass (an Aliengo
+trotting in place read 0.78-0.80 for exact legs, docs/forces.md). ``λ W`` is
 taken off every residual, stance included (``W`` is the leg's own dynamics there too), which is
 the observer run on the leg's mass matrix and gravity terms scaled by ``a``.
 """
@@ -46,14 +49,15 @@ Triple = tuple[float, float, float]
 
 
 class _Sample:
-    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], and whether
-    it was surely in the air (set when the leg learns).
+    """One sample of a leg: its torques ``model`` = W and ``target`` = r - c [N m], per joint
+    whether its rate was beyond the stiction band (``moving``), and whether it was surely in the
+    air (set when the leg learns).
     """
 
-    __slots__ = ("in_air", "model", "target")
+    __slots__ = ("in_air", "model", "moving", "target")
 
-    def __init__(self, model: Triple, target: Triple) -> None:
-        self.model, self.target, self.in_air = model, target, False
+    def __init__(self, model: Triple, target: Triple, moving: tuple[bool, bool, bool]) -> None:
+        self.model, self.target, self.moving, self.in_air = model, target, moving, False
 
 
 class LegScales:
@@ -61,7 +65,8 @@ class LegScales:
     text), or ``fixed`` (a calibration's file) and never learnt.
 
     Per leg, with forgetting: ``_sums`` the swing samples' ``W'·W``, ``W'·(r - c)`` and ``W'·W'``
-    summed over its three joints [N² m²] (``W'`` the instrument), ``_variance`` [N² m²] the
+    summed over its joints [N² m²] (``W'`` the instrument), those beyond the stiction band first,
+    then those slower (left out if the leg shows Coulomb friction), ``_variance`` [N² m²] the
     residual's about the fit (a priori errors' squares), ``_share`` the share ``λ`` taken off.
     """
 
@@ -72,17 +77,20 @@ class LegScales:
         bound: float,
         significance: float,
         fixed: Sequence[float] | None = None,
+        band: float = 0.0,
     ) -> None:
         """``forget_s`` [s] the forgetting's time constant (of learning time), ``noise_nm`` [N m]
         the residual's prior noise, ``bound`` the largest ``|1 - a|`` (the prior's standard
         deviation too), ``significance`` the shrinking in standard deviations; ``fixed``: per
-        leg its scale ``a`` taken as it is (None: learnt).
+        leg its scale ``a`` taken as it is (None: learnt); ``band`` [rad/s]: a joint slower than
+        this may be stuck (see :meth:`keep`).
         """
         self.forget_s, self.bound, self.significance = forget_s, bound, significance
+        self.band = band
         self.fixed = fixed is not None
         self._prior = (noise_nm / bound) ** 2
         """The prior's information on λ, times the noise's variance [N² m²]."""
-        self._sums = [[0.0, 0.0, 0.0] for _ in range(LEGS)]
+        self._sums = [[0.0] * 6 for _ in range(LEGS)]
         self._variance = [noise_nm**2] * LEGS
         self._share = [1.0 - scale for scale in fixed] if fixed is not None else [0.0] * LEGS
         self._fit = list(self._share)
@@ -113,9 +121,12 @@ class LegScales:
         """
         return not self.fixed or self._share[leg] != 0.0
 
-    def keep(self, leg: int, left: Triple) -> None:
+    def keep(self, leg: int, left: Triple, rates: Triple) -> None:
         """The residual [N m] left of leg slot ``leg`` after every correction (friction too),
-        with its torques ``W`` kept for the learning (``r - c = left + λ W``).
+        with its torques ``W`` kept for the learning (``r - c = left + λ W``), at its joints'
+        ``rates`` [rad/s]: a joint slower than :attr:`band` may be stuck, its friction then
+        anything up to its Coulomb term (not the smooth sign's value): where the leg shows
+        Coulomb friction it is not learnt from (:meth:`learn`).
         """
         model, self._latest[leg] = self._latest[leg], None
         if model is None or self.fixed:
@@ -123,14 +134,18 @@ class LegScales:
         share, before = self._share[leg], self._before[leg]
         w0, w1, w2 = model
         target = (left[0] + share * w0, left[1] + share * w1, left[2] + share * w2)
-        before.append(_Sample(model, target))
+        q0, q1, q2 = rates
+        band = self.band
+        moving = (abs(q0) > band, abs(q1) > band, abs(q2) > band)
+        before.append(_Sample(model, target, moving))
         if len(before) > 2 * DELAY + 1:
             del before[0]
 
-    def learn(self, leg: int, step_s: float) -> None:
+    def learn(self, leg: int, step_s: float, sticks: bool = False) -> None:
         """Leg slot ``leg`` is surely in the air: its sample of :data:`DELAY` samples before
         into its least squares, ``step_s`` [s] of learning time since its previous one
-        forgotten.
+        forgotten; ``sticks``: the leg's joints show Coulomb friction, so its joints slower than
+        :attr:`band` (their sums kept apart) are left out of the fit (see :meth:`keep`).
         """
         before = self._before[leg]
         if self.fixed or len(before) <= 2 * DELAY:
@@ -138,7 +153,8 @@ class LegScales:
         before[-1].in_air = True
         if not before[DELAY].in_air:
             return
-        (w0, w1, w2), (y0, y1, y2) = before[DELAY].model, before[DELAY].target
+        sample = before[DELAY]
+        (w0, w1, w2), (y0, y1, y2) = sample.model, sample.target
         (a0, a1, a2), (b0, b1, b2) = before[0].model, before[-1].model
         z0, z1, z2 = 0.5 * (a0 + b0), 0.5 * (a1 + b1), 0.5 * (a2 + b2)  # the instrument
         if not math.isfinite(y0 + y1 + y2 + w0 + w1 + w2 + z0 + z1 + z2):
@@ -147,17 +163,27 @@ class LegScales:
         keep = math.exp(-step_s / self.forget_s)
         error = (y0 - fit * w0) ** 2 + (y1 - fit * w1) ** 2 + (y2 - fit * w2) ** 2
         self._variance[leg] = keep * self._variance[leg] + (1.0 - keep) * error / 3.0
-        sums[0] = keep * sums[0] + z0 * w0 + z1 * w1 + z2 * w2
-        sums[1] = keep * sums[1] + z0 * y0 + z1 * y1 + z2 * y2
-        sums[2] = keep * sums[2] + z0 * z0 + z1 * z1 + z2 * z2
+        for first in (0, 3):
+            sums[first] *= keep
+            sums[first + 1] *= keep
+            sums[first + 2] *= keep
+        for z, w, y, moving in zip((z0, z1, z2), (w0, w1, w2), (y0, y1, y2), sample.moving):
+            first = 0 if moving else 3
+            sums[first] += z * w
+            sums[first + 1] += z * y
+            sums[first + 2] += z * z
         self.learnt_samples[leg] += 1
-        self._solve(leg)
+        self._solve(leg, sticks)
 
-    def _solve(self, leg: int) -> None:
+    def _solve(self, leg: int, sticks: bool) -> None:
         """Leg ``leg``'s fit and the share taken off: the fit shrunk by ``significance``
-        standard deviations (of the fit, with the residual's variance), within ``±bound``.
+        standard deviations (of the fit, with the residual's variance), within ``±bound``; the
+        slow joints' sums left out if it ``sticks``.
         """
-        cross, moment, squares = self._sums[leg]
+        sums = self._sums[leg]
+        cross, moment, squares = (
+            sums[:3] if sticks else [a + b for a, b in zip(sums[:3], sums[3:])]
+        )
         information = max(cross, 0.0) + self._prior  # the instrument's, against W
         fit = moment / information
         margin = self.significance * math.sqrt(self._variance[leg] * (squares + self._prior))

@@ -145,9 +145,8 @@ class ModelCorrections:
         learnt = self.settings.learn_scales and not self.fixed
         given = None if learnt else (scales or [1.0] * len(LEG_NAMES))
         settings = self.settings
-        self.scales = LegScales(
-            settings.forget_s, noise, settings.scale_bound, settings.scale_significance, given
-        )
+        scale = (settings.scale_bound, settings.scale_significance)
+        self.scales = LegScales(settings.forget_s, noise, *scale, given, settings.smooth_rate)
         """Each leg's inertia scale, learnt when its joints learn."""
         self._prior = np.array([(bound / noise) ** 2 for bound in self.settings.bounds])
         """The prior's variance per parameter, over the noise's."""
@@ -212,7 +211,8 @@ class ModelCorrections:
                 continue
             if not lowest - foot.depth > height_half_m:
                 continue
-            self.scales.learn(leg, step)
+            joints = self._applied[leg * JOINTS_PER_LEG : (leg + 1) * JOINTS_PER_LEG]
+            self.scales.learn(leg, step, any(coulomb != 0.0 for _, _, coulomb in joints))
             first = leg * width
             sample = latest[first : first + width]
             latest[first : first + width] = NONE

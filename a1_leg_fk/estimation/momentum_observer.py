@@ -227,7 +227,7 @@ class MomentumObserver:
             correct(first + 2, r2, rates[2]),
         )
         if not scales.fixed:  # fixed scales learn nothing: nothing to keep
-            scales.keep(slot, left)
+            scales.keep(slot, left, rates)
         return left
 
     def step_batch(

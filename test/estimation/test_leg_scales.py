@@ -8,6 +8,7 @@ gives its scales back.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -53,20 +54,31 @@ def lighter_a1(scale: float, directory: Path) -> Path:
     return path
 
 
-def swing_efforts(urdf: Path, stamps: np.ndarray) -> tuple[np.ndarray, ...]:
+def swing_efforts(
+    urdf: Path,
+    stamps: np.ndarray,
+    hip_rad: float = 0.15,
+    heave_ms2: float = 0.0,
+    stroke: float = 1.0,
+) -> tuple[np.ndarray, ...]:
     """(N, 12) angles [rad], rates [rad/s] and efforts [N m] (slot order) of the legs swinging
-    sinusoidally (a trot's ranges: up to 9 rad/s), the base fixed and level: the efforts PyBullet's
-    inverse dynamics of ``urdf`` needs."""
+    sinusoidally (a trot's ranges: up to 9 rad/s, thighs and calves times ``stroke``; the hips by
+    ``hip_rad`` [rad], 0: still), the
+    base fixed and level, or heaving by ``heave_ms2`` [m/s²] (a trot in place: the legs feel
+    gravity less the base's acceleration), and (N, 3) that gravity in the base frame [m/s²]: the
+    efforts PyBullet's inverse dynamics of ``urdf`` needs."""
     middle = np.array([0.0, 0.8, -1.6] * 4)
-    amplitude = np.array([0.15, 0.5, 0.6] * 4)
+    amplitude = np.array([hip_rad, 0.5 * stroke, 0.6 * stroke] * 4)
     omega = 2.0 * math.pi * np.array([2.1, 2.5, 2.3] * 4)
     phase = np.arange(12) * 0.7
     angles = middle + amplitude * np.sin(omega * stamps[:, None] + phase)
     rates = amplitude * omega * np.cos(omega * stamps[:, None] + phase)
     accelerations = -amplitude * omega**2 * np.sin(omega * stamps[:, None] + phase)
+    heave = heave_ms2 * np.sin(2.0 * math.pi * 1.3 * stamps)
+    gravity = np.zeros((len(stamps), 3))
+    gravity[:, 2] = LEVEL[2] - heave
     client = pybullet.connect(pybullet.DIRECT)
     try:
-        pybullet.setGravity(*LEVEL, physicsClientId=client)
         body = pybullet.loadURDF(
             str(urdf), useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
             physicsClientId=client,
@@ -79,6 +91,7 @@ def swing_efforts(urdf: Path, stamps: np.ndarray) -> tuple[np.ndarray, ...]:
         slots = [list(A1.joint_names).index(name) for name in names]
         efforts = np.empty_like(angles)
         for row in range(len(stamps)):
+            pybullet.setGravity(*gravity[row].tolist(), physicsClientId=client)
             theirs = pybullet.calculateInverseDynamics(
                 body, angles[row, slots].tolist(), rates[row, slots].tolist(),
                 accelerations[row, slots].tolist(), physicsClientId=client,
@@ -86,7 +99,7 @@ def swing_efforts(urdf: Path, stamps: np.ndarray) -> tuple[np.ndarray, ...]:
             efforts[row, slots] = theirs
     finally:
         pybullet.disconnect(client)
-    return angles, rates, efforts
+    return angles, rates, efforts, gravity
 
 
 LEARNING = CorrectionSettings(learn_scales=True)
@@ -94,13 +107,19 @@ LEARNING = CorrectionSettings(learn_scales=True)
 
 
 def swing(
-    urdf: Path, online: bool, noise: float = 0.0, settings: CorrectionSettings = LEARNING
+    urdf: Path,
+    online: bool,
+    noise: float = 0.0,
+    settings: CorrectionSettings = LEARNING,
+    efforts_of: Callable[[np.ndarray], tuple[np.ndarray, ...]] | None = None,
 ) -> tuple[ModelCorrections, np.ndarray]:
     """The nominal A1's observer over FR's swing with the efforts of ``urdf`` (``online``: the
-    corrections learning, with ``settings``; rates read with ``noise`` [rad/s]); the corrections
-    and FR's force [N] over the last 2 s."""
+    corrections learning, with ``settings``; rates read with ``noise`` [rad/s]; ``efforts_of``:
+    the swing's angles, rates, efforts and gravity from its stamps, :func:`swing_efforts` by
+    default);
+    the corrections and FR's force [N] over the last 2 s."""
     stamps = np.arange(0.0, SWING_S, STEP_S)
-    angles, rates, efforts = swing_efforts(urdf, stamps)
+    angles, rates, efforts, gravity = (efforts_of or (lambda t: swing_efforts(urdf, t)))(stamps)
     rates = rates + np.random.default_rng(2).normal(0.0, noise, rates.shape)
     observer = MomentumObserver(A1)
     corrections = ModelCorrections(settings)
@@ -108,7 +127,7 @@ def swing(
     forces = []
     for row, stamp in enumerate(stamps.tolist()):
         sample = (angles[row].tolist(), rates[row].tolist(), efforts[row].tolist())
-        out, _, _ = observer.step_floats(stamp, sample, LEVEL)
+        out, _, _ = observer.step_floats(stamp, sample, gravity[row].tolist())
         corrections.learn(STEP_S, SWING, FEET, 0.05)
         if stamp >= SWING_S - 2.0:
             forces.append(out[0])
@@ -153,3 +172,34 @@ def test_online_the_scales_are_not_learnt(tmp_path: Path) -> None:
     corrections, _ = swing(lighter_a1(0.85, tmp_path), True, settings=CorrectionSettings())
     assert corrections.scales.scales == [1.0, 1.0, 1.0, 1.0]
     assert corrections.line().endswith("inertia scales 1, not learnt online (calibrate fits them)")
+
+
+COULOMB_NM = 1.0
+"""Coulomb friction on every joint [N m]."""
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.85])
+def test_a_stuck_joints_friction_is_not_read_as_a_lighter_leg(
+    tmp_path: Path, scale: float
+) -> None:
+    """A trot in place, by construction: FR's hip roll held still while its thigh and calf
+    swing slowly (0.3 of the trot's strokes) and the base heaves by 5 m/s², every joint with
+    1 N m of Coulomb friction. The sliding joints' motors overcome it (the efforts PyBullet's
+    inverse dynamics plus 1 N m along the rate); the stuck hip's motor holds a steady torque and
+    its friction the rest (at most 0.59 N m: it stays stuck), so the hip's residual is a share
+    of its torque that is friction, not mass (the Aliengo of docs/forces.md). The leg's scale
+    (links as the URDF's, or 15 % lighter) is found within 5 % (learnt from the stuck hip too:
+    0.92 and 0.79)."""
+    urdf = lighter_a1(scale, tmp_path)
+
+    def with_friction(stamps: np.ndarray) -> tuple[np.ndarray, ...]:
+        angles, rates, efforts, gravity = swing_efforts(urdf, stamps, 0.0, 5.0, 0.3)
+        holding = efforts.mean(axis=0)  # the stuck hips' motors: a steady torque
+        held = efforts - holding  # their friction: the rest
+        assert np.abs(held[:, rates[0] == 0.0]).max() < COULOMB_NM  # within it: stuck
+        sliding = np.sign(rates) * COULOMB_NM
+        return angles, rates, efforts + np.where(rates == 0.0, -held, sliding), gravity
+
+    corrections, _ = swing(urdf, online=True, efforts_of=with_friction)
+    found = corrections.scales.scales[0]
+    assert abs(found - scale) <= 0.05 * scale, corrections.scales.fit

@@ -38,7 +38,8 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--imu",
         metavar="TOPIC",
         help="sensor_msgs/msg/Imu aligned with the base: gravity's direction, the base's motion "
-        "(as bag --imu)",
+        "(as bag --imu); without its gyro and accelerometer the legs' inertia scales are not "
+        "fitted (1)",
     )
     calibrate.add_argument(
         "--effort-scale",
@@ -73,7 +74,7 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     try:
         if target.exists() and not options.force:
             raise LegFkError(f"-o {target}: exists already (use --force to replace it)")
-        calibration = calibrate_recording(
+        calibration, scales_fitted = calibrate_recording(
             options.input,
             progress=show_progress(options),
             topic=options.topic,
@@ -102,7 +103,11 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
         )
         print(f"{name}: {terms}   ({fits})")
     scales = " ".join(f"{n} {v:.3f}" for n, v in zip(LEG_NAMES, calibration.inertia_scales))
-    print(f"legs:      inertia scales (mass and inertia over the URDF's) {scales}")
+    if scales_fitted:
+        print(f"legs:      inertia scales (mass and inertia over the URDF's) {scales}")
+    else:
+        print("legs:      inertia scales 1, not fitted: no IMU gyro and accelerometer (--imu);")
+        print("           without the base's motion the legs' scales would read it")
     print(
         f"payload:   {calibration.payload_kg:+.2f} kg over the URDF's mass, from "
         f"{calibration.standing_s:.2f} s of standing"

@@ -445,6 +445,27 @@ def test_calibrate_refuses_what_a_recording_cannot_identify(
         assert not out.exists()
 
 
+def test_calibrate_fits_the_legs_scales_only_with_the_base_motion(
+    tmp_path: Path, trot: dict[str, np.ndarray], capsys: pytest.CaptureFixture
+) -> None:
+    """Without ``--imu`` the legs' inertia scales are written as exactly 1 and the console says
+    they were not fitted (an exact A1 trotting reads 0.74-0.97 without its IMU); with the IMU's
+    gyro and accelerometer they are fitted. The joints' terms are fitted either way."""
+    bag = write_trot_bag(tmp_path / "in", trot, "mcap", motion=True)
+    scales = {}
+    for name, imu in (("without", []), ("with", ["--imu", "/imu"])):
+        out = tmp_path / f"{name}.yaml"
+        arguments = ["calibrate", str(bag), "--topic", "/joint_states", *imu, "--quiet"]
+        assert cli.main([*arguments, "-o", str(out)]) == 0, name
+        printed = capsys.readouterr().out
+        assert ("not fitted" in printed) == (name == "without"), printed
+        document = json.loads(out.read_text())
+        scales[name] = list(document["leg_inertia_scales"].values())
+        assert any(entry["swing_samples"] > 0 for entry in document["joints"].values())
+    assert scales["without"] == [1.0] * 4, scales
+    assert scales["with"] != [1.0] * 4, scales
+
+
 def test_a_corrections_file_of_another_robot_is_refused_in_one_line(
     tmp_path: Path, trot: dict[str, np.ndarray], capsys: pytest.CaptureFixture
 ) -> None:

@@ -101,6 +101,12 @@ MUTATIONS = (
         "references = _references(velocities, low, [False] * LEGS, forced)",
     ),
     Mutation(
+        "a landed foot with a force still called swing by its height",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "rise = math.nan if forced[leg] and rise != math.inf else rise",
+        "rise = math.nan if forced[leg] else rise",
+    ),
+    Mutation(
         "contact filter's rise above a foot's own foothold ignored",
         "a1_leg_fk/estimation/contact_filter.py",
         "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",

@@ -19,7 +19,7 @@ that no single sample decides alone:
   ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
   lower tread is "low" against the others well after its liftoff; against its own foothold it
   is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
-  of where it came down to for 20 ms: a staircase's rise is no evidence of swing);
+  of where it came down to for 20 ms: a staircase's rise is no evidence of swing; forced too);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
   on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
@@ -252,11 +252,12 @@ def _kinematic(
     ``terrain``'s first (the slope taken off) where that is lower; its second bounds each foot's
     height log-odds (a foot risen above its own foothold, or at its own level:
     :func:`_rise_odds`); and how far each foot's evidence is from the flat rules' (no rise rule,
-    speeds against every low foot), which the smoother takes. The rise rules and the speeds
-    against the feet that stood are for the feet without a force: with one, the causal
-    filter's liftoffs moved ahead of the smoothed ones by 1-2 foot-samples on three runs of the
-    contact family (the smoother with efforts no better than the causal filter), so a forced
-    foot keeps the flat rules.
+    speeds against every low foot), which the smoother takes. The rise above a foot's own
+    foothold and the speeds against the feet that stood are for the feet without a force: with
+    one, the causal filter's liftoffs moved ahead of the smoothed ones by 1-2 foot-samples on
+    three runs of the contact family (the smoother with efforts no better than the causal
+    filter), so a forced foot keeps the flat rules but one: landed, its height says no swing
+    either (on stairs its tread is not the lowest foot's; on level ground it is low anyway).
     ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
     previous sample (the speeds' reference).
     """
@@ -298,7 +299,8 @@ def _kinematic(
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # _clip written out: per foot and sample
             evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-            rise = math.nan if rises is None or forced[leg] else rises[leg]  # see below
+            rise = math.nan if rises is None else rises[leg]  # forced: the landed rule alone
+            rise = math.nan if forced[leg] and rise != math.inf else rise
             if x > rise < 0.0 or x < 0.0 < rise == math.inf:  # risen; landed, however high
                 x = min(rise, 0.0)
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136

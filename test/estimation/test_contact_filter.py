@@ -130,6 +130,36 @@ def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:
     assert out[1] == pytest.approx(sigmoid(math.log(prior / (1.0 - prior)) + rise_odds + limit))
 
 
+def test_a_foot_with_a_force_that_landed_on_a_higher_tread_stands() -> None:
+    """Forces for every foot: three feet stand still 0.3 m under the base with 50 N; FL, held in
+    swing, comes down in 5 mm steps onto a tread 4 cm up and stays there, still, bearing 5.4 N
+    ((5.4 - 3.6) / 0.6 = +3). Its height says swing (-6, clipped to -4), its speed against the
+    standing feet stance (+0.5, capped beside a force): -0.5 a sample, never standing (the
+    stairs' touchdowns called swing). Once it has landed (20 ms within 1.5 mm of where it came
+    down to) its height says no swing (0): +3.5, standing at once (28 ms after its first
+    sample). The smoother's evidence keeps the flat rules (-3.5)."""
+    down = (0.0, 0.0, -1.0)
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.99, 0.01, 0.99, 0.99]
+    limit, cap = MODEL.max_log_ratio, MODEL.max_kinematic_stance
+    switch = 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
+    force = (5.4 - MODEL.force_half_n) / MODEL.force_scale_n
+    assert force == pytest.approx(3.0)
+    p, stamps = 0.01, []
+    for n in range(1, 31):  # 60 ms at 500 Hz
+        depth = min(0.24 + 0.005 * n, 0.26)  # there at the 4th sample
+        feet = [foot(0.3), foot(depth), foot(0.3), foot(0.3)]
+        out = contacts.update(0.002, feet, (STILL, None), [50.0, 5.4, 50.0, 50.0], down=down)
+        prior = p + switch * (1.0 - 2.0 * p)
+        landed = n >= 14  # the 4th sample's level, 20 ms (10 samples) on
+        height = 0.0 if landed else -limit
+        p = sigmoid(math.log(prior / (1.0 - prior)) + force + height + cap)
+        assert out[1] == pytest.approx(p, rel=1e-9), n
+        stamps.append(0.002 * n if out[1] >= 0.5 else math.nan)
+    assert min(s for s in stamps if s == s) == pytest.approx(0.028)  # noqa: PLR0124
+    assert contacts.evidence.kinematic[1] == pytest.approx(-limit + cap)  # the flat rules
+
+
 def test_free_fall_lifts_every_foot() -> None:
     feet = [foot(0.3)] * 4  # all low and still: the kinematics alone would say stance
     contacts = ContactFilter(MODEL)

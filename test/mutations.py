@@ -270,6 +270,12 @@ MUTATIONS = (
         "return anchor[2]",
     ),
     Mutation(
+        "a step measured against the standing feet counts as touchdown noise",
+        "a1_leg_fk/estimation/ground.py",
+        "and (agrees or alone):",
+        "and True:",
+    ),
+    Mutation(
         "the reported ground takes the contact estimate's flickers (every stance a foothold)",
         "a1_leg_fk/estimation/ground.py",
         "if stamp_s - since >= MIN_FOOTHOLD_S:",

@@ -276,6 +276,12 @@ MUTATIONS = (
         "and True:",
     ),
     Mutation(
+        "the legs' scales learnt from stuck joints (a friction's hold read as a lighter leg)",
+        "a1_leg_fk/estimation/leg_scales.py",
+        "sums[:3] if sticks else",
+        "sums[:3] if False else",
+    ),
+    Mutation(
         "the reported ground takes the contact estimate's flickers (every stance a foothold)",
         "a1_leg_fk/estimation/ground.py",
         "if stamp_s - since >= MIN_FOOTHOLD_S:",

@@ -126,10 +126,10 @@ class LocalGround:
         """Per standing leg: its touchdown point [m] (at its anchored height), the slope it landed
         on (:meth:`_carried`), the sums of its contact points' x, y and z, their count, its
         contact point's last [m] and its touchdown's stamp [s]."""
-        self._fit: Fit | None = None
+        self._fit: tuple[int, Fit | None] | None = None
+        """:meth:`plane`'s fit and the :attr:`revision` it was made at."""
         self._reported: tuple[int, Fit | None] | None = None
         """:meth:`reported`'s fit and the :attr:`revision` it was made at."""
-        self._changed = False
         self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
         """The last touchdowns' absolute offsets from the prediction [m]."""
         self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
@@ -156,7 +156,6 @@ class LocalGround:
             self.footholds.append(Foothold(mean, count, stamp_s))
             if stamp_s - since >= MIN_FOOTHOLD_S:
                 self.settled.append(Foothold(mean, count, stamp_s))
-            self._changed = True
             self.revision += 1
         opened_now = self._open
         landed = []
@@ -174,7 +173,6 @@ class LocalGround:
             self._land(stamp_s, landed, standing, lifted)
         while self.footholds and stamp_s - self.footholds[0].stamp_s > self.window_s:
             self.footholds.popleft()
-            self._changed = True
             self.revision += 1
         while self.settled and stamp_s - self.settled[0].stamp_s > self.window_s:
             self.settled.popleft()
@@ -199,7 +197,6 @@ class LocalGround:
             if self.anchored:
                 own, grade = self._touchdown(point, kept or lifted)
             self._open[leg] = ((point[0], point[1], own), grade, list(point), 1, point, stamp_s)
-            self._changed = True
             self.revision += 1
 
     def _touchdown(
@@ -302,10 +299,9 @@ class LocalGround:
         """The plane through :meth:`points` at (x, y) [m, odom] (what :meth:`under` holds a
         landing foot to, and the contacts' slope); None before the first stance.
         """
-        if self._changed or self._fit is None:
-            self._changed = False
-            self._fit = self._fitted(self.points())
-        return _at(self._fit, x, y)
+        if self._fit is None or self._fit[0] != self.revision:
+            self._fit = (self.revision, self._fitted(self.points()))
+        return _at(self._fit[1], x, y)
 
     def reported(self, x: float, y: float) -> GroundPlane | None:
         """The local ground reported at (x, y) [m, odom] (the node's ``ground``, the odom CSV's

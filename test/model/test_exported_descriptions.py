@@ -122,11 +122,11 @@ def test_the_node_publishes_pybullet_feet_and_verifies_with_no_configuration(
     client = NodeClient(ros)
     angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
 
-    def sent_and_rl_arrived() -> bool:
+    def sent_and_all_arrived() -> bool:
         client.send(client.joint_state(UNITREE_NAMES, angles))
-        return bool(client.positions["RL"])
+        return all(client.positions[leg] for leg in LEGS)  # one topic per foot
 
-    assert client.probe.spin_until(sent_and_rl_arrived, 30.0), processes.output(process)
+    assert client.probe.spin_until(sent_and_all_arrived, 30.0), processes.output(process)
     with reference_robot(tmp_path, robot) as reference:
         expected = reference.feet(UNITREE_NAMES, FEET, angles)
     root = QUIRKS[robot].get("root", "base")

@@ -319,11 +319,11 @@ def test_another_urdf_through_robot_description(processes, ros, tmp_path):
         robot = Quadruped.from_urdf(str(ALIENGO_URDF))
         angles = [0.1, 0.7, -1.4, -0.1, 0.9, -1.2, 0.2, 0.6, -1.6, -0.2, 0.8, -1.1]
 
-        def sent_and_rl_arrived() -> bool:
+        def sent_and_all_arrived() -> bool:
             client.send(client.joint_state(robot.joint_names, angles))
-            return bool(client.positions["RL"])
+            return all(client.positions[leg] for leg in LEGS)  # one topic per foot
 
-        assert client.probe.spin_until(sent_and_rl_arrived, 20.0), processes.output(process)
+        assert client.probe.spin_until(sent_and_all_arrived, 20.0), processes.output(process)
         expected = aliengo.feet(list(robot.joint_names), [f"{leg}_toe" for leg in LEGS], angles)
     for slot, leg in enumerate(LEGS):
         assert distance(client.positions[leg][-1].point, expected[slot]) <= 1e-7

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 from contact_scoring import FORCE, KINEMATIC, Score, estimate, score
+from gait_family import world_feet
 from odometry_scoring import Errors, errors, feed_samples
 from odometry_scoring import estimate as odometry
 from odometry_scoring import misses as odometry_misses
@@ -136,6 +137,44 @@ def stair_ground(terrain: Terrain, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return height, np.column_stack([slope, np.zeros_like(slope)])
 
 
+FOOTHOLDS_S = 0.8
+"""[s] the stances :func:`foothold_ground` spans: the reported plane's eight footholds, two
+strides of the families' 0.4 s trots."""
+SPAN_SAMPLES = 41
+"""The points over a span that :func:`span_slope`'s fit takes (1.5-2 cm apart on 0.6-0.8 m)."""
+
+
+def span_slope(terrain: Terrain, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """The slope (N,) of the staircase averaged over one tread (:func:`stair_profile`) fitted by
+    least squares over world x from ``low`` to ``high`` (N,) [m]: rise over run where the span
+    lies on the flight, level where it lies on a landing (and where it is empty)."""
+    x = low[:, None] + (high - low)[:, None] * np.linspace(0.0, 1.0, SPAN_SAMPLES)
+    heights = stair_profile(terrain, x, True)
+    centred = x - x.mean(axis=1, keepdims=True)
+    spread = (centred * centred).sum(axis=1)
+    slope: np.ndarray = np.where(
+        spread > 1e-12, (heights * centred).sum(axis=1) / np.maximum(spread, 1e-12), 0.0
+    )
+    return slope
+
+
+def foothold_ground(terrain: TerrainRun, window_s: float = FOOTHOLDS_S) -> np.ndarray:
+    """The truth a causal estimate from footholds can know (N,): :func:`span_slope` over the span
+    of world x where the feet stood (PyBullet's contacts, our FK placed by the true base pose)
+    over the last ``window_s`` [s]; the staircase ahead of the front feet, which the rays' truth
+    (:func:`stair_ground`) sees, left out."""
+    run = terrain.run
+    standing = np.where(run.contacts, world_feet(run)[:, :, 0], np.nan)
+    rows = max(1, round(window_s / float(np.median(np.diff(run.stamps_s)))))
+    padded = np.vstack([np.full((rows - 1, standing.shape[1]), np.nan), standing])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, rows, axis=0)
+    flat = windows.reshape(len(standing), -1)
+    stood = np.isfinite(flat).any(axis=1)
+    low = np.where(stood, np.nanmin(np.where(stood[:, None], flat, 0.0), axis=1), 0.0)
+    high = np.where(stood, np.nanmax(np.where(stood[:, None], flat, 0.0), axis=1), 0.0)
+    return span_slope(terrain.terrain, low, high)
+
+
 @dataclass(frozen=True)
 class GroundErrors:
     """The live local ground against the truth's (``TerrainRun``: the plane through rays about
@@ -143,7 +182,9 @@ class GroundErrors:
     95th-percentile angle between the normals [deg], and of the error of the base's height above
     the ground [m]; the share of samples with a plane; the worst angle [deg] where the truth's
     slope has not changed over the last stride (a staircase's flight or landing, not its ends
-    passing under the robot: footholds cannot see a step the feet have not reached)."""
+    passing under the robot: footholds cannot see a step the feet have not reached); on a
+    staircase the worst and 95th-percentile angle [deg] against :func:`foothold_ground`, the
+    staircase where the feet stood (on a slope the same as against the rays')."""
 
     worst_deg: float
     p95_deg: float
@@ -151,18 +192,21 @@ class GroundErrors:
     p95_height_m: float
     coverage: float
     steady_worst_deg: float
+    span_worst_deg: float
+    span_p95_deg: float
 
     def row(self, name: str) -> str:
         return (
             f"{name:<18} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
             f"{100 * self.worst_height_m:7.2f} {100 * self.p95_height_m:7.2f} "
-            f"{100 * self.coverage:6.1f} {self.steady_worst_deg:7.2f}"
+            f"{100 * self.coverage:6.1f} {self.steady_worst_deg:7.2f} "
+            f"{self.span_worst_deg:6.2f} {self.span_p95_deg:6.2f}"
         )
 
 
 GROUND_HEADER = (
     f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6} "
-    f"{'steady°':>7}"
+    f"{'steady°':>7} {'span°':>6} {'sp95°':>6}"
 )
 STEADY_RAD = 1e-4
 """A truth's gradient that moved less than this over the last stride is steady."""
@@ -183,17 +227,20 @@ def ground_errors(
     angles, heights, steady = [], [], []
     lag = max(1, round(stride_s / float(np.median(np.diff(run.stamps_s)))))
     true_heights, true_gradients = terrain.plane_heights, terrain.plane_gradients
+    span_gradients = true_gradients
     if terrain.terrain.kind == "stairs":
         true_heights, true_gradients = stair_ground(terrain.terrain, run.base_positions[:, 0])
-    true_normals = np.column_stack([-true_gradients, np.ones(len(run.stamps_s))])
-    true_normals /= np.linalg.norm(true_normals, axis=1, keepdims=True)
+        span = foothold_ground(terrain)
+        span_gradients = np.column_stack([span, np.zeros_like(span)])
+    true_normals, span_normals = _normals(true_gradients), _normals(span_gradients)
+    spans = []
     true_above = run.base_positions[:, 2] - true_heights
     for row in np.flatnonzero(scored):
         plane = planes[row]
         if plane is None:
             continue
-        cosine = float(np.clip(np.dot(plane.normal, true_normals[row]), -1.0, 1.0))
-        angles.append(math.degrees(math.acos(cosine)))
+        angles.append(_angle_deg(plane.normal, true_normals[row]))
+        spans.append(_angle_deg(plane.normal, span_normals[row]))
         held = true_gradients[max(0, row - lag) : row + 1]
         steady.append(float(np.ptp(held, axis=0).max()) < STEADY_RAD)
         heights.append(abs(samples[row].position[2] - plane.height_m - true_above[row]))
@@ -204,4 +251,18 @@ def ground_errors(
         float(np.percentile(heights, 95)),
         len(angles) / int(scored.sum()),
         max((a for a, kept in zip(angles, steady) if kept), default=math.nan),
+        max(spans),
+        float(np.percentile(spans, 95)),
     )
+
+
+def _normals(gradients: np.ndarray) -> np.ndarray:
+    """The unit normals (N, 3) of planes of ``gradients`` (N, 2) (dz/dx, dz/dy)."""
+    normals = np.column_stack([-gradients, np.ones(len(gradients))])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals
+
+
+def _angle_deg(normal: tuple[float, float, float], other: np.ndarray) -> float:
+    """The angle [deg] between two unit normals."""
+    return math.degrees(math.acos(float(np.clip(np.dot(normal, other), -1.0, 1.0))))

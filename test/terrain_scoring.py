@@ -164,14 +164,15 @@ def foothold_ground(terrain: TerrainRun, window_s: float = FOOTHOLDS_S) -> np.nd
     over the last ``window_s`` [s]; the staircase ahead of the front feet, which the rays' truth
     (:func:`stair_ground`) sees, left out."""
     run = terrain.run
-    standing = np.where(run.contacts, world_feet(run)[:, :, 0], np.nan)
+    feet = world_feet(run)[:, :, 0]
     rows = max(1, round(window_s / float(np.median(np.diff(run.stamps_s)))))
-    padded = np.vstack([np.full((rows - 1, standing.shape[1]), np.nan), standing])
-    windows = np.lib.stride_tricks.sliding_window_view(padded, rows, axis=0)
-    flat = windows.reshape(len(standing), -1)
-    stood = np.isfinite(flat).any(axis=1)
-    low = np.where(stood, np.nanmin(np.where(stood[:, None], flat, 0.0), axis=1), 0.0)
-    high = np.where(stood, np.nanmax(np.where(stood[:, None], flat, 0.0), axis=1), 0.0)
+    windows = np.lib.stride_tricks.sliding_window_view
+    pad = np.full(rows - 1, np.inf)
+    low = windows(np.concatenate([pad, np.where(run.contacts, feet, np.inf).min(axis=1)]), rows)
+    high = windows(np.concatenate([-pad, np.where(run.contacts, feet, -np.inf).max(axis=1)]), rows)
+    low, high = low.min(axis=1), high.max(axis=1)
+    stood = np.isfinite(low)
+    low, high = np.where(stood, low, 0.0), np.where(stood, high, 0.0)
     return span_slope(terrain.terrain, low, high)
 
 

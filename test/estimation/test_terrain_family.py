@@ -85,12 +85,14 @@ GROUND_UNMET = {
 tread, whose slope is rise over run on the flight): the plane through the last eight footholds
 samples the treads where the feet happened to land (two clusters, the front and the rear feet's),
 and at the staircase's ends it lags the truth, which sees a tread and a half ahead of the root.
-At the first edge that truth bends 0.92-1.20 s before any foothold lies past it (the rays reach
-0.45 m ahead of the root, the front feet 0.18-0.19 m): no causal estimate from footholds can
-follow it there (the plane is 1.87-5.70° off in that time). Against the staircase where the feet
-stood over the last two strides (:func:`terrain_scoring.foothold_ground`, the truth such an
-estimate can know) the plane is still 2.04-4.04° off: the treads' sampling, not the ends, is what
-misses on the flight (docs/leg_odometry.md, "Local ground").
+On 0.3 m treads that truth bends 0.92-0.97 s before any foothold lies past the first edge (on
+0.4-0.5 m treads from the first sample; the rays and the tread's average reach 0.45-0.55 m ahead
+of the root, the front feet 0.18-0.19 m): no causal estimate from footholds can follow it there
+(the plane is 1.87-5.70° off in that time). Against the staircase where the feet stood over the
+last two strides (:func:`terrain_scoring.foothold_ground`, the truth such an estimate can know)
+the plane is still 2.04-4.04° off, much of it a tilt across the stairs (1.98-3.65°); and even an
+oracle told the rise finds staircases 2.1-4.1° either way of the truth that put the last eight
+footholds on their treads (docs/leg_odometry.md, "Local ground").
 Against the rays' plane through the treads (the truth before, swinging 0.6-1.33 times the
 staircase's slope) it was 2.32-8.91° off, the heights 0.77-2.15 cm with every stance in the fit.
 On every slope the ground is within 0.01-0.39° and 0.37 cm (with the contact estimate's stances

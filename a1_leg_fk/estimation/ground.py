@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from a1_leg_fk.estimation import ground_plane
 from a1_leg_fk.estimation.ground_plane import (
     DEFAULT_MIN_SIGMA_M,
     DEFAULT_SLOPE_PRIOR,
@@ -303,17 +304,48 @@ class LocalGround:
             self._fit = (self.revision, self._fitted(self.points()))
         return _at(self._fit[1], x, y)
 
-    def reported(self, x: float, y: float) -> GroundPlane | None:
+    def reported(
+        self, x: float, y: float, orientation: Quaternion | None = None
+    ) -> GroundPlane | None:
         """The local ground reported at (x, y) [m, odom] (the node's ``ground``, the odom CSV's
         columns): the plane through the :attr:`settled` footholds and the standing feet's
         touchdowns, the stances shorter than :data:`MIN_FOOTHOLD_S` left out unless they are all
-        there is (the ground once known stays known); None before the first stance.
+        there is (the ground once known stays known); None before the first stance. Given the
+        base's ``orientation`` (x, y, z, w: base to odom), anchored, its slope across the base's
+        heading is :meth:`gradient`'s (:meth:`_across`).
         """
         if self._reported is None or self._reported[0] != self.revision:
             standing = [opened[0] for opened in self._open.values()]
             points = [foothold.point for foothold in self.settled] + standing
             self._reported = (self.revision, self._fitted(points or self.points()))
-        return _at(self._reported[1], x, y)
+        fitted = self._reported[1]
+        if orientation is None or not self.anchored or fitted is None:
+            return _at(fitted, x, y)
+        centre, solution, covariance, count = fitted
+        there, spread = moved(solution, covariance, x - centre[0], y - centre[1])
+        return plane_of(*self._across(there, spread, orientation), count)
+
+    def _across(
+        self, solution: Sequence[float], covariance: Covariance, orientation: Quaternion
+    ) -> tuple[tuple[float, float, float], Covariance]:
+        """The plane (a, b, c) and covariance at a point, its slope across the heading of a base
+        turned by ``orientation`` (its x axis in odom) :meth:`gradient`'s, its height there and
+        its slope along kept (:func:`ground_plane.with_slope_across`): across, the feet that
+        stand together span the track at every instant, while the footholds' left and right
+        feet land at different places on a staircase's treads and tilt the plane (2.0-3.7° on the
+        family's staircases, level across; :meth:`gradient` 0.5-1.2°). Unchanged for a base
+        facing straight up or down.
+        """
+        forward = rotate(orientation, (1.0, 0.0, 0.0))
+        norm = math.hypot(forward[0], forward[1])
+        if norm < 1e-6:
+            return (solution[0], solution[1], solution[2]), covariance
+        ux, uy = forward[0] / norm, forward[1] / norm
+        (gx, gy), (cxx, cxy, cyy) = self.gradient()
+        variance = uy * uy * cxx - 2.0 * ux * uy * cxy + ux * ux * cyy
+        return ground_plane.with_slope_across(
+            solution, covariance, (ux, uy), ux * gy - uy * gx, variance
+        )
 
     def _fitted(self, points: list[Point]) -> Fit | None:
         """The plane through ``points`` [m, odom] about their centre; None without points."""

@@ -109,3 +109,26 @@ def moved(
     m01, m02 = s01 + dx * s11 + dy * s12, s02 + dx * s12 + dy * s22
     m00 = s00 + dx * (s01 + m01) + dy * (s02 + m02)
     return (a + b * dx + c * dy, b, c), ((m00, m01, m02), (m01, s11, s12), (m02, s12, s22))
+
+
+def with_slope_across(
+    solution: Sequence[float],
+    covariance: Covariance,
+    along: tuple[float, float],
+    slope: float,
+    variance: float,
+) -> tuple[tuple[float, float, float], Covariance]:
+    """(a, b, c) and their covariance of the plane turned about its point (x₀, y₀) so that its
+    slope across the unit direction ``along`` (x, y) [odom] is ``slope`` (dz per m, to the left
+    of ``along``) with ``variance``, independent of the rest; its height there and its slope
+    along are kept.
+    """
+    (ux, uy), (a, b, c) = along, solution
+    rotation = np.array([[1.0, 0.0, 0.0], [0.0, ux, uy], [0.0, -uy, ux]])  # (a, b, c) -> along
+    turned = rotation @ np.asarray(covariance, dtype=float) @ rotation.T
+    turned[2, :] = turned[:, 2] = 0.0
+    turned[2, 2] = variance
+    back = rotation.T @ turned @ rotation
+    kept = ux * b + uy * c
+    new = (a, ux * kept - uy * slope, uy * kept + ux * slope)
+    return new, tuple((float(r[0]), float(r[1]), float(r[2])) for r in back)

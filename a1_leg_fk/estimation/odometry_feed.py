@@ -201,7 +201,7 @@ class OdometryFeed:
         stood): its height [m, odom], normal, tilt and their covariance.
         """
         position = sample.position
-        return self.ground.reported(position[0], position[1])
+        return self.ground.reported(position[0], position[1], sample.orientation)
 
     def _filtered(
         self,

@@ -12,6 +12,9 @@ in stance, the IMU's orientation, gyro and accelerometer) again and again, the s
 - its parts: ``propagate``, ``update``, ``sample``;
 - ``OdometryFeed.step``: the whole per-joint-state work of ``leg_odometry_node`` without ROS (the
   contact estimate with efforts, the feet's motion and Jacobians, the filter);
+- ``OdometryFeed.ground_plane``: the local ground the node publishes beside each sample (its slope
+  across the base's heading the standing feet's), and ``LocalGround.reported`` without the heading
+  (the footholds' plane alone, as before), the ratio printed;
 - the baselines: ``ContactEstimator.step`` and ``Quadruped.fk``.
 """
 
@@ -76,6 +79,16 @@ def main() -> None:
         feed.add_imu(stamp, imu)
         feed.step(stamp, legs, ANGLES, RATES, efforts=EFFORTS)
 
+    stood = feed.step(tick("feed"), legs, ANGLES, RATES, efforts=EFFORTS)
+    for k in range(40):  # a trot's footholds on a 5° slope: the ground has its plane
+        pair, ahead = ((0, 3), (1, 2))[k % 2], 0.1 * k
+        points = [(leg, (feet[leg][0] + ahead, feet[leg][1], 0.087 * (feet[leg][0] + ahead)))
+                  for leg in pair]  # fmt: skip
+        for sample_s in range(20):
+            feed.ground.update(k * 0.2 + sample_s * 0.01, points)
+    assert stood is not None and feed.ground_plane(stood) is not None
+    x, y, _ = stood.position
+
     runs = median_seconds_per_call(
         {
             "StateFilter step": step,
@@ -84,6 +97,8 @@ def main() -> None:
             "StateFilter.update": lambda: state.update(tick("filter"), stance, ORIENTATION),
             "StateFilter.sample": lambda: state.sample(0, (0, 3), (0, 3)),
             "OdometryFeed.step (with efforts)": fed,
+            "OdometryFeed.ground_plane": lambda: feed.ground_plane(stood),
+            "LocalGround.reported, no heading": lambda: feed.ground.reported(x, y),
             "ContactEstimator.step": lambda: contacts.step(
                 tick("contacts") / 1e9, (ANGLES, RATES, EFFORTS), legs, sample
             ),
@@ -94,6 +109,12 @@ def main() -> None:
     print(f"\n  {'one sample':<36} {'us':>8} {'x fk':>6}")
     for name, seconds in runs.items():
         print(f"  {name:<36} {seconds * 1e6:8.1f} {seconds / fk:6.1f}")
+    ground = runs["OdometryFeed.ground_plane"] / runs["LocalGround.reported, no heading"]
+    print(f"\n  the slope across the heading: the ground {ground:.2f}x its cost without it")
+    node = (runs["OdometryFeed.step (with efforts)"] + runs["OdometryFeed.ground_plane"]) / (
+        runs["OdometryFeed.step (with efforts)"] + runs["LocalGround.reported, no heading"]
+    )
+    print(f"  the odometry's step and its ground: {node:.3f}x")
     give = runs["StateFilter step"] / runs["StateFilter step, no give"]
     print(f"\n  the feet's give: StateFilter step {give:.3f}x its cost without it")
 

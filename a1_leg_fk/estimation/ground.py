@@ -334,14 +334,15 @@ class LocalGround:
         stand together span the track at every instant, while the footholds' left and right
         feet land at different places on a staircase's treads and tilt the plane (2.0-3.7° on the
         family's staircases, level across; :meth:`gradient` 0.5-1.2°). Unchanged for a base
-        facing straight up or down.
+        facing straight up or down, and where :meth:`gradient` is below :data:`LEVEL_SLOPE`
+        (the footholds are anchored level then: a flat floor's plane stays level).
         """
         forward = rotate(orientation, (1.0, 0.0, 0.0))
         norm = math.hypot(forward[0], forward[1])
-        if norm < 1e-6:
+        (gx, gy), (cxx, cxy, cyy) = self.gradient()
+        if norm < 1e-6 or gx * gx + gy * gy <= LEVEL_SLOPE**2:  # level: as the anchoring takes it
             return (solution[0], solution[1], solution[2]), covariance
         ux, uy = forward[0] / norm, forward[1] / norm
-        (gx, gy), (cxx, cxy, cyy) = self.gradient()
         variance = uy * uy * cxx - 2.0 * ux * uy * cxy + ux * ux * cyy
         return ground_plane.with_slope_across(
             solution, covariance, (ux, uy), ux * gy - uy * gx, variance

@@ -124,11 +124,12 @@ def with_slope_across(
     along are kept.
     """
     (ux, uy), (a, b, c) = along, solution
-    rotation = np.array([[1.0, 0.0, 0.0], [0.0, ux, uy], [0.0, -uy, ux]])  # (a, b, c) -> along
-    turned = rotation @ np.asarray(covariance, dtype=float) @ rotation.T
-    turned[2, :] = turned[:, 2] = 0.0
-    turned[2, 2] = variance
-    back = rotation.T @ turned @ rotation
+    (s00, s01, s02), (_, s11, s12), (_, _, s22) = covariance
     kept = ux * b + uy * c
-    new = (a, ux * kept - uy * slope, uy * kept + ux * slope)
-    return new, tuple((float(r[0]), float(r[1]), float(r[2])) for r in back)
+    with_a = ux * s01 + uy * s02  # the covariance of the height and the slope along
+    spread = ux * ux * s11 + 2.0 * ux * uy * s12 + uy * uy * s22  # the slope along's variance
+    return (a, ux * kept - uy * slope, uy * kept + ux * slope), (
+        (s00, ux * with_a, uy * with_a),
+        (ux * with_a, ux * ux * spread + uy * uy * variance, ux * uy * (spread - variance)),
+        (uy * with_a, ux * uy * (spread - variance), uy * uy * spread + ux * ux * variance),
+    )

@@ -316,3 +316,69 @@ def test_touchdowns_with_no_foot_to_measure_against_widen_the_noise_by_their_off
     ground = LocalGround(window_s=0.05)
     _turns(ground, 9, flight=True, drift=0.0)
     assert ground.touchdown_sigma_m() == pytest.approx(0.04 / 0.3186, rel=1e-9)
+
+
+def test_a_planes_slope_across_a_heading_is_replaced_its_height_and_slope_along_kept() -> None:
+    """``with_slope_across`` against a rotation done with numpy: a plane (a, b, c) = (0.3, 0.2,
+    0.1) and a covariance, heading 30°: its slope along (0.2 cos 30° + 0.1 sin 30° = 0.2232)
+    and height kept, its slope across -0.05 with variance 1e-4 and no correlation with the rest;
+    the covariance the plane's turned into (height, along, across), across replaced, turned back.
+    """
+    from a1_leg_fk.estimation.ground_plane import with_slope_across
+
+    heading = math.radians(30.0)
+    along = (math.cos(heading), math.sin(heading))
+    covariance = ((4e-4, 1e-5, -2e-5), (1e-5, 3e-3, 5e-4), (-2e-5, 5e-4, 2e-3))
+    solution, turned = with_slope_across((0.3, 0.2, 0.1), covariance, along, -0.05, 1e-4)
+    across = (-along[1], along[0])
+    slope = 0.2 * along[0] + 0.1 * along[1]
+    assert slope == pytest.approx(0.2232, abs=1e-4)
+    expected = np.array(along) * slope - 0.05 * np.array(across)
+    assert np.allclose(solution, (0.3, *expected))
+    rotation = np.array([[1.0, 0.0, 0.0], [0.0, *along], [0.0, *across]])
+    inner = rotation @ np.array(covariance) @ rotation.T
+    inner[2, :] = inner[:, 2] = 0.0
+    inner[2, 2] = 1e-4
+    assert np.allclose(turned, rotation.T @ inner @ rotation, rtol=0, atol=1e-15)
+
+
+def _stairs_trot(start_m: float) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """A trot down a staircase (6 cm steps 0.3 m deep, edges across x at 0, 0.3, 0.6 ... m),
+    the base at ``start_m`` + 0.75 m/s along x (a stride per 0.4 s cycle: one tread), the feet
+    at (±0.2, ∓0.13) m about it landing where they are and standing half a cycle, diagonal
+    pairs: the reported plane's gradient from 3 to 6 s, as the footholds' plane and with the
+    slope across the base's heading (+x) the standing feet's."""
+    offsets = [(0.2, -0.13), (0.2, 0.13), (-0.2, -0.13), (-0.2, 0.13)]
+    ground, gradients = LocalGround(), []
+    feet: dict[int, tuple[float, float, float]] = {}
+    for row in range(1200):
+        stamp = row * 0.005
+        base = start_m + 0.75 * stamp
+        pair = (0, 3) if stamp % 0.4 < 0.2 else (1, 2)
+        for leg in pair:
+            x = base + offsets[leg][0]
+            feet.setdefault(leg, (x, offsets[leg][1], -0.06 * (math.floor(x / 0.3) + 1)))
+        feet = {leg: feet[leg] for leg in pair}
+        ground.update(stamp, list(feet.items()))
+        if stamp >= 3.0:
+            plane, across = ground.reported(base, 0.0), ground.reported(base, 0.0, (0, 0, 0, 1))
+            assert plane is not None and across is not None
+            gradients.append((plane.gradient, across.gradient))
+    return gradients
+
+
+def test_on_a_staircase_the_slope_across_is_the_standing_feets_not_the_footholds() -> None:
+    """Treads are level across: the slope across is 0. The base starting at 0.05 m, every
+    diagonal pair stands across one edge (front feet 0.15-0.25 m past an edge, rear feet 0.4 m
+    behind), so the standing feet's height differences are the same for both pairs while their
+    offsets across are opposite: their slope across is 0 by hand. The footholds are not: the
+    left feet land 0.15 m further into their treads than the right ones, and the plane through
+    them tilts across (1.6°). (Started at 0 m the two pairs span different numbers of edges and
+    both tilt: 7.4° the plane, 6.6° the standing feet, docs/leg_odometry.md.)"""
+    gradients = _stairs_trot(0.05)
+    plane = max(abs(math.degrees(math.atan(grade[1]))) for grade, _ in gradients)
+    across = max(abs(math.degrees(math.atan(grade[1]))) for _, grade in gradients)
+    assert plane > 1.0
+    assert across <= 1.0
+    along = [(grade[0], turned[0]) for grade, turned in gradients]
+    assert all(first == pytest.approx(second) for first, second in along)

@@ -369,7 +369,7 @@ def _stairs_trot(start_m: float) -> list[tuple[tuple[float, float], tuple[float,
 
 def test_on_a_staircase_the_slope_across_is_the_standing_feets_not_the_footholds() -> None:
     """Treads are level across: the slope across is 0. The base starting at 0.05 m, every
-    diagonal pair stands across one edge (front feet 0.15-0.25 m past an edge, rear feet 0.4 m
+    diagonal pair stands across one edge (front feet 0.1-0.25 m past an edge, rear feet 0.4 m
     behind), so the standing feet's height differences are the same for both pairs while their
     offsets across are opposite: their slope across is 0 by hand. The footholds are not: the
     left feet land 0.15 m further into their treads than the right ones, and the plane through

@@ -21,13 +21,13 @@ that no single sample decides alone:
   is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
   of where it came down to for 20 ms: a staircase's rise is no evidence of swing; forced too);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
-  ``height_half_m``) that stood at the previous sample (all the other low feet when none did:
-  on rough ground a swing foot skims within ``height_half_m`` of the ground, and its speed is
-  not the ground's); for a foot with a force, every other low foot while it and the feet that
-  stood are all low, else the feet that stood at any height (a staircase's other treads): the
-  distance between the base velocity this foot gives if it were still
-  (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs; ``(speed_half_mps - v) /
-  speed_scale_mps``;
+  ``height_half_m``) that stood at the previous sample (a swing foot skimming rough ground is
+  low, and its speed not the ground's), else the others that stood at any height (on stairs down
+  the lowest may be a swing foot reaching for the lower tread), else every other low foot; for
+  a foot with a force, every other low foot while it and the feet that stood are all low, else
+  the feet that stood at any height: the distance between the base velocity this foot gives if
+  it were still (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs;
+  ``(speed_half_mps - v) / speed_scale_mps``;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
   force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
   ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
@@ -348,13 +348,13 @@ def _references(
 ) -> list[Vector | None]:
     """Per foot, the ground's velocity its speed is taken against [m/s, base frame]: the mean
     base velocity of the other feet with a velocity that the filter held ``standing`` at the
-    previous sample, the ``low`` ones among them for a foot without a force, or of the other
-    low feet when none of those stood (None: no other low foot). A swing foot skimming rough
-    ground is low too, and moves: the standing feet leave it out. A foot whose force is evidence
-    (``forced``) takes every other low foot while it and every standing foot are low (flat
-    ground: its force places its edges, see :func:`_kinematic`), else the standing feet at any
-    height: on stairs a foot stands on another tread than the lowest's, and the low feet are
-    swing feet coming down to the lowest tread.
+    previous sample, the ``low`` ones among them for a foot without a force (else any: on stairs
+    down the low foot may be one reaching for the lower tread), or of the other low feet when
+    none stood (None: no other low foot). A swing foot skimming rough ground is low too, and
+    moves: the standing feet leave it out. A foot whose force is evidence (``forced``) takes
+    every other low foot while it and every standing foot are low (flat ground: its force places
+    its edges, see :func:`_kinematic`), else the standing feet at any height: on stairs a foot
+    stands on another tread than the lowest's, and the low feet are swing feet coming down.
     """
     stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
     sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
@@ -372,10 +372,10 @@ def _references(
     out: list[Vector | None] = []
     for leg, velocity in enumerate(velocities):
         known = velocity is not None  # its own velocity is in the sums: leave it out
-        chosen = 1  # low and standing
-        if forced[leg]:
-            chosen = 0 if low[leg] and not stepped else 2  # low; standing
+        chosen = 1 if not forced[leg] else 0 if low[leg] and not stepped else 2  # as sums
         mine = known and standing[leg] and (chosen == 2 or low[leg])
+        if chosen == 1 and not sums[1][0] > mine:  # no other low foot stood: any that stood
+            chosen, mine = 2, known and standing[leg]
         if chosen == 0 or not sums[chosen][0] > mine:
             chosen, mine = 0, known and low[leg]
         count, sx, sy, sz = sums[chosen]

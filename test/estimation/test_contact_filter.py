@@ -83,6 +83,30 @@ def test_speeds_are_taken_against_the_feet_that_stood() -> None:
     assert out[1] == pytest.approx(sigmoid(-stood + fl_height_odds - MODEL.max_log_ratio))
 
 
+def test_a_swing_foot_reaching_down_a_step_is_no_reference_for_the_standing_feet() -> None:
+    """A staircase down, no forces (go2_stairs_down_6cm at 2.05 s): FR and RL stand still on the
+    upper tread (held standing); FL, held in swing, reaches 2 cm below them for the lower tread,
+    moving down at 0.5 m/s; RR swings 10 cm up. FL is the lowest foot, so FR and RL are not low
+    (height log-odds (16 - 20) / 4 = -1) and no other low foot stood: against every other low
+    foot (FL) FR would move 0.5 m/s, (0.32 - 0.5) / 0.08 = -2.25 more, and be called swing in
+    mid-stance. Against the feet that stood, at any height, it is still: +4. FL, whose speed had
+    no reference (no other low foot), is now 0.5 m/s against the standing feet: -2.25 on its
+    +4 height. The smoother's evidence keeps the flat rules (against every low foot)."""
+    feet = [foot(0.27), foot(0.29, (0.0, 0.0, 0.5)), foot(0.17, (1.0, 0.0, 0.0)), foot(0.27)]
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.9, 0.1, 0.1, 0.9]
+    out = contacts.update(0.0, feet, (STILL, None))
+    stood, limit = math.log(0.9 / 0.1), MODEL.max_log_ratio
+    height = (MODEL.height_half_m - 0.02) / MODEL.height_scale_m
+    moving = (MODEL.speed_half_mps - 0.5) / MODEL.speed_scale_mps
+    assert (height, moving) == (pytest.approx(-1.0), pytest.approx(-2.25))
+    assert out[0] == pytest.approx(sigmoid(stood + height + limit)) and out[0] > 0.99
+    assert out[3] == pytest.approx(out[0])
+    assert out[1] == pytest.approx(sigmoid(-stood + limit + moving))
+    assert contacts.evidence.kinematic[0] == pytest.approx(height + moving)  # the smoother's
+    assert contacts.evidence.kinematic[1] == pytest.approx(limit)
+
+
 def test_a_foot_with_a_force_on_a_higher_tread_is_still_against_the_standing_feet() -> None:
     """A staircase, forces for every foot: FR stands on a tread 3 cm above RL's (both held
     standing, both still); FL, in swing, comes down to RL's tread at 1 m/s, 5 mm above it (low);

@@ -144,9 +144,9 @@ def test_rts_with_a_heading_equals_the_batch_solution_rotation_included() -> Non
     assert np.abs(headings).max() > 0.05  # the rotations do turn
     for k in range(steps):
         block = slice(k * N, (k + 1) * N)
-        assert np.allclose(states.rotations[k], _yaw(headings[k]), atol=1e-9), k
-        assert np.allclose(states.nominals[k], mean[block][3:], atol=1e-8), k
-        assert np.allclose(states.covariances[k], covariance[block, block], atol=1e-8), k
+        assert np.allclose(states.rotations[k], _yaw(headings[k]), rtol=0, atol=1e-12), k
+        assert np.allclose(states.nominals[k], mean[block][3:], rtol=0, atol=1e-10), k
+        assert np.allclose(states.covariances[k], covariance[block, block], rtol=0, atol=1e-10), k
 
 
 SPEED, YAW_RATE, STEP_NS = 0.5, 0.4, 2_000_000

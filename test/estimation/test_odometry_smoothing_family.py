@@ -51,7 +51,9 @@ UNMET: dict[str, str] = {
     "a1_trot_slips": "RMSE not halved; noisy 3 sigma 94.4-94.7 %; smoothed/causal m/s (ratio): "
     "clean 0.0129/0.0152 (0.85), 0.0129/0.0152 (0.85); noisy 0.0166/0.0212 (0.78), "
     "0.0209/0.0250 (0.84); drift horizontal <= 0.86 %, vertical 0.00 %; 3 sigma 94.4-95.9 %, "
-    "sigma/error 1.07-2.47",
+    "sigma/error 1.07-2.47; clean, 78 % of the smoothed mean square lies where the gate rejects "
+    "every foot (6.6 % of the gait, the IMU alone across the slips), the rest follows the used "
+    "feet's own error (correlation 0.96 / 0.99 in x / y)",
     "a1_trot_fast_long": "RMSE not halved with the noisy sensors; smoothed/causal m/s (ratio): "
     "clean 0.0015/0.0035 (0.43), 0.0016/0.0037 (0.43); noisy 0.0043/0.0070 (0.61), "
     "0.0043/0.0074 (0.58); drift horizontal <= 0.04 %, vertical 0.00 %; 3 sigma 99.9 %, "

@@ -1,8 +1,9 @@
 """The smoothed trajectory (a1_leg_fk.estimation.state_smoother, odometry_smoother): the
 Rauch-Tung-Striebel pass against a dense batch least-squares solution of a small linear system
-(an independent reference); on a turning run known by construction, the smoothed estimate
-against the filter's and its covariances below the filter's; windows against the whole pass;
-the history hook leaves the live filter's output bit for bit."""
+(an independent reference), its rotation part included; on a turning run known by
+construction, the smoothed estimate against the filter's and its covariances below the
+filter's; windows against the whole pass; the history hook leaves the live filter's output bit
+for bit."""
 
 from __future__ import annotations
 
@@ -23,11 +24,14 @@ N = 15
 DT = 0.01
 
 
-def _linear_system(rng: np.random.Generator, steps: int):
-    """A linear system of the filter's shape whose rotation part stays at zero: the transition
-    (dθ turned, dθ by db_g = -dt, dv by db_a, dp by dv = dt), diagonal process noise densities,
-    measurements of v, p and the accelerometer bias part (never of dθ or db_g, so their mean
-    stays zero and every rotation the identity)."""
+def _linear_system(rng: np.random.Generator, steps: int, heading: bool = False):
+    """A linear system of the filter's shape: the transition (dθ turned, dθ by db_g = -dt, dv by
+    db_a, dp by dv = dt), diagonal process noise densities, measurements of v, p and the
+    accelerometer bias part. Without ``heading`` dθ is never observed, so its mean stays zero and
+    every rotation the identity; with it the heading dθ_z is observed too and drives dv (as the
+    filter's ``-R [f]x dt`` does), so the rotations turn about z alone (where composing them is
+    adding their angles, exactly) while dθ_x and dθ_y, decoupled from every measurement, stay
+    zero."""
     transition = np.eye(N)
     angle = 0.3 * DT
     cos, sin = math.cos(angle), math.sin(angle)
@@ -36,32 +40,38 @@ def _linear_system(rng: np.random.Generator, steps: int):
     transition[3:6, 12:15] = -DT * rng.normal(size=(3, 3))
     transition[6:9, 3:6] = DT * np.eye(3)
     density = rng.uniform(0.01, 0.5, N)
-    rows = np.zeros((7, N))
+    rows = np.zeros((8 if heading else 7, N))
     rows[0:3, 3:6] = np.eye(3)  # velocity
     rows[3, 6] = rows[4, 7] = 1.0  # horizontal position
     rows[5, 12] = rows[6, 14] = 1.0  # accelerometer bias
-    noise = np.diag(rng.uniform(0.05, 0.3, 7) ** 2)
     start = np.diag(rng.uniform(0.1, 1.0, N) ** 2)
     start[0:3, 0:3] = start[9:12, 9:12] = 0.0
     start[0:3, 0:3] += 0.01 * np.eye(3)
     start[9:12, 9:12] += 0.01 * np.eye(3)
+    if heading:
+        rows[7, 2] = 1.0  # the heading
+        transition[3:6, 2] = DT * rng.normal(0.0, 5.0, 3)  # dv by dθ_z: a horizontal force
+    noise = np.diag(rng.uniform(0.05, 0.3, len(rows)) ** 2)
     truth = [rng.multivariate_normal(np.zeros(N), start)]
     truth[0][0:3] = truth[0][9:12] = 0.0
     q = np.diag(density * DT)
     for _ in range(steps):
         truth.append(transition @ truth[-1] + rng.multivariate_normal(np.zeros(N), q))
-    measured = [rows @ x + rng.multivariate_normal(np.zeros(7), noise) for x in truth]
+    measured = [rows @ x + rng.multivariate_normal(np.zeros(len(rows)), noise) for x in truth]
     return transition, density, rows, noise, start, measured
 
 
-def test_rts_equals_the_batch_least_squares_solution() -> None:
-    """A textbook Kalman filter (written here) records its steps into a FilterHistory; the
-    smoother's means and covariances equal the batch solution: the normal equations of every
-    state at once (prior, dynamics and measurements weighted by their inverse covariances),
-    its inverse's diagonal blocks the covariances."""
-    rng = np.random.default_rng(3)
-    steps = 25
-    transition, density, rows, noise, start, measured = _linear_system(rng, steps)
+def _yaw(angle: float) -> np.ndarray:
+    """The rotation by ``angle`` [rad] about z."""
+    cos, sin = math.cos(angle), math.sin(angle)
+    return np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _filtered_history(system, steps: int):
+    """A textbook Kalman filter (written here) over ``system``, recording its steps into a
+    FilterHistory as the state filter does (the rotation: the error's dθ_z as a yaw, the rest
+    nominal); the history and the last state (rotation, nominal, covariance)."""
+    transition, density, rows, noise, start, measured = system
     q = np.diag(density * DT)
     history = FilterHistory(density, capacity=4)
     x = np.zeros(N)
@@ -74,18 +84,22 @@ def test_rts_equals_the_batch_least_squares_solution() -> None:
 
     x, p = update(x, p, measured[0])
     for k in range(steps):
-        history.before(k, np.eye(3), x[3:], p)
+        history.before(k, _yaw(x[2]), x[3:], p)
         x, p = transition @ x, transition @ p @ transition.T + q
-        history.after(transition, np.eye(3), x[3:])
+        history.after(transition, _yaw(x[2]), x[3:])
         x, p = update(x, p, measured[k + 1])
-    assert np.allclose(x[0:3], 0.0)
-    states = smooth(history, (np.eye(3), x[3:], p), steps)
-    # the batch problem: all 26 states at once
+    assert np.allclose(x[0:2], 0.0, atol=1e-15)
+    return history, (_yaw(x[2]), x[3:], p)
+
+
+def _batch_solution(system, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every state at once: the normal equations (prior, dynamics and measurements weighted by
+    their inverse covariances); the mean ((steps + 1) * 15) and its covariance."""
+    transition, density, rows, noise, start, measured = system
     size = (steps + 1) * N
     information, vector = np.zeros((size, size)), np.zeros(size)
-    prior = np.linalg.inv(start)
-    information[:N, :N] += prior
-    q_inverse, r_inverse = np.linalg.inv(q), np.linalg.inv(noise)
+    information[:N, :N] += np.linalg.inv(start)
+    q_inverse, r_inverse = np.linalg.inv(np.diag(density * DT)), np.linalg.inv(noise)
     for k in range(steps + 1):
         block = slice(k * N, (k + 1) * N)
         information[block, block] += rows.T @ r_inverse @ rows
@@ -96,7 +110,17 @@ def test_rts_equals_the_batch_least_squares_solution() -> None:
             both[:, (k + 1) * N : (k + 2) * N] = np.eye(N)
             information += both.T @ q_inverse @ both
     covariance = np.linalg.inv(information)
-    mean = covariance @ vector
+    return covariance @ vector, covariance
+
+
+def test_rts_equals_the_batch_least_squares_solution() -> None:
+    """The smoother's means and covariances over the textbook filter's history equal the batch
+    solution (its inverse's diagonal blocks the covariances); the rotation stays the identity."""
+    steps = 25
+    system = _linear_system(np.random.default_rng(3), steps)
+    history, end = _filtered_history(system, steps)
+    states = smooth(history, end, steps)
+    mean, covariance = _batch_solution(system, steps)
     for k in range(steps):
         block = slice(k * N, (k + 1) * N)
         assert np.allclose(states.nominals[k], mean[block][3:], atol=1e-8), k
@@ -104,6 +128,25 @@ def test_rts_equals_the_batch_least_squares_solution() -> None:
         assert np.allclose(
             states.covariances[k][3:, 3:], covariance[block, block][3:, 3:], atol=1e-8
         )
+
+
+def test_rts_with_a_heading_equals_the_batch_solution_rotation_included() -> None:
+    """The smoother's rotation path (the updates' injection ``Log(R⁻ᵀ R)``, the smoothed
+    ``R Exp(δθ)``) and the orientation's rows and columns of the covariances: with the heading
+    observed and driving the velocity, the smoothed rotations are the yaws of the batch
+    solution's heading, and every mean and the whole 15 x 15 covariances equal it."""
+    steps = 40
+    system = _linear_system(np.random.default_rng(8), steps, heading=True)
+    history, end = _filtered_history(system, steps)
+    states = smooth(history, end, steps)
+    mean, covariance = _batch_solution(system, steps)
+    headings = mean[2 : steps * N : N]
+    assert np.abs(headings).max() > 0.05  # the rotations do turn
+    for k in range(steps):
+        block = slice(k * N, (k + 1) * N)
+        assert np.allclose(states.rotations[k], _yaw(headings[k]), rtol=0, atol=1e-12), k
+        assert np.allclose(states.nominals[k], mean[block][3:], rtol=0, atol=1e-10), k
+        assert np.allclose(states.covariances[k], covariance[block, block], rtol=0, atol=1e-10), k
 
 
 SPEED, YAW_RATE, STEP_NS = 0.5, 0.4, 2_000_000

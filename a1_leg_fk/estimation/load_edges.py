@@ -110,7 +110,7 @@ def loaded_stance(
         floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
         if floor is not None:
             _carried(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
-        _ramp(result, stamps_s, loads[:, leg], last, leg)
+        _ramp(result, (stamps_s, loads[:, leg]), last, leg, floor)
     return result
 
 
@@ -153,11 +153,18 @@ def _carried(
 
 
 def _ramp(
-    result: np.ndarray, stamps_s: np.ndarray, loads: np.ndarray, last: int, leg: int
+    result: np.ndarray,
+    leg_rows: tuple[np.ndarray, np.ndarray],
+    last: int,
+    leg: int,
+    noise_n: float | None,
 ) -> None:
-    """The unloading ramp of the leg's ``loads`` [N] before row ``last`` carried to zero (the
-    module text), into ``result``: least squares in floats (a handful of samples).
+    """The unloading ramp of the leg's loads [N] before row ``last`` carried to zero (the
+    module text), into ``result``: least squares in floats (a handful of samples);
+    ``leg_rows``: the stamps [s] and the leg's loads; none where the line's load at ``last``
+    stands above the floor of the load's noise ``noise_n`` [N] (None: unknown).
     """
+    stamps_s, loads = leg_rows
     end_s = float(stamps_s[last])
     first = int(np.searchsorted(stamps_s, end_s - RAMP_WINDOW_S + 1e-9, side="left"))
     points = [
@@ -177,6 +184,8 @@ def _ramp(
     offset = n_mean - slope * t_mean
     if not slope < 0.0 or -offset / slope > RAMP_REACH_S:
         return
+    if noise_n is not None and offset > FLOOR_SIGMAS * noise_n:
+        return  # the samples' own loads resolve the ramp: the floor's rule places its end
     residuals = [n - offset - slope * t for t, n in points]
     variance = sum(r * r for r in residuals) / max(count - 2, 1)
     if not math.isfinite(variance):  # absurd loads: no ramp

@@ -183,16 +183,14 @@ class ContactFilter:
                 common = min(0.0, _clip(fall, limit, limit))
         forces = NO_FORCES if normal_forces is None else normal_forces
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
-        half, per, weak = model.force_half_n, model.force_scale_n, model.max_kinematic_stance
-        pushes = [  # the force's log-odds; for a foot without one, free fall's
-            _clip((force - half) / per, limit, limit) if on else common
-            for force, on in zip(forces, forced, strict=True)
-        ]
-        # the kinematics' stance: weak while falling or beside a force; none if that says swing
-        caps = [
-            0.0 if on and push < 0.0 else weak if on or common < -1.0 else limit
-            for on, push in zip(forced, pushes, strict=True)
-        ]
+        # the force's log-odds (free fall's without one); the kinematics' stance: weak while
+        # falling or beside a force, none where that force says swing
+        weak = model.max_kinematic_stance
+        pushes, caps = [common] * LEGS, [weak if common < -1.0 else limit] * LEGS
+        for leg, force in enumerate(forces):
+            if forced[leg]:
+                push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)
+                pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:

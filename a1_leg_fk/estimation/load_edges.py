@@ -19,7 +19,10 @@ three rules may lengthen it, never shorten it:
   sample's own load weighted by their inverse variances (the line's standard error there; the
   spread of the line's residuals for the sample): a load that falls off a cliff, as a trotting
   foot's does in its last sample, is not carried on by the line, and one that follows it is
-  carried with more confidence;
+  carried with more confidence. Where the load's noise floor (below) is known and the line's load
+  at the stance's last sample stands above it, the samples' own loads show where it reaches zero
+  and the floor's rule alone places the end: a trotting foot's load ramps down to 6-10 N, then
+  falls to zero within a sample, and the line would carry the stance one to three samples on;
 - **the load above the noise floor**: the samples right after the stance whose load stays above
   :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
   last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread

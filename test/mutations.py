@@ -91,8 +91,14 @@ MUTATIONS = (
     Mutation(
         "contact filter's force evidence x 0",
         "a1_leg_fk/estimation/contact_filter.py",
-        "odds += _clip(force, limit, limit)",
-        "odds += _clip(0.0 * force, limit, limit)",
+        "push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)",
+        "push = _clip(0.0 * force / model.force_scale_n, limit, limit)",
+    ),
+    Mutation(
+        "a forced foot whose force says swing keeps its low-and-still stance",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak",
+        "pushes[leg], caps[leg] = push, weak",
     ),
     Mutation(
         "contact filter's speeds against every low foot, not the feet that stood",
@@ -256,6 +262,12 @@ MUTATIONS = (
         "a1_leg_fk/estimation/pooled_rise.py",
         "np.broadcast_arrays(np.ones_like(times), times, rising)",
         "np.broadcast_arrays(np.ones_like(times), 0.0 * times, rising)",
+    ),
+    Mutation(
+        "the unloading ramp carried past a cliff the samples' own loads show",
+        "a1_leg_fk/estimation/load_edges.py",
+        "if noise_n is not None and offset > FLOOR_SIGMAS * noise_n:",
+        "if False:",
     ),
     Mutation(
         "the load's dip never bridged",

@@ -36,9 +36,9 @@ that no single sample decides alone:
 
 The kinematic evidence is asymmetric: a foot high or fast is strong evidence of swing (down to
 ``-max_log_ratio``), one low and still only weak evidence of stance (up to
-``max_kinematic_stance``), because an unloaded foot, or every foot in a flight phase, is low and
-still too. Defaults scale with the robot (:meth:`ContactModel.for_robot`): forces with its
-weight, heights and speeds with its leg length.
+``max_kinematic_stance``; none beside a force that says swing), because an unloaded foot, or
+every foot in a flight phase, is low and still too. Defaults scale with the robot
+(:meth:`ContactModel.for_robot`): forces with its weight, heights and speeds with its leg length.
 """
 
 from __future__ import annotations
@@ -179,12 +179,18 @@ class ContactFilter:
             fx, fy, fz = specific_force
             felt = sqrt(fx * fx + fy * fy + fz * fz)
             if isfinite(felt):
-                common = min(
-                    0.0, _clip((felt - model.fall_half_mps2) / model.fall_scale_mps2, limit, limit)
-                )
+                fall = (felt - model.fall_half_mps2) / model.fall_scale_mps2
+                common = min(0.0, _clip(fall, limit, limit))
         forces = NO_FORCES if normal_forces is None else normal_forces
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
-        # falling, no foot stands however low and still it is: the kinematics' stance is weak
+        # the force's log-odds (free fall's without one); the kinematics' stance: weak while
+        # falling or beside a force, none where that force says swing
+        weak = model.max_kinematic_stance
+        pushes, caps = [common] * LEGS, [weak if common < -1.0 else limit] * LEGS
+        for leg, force in enumerate(forces):
+            if forced[leg]:
+                push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)
+                pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
@@ -194,27 +200,21 @@ class ContactFilter:
             model,
             feet,
             (omega, standing),
-            (forced, common < -1.0),
+            (forced, caps),
             (heights, _rise_odds(model, self.ground.rise) if down is not None else None),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
             prior = _logit(previous + switch * (1.0 - 2.0 * previous))
-            odds = prior + kinematic[leg]
-            if forced[leg]:
-                force = (forces[leg] - model.force_half_n) / model.force_scale_n
-                odds += _clip(force, limit, limit)
-            else:  # free fall stands in for a foot's own force
-                odds += common
+            odds = prior + kinematic[leg] + pushes[leg]
             if phase_prior is not None and isfinite(phase_prior[leg]):
                 odds += model.phase_weight * _logit(phase_prior[leg])
             posterior.append(1.0 / (1.0 + exp(-odds)))
             totals.append(odds - prior - lowered[leg])
         self.probabilities = posterior
-        # the smoother's evidence by the flat rules: the rise rules and the speeds against the
-        # feet that stood follow this filter's own state (the feet it holds standing), which a
-        # backward pass does not share (with the caps, 7 smoothed runs without efforts fell
-        # below 98 %; with the speeds, 12 lost 0.01-0.67 point)
+        # the smoother's evidence by the flat rules: the rise rules and the speeds against the feet
+        # that stood follow this filter's own state, which a backward pass does not share (with
+        # the caps, 7 smoothed runs without efforts fell below 98 %; the speeds: 12 lost 0.01-0.67)
         plain = [k - off for k, off in zip(kinematic, lowered, strict=True)]
         self.evidence = SampleEvidence(switch, plain, forced, totals, taken)
         return posterior
@@ -243,21 +243,20 @@ def _kinematic(
     model: ContactModel,
     feet: Sequence[FootMotion | None],
     motion: tuple[Sequence[float], Sequence[bool]],
-    force: tuple[Sequence[bool], bool],
+    force: tuple[Sequence[bool], Sequence[float]],
     terrain: tuple[Sequence[float] | None, Sequence[float] | None],
 ) -> tuple[list[float], list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
-    the feet whose force is evidence too (``force``: per foot, and whether the base is falling,
-    then for all); and the heights [m] it took (NaN: unknown): above the lowest foot, or from
-    ``terrain``'s first (the slope taken off) where that is lower; its second bounds each foot's
-    height log-odds (a foot risen above its own foothold, or at its own level:
-    :func:`_rise_odds`); and how far each foot's evidence is from the flat rules' (no rise rule,
-    speeds against every low foot), which the smoother takes. The rise above a foot's own
-    foothold and the speeds against the feet that stood are for the feet without a force: with
-    one, the causal filter's liftoffs moved ahead of the smoothed ones by 1-2 foot-samples on
-    three runs of the contact family (the smoother with efforts no better than the causal
-    filter), so a forced foot keeps the flat rules but one: landed, its height says no swing
-    either (on stairs its tread is not the lowest foot's; on level ground it is low anyway).
+    the feet whose force is evidence too (``force``: per foot, whether it is, and the most
+    stance its height and speed may each say); and the heights [m] it took (NaN: unknown):
+    above the lowest foot, or from ``terrain``'s first (the slope taken off) where that is
+    lower; its second bounds each foot's height log-odds (a foot risen above its own foothold,
+    or at its own level: :func:`_rise_odds`); and how far each foot's evidence is from the flat
+    rules' (no rise rule, speeds against every low foot), which the smoother takes. The rise
+    above a foot's own foothold and the speeds against the feet that stood are for the feet
+    without a force: with one, the causal filter's liftoffs moved ahead of the smoothed ones by
+    1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
+    but one: landed, its height says no swing either (on stairs its tread is not the lowest's).
     ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
     previous sample (the speeds' reference).
     """
@@ -269,10 +268,9 @@ def _kinematic(
     if not isfinite(lowest):
         return [0.0] * LEGS, [math.nan] * LEGS, [0.0] * LEGS
     (wx, wy, wz), standing = motion
-    forced, falling = force
+    forced, caps = force
     ground, rises = terrain
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
-    stance_cap = model.max_kinematic_stance
     velocities: list[Vector | None] = [None] * LEGS
     heights = [math.nan] * LEGS
     for leg, foot in enumerate(feet):
@@ -293,7 +291,7 @@ def _kinematic(
         flats = _references(velocities, low, [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
-        cap = stance_cap if falling or forced[leg] else limit
+        cap = caps[leg]
         height, velocity, reference = heights[leg], velocities[leg], references[leg]
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)

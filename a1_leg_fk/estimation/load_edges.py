@@ -19,7 +19,10 @@ three rules may lengthen it, never shorten it:
   sample's own load weighted by their inverse variances (the line's standard error there; the
   spread of the line's residuals for the sample): a load that falls off a cliff, as a trotting
   foot's does in its last sample, is not carried on by the line, and one that follows it is
-  carried with more confidence;
+  carried with more confidence. Where the load's noise floor (below) is known and the line's load
+  at the stance's last sample stands above it, the samples' own loads show where it reaches zero
+  and the floor's rule alone places the end: a trotting foot's load ramps down to 6-10 N, then
+  falls to zero within a sample, and the line would carry the stance one to three samples on;
 - **the load above the noise floor**: the samples right after the stance whose load stays above
   :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
   last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread
@@ -110,7 +113,7 @@ def loaded_stance(
         floor = _noise(loads, swing, stamps_s, float(stamps_s[last]))
         if floor is not None:
             _carried(result, (stamps_s, loads[:, leg], stance[:, leg]), last, leg, floor)
-        _ramp(result, stamps_s, loads[:, leg], last, leg)
+        _ramp(result, (stamps_s, loads[:, leg]), last, leg, floor)
     return result
 
 
@@ -153,11 +156,18 @@ def _carried(
 
 
 def _ramp(
-    result: np.ndarray, stamps_s: np.ndarray, loads: np.ndarray, last: int, leg: int
+    result: np.ndarray,
+    leg_rows: tuple[np.ndarray, np.ndarray],
+    last: int,
+    leg: int,
+    noise_n: float | None,
 ) -> None:
-    """The unloading ramp of the leg's ``loads`` [N] before row ``last`` carried to zero (the
-    module text), into ``result``: least squares in floats (a handful of samples).
+    """The unloading ramp of the leg's loads [N] before row ``last`` carried to zero (the
+    module text), into ``result``: least squares in floats (a handful of samples);
+    ``leg_rows``: the stamps [s] and the leg's loads; none where the line's load at ``last``
+    stands above the floor of the load's noise ``noise_n`` [N] (None: unknown).
     """
+    stamps_s, loads = leg_rows
     end_s = float(stamps_s[last])
     first = int(np.searchsorted(stamps_s, end_s - RAMP_WINDOW_S + 1e-9, side="left"))
     points = [
@@ -177,6 +187,8 @@ def _ramp(
     offset = n_mean - slope * t_mean
     if not slope < 0.0 or -offset / slope > RAMP_REACH_S:
         return
+    if noise_n is not None and offset > FLOOR_SIGMAS * noise_n:
+        return  # the samples' own loads resolve the ramp: the floor's rule places its end
     residuals = [n - offset - slope * t for t, n in points]
     variance = sum(r * r for r in residuals) / max(count - 2, 1)
     if not math.isfinite(variance):  # absurd loads: no ramp

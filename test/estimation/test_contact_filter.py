@@ -254,3 +254,30 @@ def test_a_swing_foot_that_landed_on_a_higher_tread_stands() -> None:
         stamps.append(0.002 * n if out[1] >= 0.5 else math.nan)
     assert min(s for s in stamps if s == s) == pytest.approx(0.028)  # noqa: PLR0124
     assert contacts.evidence.kinematic[1] == pytest.approx(0.0)  # the smoother's: the flat rules
+
+
+def test_a_foot_whose_force_says_swing_gets_no_low_and_still_stance() -> None:
+    """A position motor's bounce (docs/forces.md): four feet stand still at one height with
+    50 N, FL's force then reads 0 N for two samples and 50 N again; its height and speed stay
+    stance-like (+0.5 each beside a force). A foot held standing enters a 2 ms sample with the
+    transition's log((1 - s) / s) = +3.90 and its force says -4 (the clip): with the low, still
+    foot's +1 it would stand (+0.90); a force that says swing leaves its kinematics no stance
+    evidence, so both samples are swing (-0.10, then -4.10), and the evidence kept for the
+    smoother says the same (0). Its swing evidence is kept: FL 5 cm up would say -4."""
+    limit, cap = MODEL.max_log_ratio, MODEL.max_kinematic_stance
+    switch = 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
+    contacts, p = ContactFilter(MODEL), 0.5
+    for n in range(40):
+        fl = 0.0 if n in (30, 31) else 50.0
+        out = contacts.update(0.002, [foot(0.3)] * 4, (STILL, None), [50.0, fl, 50.0, 50.0])
+        prior = p + switch * (1.0 - 2.0 * p)
+        force = -limit if fl == 0.0 else limit
+        p = sigmoid(math.log(prior / (1.0 - prior)) + force + (0.0 if fl == 0.0 else 2 * cap))
+        assert out[1] == pytest.approx(p, rel=1e-9), n
+        assert (out[1] >= 0.5) == (n not in (30, 31)), n
+        assert contacts.evidence.kinematic[1] == pytest.approx(0.0 if fl == 0.0 else 2 * cap)
+    assert math.log((1.0 - switch) / switch) == pytest.approx(3.90, abs=0.005)
+    risen = contacts.update(0.002, [foot(0.3), foot(0.25)] + [foot(0.3)] * 2, (STILL, None),
+                            [50.0, 0.0, 50.0, 50.0])  # fmt: skip
+    assert contacts.evidence.kinematic[1] == pytest.approx(-limit)  # height -6: clipped
+    assert risen[1] < 0.5

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
 from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
+from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.load_edges import unlagged
 
 LEGS, STEP_S, WEIGHT_N = 4, 0.002, 120.0
@@ -179,3 +181,32 @@ def test_windows_give_the_whole_pass_with_loads(case: str) -> None:
         parts.append(smoother.take(smoother.final_rows()))
     parts.append(smoother.take(len(smoother.pending)))
     np.testing.assert_array_equal(np.concatenate(parts) >= 0.5, whole)
+
+
+def test_a_trotting_foots_liftoff_smoothed_is_no_later_than_the_filters() -> None:
+    """A trot's clean liftoffs (a1_trot_soft's RL at 1.7 s: the load ramping down 2.9 N a
+    sample to 8.2 N, then nothing; 0.05 N of noise, the floor 0.4 N), the feet low and still
+    throughout: the causal filter (no low-and-still stance beside a force that says swing) lets
+    go on the first sample without load. The smoother, run on the filter's own evidence, lets
+    go there too: the unloading ramp's line (8.0 N at the stance's last sample, reaching zero
+    5.7 ms after it, far above the floor) would carry the stance two samples past the cliff,
+    where the samples' own loads say none."""
+    rng = np.random.default_rng(46)
+    ramp = [25.1, 22.2, 19.3, 16.4, 13.6, 10.6, 8.2]
+    stride = np.r_[np.full(100 - len(ramp), 30.0), ramp, np.zeros(100)]
+    true = np.stack([np.roll(np.tile(stride, 10), shift) for shift in (0, 100, 100, 0)], axis=1)
+    loads = np.abs(true + rng.normal(0.0, 0.05, true.shape))
+    still = FootMotion((0.0, 0.0, 0.0), (0.0, 0.0, -0.3), 0.3)
+    contacts = ContactFilter(ContactModel.for_robot(WEIGHT_N, 0.4))
+    causal, kept = np.empty(true.shape), []
+    for k, row in enumerate(loads.tolist()):
+        causal[k] = contacts.update(STEP_S, [still] * LEGS, ((0.0, 0.0, 0.0), None), row)
+        kept.append(contacts.evidence)
+    switch, kinematic, forced, total, heights = (np.array(c) for c in zip(*kept, strict=True))
+    stamps = np.arange(len(loads)) * STEP_S
+    rows = EvidenceRows(stamps, switch, kinematic, forced, total, loads, heights)
+    smoothed = stance_of(rows)
+    for leg in range(LEGS):
+        zeros = np.flatnonzero((true[:-1, leg] > 0.0) & (true[1:, leg] == 0.0)) + 1
+        assert liftoffs(causal[:, leg] >= 0.5).tolist() == zeros.tolist(), leg
+        assert liftoffs(smoothed[:, leg]).tolist() == zeros.tolist(), leg

@@ -1,15 +1,16 @@
 """``a1-leg-fk calibrate``: the model corrections (:mod:`a1_leg_fk.estimation.model_corrections`)
 fitted over a whole recording, and the payload its standing phase shows; no ROS install.
 
-One pass of the force and contact pipeline (the bag tools' and the node's) with the corrections
+A pass of the force and contact pipeline (the bag tools' and the node's) with the corrections
 learning without forgetting: every joint's bias, viscous and Coulomb terms are the least squares
 over every sample in which its foot was surely in the air (each shrunk by three of its standard
 deviations, as online, with the variance of the fit's own residual), with the residual's RMS
 before and after the fit; each leg's inertia scale as learnt by the end
-(:mod:`a1_leg_fk.estimation.leg_scales`). The payload: while all
-four feet stand (the filter's probability of stance at least :data:`STANDING_PROBABILITY`) and
-are still (each foot slower than :data:`STILL_MPS` in the base frame), the normal forces' sum is
-the robot's weight; its mean over the URDF's weight, in kg. A recording that cannot identify
+(:mod:`a1_leg_fk.estimation.leg_scales`). The payload, in a second pass with those terms fixed
+(as a node given the file weighs): while all four feet stand (the filter's probability of
+stance at least :data:`STANDING_PROBABILITY`) and are still (each foot slower than
+:data:`STILL_MPS` in the base frame), the normal forces' sum is the robot's weight; its mean
+over the URDF's weight, in kg. A recording that cannot identify
 something is refused in one line: no efforts, never a foot surely in the air, never
 :data:`MIN_STANDING_S` of standing still.
 """
@@ -133,9 +134,8 @@ def calibrate_recording(
         scales_fitted = base_motion(forces)
         estimator.correction_settings = CALIBRATION if scales_fitted else WITHOUT_IMU
         estimator.timing = EffortTiming(scale, latency_s)
-        standing = _Standing()
-        for block in iter_foot_blocks(recording, progress=progress):
-            standing.add(block)
+        for _ in iter_foot_blocks(recording, progress=progress):
+            pass
         corrections = estimator.corrections
     finally:
         close_recording(recording)
@@ -146,26 +146,51 @@ def calibrate_recording(
             "can be fitted; "
             "record a few strides"
         )
+    corrections.solve()
+    residuals = corrections.fit_residuals()
+    fitted = CorrectionFile(
+        recording.quadruped.joint_names,
+        tuple(corrections.terms_at([after * after for _, _, after in residuals])),
+        tuple(residuals),
+        0.0,
+        0.0,
+        str(path),
+        estimator.statics.total_mass_kg,
+        scale,
+        latency_s,
+        tuple(corrections.scales.scales),
+    )
+    standing = _weighed(path, fitted, progress, choices)
     if standing.seconds < MIN_STANDING_S:
         raise LegFkError(
             f"{path}: never stood still ({standing.seconds:.2f} s with all four feet down and "
             f"still, {MIN_STANDING_S:g} s needed), so no payload can be weighed; record a "
             "standing phase"
         )
-    corrections.solve()
-    urdf_mass = estimator.statics.total_mass_kg
-    weight_n = float(np.mean(standing.sums))
-    residuals = corrections.fit_residuals()
-    file = CorrectionFile(
-        recording.quadruped.joint_names,
-        tuple(corrections.terms_at([after * after for _, _, after in residuals])),
-        tuple(residuals),
-        weight_n / STANDARD_GRAVITY - urdf_mass,
-        standing.seconds,
-        str(path),
-        urdf_mass,
-        scale,
-        latency_s,
-        tuple(corrections.scales.scales),
-    )
+    payload_kg = float(np.mean(standing.sums)) / STANDARD_GRAVITY - fitted.urdf_mass_kg
+    file = replace(fitted, payload_kg=payload_kg, standing_s=standing.seconds)
     return Calibration(file, scales_fitted)
+
+
+def _weighed(
+    path: str | Path, fitted: CorrectionFile, progress: bool, choices: RecordingChoices
+) -> _Standing:
+    """The standing phase of the recording at ``path`` weighed in a second pass with the
+    ``fitted`` terms, scales and timing fixed (as a node given the file runs): weighed during
+    the fit, it took the terms learnt so far (none at a recording's start), and a calf bias of
+    0.5 N m read as 1.28 kg of payload.
+    """
+    recording = open_recording(path, **choices)
+    try:
+        if recording.forces is None:  # not after the first pass; a file changed meanwhile
+            raise LegFkError(f"{path}: no foot forces to weigh the standing phase with")
+        estimator = recording.forces.estimator
+        estimator.calibration = fitted
+        estimator.timing = EffortTiming(fitted.effort_scale, fitted.effort_latency_s)
+        estimator.reset()
+        standing = _Standing()
+        for block in iter_foot_blocks(recording, progress=progress):
+            standing.add(block)
+        return standing
+    finally:
+        close_recording(recording)

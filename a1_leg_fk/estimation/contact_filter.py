@@ -27,7 +27,10 @@ that no single sample decides alone:
   a foot with a force, every other low foot while it and the feet that stood are all low, else
   the feet that stood at any height: the distance between the base velocity this foot gives if
   it were still (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs;
-  ``(speed_half_mps - v) / speed_scale_mps``;
+  ``(speed_half_mps - v) / speed_scale_mps``; for a foot with a force, its swing side times
+  ``1 - F / max_log_ratio``, ``F`` the force's log-odds from 0 up: a foot whose force says it
+  presses (at ``max_log_ratio``) is in contact however it slides (go2_stairs_down_6cm's
+  landing feet slide 0.57 m/s, median, over a tread's edge under load);
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
   force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
   ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
@@ -191,6 +194,11 @@ class ContactFilter:
             if forced[leg]:
                 push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
+        # a speed is no swing evidence for a foot its force says presses (the truth: force > 0)
+        fades = [
+            1.0 - max(push, 0.0) / limit if on else 1.0
+            for push, on in zip(pushes, forced, strict=True)
+        ]
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
@@ -200,7 +208,7 @@ class ContactFilter:
             model,
             feet,
             (omega, standing),
-            (forced, caps),
+            (forced, caps, fades),
             (heights, _rise_odds(model, self.ground.rise) if down is not None else None),
         )
         posterior, totals = [], []
@@ -243,7 +251,7 @@ def _kinematic(
     model: ContactModel,
     feet: Sequence[FootMotion | None],
     motion: tuple[Sequence[float], Sequence[bool]],
-    force: tuple[Sequence[bool], Sequence[float]],
+    force: tuple[Sequence[bool], Sequence[float], Sequence[float]],
     terrain: tuple[Sequence[float] | None, Sequence[float] | None],
 ) -> tuple[list[float], list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
@@ -258,7 +266,8 @@ def _kinematic(
     1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
     but one: landed, its height says no swing either (on stairs its tread is not the lowest's).
     ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
-    previous sample (the speeds' reference).
+    previous sample (the speeds' reference); ``force``'s third: per foot, the share of its
+    speed's swing evidence its force leaves (:func:`_speed_odds`).
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -268,7 +277,7 @@ def _kinematic(
     if not isfinite(lowest):
         return [0.0] * LEGS, [math.nan] * LEGS, [0.0] * LEGS
     (wx, wy, wz), standing = motion
-    forced, caps = force
+    forced, caps, fades = force
     ground, rises = terrain
     half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
     velocities: list[Vector | None] = [None] * LEGS
@@ -304,26 +313,29 @@ def _kinematic(
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
                 lowered[leg], evidence = risen - evidence, risen
         if velocity is not None:
-            speed = _speed_odds(velocity, reference, model, cap)
+            fade = fades[leg]
+            speed = _speed_odds(velocity, reference, model, cap, fade)
             evidence += speed
             if flats is not references and flats[leg] != reference:  # for the smoother
-                lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap)
+                lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap, fade)
         out.append(evidence)
     return out, heights, lowered
 
 
 def _speed_odds(
-    velocity: Vector, reference: Vector | None, model: ContactModel, cap: float
+    velocity: Vector, reference: Vector | None, model: ContactModel, cap: float, fade: float
 ) -> float:
     """A foot's speed log-odds: its base velocity [m/s] against the ``reference``'s (0: none),
-    within ``-max_log_ratio`` and ``cap``.
+    within ``-max_log_ratio`` and ``cap``, the swing side (below 0) times ``fade`` (the share
+    its force leaves it, see the module text).
     """
     if reference is None:
         return 0.0
     (vx, vy, vz), (gx, gy, gz) = velocity, reference
     dx, dy, dz = vx - gx, vy - gy, vz - gz
     speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
-    return _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model.max_log_ratio, cap)
+    odds = _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model.max_log_ratio, cap)
+    return odds * fade if odds < 0.0 else odds
 
 
 def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:

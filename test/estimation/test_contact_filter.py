@@ -125,8 +125,9 @@ def test_a_foot_with_a_force_on_a_higher_tread_is_still_against_the_standing_fee
     assert fr_height == pytest.approx(-3.5)
     assert out[0] == pytest.approx(sigmoid(stood + limit + fr_height + cap))
     assert out[3] == pytest.approx(sigmoid(stood + limit + 2 * cap))
-    flat = (MODEL.speed_half_mps - 0.5) / MODEL.speed_scale_mps  # against RL and FL
-    assert contacts.evidence.kinematic[0] == pytest.approx(fr_height + flat)  # the smoother's
+    # the smoother's: against RL and FL, (0.32 - 0.5) / 0.08 = -2.25, but FR's 50 N (+4) is sure
+    # it presses: a speed is then no swing evidence
+    assert contacts.evidence.kinematic[0] == pytest.approx(fr_height)
 
 
 def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:
@@ -182,6 +183,36 @@ def test_a_foot_with_a_force_that_landed_on_a_higher_tread_stands() -> None:
         stamps.append(0.002 * n if out[1] >= 0.5 else math.nan)
     assert min(s for s in stamps if s == s) == pytest.approx(0.028)  # noqa: PLR0124
     assert contacts.evidence.kinematic[1] == pytest.approx(-limit + cap)  # the flat rules
+
+
+def test_a_loaded_foot_sliding_over_a_treads_edge_stands() -> None:
+    """Forces for every foot: three feet stand still 0.3 m under the base with 50 N; FL, held
+    in swing, lands on a tread's edge 16 mm above them (height at even odds: 0) bearing 20 N
+    (+4, clipped) and slides off it at 1 m/s against them ((0.32 - 1) / 0.08: -4, clipped), as
+    go2_stairs_down_6cm's landing feet. The speed's swing evidence fades with the force's
+    log-odds: ``1 - 4 / 4`` of it is left, so the force decides: +4 a sample, standing from the
+    first (0.01, through the transition model 0.029: -3.50 + 4 = +0.50). Without the fade,
+    force and speed cancel and the foot stays in swing while it slides (the transition model
+    alone pulls it towards even odds). At 4.8 N ((4.8 - 3.6) / 0.6 = +2) half of the speed's
+    -4 is left."""
+    contacts = ContactFilter(MODEL)
+    contacts.probabilities = [0.99, 0.01, 0.99, 0.99]
+    limit = MODEL.max_log_ratio
+    switch = 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
+    p = 0.01
+    for n in range(1, 11):  # 20 ms at 500 Hz
+        feet = [foot(0.3), foot(0.284, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
+        out = contacts.update(0.002, feet, (STILL, None), [50.0, 20.0, 50.0, 50.0])
+        prior = p + switch * (1.0 - 2.0 * p)
+        p = sigmoid(math.log(prior / (1.0 - prior)) + limit)
+        assert out[1] == pytest.approx(p, rel=1e-9), n
+        assert out[1] > 0.5, n
+    assert contacts.evidence.kinematic[1] == pytest.approx(0.0, abs=1e-9)  # the smoother's too
+    half = ContactFilter(MODEL)
+    half.probabilities = [0.99, 0.5, 0.99, 0.99]
+    out = half.update(0.0, feet, (STILL, None), [50.0, 4.8, 50.0, 50.0])
+    assert half.evidence.kinematic[1] == pytest.approx(-limit / 2)
+    assert out[1] == pytest.approx(sigmoid(2.0 - limit / 2))
 
 
 def test_free_fall_lifts_every_foot() -> None:

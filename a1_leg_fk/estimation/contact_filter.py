@@ -27,10 +27,8 @@ that no single sample decides alone:
   a foot with a force, every other low foot while it and the feet that stood are all low, else
   the feet that stood at any height: the distance between the base velocity this foot gives if
   it were still (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs;
-  ``(speed_half_mps - v) / speed_scale_mps``; for a foot with a force, its swing side times
-  ``1 - F / max_log_ratio``, ``F`` the force's log-odds from 0 up: a foot whose force says it
-  presses (at ``max_log_ratio``) is in contact however it slides (go2_stairs_down_6cm's
-  landing feet slide 0.57 m/s, median, over a tread's edge under load);
+  ``(speed_half_mps - v) / speed_scale_mps``, with a force ``F`` log-odds its swing side times
+  ``1 - max(F, 0) / max_log_ratio``: a foot surely pressing is in contact however it slides;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
   force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
   ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
@@ -190,15 +188,12 @@ class ContactFilter:
         # falling or beside a force, none where that force says swing
         weak = model.max_kinematic_stance
         pushes, caps = [common] * LEGS, [weak if common < -1.0 else limit] * LEGS
+        fades = [1.0] * LEGS  # the share of its speed's swing evidence a foot's force leaves
         for leg, force in enumerate(forces):
             if forced[leg]:
                 push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
-        # a speed is no swing evidence for a foot its force says presses (the truth: force > 0)
-        fades = [
-            1.0 - max(push, 0.0) / limit if on else 1.0
-            for push, on in zip(pushes, forced, strict=True)
-        ]
+                fades[leg] = 1.0 - max(push, 0.0) / limit
         heights = None
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
@@ -266,8 +261,7 @@ def _kinematic(
     1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
     but one: landed, its height says no swing either (on stairs its tread is not the lowest's).
     ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
-    previous sample (the speeds' reference); ``force``'s third: per foot, the share of its
-    speed's swing evidence its force leaves (:func:`_speed_odds`).
+    previous sample (the speeds' reference); ``force``'s third: the speeds' fades.
     """
     lowest = math.nan  # the deepest contact point, as max() finds it
     known = False
@@ -313,11 +307,10 @@ def _kinematic(
                 risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
                 lowered[leg], evidence = risen - evidence, risen
         if velocity is not None:
-            fade = fades[leg]
-            speed = _speed_odds(velocity, reference, model, cap, fade)
+            speed = _speed_odds(velocity, reference, model, cap, fades[leg])
             evidence += speed
             if flats is not references and flats[leg] != reference:  # for the smoother
-                lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap, fade)
+                lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap, fades[leg])
         out.append(evidence)
     return out, heights, lowered
 
@@ -326,9 +319,7 @@ def _speed_odds(
     velocity: Vector, reference: Vector | None, model: ContactModel, cap: float, fade: float
 ) -> float:
     """A foot's speed log-odds: its base velocity [m/s] against the ``reference``'s (0: none),
-    within ``-max_log_ratio`` and ``cap``, the swing side (below 0) times ``fade`` (the share
-    its force leaves it, see the module text).
-    """
+    within ``-max_log_ratio`` and ``cap``, below 0 times ``fade`` (the share its force leaves)."""
     if reference is None:
         return 0.0
     (vx, vy, vz), (gx, gy, gz) = velocity, reference
@@ -396,9 +387,7 @@ def _references(
 
 
 def _clip(log_ratio: float, limit: float, cap: float) -> float:
-    """A log-likelihood ratio within ``-limit`` and ``cap``; NaN (from absurd values) is no
-    evidence.
-    """
+    """A log-likelihood ratio within ``-limit`` and ``cap``; NaN (absurd values): 0."""
     if log_ratio != log_ratio:  # noqa: PLR0124
         return 0.0
     return -limit if log_ratio < -limit else min(log_ratio, cap)

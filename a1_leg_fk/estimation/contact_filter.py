@@ -319,7 +319,8 @@ def _speed_odds(
     velocity: Vector, reference: Vector | None, model: ContactModel, cap: float, fade: float
 ) -> float:
     """A foot's speed log-odds: its base velocity [m/s] against the ``reference``'s (0: none),
-    within ``-max_log_ratio`` and ``cap``, below 0 times ``fade`` (the share its force leaves)."""
+    within ``-max_log_ratio`` and ``cap``, below 0 times ``fade`` (the share its force leaves).
+    """
     if reference is None:
         return 0.0
     (vx, vy, vz), (gx, gy, gz) = velocity, reference

@@ -27,8 +27,8 @@ that no single sample decides alone:
   a foot with a force, every other low foot while it and the feet that stood are all low, else
   the feet that stood at any height: the distance between the base velocity this foot gives if
   it were still (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs;
-  ``(speed_half_mps - v) / speed_scale_mps``, with a force ``F`` log-odds its swing side times
-  ``1 - max(F, 0) / max_log_ratio``: a foot surely pressing is in contact however it slides;
+  ``(speed_half_mps - v) / speed_scale_mps``; where a standing foot is not low (stairs), with a
+  force ``F`` log-odds, its swing side times ``1 - max(F, 0) / max_log_ratio`` (sliding, pressing);
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
   force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
   ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
@@ -140,9 +140,7 @@ class SampleEvidence(NamedTuple):
 
 
 class ContactFilter:
-    """The four feet's filters, carried from one sample to the next. Every foot starts at even
-    odds.
-    """
+    """The four feet's filters, carried from one sample to the next, from even odds."""
 
     def __init__(self, model: ContactModel) -> None:
         self.model = model
@@ -288,6 +286,8 @@ def _kinematic(
         if isfinite(vx + vy + vz):
             velocities[leg] = (vx, vy, vz)
     low = [h < half for h in heights]
+    if not any(stood and not down for stood, down in zip(standing, low, strict=True)):
+        fades = [1.0] * LEGS  # one level: the speeds in full (slopes, flat, the smoother's goal)
     references = _references(velocities, low, standing, forced)
     flats = references  # against every low foot: the same where every low foot stood
     if standing != low:  # the same feet low and standing: the same references

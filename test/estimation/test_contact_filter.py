@@ -186,22 +186,23 @@ def test_a_foot_with_a_force_that_landed_on_a_higher_tread_stands() -> None:
 
 
 def test_a_loaded_foot_sliding_over_a_treads_edge_stands() -> None:
-    """Forces for every foot: three feet stand still 0.3 m under the base with 50 N; FL, held
-    in swing, lands on a tread's edge 16 mm above them (height at even odds: 0) bearing 20 N
-    (+4, clipped) and slides off it at 1 m/s against them ((0.32 - 1) / 0.08: -4, clipped), as
-    go2_stairs_down_6cm's landing feet. The speed's swing evidence fades with the force's
-    log-odds: ``1 - 4 / 4`` of it is left, so the force decides: +4 a sample, standing from the
-    first (0.01, through the transition model 0.029: -3.50 + 4 = +0.50). Without the fade,
-    force and speed cancel and the foot stays in swing while it slides (the transition model
-    alone pulls it towards even odds). At 4.8 N ((4.8 - 3.6) / 0.6 = +2) half of the speed's
-    -4 is left."""
+    """Stairs down, forces for every foot: FR stands on the upper tread, 4 cm above RR and RL on
+    the lower one (all three still, held standing, 50 N); FL, held in swing, lands on the lower
+    tread's edge 16 mm above them (height at even odds: 0) bearing 20 N (+4, clipped) and slides
+    off it at 1 m/s against the standing feet ((0.32 - 1) / 0.08: -4, clipped), as
+    go2_stairs_down_6cm's landing feet. Where the feet stand on more than one level, the speed's
+    swing evidence fades with the force's log-odds: ``1 - 4 / 4`` of it is left, so the force
+    decides: +4 a sample, standing from the first (0.01, through the transition model 0.029:
+    -3.50 + 4 = +0.50). Without the fade force and speed cancel and the foot stays in swing while
+    it slides. At 4.8 N ((4.8 - 3.6) / 0.6 = +2) half of the speed's -4 is left. With every
+    standing foot on one level (FR down with the others) the speed counts in full."""
     contacts = ContactFilter(MODEL)
     contacts.probabilities = [0.99, 0.01, 0.99, 0.99]
     limit = MODEL.max_log_ratio
     switch = 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
+    feet = [foot(0.26), foot(0.284, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
     p = 0.01
     for n in range(1, 11):  # 20 ms at 500 Hz
-        feet = [foot(0.3), foot(0.284, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
         out = contacts.update(0.002, feet, (STILL, None), [50.0, 20.0, 50.0, 50.0])
         prior = p + switch * (1.0 - 2.0 * p)
         p = sigmoid(math.log(prior / (1.0 - prior)) + limit)
@@ -213,6 +214,12 @@ def test_a_loaded_foot_sliding_over_a_treads_edge_stands() -> None:
     out = half.update(0.0, feet, (STILL, None), [50.0, 4.8, 50.0, 50.0])
     assert half.evidence.kinematic[1] == pytest.approx(-limit / 2)
     assert out[1] == pytest.approx(sigmoid(2.0 - limit / 2))
+    level = ContactFilter(MODEL)
+    level.probabilities = [0.99, 0.25, 0.99, 0.99]
+    feet[0] = foot(0.3)
+    out = level.update(0.0, feet, (STILL, None), [50.0, 20.0, 50.0, 50.0])
+    assert level.evidence.kinematic[1] == pytest.approx(-limit)
+    assert out[1] == pytest.approx(0.25)
 
 
 def test_free_fall_lifts_every_foot() -> None:

@@ -286,12 +286,12 @@ def _kinematic(
         if isfinite(vx + vy + vz):
             velocities[leg] = (vx, vy, vz)
     low = [h < half for h in heights]
-    if not any(stood and not down for stood, down in zip(standing, low, strict=True)):
-        fades = [1.0] * LEGS  # one level: the speeds in full (slopes, flat, the smoother's goal)
-    references = _references(velocities, low, standing, forced)
+    stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
+    fades = fades if stepped else [1.0] * LEGS  # one level: in full (the smoother's goal)
+    references = _references(velocities, (low, stepped), standing, forced)
     flats = references  # against every low foot: the same where every low foot stood
     if standing != low:  # the same feet low and standing: the same references
-        flats = _references(velocities, low, [False] * LEGS, forced)
+        flats = _references(velocities, (low, False), [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
         cap = caps[leg]
@@ -344,7 +344,7 @@ def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:
 
 def _references(
     velocities: Sequence[Vector | None],
-    low: Sequence[bool],
+    levels: tuple[Sequence[bool], bool],
     standing: Sequence[bool],
     forced: Sequence[bool],
 ) -> list[Vector | None]:
@@ -357,8 +357,9 @@ def _references(
     every other low foot while it and every standing foot are low (flat ground: its force places
     its edges, see :func:`_kinematic`), else the standing feet at any height: on stairs a foot
     stands on another tread than the lowest's, and the low feet are swing feet coming down.
+    ``levels``: which feet are low, and whether a standing foot is not (on two levels).
     """
-    stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
+    low, stepped = levels
     sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
     for o, velocity in enumerate(velocities):  # (count, x, y, z): low; low, standing; standing
         if velocity is None:

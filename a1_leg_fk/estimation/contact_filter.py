@@ -126,10 +126,9 @@ class SampleEvidence(NamedTuple):
     ``switch`` of a change of state since the previous sample, the kinematic (height and speed)
     log-likelihood ratios by the flat rules (without the feet's rises above their own footholds
     or levels, the speeds against every low foot: the filter's own rules follow its own state),
-    whether the foot's force was evidence, the ``total``
-    log-likelihood ratio (kinematic as kept here, force or free fall, phase prior) and the feet's
-    ``heights`` [m] the kinematic evidence took (above the lowest foot along gravity, or above
-    the local ground's slope where lower; NaN: unknown).
+    whether the foot's force was evidence, the ``total`` log-likelihood ratio (kinematic as kept
+    here, force or free fall, phase prior) and the feet's ``heights`` [m] the kinematic evidence
+    took (above the lowest foot along gravity, or the local ground's slope where lower; or NaN).
     """
 
     switch: float

@@ -243,16 +243,32 @@ class LocalGround:
         tread: level), or with no prediction. ``alone``: no foot to take its height against
         (the estimate's own).
         """
+        nearest = self._nearest(point)
+        if nearest is None:
+            return point[2], LEVEL
+        height, variance, grade, agrees = nearest
+        if variance <= self.min_sigma_m**2 and (agrees or alone):  # noise: touchdown_sigma_m
+            self._offsets.append(abs(point[2] - height))
+        return (height, grade) if agrees else (point[2], LEVEL)
+
+    def lands_on_a_step(self, point: Point) -> bool:
+        """Whether a touchdown at ``point`` [m, odom] with no foot to take its height against
+        is a step: off the prediction where the ground slopes (on level ground, the estimate's
+        own height wandering: :meth:`touchdown_sigma_m`).
+        """
+        nearest = self._nearest(point)
+        return nearest is not None and not nearest[3] and self.predicted(*point[:2])[0][2] != LEVEL
+
+    def _nearest(self, point: Point) -> tuple[float, float, Grade, bool] | None:
+        """The prediction nearer to ``point`` [m, odom] (height [m], variance [m²], slope) and
+        whether ``point`` agrees with it within :attr:`step_gate` sigmas; None: no foothold yet.
+        """
         predictions = self.predicted(point[0], point[1])
         if not predictions:
-            return point[2], LEVEL
+            return None
         height, variance, grade = min(predictions, key=lambda p: abs(point[2] - p[0]))
-        off = point[2] - height
-        noise = self.touchdown_sigma_m()
-        agrees = off * off <= self.step_gate**2 * (variance + noise * noise)
-        if variance <= self.min_sigma_m**2 and (agrees or alone):  # noise: touchdown_sigma_m
-            self._offsets.append(abs(off))
-        return (height, grade) if agrees else (point[2], LEVEL)
+        noise, off = self.touchdown_sigma_m(), point[2] - height
+        return height, variance, grade, off * off <= self.step_gate**2 * (variance + noise * noise)
 
     def touchdown_sigma_m(self) -> float:
         """[m] a touchdown's height noise: ``min_sigma_m``, or where larger the robust scatter
@@ -369,25 +385,3 @@ def _at(fitted: Fit | None, x: float, y: float) -> GroundPlane | None:
     centre, solution, covariance, count = fitted
     there, spread = moved(solution, covariance, x - centre[0], y - centre[1])
     return plane_of(there, spread, count)
-
-
-def contact_points(
-    position: Point,
-    orientation: Quaternion,
-    feet: Sequence[Sequence[float] | None],
-    radii: Sequence[float],
-    legs: Iterable[int],
-) -> list[tuple[int, Point]]:
-    """The contact points [m, odom] of the feet of ``legs``: the base at ``position`` [m] turned
-    by ``orientation`` (x, y, z, w: base to odom), each foot's centre ``feet[leg]`` [m, base
-    frame] less its rolling radius ``radii[leg]`` [m] straight down; legs without a foot are
-    left out.
-    """
-    points = []
-    for leg in legs:
-        foot = feet[leg]
-        if foot is None:
-            continue
-        x, y, z = rotate(orientation, (foot[0], foot[1], foot[2]))
-        points.append((leg, (position[0] + x, position[1] + y, position[2] + z - radii[leg])))
-    return points

@@ -57,11 +57,13 @@ from a1_leg_fk.model.legs import JOINTS_PER_LEG
 from a1_leg_fk.model.urdf import LegFkError
 
 LANDING_SETTLE_S = 0.03
-"""[s] a foot that lands while no foot stands (after a flight) gives the state filter no
-measurement for this long: on landing it bounces while in contact (go2_stairs_down_6cm: 5-6 mm
-up in 25-50 ms), and held still from its first sample it pulled the base down with it, 3-5 mm
-per flight (vertical drift 0.53 %; the IMU carries the base meanwhile). Its foothold is
-anchored when it is first used."""
+"""[s] a foot that lands on a step while no foot stands (after a flight;
+:meth:`LocalGround.lands_on_a_step`) gives the state filter no measurement for this long, unless
+the contacts weigh the feet's forces: called standing by its kinematics at the impact, it bounces
+in contact (go2_stairs_down_6cm: 2-6 mm up in 25-50 ms), and held still from its first sample
+it pulled the base down with it (vertical drift 0.53 %, 0.27 % since; the IMU carries the base
+meanwhile). A force calls the stance as the foot takes the load: held too, 0.22 -> 0.39 %. Its
+foothold is anchored when it is first used."""
 
 Foot = tuple[Sequence[float], Sequence[float]]
 """A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
@@ -181,6 +183,8 @@ class OdometryFeed:
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
         motions: Sequence[FootMotion | None] = NO_MOTIONS
+        forced = contacts is None and self.contacts is not None and self.source != KINEMATIC
+        forced = forced and efforts is not None  # the stances the feet's loads call
         if contacts is None:
             step = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
             if step is not None:
@@ -191,7 +195,7 @@ class OdometryFeed:
             sample = self._legs_alone(joint, (contacts, motions), imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
-            sample = self._filtered(joint, (contacts, motions), imu, down)
+            sample = self._filtered(joint, (contacts, motions), imu, down, forced)
         position = sample.position
         centres = [None if foot is None else foot[0] for foot in feet]
         self.ground.update(
@@ -218,9 +222,11 @@ class OdometryFeed:
         contacts: tuple[Sequence[float] | None, Sequence[FootMotion | None]],
         imu: ImuReading,
         down: Vector,
+        forced: bool,
     ) -> OdometrySample:
         """The state filter's estimate after its update with this joint state's feet (their
-        contact probabilities, and their motions where the contact estimate has them).
+        contact probabilities, and their motions where the contact estimate has them; ``forced``:
+        the probabilities weigh the feet's forces).
         """
         stamp_ns, feet, angles, _ = joint
         probabilities, motions = contacts
@@ -230,7 +236,7 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
-        self._settle(stamp_ns, feet, legs)
+        self._settle(stamp_ns, feet, legs, forced)
         grounds = self._grounds(feet, legs) if self.filter.ground == FOOTHOLDS else None
         used = self.filter.update(
             stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
@@ -239,15 +245,19 @@ class OdometryFeed:
         return self.filter.sample(stamp_ns, stance, used)
 
     def _settle(
-        self, stamp_ns: int, feet: Sequence[Foot | None], legs: list[LegMeasurement | None]
+        self,
+        stamp_ns: int,
+        feet: Sequence[Foot | None],
+        legs: list[LegMeasurement | None],
+        forced: bool,
     ) -> None:
         """Leave out of ``legs`` (per leg its measurement, None: swing) the feet that landed on
         a step while no foot stood in the last estimate (after a flight) until
-        :data:`LANDING_SETTLE_S` after their touchdown; ``stamp_ns``: this sample's [ns],
-        ``feet``: :meth:`step`'s.
+        :data:`LANDING_SETTLE_S` after their touchdown, unless ``forced`` (their stances weigh
+        their loads); ``stamp_ns``: this sample's [ns], ``feet``: :meth:`step`'s.
         """
         last = self._last
-        alone = last is not None and not last.used
+        alone = not forced and last is not None and not last.used
         touchdowns = self._touchdowns
         for leg, measurement in enumerate(legs):
             if measurement is None:

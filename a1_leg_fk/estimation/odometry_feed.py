@@ -9,7 +9,8 @@ tool (:class:`OdometryFeed`).
   dynamic foot forces fused with the feet's heights and speeds, or the kinematic evidence alone,
   see :data:`CONTACT_SOURCES`); each
   standing foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`) and Jacobian; then
-  the filter's update, gated per foot.
+  the filter's update, gated per foot (a foot landing on a step after a flight, its stance from
+  the kinematics, left out while it settles: :data:`LANDING_SETTLE_S`).
 - The standing feet the estimate used, at their contact points in odom, feed the local ground
   (:class:`~a1_leg_fk.estimation.ground.LocalGround`: the plane through the recent footholds,
   :meth:`OdometryFeed.ground_plane`).

@@ -22,10 +22,11 @@ Frames: the base frame (the URDF root link), as in :mod:`a1_leg_fk.kinematics.qu
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
 from typing import NamedTuple
 
+from a1_leg_fk.estimation.ground_plane import Point
 from a1_leg_fk.kinematics.compiled_leg import CompiledLeg
 from a1_leg_fk.kinematics.fk_codegen import (
     Code,
@@ -37,6 +38,7 @@ from a1_leg_fk.kinematics.fk_codegen import (
     term_tuple,
     weighted_sum,
 )
+from a1_leg_fk.kinematics.frames import Quaternion, rotate
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import LEG_NAMES, foot_sphere
 from a1_leg_fk.model.urdf import Joint
@@ -200,3 +202,25 @@ class LegMotion:
         three ``angles`` [rad] and ``rates`` [rad/s] (see :func:`calf_rate_source`).
         """
         return self._calf_rates[leg](angles[0], angles[1], rates[0], rates[1], rates[2])
+
+
+def contact_points(
+    position: Point,
+    orientation: Quaternion,
+    feet: Sequence[Sequence[float] | None],
+    radii: Sequence[float],
+    legs: Iterable[int],
+) -> list[tuple[int, Point]]:
+    """The contact points [m, odom] of the feet of ``legs``: the base at ``position`` [m] turned
+    by ``orientation`` (x, y, z, w: base to odom), each foot's centre ``feet[leg]`` [m, base
+    frame] less its rolling radius ``radii[leg]`` [m] straight down; legs without a foot are
+    left out.
+    """
+    points = []
+    for leg in legs:
+        foot = feet[leg]
+        if foot is None:
+            continue
+        x, y, z = rotate(orientation, (foot[0], foot[1], foot[2]))
+        points.append((leg, (position[0] + x, position[1] + y, position[2] + z - radii[leg])))
+    return points

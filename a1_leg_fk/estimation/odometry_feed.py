@@ -9,7 +9,8 @@ tool (:class:`OdometryFeed`).
   dynamic foot forces fused with the feet's heights and speeds, or the kinematic evidence alone,
   see :data:`CONTACT_SOURCES`); each
   standing foot's motion (:class:`~a1_leg_fk.estimation.leg_motion.LegMotion`) and Jacobian; then
-  the filter's update, gated per foot.
+  the filter's update, gated per foot (a foot landing on a step after a flight, its stance from
+  the kinematics, left out while it settles: :data:`LANDING_SETTLE_S`).
 - The standing feet the estimate used, at their contact points in odom, feed the local ground
   (:class:`~a1_leg_fk.estimation.ground.LocalGround`: the plane through the recent footholds,
   :meth:`OdometryFeed.ground_plane`).
@@ -38,10 +39,10 @@ from a1_leg_fk.estimation.filter_model import (
     stands,
 )
 from a1_leg_fk.estimation.force_pass import ForcePass
-from a1_leg_fk.estimation.ground import LocalGround, contact_points
+from a1_leg_fk.estimation.ground import LocalGround
 from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S, ImuBuffer
-from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion
+from a1_leg_fk.estimation.leg_motion import FootMotion, LegMotion, contact_points
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS, ModelCorrections
 from a1_leg_fk.estimation.odometry import (
     ImuReading,
@@ -55,6 +56,15 @@ from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY, Vector, down_direction
 from a1_leg_fk.kinematics.quadruped import Quadruped
 from a1_leg_fk.model.legs import JOINTS_PER_LEG
 from a1_leg_fk.model.urdf import LegFkError
+
+LANDING_SETTLE_S = 0.03
+"""[s] a foot that lands on a step while no foot stands (after a flight;
+:meth:`LocalGround.lands_on_a_step`) gives the state filter no measurement for this long, unless
+the contacts weigh the feet's forces: called standing by its kinematics at the impact, it bounces
+in contact (go2_stairs_down_6cm: 2-6 mm up in 25-50 ms), and held still from its first sample
+it pulled the base down with it (vertical drift 0.53 %, 0.27 % since; the IMU carries the base
+meanwhile). A force calls the stance as the foot takes the load: held too, 0.22 -> 0.39 %. Its
+foothold is anchored when it is first used."""
 
 Foot = tuple[Sequence[float], Sequence[float]]
 """A foot's position [m] and velocity [m/s] (``J q_dot``), base frame."""
@@ -132,6 +142,8 @@ class OdometryFeed:
         self.ground = LocalGround()
         """The recent footholds and the local ground's plane through them."""
         self._last: OdometrySample | None = None
+        self._touchdowns: dict[int, tuple[int, bool]] = {}
+        """Per standing leg its touchdown's stamp [ns] and whether it is held (:meth:`_settle`)."""
 
     @property
     def counts(self) -> EvidenceCounts:
@@ -172,6 +184,8 @@ class OdometryFeed:
         self.samples_with_imu += imu is not None
         down = down_direction(None if imu is None else imu.orientation)
         motions: Sequence[FootMotion | None] = NO_MOTIONS
+        forced = contacts is None and self.contacts is not None and self.source != KINEMATIC
+        forced = forced and efforts is not None  # the stances the feet's loads call
         if contacts is None:
             step = self._contacts(stamp_ns, feet, (angles, rates, efforts), imu, down)
             if step is not None:
@@ -182,7 +196,7 @@ class OdometryFeed:
             sample = self._legs_alone(joint, (contacts, motions), imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
-            sample = self._filtered(joint, (contacts, motions), imu, down)
+            sample = self._filtered(joint, (contacts, motions), imu, down, forced)
         position = sample.position
         centres = [None if foot is None else foot[0] for foot in feet]
         self.ground.update(
@@ -209,9 +223,11 @@ class OdometryFeed:
         contacts: tuple[Sequence[float] | None, Sequence[FootMotion | None]],
         imu: ImuReading,
         down: Vector,
+        forced: bool,
     ) -> OdometrySample:
         """The state filter's estimate after its update with this joint state's feet (their
-        contact probabilities, and their motions where the contact estimate has them).
+        contact probabilities, and their motions where the contact estimate has them; ``forced``:
+        the probabilities weigh the feet's forces).
         """
         stamp_ns, feet, angles, _ = joint
         probabilities, motions = contacts
@@ -221,12 +237,52 @@ class OdometryFeed:
                 motion = motions[leg] or self._motion(leg, foot, joint, down)
                 joints = slice(leg * JOINTS_PER_LEG, (leg + 1) * JOINTS_PER_LEG)
                 legs[leg] = self._measurement(leg, motion, angles[joints], probabilities[leg])
+        self._settle(stamp_ns, feet, legs, forced)
         grounds = self._grounds(feet, legs) if self.filter.ground == FOOTHOLDS else None
         used = self.filter.update(
             stamp_ns, legs, imu.orientation, imu.orientation_variance, grounds
         )
         stance = [leg for leg, measurement in enumerate(legs) if measurement is not None]
         return self.filter.sample(stamp_ns, stance, used)
+
+    def _settle(
+        self,
+        stamp_ns: int,
+        feet: Sequence[Foot | None],
+        legs: list[LegMeasurement | None],
+        forced: bool,
+    ) -> None:
+        """Leave out of ``legs`` (per leg its measurement, None: swing) the feet that landed on
+        a step while no foot stood in the last estimate (after a flight) until
+        :data:`LANDING_SETTLE_S` after their touchdown, unless ``forced`` (their stances weigh
+        their loads); ``stamp_ns``: this sample's [ns], ``feet``: :meth:`step`'s.
+        """
+        last = self._last
+        alone = not forced and last is not None and not last.used
+        touchdowns = self._touchdowns
+        for leg, measurement in enumerate(legs):
+            if measurement is None:
+                touchdowns.pop(leg, None)
+                continue
+            if leg not in touchdowns:
+                touchdowns[leg] = (stamp_ns, alone and self._on_a_step(leg, feet))
+            landed, held = touchdowns[leg]
+            if held and (stamp_ns - landed) * 1e-9 < LANDING_SETTLE_S:
+                legs[leg] = None
+
+    def _on_a_step(self, leg: int, feet: Sequence[Foot | None]) -> bool:
+        """Whether the foot of ``leg`` in ``feet`` lands off the ground's prediction (a step:
+        its foothold takes its own height, :meth:`LocalGround.takes_prediction`), placed by the
+        last estimate's pose.
+        """
+        last = self._last
+        foot = feet[leg]
+        if last is None or foot is None:
+            return False
+        points = contact_points(
+            last.position, last.orientation, [foot[0]], self.motion.radii[leg : leg + 1], [0]
+        )
+        return self.ground.lands_on_a_step(points[0][1])
 
     def _grounds(
         self, feet: Sequence[Foot | None], measured: Sequence[LegMeasurement | None]

@@ -10,8 +10,9 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from a1_leg_fk.estimation.ground import LocalGround, contact_points
+from a1_leg_fk.estimation.ground import LocalGround
 from a1_leg_fk.estimation.ground_plane import DEFAULT_MIN_SIGMA_M, DEFAULT_SLOPE_PRIOR, fit_plane
+from a1_leg_fk.estimation.leg_motion import contact_points
 
 FOOTHOLDS = [(x, y) for x in (-0.2, -0.05, 0.1, 0.25) for y in (-0.13, 0.13)]
 """[m] two strides of a trot's footholds about the base (odom x, y)."""

@@ -17,8 +17,8 @@ from collections.abc import Callable
 import numpy as np
 
 from a1_leg_fk.estimation.filter_model import FLAT, FOOTHOLDS, LegMeasurement
-from a1_leg_fk.estimation.ground import LocalGround, contact_points
-from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.estimation.ground import LocalGround
+from a1_leg_fk.estimation.leg_motion import FootMotion, contact_points
 from a1_leg_fk.estimation.state_filter import StateFilter
 from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 

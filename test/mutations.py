@@ -103,8 +103,8 @@ MUTATIONS = (
     Mutation(
         "contact filter's speeds against every low foot, not the feet that stood",
         "a1_leg_fk/estimation/contact_filter.py",
-        "references = _references(velocities, low, standing, forced)",
-        "references = _references(velocities, low, [False] * LEGS, forced)",
+        "references = _references(velocities, (low, stepped), standing, forced)",
+        "references = _references(velocities, (low, stepped), [False] * LEGS, forced)",
     ),
     Mutation(
         "a landed foot with a force still called swing by its height",
@@ -206,8 +206,8 @@ MUTATIONS = (
     Mutation(
         "a touchdown never takes the ground's prediction (no anchoring)",
         "a1_leg_fk/estimation/ground.py",
-        "agrees = off * off <= self.step_gate**2 * (variance + noise * noise)",
-        "agrees = False",
+        "off * off <= self.step_gate**2 * (variance + noise * noise)",
+        "False",
     ),
     Mutation(
         "a touchdown never waits for the foot to stop coming down",
@@ -284,7 +284,7 @@ MUTATIONS = (
     Mutation(
         "a step measured against the standing feet counts as touchdown noise",
         "a1_leg_fk/estimation/ground.py",
-        "and (agrees or alone):",
+        "and (agrees or (alone and not step)):",
         "and True:",
     ),
     Mutation(

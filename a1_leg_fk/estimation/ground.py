@@ -252,7 +252,7 @@ class LocalGround:
         if nearest is None:
             return point[2], LEVEL
         height, variance, grade, agrees = nearest
-        step = alone and self.lands_on_a_step(point)  # a step is no noise
+        step = alone and not agrees and _sloped(self.gradient()[0])  # lands_on_a_step's: no noise
         if variance <= self.min_sigma_m**2 and (agrees or (alone and not step)):
             self._offsets.append(abs(point[2] - height))  # noise: touchdown_sigma_m
         return (height, grade) if agrees else (point[2], LEVEL)

@@ -272,7 +272,7 @@ class OdometryFeed:
 
     def _on_a_step(self, leg: int, feet: Sequence[Foot | None]) -> bool:
         """Whether the foot of ``leg`` in ``feet`` lands off the ground's prediction (a step:
-        its foothold takes its own height, :meth:`LocalGround.takes_prediction`), placed by the
+        its foothold takes its own height, :meth:`LocalGround.lands_on_a_step`), placed by the
         last estimate's pose.
         """
         last = self._last

@@ -17,7 +17,8 @@ from odometry_scoring import Errors, errors, feed_samples
 from odometry_scoring import estimate as odometry
 from odometry_scoring import misses as odometry_misses
 from sensor_noise import with_noise
-from terrain_runs import GRID, Terrain, TerrainRun
+from terrain_runs import GRID, TerrainRun
+from terrain_specs import Terrain
 
 from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed

@@ -16,7 +16,11 @@ stairs. Where today's defaults miss, the run is a strict xfail naming the measur
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -272,6 +276,55 @@ def test_the_estimators_model_puts_every_robots_standing_feet_on_the_floor() -> 
         standing = world[run.gait][..., 2][run.contacts[run.gait]]
         radius = ROBOTS[SPECS[name].robot].legs.foot_radius_m
         assert np.abs(standing - radius).max() < 0.002, name
+
+
+def test_a_runs_cache_key_is_its_own(tmp_path) -> None:
+    """Each run's files are named by its own key: distinct per run and changed by its spec and
+    its description's text; a run added to terrain_specs.py or a run relabelled tuned changes no
+    other run's key, an edit of the simulator (terrain_runs.py) every key (copies of the modules
+    in ``tmp_path``, each key computed in a fresh interpreter)."""
+    from contact_runs import SOURCES
+    from terrain_runs import run_key
+    from terrain_specs import SPECS
+
+    keys = {name: run_key(name, spec, "<robot/>") for name, spec in SPECS.items()}
+    assert len(set(keys.values())) == len(SPECS)
+    spec = SPECS["aliengo_flat"]
+    assert run_key("aliengo_flat", replace(spec, gait_s=9.0), "<robot/>") != keys["aliengo_flat"]
+    assert run_key("aliengo_flat", spec, "<robot name='x'/>") != keys["aliengo_flat"]
+    test_dir = Path(__file__).resolve().parents[1]
+    edits = {
+        "as it is": ("terrain_specs.py", ""),
+        "a run added, one relabelled": (
+            "terrain_specs.py",
+            (
+                '\nSPECS["aliengo_long"] = replace(SPECS["aliengo_flat"], gait_s=60.0)'
+                '\nTUNED = (*TUNED, "aliengo_slope_up_5")\n'
+            ),
+        ),
+        "the simulator edited": ("terrain_runs.py", "\n# edited\n"),
+    }
+    found = {}
+    for label, (edited, text) in edits.items():
+        folder = tmp_path / label.replace(" ", "_").replace(",", "")
+        folder.mkdir()
+        for name in ("terrain_runs.py", "terrain_specs.py", *SOURCES):
+            (folder / name).write_text((test_dir / name).read_text(encoding="utf-8") + (
+                text if name == edited else ""), encoding="utf-8")  # fmt: skip
+        script = (
+            "import sys; sys.path[:0] = sys.argv[1:3]\n"
+            "from terrain_runs import run_key; from terrain_specs import SPECS\n"
+            "print(' '.join(run_key(n, SPECS[n], '<robot/>') for n in sorted(SPECS)"
+            " if n != 'aliengo_long'))"
+        )
+        done = subprocess.run(
+            [sys.executable, "-c", script, str(folder), str(test_dir)],
+            capture_output=True, text=True, timeout=60, check=True,
+        )  # fmt: skip
+        found[label] = done.stdout.split()
+    assert found["as it is"] == [keys[name] for name in sorted(SPECS)]
+    assert found["a run added, one relabelled"] == found["as it is"]
+    assert not set(found["the simulator edited"]) & set(found["as it is"])
 
 
 def test_a_slope_run_and_its_live_ground() -> None:

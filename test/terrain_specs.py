@@ -153,7 +153,9 @@ SPECS = {
 0.5 m deep with a 14 cm swing (4 cm steps 0.3 m deep stub its rear toes on the first riser; the
 Go2 climbs 4 cm steps 0.4 m deep); it walks down 10° and down 4-6 cm steps (8 cm: the Go2's
 calves touch the treads on 8 % of the samples, more than the family allows; down 3 cm steps 0.4
-m deep the A1's front calves touch the steps on 5.4 % with a 12 cm swing, 4.5 % with 14 cm)."""
+m deep the A1's front calves touch the steps on 5.4 % with a 12 cm swing, 4.5 % with 14 cm). The
+Aliengo walks its four on its feet alone (no other link touches): with kp 120 N m/rad it yawed off
+the 5° slope and rolled over, with :data:`ALIENGO`'s 150 it climbs it."""
 TUNED = (
     "a1_slope_up_5",
     "a1_slope_down_5",

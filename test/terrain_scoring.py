@@ -17,7 +17,8 @@ from odometry_scoring import Errors, errors, feed_samples
 from odometry_scoring import estimate as odometry
 from odometry_scoring import misses as odometry_misses
 from sensor_noise import with_noise
-from terrain_runs import GRID, Terrain, TerrainRun
+from terrain_runs import GRID, TerrainRun
+from terrain_specs import Terrain
 
 from a1_leg_fk.estimation.ground_plane import GroundPlane
 from a1_leg_fk.estimation.odometry_feed import OdometryFeed
@@ -59,7 +60,7 @@ def score_run(terrain: TerrainRun) -> TerrainScores:
 
 
 HEADER = (
-    f"{'run':<18} {'F agree':>7} {'sw>st':>5} {'K agree':>7} {'sw>st':>5} | {'odometry':<15} "
+    f"{'run':<23} {'F agree':>7} {'sw>st':>5} {'K agree':>7} {'sw>st':>5} | {'odometry':<15} "
     f"{'rmse':>6} {'burst':>5} {'hor%':>5} {'ver%':>6} {'in3s%':>5} {'s/err':>5}"
 )
 
@@ -68,14 +69,14 @@ def rows(name: str, scores: TerrainScores) -> list[str]:
     """The run's table lines: its contacts on the first, one odometry estimate on each."""
     force, kinematic = scores.contacts[FORCE], scores.contacts[KINEMATIC]
     head = (
-        f"{name:<18} {force.agree_pct:7.2f} {force.swing_as_stance_pct:5.2f} "
+        f"{name:<23} {force.agree_pct:7.2f} {force.swing_as_stance_pct:5.2f} "
         f"{kinematic.agree_pct:7.2f} {kinematic.swing_as_stance_pct:5.2f}"
     )
     lines: list[str] = []
     for (sensors, efforts), e in scores.odometry.items():
         label = f"{sensors} {'efforts' if efforts else 'kinematic'}"
         lines.append(
-            f"{head if not lines else '':<46} | {label:<15} {e.rmse:6.4f} {e.worst_window:5.3f} "
+            f"{head if not lines else '':<51} | {label:<15} {e.rmse:6.4f} {e.worst_window:5.3f} "
             f"{e.horizontal_pct:5.2f} {e.vertical_pct:6.2f} {100 * e.within_3sigma:5.1f} "
             f"{e.sigma_ratio:5.2f}"
         )
@@ -198,7 +199,7 @@ class GroundErrors:
 
     def row(self, name: str) -> str:
         return (
-            f"{name:<18} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
+            f"{name:<23} {self.worst_deg:6.2f} {self.p95_deg:6.2f} "
             f"{100 * self.worst_height_m:7.2f} {100 * self.p95_height_m:7.2f} "
             f"{100 * self.coverage:6.1f} {self.steady_worst_deg:7.2f} "
             f"{self.span_worst_deg:6.2f} {self.span_p95_deg:6.2f}"
@@ -206,7 +207,7 @@ class GroundErrors:
 
 
 GROUND_HEADER = (
-    f"{'run':<18} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6} "
+    f"{'run':<23} {'worst°':>6} {'p95°':>6} {'worstcm':>7} {'p95cm':>7} {'have%':>6} "
     f"{'steady°':>7} {'span°':>6} {'sp95°':>6}"
 )
 STEADY_RAD = 1e-4

@@ -91,7 +91,7 @@ GROUND = (
 )
 GROUND_UNMET = {
     "a1_stairs_up_3cm": GROUND.format(2.20, 1.87, 2.03, 2.37, 1.87),
-    "a1_stairs_down_4cm": GROUND.format(4.68, 3.58, 1.55, 2.00, 1.36),
+    "a1_stairs_down_4cm": GROUND.format(4.68, 3.58, 1.55, 2.01, 1.36),
     "go2_stairs_down_6cm": GROUND.format(6.43, 5.29, 3.50, 3.11, 2.74) + ", height 1.92 cm",
     "go2_stairs_up_4cm": GROUND.format(3.29, 2.08, 3.29, 3.29, 1.81),
     "a1_stairs_down_3cm": GROUND.format(2.50, 1.84, 1.70, 1.77, 1.22),

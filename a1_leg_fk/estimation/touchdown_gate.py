@@ -16,13 +16,13 @@ touchdown's own height, which depends on where that height comes from.
   level, the touchdowns' robust scatter about confident predictions (:meth:`TouchdownGate.count`:
   the offsets the gate took, and every lone one's) where larger: an IMU the filter's model
   does not describe (a retargeted walk's, linearly interpolated: accelerations that jump at
-  every frame) moves the estimate's height by 1-2 cm between touchdowns while its sigma stays
-  1-5 mm. Where the ground slopes a lone touchdown off by more than its own noise is a step
-  (the run's scatter took a lone 32 mm step for the tread below).
+  every frame) lands its lone feet 5-23 mm off the prediction while the filter's vertical sigma
+  stays 0.7-4.8 mm. Where the ground slopes a lone touchdown off by more than its own noise is
+  a step (the run's scatter took a lone 32 mm step for the tread below).
 
-The scatter cannot widen the gate that feeds it: what it widens (lone touchdowns on level
-ground) is not what it counts from a staircase (the steps taken against the standing feet, at
-most ``step_gate`` base sigmas off).
+No count depends on the scatter any more, so it cannot widen the gate that feeds it: a
+touchdown against the standing feet counts where it is within the base noise's gate, a lone one
+on level ground taken or not, and on sloped ground the scatter is no part of the gate.
 """
 
 from __future__ import annotations

@@ -40,6 +40,7 @@ FAST_SUBSET = (
     "test/estimation/test_foot_ground.py",
     "test/estimation/test_foot_rise.py",
     "test/estimation/test_ground.py",
+    "test/estimation/test_touchdown_gate.py",
     "test/estimation/test_ground_walks.py",
     "test/gait/test_gait_edges.py",
     "test/estimation/test_pooled_rise.py",
@@ -205,8 +206,8 @@ MUTATIONS = (
     ),
     Mutation(
         "a touchdown never takes the ground's prediction (no anchoring)",
-        "a1_leg_fk/estimation/ground.py",
-        "off * off <= self.step_gate**2 * (variance + noise * noise)",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "offset_m * offset_m <= self.step_gate**2 * (variance + sigma_m * sigma_m)",
         "False",
     ),
     Mutation(
@@ -284,8 +285,20 @@ MUTATIONS = (
     Mutation(
         "a step measured against the standing feet counts as touchdown noise",
         "a1_leg_fk/estimation/ground.py",
-        "and (agrees or (alone and not step)):",
+        "and (agrees or (alone and not lone_step)):",
         "and True:",
+    ),
+    Mutation(
+        "a touchdown against the standing feet judged at the touchdowns' scatter",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "        if not alone:\n            return self.min_sigma_m\n",
+        "",
+    ),
+    Mutation(
+        "a lone touchdown's noise without the estimate's vertical variance",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "max(height_variance, 0.0)",
+        "0.0",
     ),
     Mutation(
         "the legs' scales learnt from stuck joints (a friction's hold read as a lighter leg)",

@@ -16,7 +16,9 @@ On a staircase either samples the treads where the feet landed: a plane, not the
 
 The heights are anchored, not the drifting estimate's (``ground: footholds``, the default): a
 touchdown within ``step_gate`` sigmas of the ground's prediction takes it (a flat floor, a tread,
-an even slope: no error carried from stance to stance), one off it keeps its own height (a step).
+an even slope: no error carried from stance to stance), one off it keeps its own height (a step);
+its sigma is its own height's, by where that comes from
+(:mod:`a1_leg_fk.estimation.touchdown_gate`).
 The prediction is the nearest foothold's height carried along the slope (measured between feet
 standing at the same time, :mod:`a1_leg_fk.estimation.ground_slope`; level below
 :data:`LEVEL_SLOPE`) or level (a tread), the nearer; a touchdown's own height is taken against
@@ -47,6 +49,7 @@ from a1_leg_fk.estimation.ground_plane import (
     plane_of,
 )
 from a1_leg_fk.estimation.ground_slope import GroundSlope
+from a1_leg_fk.estimation.touchdown_gate import TouchdownGate
 from a1_leg_fk.kinematics.frames import Quaternion, rotate
 
 DEFAULT_WINDOW_S = 2.0
@@ -59,8 +62,6 @@ DEFAULT_SLOPE_TIME_S = 2.0
 """[s] the time constant over which the standing feet's height differences are summed."""
 LEVEL_SLOPE = math.tan(math.radians(1.0))
 """Slopes below this are level: an IMU's mounting error (0.3°) tilts the feet's differences."""
-SCATTER_TOUCHDOWNS = 16
-"""The touchdowns whose offsets from a confident prediction scale the touchdowns' noise."""
 CORRELATION_S = 0.2
 """[s] the span one stance's height differences count as one measurement over."""
 MIN_FOOTHOLD_S = 0.05
@@ -136,20 +137,27 @@ class LocalGround:
         """:meth:`plane`'s fit and the :attr:`revision` it was made at."""
         self._reported: tuple[int, Fit | None] | None = None
         """:meth:`reported`'s fit and the :attr:`revision` it was made at."""
-        self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
-        """The last touchdowns' absolute offsets from the prediction [m]."""
+        self.gate = TouchdownGate(min_sigma_m, step_gate)
+        """A touchdown's noise and its test against the prediction (:meth:`_nearest`)."""
+        self._height_variance = 0.0
+        """[m²] the estimate's vertical position variance in the last :meth:`update`."""
         self.slope = GroundSlope(slope_time_s, min_sigma_m, CORRELATION_S, slope_prior)
         self.revision = 0
         """Counts the changes of the points (touchdowns, liftoffs, expiries): the plane changes
         only with it, and with the point asked for."""
 
-    def update(self, stamp_s: float, contacts: Iterable[tuple[int, Point]]) -> None:
-        """One sample [s]: the standing legs (slot) and their contact points [m, odom]. A leg
-        not among them ends its stance: its foothold is kept, at its stance's mean (x, y) and
-        its anchored height (or mean height); a leg new among them is anchored
-        (:meth:`_touchdown`) or kept at its own height.
+    def update(
+        self, stamp_s: float, contacts: Iterable[tuple[int, Point]], height_variance: float = 0.0
+    ) -> None:
+        """One sample [s]: the standing legs (slot) and their contact points [m, odom], placed
+        by an estimate whose vertical position has variance ``height_variance`` [m²] (a lone
+        touchdown's height noise: :class:`TouchdownGate`). A leg not among them ends its
+        stance: its foothold is kept, at its stance's mean (x, y) and its anchored height (or
+        mean height); a leg new among them is anchored (:meth:`_touchdown`) or kept at its own
+        height.
         """
         standing = dict(contacts)
+        self._height_variance = height_variance
         if self.anchored:
             self.slope.add(stamp_s, list(standing.values()))
         lifted = {}
@@ -195,13 +203,18 @@ class LocalGround:
         [s], anchored
         (:meth:`_touchdown`) against the feet that stood before this sample and stand on
         (``standing``, not ``landed``), else the ``lifted`` ones; or kept at their own heights.
+        The feet landing in one sample are judged together, against the ground and the noise
+        known before it (two feet landing alone, one judged after the other had widened the
+        noise, took heights 21 mm apart: the retargeted walk's).
         """
         kept = {leg: (point[2], _carried(self._open[leg][0], self._open[leg][1], point))
                 for leg, point in standing.items() if leg in self._open}  # fmt: skip
-        for leg, point in landed:
-            own, grade = (point[2], LEVEL)
-            if self.anchored:
-                own, grade = self._touchdown(point, kept or lifted)
+        anchors = [
+            self._touchdown(point, kept or lifted) if self.anchored else (point[2], LEVEL)
+            for _, point in landed
+        ]
+        self.gate.close_sample()
+        for (leg, point), (own, grade) in zip(landed, anchors):
             self._open[leg] = ((point[0], point[1], own), grade, list(point), 1, point, stamp_s)
             self.revision += 1
 
@@ -243,62 +256,42 @@ class LocalGround:
 
     def _anchor(self, point: Point, alone: bool) -> tuple[float, Grade]:
         """The anchored height [m] of a touchdown at ``point`` [m, odom] and the slope its stance
-        stands on: the prediction nearer to it, where it agrees within :attr:`step_gate` sigmas
-        (the prediction's and :meth:`touchdown_sigma_m`); its own where neither does (a step, a
-        tread: level), or with no prediction. ``alone``: no foot to take its height against
-        (the estimate's own).
+        stands on: the prediction nearer to it, where it agrees (:meth:`_nearest`); its own
+        where neither does (a step, a tread: level), or with no prediction. ``alone``: no foot
+        to take its height against (the estimate's own). Its offset from a confident prediction
+        counts toward the touchdowns' scatter (:meth:`TouchdownGate.count`) where it took it,
+        and alone where it is no step (a lone touchdown off a sloped ground's prediction).
         """
         nearest = self._nearest(point, alone)
         if nearest is None:
             return point[2], LEVEL
         height, variance, grade, agrees = nearest
-        step = alone and not agrees and _sloped(self.gradient()[0])  # lands_on_a_step's: no noise
-        if variance <= self.min_sigma_m**2 and (agrees or (alone and not step)):
-            self._offsets.append(abs(point[2] - height))  # noise: touchdown_sigma_m
+        lone_step = alone and not agrees and _sloped(self.gradient()[0])
+        if variance <= self.min_sigma_m**2 and (agrees or (alone and not lone_step)):
+            self.gate.count(point[2] - height)
         return (height, grade) if agrees else (point[2], LEVEL)
 
     def lands_on_a_step(self, point: Point) -> bool:
         """Whether a touchdown at ``point`` [m, odom] with no foot to take its height against
         is a step: where the ground slopes (a staircase), off the prediction by more than
-        :attr:`step_gate` of ``min_sigma_m`` (:meth:`_nearest`).
+        :attr:`step_gate` of its noise (:meth:`_nearest`).
         """
         nearest = self._nearest(point, alone=True)
         return nearest is not None and not nearest[3] and _sloped(self.gradient()[0])
 
     def _nearest(self, point: Point, alone: bool) -> tuple[float, float, Grade, bool] | None:
         """The prediction nearer to ``point`` [m, odom] (height [m], variance [m²], slope) and
-        whether ``point`` agrees with it within :attr:`step_gate` sigmas: the prediction's and
-        :meth:`touchdown_sigma_m`, but ``min_sigma_m`` for a touchdown ``alone`` (no foot to
-        take its height against) where the ground slopes: the run's scatter is the estimate's
-        own height wandering on level ground; on a staircase, widened by noise to 12.6 mm, it
-        took a lone 32 mm step for the tread below (a1_stairs_down_4cm noisy: vertical drift
-        0.65 %; 0.13 % since). None: no foothold yet.
+        whether ``point`` agrees with it (:meth:`TouchdownGate.agrees`: its noise by where its
+        height comes from, against the standing feet or ``alone``, the estimate's own); None:
+        no foothold yet.
         """
         predictions = self.predicted(point[0], point[1])
         if not predictions:
             return None
         height, variance, grade = min(predictions, key=lambda p: abs(point[2] - p[0]))
-        noise, off = self.touchdown_sigma_m(), point[2] - height
-        if alone and len(predictions) > 1:  # sloped: predicted()
-            noise = self.min_sigma_m
-        return height, variance, grade, off * off <= self.step_gate**2 * (variance + noise * noise)
-
-    def touchdown_sigma_m(self) -> float:
-        """[m] a touchdown's height noise: ``min_sigma_m``, or where larger the robust scatter
-        of the last :data:`SCATTER_TOUCHDOWNS` about confident predictions (their absolute
-        offsets' lower quartile, a normal sigma's 0.3186): feet that land cm off the prediction
-        as a rule are not steps. Counted: the touchdowns that took the prediction, and those with
-        no foot to take their height against, taken or not (the estimate's own height: with an
-        IMU that jumps it wanders by cm, the retargeted Laikago walk's). A step measured against
-        the standing feet is no such noise: counted, a staircase's steps (most of its
-        touchdowns) widened the gate until steps were taken for the next tread
-        (a1_stairs_down_4cm with noise: 5 -> 18 mm, feet anchored 2-5 cm off their tread,
-        vertical drift 1.36 %; 0.43 % since).
-        """
-        if 2 * len(self._offsets) < SCATTER_TOUCHDOWNS:  # from half of them on
-            return self.min_sigma_m
-        quartile = sorted(self._offsets)[len(self._offsets) // 4]
-        return max(self.min_sigma_m, quartile / 0.3186)
+        sloped = len(predictions) > 1  # predicted(): the slope's and the level one
+        sigma = self.gate.sigma_m(alone, sloped, self._height_variance)
+        return height, variance, grade, self.gate.agrees(point[2] - height, variance, sigma)
 
     def under(
         self, feet: Iterable[tuple[int, Point]], legs: int

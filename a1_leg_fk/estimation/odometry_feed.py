@@ -13,7 +13,8 @@ tool (:class:`OdometryFeed`).
   the kinematics, left out while it settles: :data:`LANDING_SETTLE_S`).
 - The standing feet the estimate used, at their contact points in odom, feed the local ground
   (:class:`~a1_leg_fk.estimation.ground.LocalGround`: the plane through the recent footholds,
-  :meth:`OdometryFeed.ground_plane`).
+  :meth:`OdometryFeed.ground_plane`), with the filter's vertical position variance (a lone
+  touchdown's height noise, :mod:`~a1_leg_fk.estimation.touchdown_gate`).
 - Without an IMU sample with an accelerometer paired with the joint state (no IMU, ``use_imu``
   false, or an IMU without one), the legs alone: the averaging estimate of
   :class:`~a1_leg_fk.estimation.odometry.LegOdometry`, as before the filter.
@@ -192,16 +193,19 @@ class OdometryFeed:
                 contacts = step.probabilities
                 motions = step.motions if self._shares_motions else NO_MOTIONS
         joint = JointSample(stamp_ns, feet, angles, rates)
+        height_variance = 0.0  # the legs alone: no anchored height to be uncertain about
         if imu is None or imu.specific_force is None or not self.filter.started:
             sample = self._legs_alone(joint, (contacts, motions), imu, down)
         else:  # an accelerometer: the state filter
             self.samples_filtered += 1
             sample = self._filtered(joint, (contacts, motions), imu, down, forced)
+            height_variance = sample.pose_variance[2]
         position = sample.position
         centres = [None if foot is None else foot[0] for foot in feet]
         self.ground.update(
             stamp_ns * 1e-9,
             contact_points(position, sample.orientation, centres, self.motion.radii, sample.used),
+            height_variance,
         )
         self._last = sample
         if self._position is not None:

@@ -301,22 +301,25 @@ def test_a_step_taken_against_the_standing_feet_stays_a_step() -> None:
     drift cancels but for the one sample between: 0.04 mm a stance). Every anchor is its
     tread's, by construction: a step is no touchdown noise (counted as such, the steps made
     that noise 12.6 cm after eight, and the ninth was taken for the other tread, 4 cm off, as
-    on a1_stairs_down_4cm)."""
+    on a1_stairs_down_4cm); a touchdown taken against a standing foot counts toward no scatter."""
     ground = LocalGround(window_s=0.05)
     anchors = _turns(ground, 24, flight=False, drift=0.02)
     assert anchors == pytest.approx([0.04 * (1 - stance % 2) for stance in range(24)], abs=1e-3)
-    assert ground.touchdown_sigma_m() == DEFAULT_MIN_SIGMA_M
+    assert ground.gate.scatter_m() == DEFAULT_MIN_SIGMA_M
 
 
 def test_touchdowns_with_no_foot_to_measure_against_widen_the_noise_by_their_offsets() -> None:
     """The same two treads with a flight before each touchdown (no drift): its height is the
     estimate's own, and its offset from the prediction counts as the touchdowns' noise, taken
     or not (an IMU that jumps moves such touchdowns by cm as a rule: the retargeted Laikago
-    walk's): after eight 4 cm offsets the noise is their lower quartile over a normal sigma's,
-    0.04 / 0.3186."""
+    walk's): after eight 4 cm offsets the noise of a lone touchdown on level ground is their
+    lower quartile over a normal sigma's, 0.04 / 0.3186; a touchdown taken against a standing
+    foot keeps the base noise (its height is not the estimate's)."""
     ground = LocalGround(window_s=0.05)
     _turns(ground, 9, flight=True, drift=0.0)
-    assert ground.touchdown_sigma_m() == pytest.approx(0.04 / 0.3186, rel=1e-9)
+    assert ground.gate.scatter_m() == pytest.approx(0.04 / 0.3186, rel=1e-9)
+    assert ground.gate.sigma_m(True, False, 0.0) == pytest.approx(0.04 / 0.3186, rel=1e-9)
+    assert ground.gate.sigma_m(False, False, 0.0) == DEFAULT_MIN_SIGMA_M
 
 
 def test_a_planes_slope_across_a_heading_is_replaced_its_height_and_slope_along_kept() -> None:

@@ -1,0 +1,90 @@
+"""Whether a touchdown takes the ground's prediction (:class:`TouchdownGate`): the anchoring's
+decision (:mod:`a1_leg_fk.estimation.ground`), a step or the same ground, from the noise of the
+touchdown's own height, which depends on where that height comes from.
+
+- **Against the standing feet** (their anchors plus the contact points' height differences, both
+  from one pose): the estimate's height error cancels, and what is left is the feet's relative
+  error, ``min_sigma_m``. The run's scatter of touchdown offsets no longer widens it: on a
+  staircase most touchdowns are steps, and the offsets the gate took widened the gate that
+  took them until a 24-32 mm step passed for noise and its foot was anchored on the wrong
+  tread (a1_stairs_down_4cm with noise: the scatter 5 -> 15-19 mm, vertical drift 0.73 %;
+  Unitree's Aliengo down a 4 cm staircase, clean: 1.24 %).
+- **Alone** (no foot stands to take it against: after a flight, at the start): the height is
+  the estimate's own, as uncertain as the estimate's height, whose variance each sample brings
+  (``height_variance``, the state filter's: go2_slope_up_5 with noise starts with four feet
+  landing alone 19 mm off the first footholds after the robot's drop). Where the ground is
+  level, the touchdowns' robust scatter about confident predictions (:meth:`TouchdownGate.count`:
+  the offsets the gate took, and every lone one's) where larger: an IMU the filter's model
+  does not describe (a retargeted walk's, linearly interpolated: accelerations that jump at
+  every frame) lands its lone feet 5-23 mm off the prediction while the filter's vertical sigma
+  stays 0.7-4.8 mm. Where the ground slopes a lone touchdown off by more than its own noise is
+  a step (the run's scatter took a lone 32 mm step for the tread below).
+
+No count depends on the scatter any more, so it cannot widen the gate that feeds it: a
+touchdown against the standing feet counts where it is within the base noise's gate, a lone one
+on level ground taken or not, and on sloped ground the scatter is no part of the gate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+SCATTER_TOUCHDOWNS = 16
+"""The touchdowns whose offsets from a confident prediction give their scatter."""
+NORMAL_QUARTILE = 0.3186
+"""The lower quartile of a normal variable's absolute value, in sigmas."""
+
+
+class TouchdownGate:
+    """A touchdown's noise [m] by where its height comes from, and its test against the ground's
+    prediction (module text): within ``step_gate`` sigmas of it, the touchdown takes it.
+    """
+
+    def __init__(self, min_sigma_m: float, step_gate: float) -> None:
+        self.min_sigma_m = min_sigma_m
+        """[m] the touchdowns' height noise against the standing feet, and its least alone."""
+        self.step_gate = step_gate
+        self._offsets: deque[float] = deque(maxlen=SCATTER_TOUCHDOWNS)
+        """The last counted touchdowns' absolute offsets from a confident prediction [m]."""
+        self._pending: list[float] = []
+        """This sample's counted offsets [m], kept out of its own touchdowns' noise."""
+
+    def sigma_m(self, alone: bool, sloped: bool, height_variance: float) -> float:
+        """[m] the noise of a touchdown's height: ``min_sigma_m`` against the standing feet;
+        ``alone`` (no foot to take it against), the estimate's own, ``height_variance`` [m²]
+        its vertical position's, and where the ground is not ``sloped``, the touchdowns'
+        :meth:`scatter_m` where larger.
+        """
+        if not alone:
+            return self.min_sigma_m
+        own = math.sqrt(self.min_sigma_m**2 + max(height_variance, 0.0))
+        return own if sloped else max(own, self.scatter_m())
+
+    def agrees(self, offset_m: float, variance: float, sigma_m: float) -> bool:
+        """Whether a touchdown ``offset_m`` [m] off a prediction of variance ``variance`` [m²]
+        is within ``step_gate`` sigmas of it, its own noise ``sigma_m`` [m] (:meth:`sigma_m`).
+        """
+        return offset_m * offset_m <= self.step_gate**2 * (variance + sigma_m * sigma_m)
+
+    def count(self, offset_m: float) -> None:
+        """Count a touchdown's offset [m] from a confident prediction (one that took it, or a
+        lone one, but a step where the ground slopes), from the next sample on
+        (:meth:`close_sample`).
+        """
+        self._pending.append(abs(offset_m))
+
+    def close_sample(self) -> None:
+        """The sample's touchdowns are judged: its counted offsets join the scatter."""
+        self._offsets.extend(self._pending)
+        self._pending.clear()
+
+    def scatter_m(self) -> float:
+        """[m] the touchdowns' robust scatter: ``min_sigma_m``, or where larger the lower
+        quartile of the last :data:`SCATTER_TOUCHDOWNS` counted offsets over a normal sigma's
+        (:data:`NORMAL_QUARTILE`), from half of them on.
+        """
+        if 2 * len(self._offsets) < SCATTER_TOUCHDOWNS:
+            return self.min_sigma_m
+        quartile = sorted(self._offsets)[len(self._offsets) // 4]
+        return max(self.min_sigma_m, quartile / NORMAL_QUARTILE)

@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from synthetic_trot import FEET, JJT, STEP_NS, V, vertical_errors
 
 from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.foot_impact import FootImpact
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.state_filter import StateFilter
-from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 
 NOISE_MPS = 0.002
 """Each foot's white noise [m/s] per axis (seeded), the filters' own model of it (no joint rates'
@@ -31,12 +31,7 @@ MEASURED = FilterSettings(**EXACT)
 """Each landing measured (the default: ``impact_window_s`` 0.03)."""
 FIXED = FilterSettings(impact_window_s=0.0, **EXACT)
 """Every landing ``touchdown_noise_mps`` (0.1 m/s): the filter as it was before."""
-V = (0.4, -0.1, 0.0)  # [m/s] base frame = world frame (level, no turn)
-FEET = ((0.18, -0.13, -0.3), (0.18, 0.13, -0.3), (-0.18, -0.13, -0.3), (-0.18, 0.13, -0.3))
-LEVEL = (0.0, 0.0, 0.0, 1.0)
-STEP_NS = 2_000_000
 STANCE_STEPS = 100  # 0.2 s per diagonal pair
-JJT = (0.05, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.05)
 SETTLE_S = 2.0
 """[s] not scored: the filter's start."""
 
@@ -83,12 +78,8 @@ def trot(settings: FilterSettings, landing_mps: float, seconds: float = 8.0):
     exp(-t / touchdown_s)`` since its touchdown, every foot's by a white noise."""
     rng = np.random.default_rng(5)
     tau = settings.touchdown_s
-    state = StateFilter(settings, FLAT)
-    errors, sigmas = [], []
-    stamp = 0
-    for k in range(round(seconds * 1e9 / STEP_NS)):
-        stamp += STEP_NS
-        state.propagate(stamp, (0.0, 0.0, 0.0), (0.0, 0.0, STANDARD_GRAVITY), LEVEL)
+
+    def legs_at(k: int) -> list[LegMeasurement | None]:
         pair = (0, 3) if (k // STANCE_STEPS) % 2 == 0 else (1, 2)
         landed_s = (k % STANCE_STEPS) * STEP_NS / 1e9
         legs: list[LegMeasurement | None] = [None] * 4
@@ -97,11 +88,9 @@ def trot(settings: FilterSettings, landing_mps: float, seconds: float = 8.0):
             vertical = landing_mps * math.exp(-landed_s / tau) + z
             motion = FootMotion((V[0] + x, V[1] + y, vertical), FEET[leg], 0.3)
             legs[leg] = LegMeasurement(motion, 0.99, JJT)
-        state.update(stamp, legs, LEVEL)
-        if stamp >= SETTLE_S * 1e9:
-            errors.append(float(state.velocity[2]) - V[2])
-            sigmas.append(math.sqrt(state.covariance[5, 5]))
-    return np.array(errors), np.array(sigmas)
+        return legs
+
+    return vertical_errors(StateFilter(settings, FLAT), seconds, legs_at, SETTLE_S)
 
 
 def scores(settings: FilterSettings, landing_mps: float) -> tuple[float, float, float]:

@@ -8,7 +8,9 @@ in stance, the IMU's orientation, gyro and accelerometer) again and again, the s
 - ``StateFilter step``: one IMU propagation, one update with two stance feet and the IMU's
   orientation, and the output sample: the filter's own work per joint state (goal <= 60 us);
   ``StateFilter step, no give``: the same without the feet's give (``give_s`` 0), the ratio
-  printed (the give's cost, goal <= 1.1);
+  printed (the give's cost, goal <= 1.1); ``StateFilter step, impacts fixed``: every landing
+  ``touchdown_noise_mps`` (``impact_window_s`` 0, the filter before each landing was measured),
+  the ratio printed;
 - its parts: ``propagate``, ``update``, ``sample``;
 - ``OdometryFeed.step``: the whole per-joint-state work of ``leg_odometry_node`` without ROS (the
   contact estimate with efforts, the feet's motion and Jacobians, the filter);
@@ -50,7 +52,16 @@ def main() -> None:
     legs = [(feet[leg].tolist(), velocities[leg].tolist()) for leg in range(4)]
     state, feed, contacts = StateFilter(), OdometryFeed(a1), ContactEstimator(a1)
     rigid = StateFilter(FilterSettings(give_s=0.0))
-    clock = {"filter": 0, "rigid": 0, "propagate": 0, "update": 0, "feed": 0, "contacts": 0}
+    fixed = StateFilter(FilterSettings(impact_window_s=0.0))
+    clock = {
+        "filter": 0,
+        "rigid": 0,
+        "fixed": 0,
+        "propagate": 0,
+        "update": 0,
+        "feed": 0,
+        "contacts": 0,
+    }
     stance = [
         LegMeasurement(FootMotion((0.3, 0.0, 0.0), (0.18, -0.13, -0.3), 0.3), 0.99, JJT),
         None,
@@ -59,6 +70,7 @@ def main() -> None:
     ]
     state.propagate(0, GYRO, FORCE, ORIENTATION)
     rigid.propagate(0, GYRO, FORCE, ORIENTATION)
+    fixed.propagate(0, GYRO, FORCE, ORIENTATION)
     imu = ImuReading(ORIENTATION, GYRO, specific_force=FORCE)
     sample = ImuSample((0.3, -0.2, -9.79), GYRO, FORCE)
 
@@ -93,6 +105,7 @@ def main() -> None:
         {
             "StateFilter step": step,
             "StateFilter step, no give": lambda: step(rigid, "rigid"),
+            "StateFilter step, impacts fixed": lambda: step(fixed, "fixed"),
             "StateFilter.propagate": lambda: state.propagate(tick("filter"), GYRO, FORCE),
             "StateFilter.update": lambda: state.update(tick("filter"), stance, ORIENTATION),
             "StateFilter.sample": lambda: state.sample(0, (0, 3), (0, 3)),
@@ -117,6 +130,8 @@ def main() -> None:
     print(f"  the odometry's step and its ground: {node:.3f}x")
     give = runs["StateFilter step"] / runs["StateFilter step, no give"]
     print(f"\n  the feet's give: StateFilter step {give:.3f}x its cost without it")
+    impact = runs["StateFilter step"] / runs["StateFilter step, impacts fixed"]
+    print(f"  each landing measured: StateFilter step {impact:.3f}x its cost with them fixed")
 
 
 if __name__ == "__main__":

@@ -189,7 +189,7 @@ MUTATIONS = (
     Mutation(
         "the touchdown term dropped",
         "a1_leg_fk/estimation/state_filter.py",
-        "touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9)",
+        "self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)",
         "0.0",
     ),
     Mutation(

@@ -54,9 +54,15 @@ class FilterSettings:
     vertical noise adaptation, ``vertical_adapt_s``; the impacts: ``touchdown_noise_mps``)."""
     touchdown_noise_mps: float = 0.1
     """A foot's vertical velocity error at its touchdown [m/s]: the impact's give (the ground and
-    the foot compressed, then springing back), decaying over ``touchdown_s`` (0: none)."""
+    the foot compressed, then springing back), decaying over ``touchdown_s`` (0: none); with
+    ``impact_window_s``, a landing's until its own is measured
+    (:mod:`~a1_leg_fk.estimation.foot_impact`)."""
     touchdown_s: float = 0.03
     """The time constant [s] of the touchdown's vertical error."""
+    impact_window_s: float = 0.03
+    """A landing's touchdown amplitude is measured on its own vertical innovations within this
+    [s] of its touchdown (:mod:`~a1_leg_fk.estimation.foot_impact`; 0: ``touchdown_noise_mps``
+    for every landing, the filter as before it)."""
     give_s: float = 0.02
     """The correlation time [s] of the standing feet's give (their vertical velocity the IMU does
     not confirm, measured: :mod:`~a1_leg_fk.estimation.foot_give`): PyBullet's mat-soft toes'
@@ -203,17 +209,6 @@ def scaled(
         xy, hh * d + 2.0 * hg * wy * uy + gg * uy * uy, yz,
         xz, yz, hh * f + 2.0 * hg * wz * uz + gg * uz * uz,
     )  # fmt: skip
-
-
-def touchdown_variance(settings: FilterSettings, seconds: float) -> float:
-    """A foot's extra vertical velocity variance [m²/s²] ``seconds`` after its touchdown (its
-    first joint state in stance): the impact's transient, ``touchdown_noise_mps`` decaying
-    exponentially over ``touchdown_s``.
-    """
-    if not settings.touchdown_noise_mps > 0.0:
-        return 0.0
-    decay = math.exp(-seconds / max(settings.touchdown_s, 1e-9))
-    return (settings.touchdown_noise_mps * decay) ** 2
 
 
 def inverse_square(

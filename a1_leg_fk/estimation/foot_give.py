@@ -150,7 +150,7 @@ class FootGive:
         return feet * self.square * 2.0 * self.settings.give_s / self.interval_s
 
 
-def quadratic(up: list[float], matrix: Sequence[float]) -> float:
+def quadratic(up: Sequence[float], matrix: Sequence[float]) -> float:
     """``uᵀ M u`` for a symmetric 3 x 3 ``matrix`` (row-major) and ``up`` ``u``."""
     ux, uy, uz = up
     a, b, c, _, d, e, _, _, f = matrix

@@ -15,8 +15,9 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   r = Rᵀ v + r x b_g`` (``e = -(J q̇ + ω_calf x c)`` at the rolling contact point ``r``,
   :class:`~a1_leg_fk.estimation.leg_motion.FootMotion`), noise
   :func:`~a1_leg_fk.estimation.filter_model.foot_noise` over the contact probability plus the
-  touchdown's vertical transient (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`,
-  since the foot's first joint state in stance; with ``give_s``, the larger of it and the feet's
+  touchdown's vertical transient (:class:`~a1_leg_fk.estimation.foot_impact.FootImpact`, its
+  amplitude fitted to the landing feet's vertical innovations, since the foot's first joint
+  state in stance; with ``give_s``, the larger of it and the feet's
   measured give, :mod:`~a1_leg_fk.estimation.foot_give`); the stance feet's heights
   ``p_z + (R r)_z`` equal their footholds' anchored heights (``ground="footholds"``, the default,
   :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
@@ -66,11 +67,11 @@ from a1_leg_fk.estimation.filter_model import (
     scattered,
     standing_still,
     stands,
-    touchdown_variance,
 )
 from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.foot_gate import FootGate
 from a1_leg_fk.estimation.foot_give import FootGive
+from a1_leg_fk.estimation.foot_impact import FootImpact
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of
 from a1_leg_fk.estimation.state_sample import floats_of, state_sample
@@ -115,6 +116,7 @@ class StateFilter:
         self._touchdowns: list[int | None] = [None] * LEGS
         self.gate = FootGate(self.settings, self.counts)
         self.give = FootGive(self.settings)
+        self.impact = FootImpact(self.settings)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
@@ -251,11 +253,17 @@ class StateFilter:
         positions = [candidates.index(leg) for leg in used]
         residuals = [stack.foot_residuals[k] for k in positions]
         noises = [stack.foot_noises[k] for k in positions]
+        transients = [feet[k][1] for k in positions]
         if self.settings.give_s > 0.0:  # the feet's give modelled
-            transients = [feet[k][1] for k in positions]
             landed = max([self._touchdowns[leg] or stamp_ns for leg in used] or [stamp_ns])
             covariance, up = self.covariance, stack.up
             self.give.observe(stamp_ns, up, residuals, noises, transients, covariance, landed)
+        if self.settings.impact_window_s > 0.0:  # each landing's amplitude measured
+            ages = [(stamp_ns - (self._touchdowns[leg] or stamp_ns)) / 1e9 for leg in used]
+            rows = [stack.layout.feet.start + 3 * k for k in positions]
+            self.impact.observe(
+                stamp_ns, (used, ages, residuals), transients, stack.up, innovation, rows
+            )
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions if spread else ():  # the feet disagree beyond their noises
             first = stack.layout.feet.start + 3 * k
@@ -273,8 +281,7 @@ class StateFilter:
         self, stamp_ns: int, legs: Sequence[LegMeasurement | None]
     ) -> tuple[list[int], list[tuple[LegMeasurement, float]]]:
         """The legs whose feet stand, and each one's measurement with its touchdown's vertical
-        variance (:func:`~a1_leg_fk.estimation.filter_model.touchdown_variance`, since its first
-        joint state in stance).
+        variance (:meth:`FootImpact.variance`, since its first joint state in stance).
         """
         candidates, feet = [], []
         for leg, measurement in enumerate(legs):
@@ -284,10 +291,9 @@ class StateFilter:
             touchdown = self._touchdowns[leg]
             if touchdown is None:
                 touchdown = self._touchdowns[leg] = stamp_ns
+                self.impact.land(leg)
             candidates.append(leg)
-            feet.append(
-                (measurement, touchdown_variance(self.settings, (stamp_ns - touchdown) / 1e9))
-            )
+            feet.append((measurement, self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)))
         give = self.give.variance(len(feet))
         if give:  # the touchdown's transient is a give too: the larger of the two, not their sum
             feet = [(measurement, max(impact, give)) for measurement, impact in feet]

@@ -13,7 +13,6 @@ from a1_leg_fk.estimation.filter_model import (
     inverse_square,
     scaled,
     scattered,
-    touchdown_variance,
 )
 
 RNG = np.random.default_rng(27)
@@ -45,14 +44,6 @@ def test_scaled_is_the_shaped_matrix() -> None:
         assert np.abs(got - expected).max() < 1e-15
         # across up scaled by h², along it by v² (plus the impact)
         assert math.isclose(u @ got @ u, v * v * (u @ n @ u) + impact, rel_tol=1e-12)
-
-
-def test_touchdown_variance_decays_from_the_impact() -> None:
-    settings = FilterSettings()
-    assert touchdown_variance(settings, 0.0) == settings.touchdown_noise_mps**2
-    ratio = touchdown_variance(settings, settings.touchdown_s) / touchdown_variance(settings, 0.0)
-    assert math.isclose(ratio, math.exp(-2.0), rel_tol=1e-12)  # the variance: the square
-    assert touchdown_variance(FilterSettings(touchdown_noise_mps=0.0), 0.0) == 0.0
 
 
 def test_feet_that_agree_within_their_noise_are_not_scattered() -> None:

@@ -11,18 +11,13 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from synthetic_trot import FEET, JJT, V, vertical_errors
 
 from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.state_filter import StateFilter
-from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 
-V = (0.4, -0.1, 0.0)  # [m/s] base frame = world frame (level, no turn); no vertical motion
-FEET = ((0.18, -0.13, -0.3), (0.18, 0.13, -0.3), (-0.18, -0.13, -0.3), (-0.18, 0.13, -0.3))
-LEVEL = (0.0, 0.0, 0.0, 1.0)
-STEP_NS = 2_000_000
 STANCE_STEPS = 75  # 0.15 s per diagonal pair
-JJT = (0.05, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.05)
 GIVE_MPS = 0.08
 """The give's amplitude [m/s]: a 7.6 mm sink over a 0.15 s stance (PyBullet's mat-soft toes: the
 feet's vertical error 0.05 m/s RMS, this 0.057)."""
@@ -45,11 +40,8 @@ def trot(
     velocity off by ``give_mps`` (kinematic contacts calling a foot that descends to a lower step
     standing)."""
     state = StateFilter(settings, FLAT)  # the floor is flat and known: the feet's heights hold z
-    errors, sigmas = [], []
-    stamp = 0
-    for k in range(round(seconds * 1e9 / STEP_NS)):
-        stamp += STEP_NS
-        state.propagate(stamp, (0.0, 0.0, 0.0), (0.0, 0.0, STANDARD_GRAVITY), LEVEL)
+
+    def legs_at(k: int) -> list[LegMeasurement | None]:
         pair = (0, 3) if (k // STANCE_STEPS) % 2 == 0 else (1, 2)
         phase = (k % STANCE_STEPS) / STANCE_STEPS
         sink = 0.0 if flicker else give_mps * math.sin(math.pi * phase)
@@ -62,11 +54,10 @@ def trot(
             motion = FootMotion((V[0], V[1], give_mps), FEET[swing], 0.3)
             legs = [None] * 4
             legs[swing] = LegMeasurement(motion, 0.99, JJT)
-        state.update(stamp, legs, LEVEL)
-        if stamp >= SETTLE_S * 1e9:
-            errors.append(float(state.velocity[2]) - V[2])
-            sigmas.append(math.sqrt(state.covariance[5, 5]))
-    return np.array(errors), np.array(sigmas), state
+        return legs
+
+    errors, sigmas = vertical_errors(state, seconds, legs_at, SETTLE_S)
+    return errors, sigmas, state
 
 
 def test_a_foot_sinking_under_load_is_inside_the_reported_sigma() -> None:

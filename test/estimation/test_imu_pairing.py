@@ -7,6 +7,7 @@ and the bag tools always had it right)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import pytest
@@ -20,6 +21,7 @@ STEP_NS = 2_000_000
 ROWS = 300
 IMPACT = range(100, 105)  # the jolt's samples
 ANGLES = [0.0, 0.8, -1.5] * 4
+Lost = frozenset[int] | set[int]
 
 
 @pytest.fixture(scope="module")
@@ -42,11 +44,11 @@ def _joint(quadruped: Quadruped, row: int) -> tuple:
     return (row + 1) * STEP_NS, [(foot, (0.0, 0.0, 0.0)) for foot in feet], ANGLES, [0.0] * 12
 
 
-def _velocities(samples: list[OdometrySample]) -> np.ndarray:
-    return np.array([[s.stamp_ns, *s.linear, *s.position] for s in samples])
+def _velocities(samples: Sequence[OdometrySample | None]) -> np.ndarray:
+    return np.array([[s.stamp_ns, *s.linear, *s.position] for s in samples if s is not None])
 
 
-def _imu_first(quadruped: Quadruped, lost: set[int] = frozenset()) -> np.ndarray:
+def _imu_first(quadruped: Quadruped, lost: Lost = frozenset()) -> np.ndarray:
     """The reference: each IMU sample into the feed before its joint state (``lost``: rows
     without one)."""
     feed, samples = OdometryFeed(quadruped, contacts="kinematic"), []
@@ -58,7 +60,7 @@ def _imu_first(quadruped: Quadruped, lost: set[int] = frozenset()) -> np.ndarray
     return _velocities(samples)
 
 
-def _imu_second(quadruped: Quadruped, lost: set[int] = frozenset(), **kwargs) -> tuple:
+def _imu_second(quadruped: Quadruped, lost: Lost = frozenset(), **kwargs) -> tuple:
     """Each IMU sample after its joint state (``lost``: rows without one), through the pairing."""
     pairing = ImuPairing(OdometryFeed(quadruped, contacts="kinematic"), **kwargs)
     samples: list[OdometrySample] = []

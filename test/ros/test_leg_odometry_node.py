@@ -1,6 +1,8 @@
 """``leg_odometry_node`` over real DDS: a PyBullet-made stream (joint_states + imu at 500 Hz; with
 and without the motor torques as efforts, so with force contacts and kinematic stance) gives the
-same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message."""
+same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message; with each
+IMU message published after its joint state too (the node holds the joint state for it:
+:class:`~a1_leg_fk.estimation.imu_pairing.ImuPairing`), the IMU-first bag's."""
 
 from __future__ import annotations
 
@@ -28,10 +30,23 @@ def run():
     return simulate(walking_targets(start_s=0.3), SIM_S)
 
 
-@pytest.mark.parametrize("efforts", [False, True], ids=["kinematic", "force_contacts"])
-def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts) -> None:
+@pytest.mark.parametrize(
+    ("efforts", "imu_second"),
+    [(False, False), (True, False), (True, True)],
+    ids=["kinematic", "force_contacts", "force_contacts_imu_second"],
+)
+def test_node_gives_the_bag_tools_numbers(
+    run, ros, processes, tmp_path, efforts, imu_second
+) -> None:
     bag = write_sim_bag(tmp_path / "sim", run, truth=False, efforts=efforts)
     track = odometry_track(bag, topic=JOINT_TOPIC)
+    if imu_second:  # the bag tool holds each joint state for its IMU sample as the node does
+        after = write_sim_bag(
+            tmp_path / "after", run, truth=False, efforts=efforts, imu_after=True
+        )
+        second = odometry_track(after, topic=JOINT_TOPIC)
+        assert np.array_equal(second.linear, track.linear)
+        assert np.array_equal(second.positions, track.positions)
     force_samples = len(run.stamps_s) if efforts else 0
     assert track.contact_counts.force == force_samples
     node = processes.start(odometry_node_command())
@@ -56,6 +71,7 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
         lambda: len(received),
         RATE_HZ,
         AHEAD,
+        imu_first=not imu_second,
     )
     assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
         f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"

@@ -201,3 +201,28 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         assert node._feed.source == "kinematic" and node._feed.filter.ground == "footholds"
     finally:
         node.destroy_node()
+
+
+def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
+    """The imu topic is subscribed but silent: each joint state waits for its IMU sample only
+    until one stamped ``imu_wait_s`` later comes (here 10 ms later), and the last one until the
+    wall-clock bound (0.1 s, checked every 0.05 s): all come out, in order, legs alone."""
+    node = processes.start(odometry_node_command())
+    received: list[Odometry] = []
+    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
+    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
+    ros.spin_for(0.5)
+    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    count = 10
+    for index in range(count):
+        message = JointState(name=names, position=[0.0, 0.8, -1.5] * 4, velocity=[0.0] * 12)
+        message.header.stamp.sec, message.header.stamp.nanosec = 100, index * 10_000_000
+        joint_pub.publish(message)
+        ros.spin_for(0.01)
+    assert ros.spin_until(lambda: len(received) >= count, 10.0), (
+        f"{len(received)} of {count}\n{processes.output(node)}"
+    )
+    assert [m.header.stamp.nanosec for m in received] == [i * 10_000_000 for i in range(count)]
+    assert all(m.pose.pose.orientation.w == 1.0 for m in received)  # legs alone: no IMU
+    assert processes.interrupt(node) == 0

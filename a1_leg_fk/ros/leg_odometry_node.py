@@ -368,6 +368,11 @@ class LegOdometryNode(Node):
     def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
         self._apply_frames()
 
+    def destroy_node(self) -> None:
+        """Ctrl-C, SIGTERM: the joint states still held are published first."""
+        self._output(self._pairing.flush())
+        super().destroy_node()  # type: ignore[no-untyped-call]
+
 
 def main(args: Sequence[str] | None = None) -> int:
     """Entry point of ``ros2 run a1_leg_fk leg_odometry_node``; exits 0 on Ctrl-C/SIGTERM."""

@@ -14,6 +14,7 @@ from nav_msgs.msg import Odometry
 from node_harness import LEGS, Diagnostics, SensorStream, to_ros
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
 from pybullet_sim import simulate, walking_targets
+from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, JointState
 from shared import odometry_node_command
@@ -150,12 +151,7 @@ def _check_ground(grounds: list[PoseWithCovarianceStamped], track) -> None:
 def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
     node = processes.start(odometry_node_command("-p", "use_imu:=false"))
     diagnostics = Diagnostics(ros, "leg odometry")
-    received: list[Odometry] = []
-    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
-    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
-    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
-    ros.spin_for(0.5)
-    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    received, joint_pub, names = _joint_states_in(ros)
     stand = [0.0, 0.8, -1.5] * 4
     bad = [
         JointState(name=names, position=stand[:11], velocity=[0.0] * 12),  # lengths differ
@@ -208,12 +204,7 @@ def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
     until one stamped ``imu_wait_s`` later comes (here 10 ms later), and the last one until the
     wall-clock bound (0.1 s, checked every 0.05 s): all come out, in order, legs alone."""
     node = processes.start(odometry_node_command())
-    received: list[Odometry] = []
-    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
-    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
-    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
-    ros.spin_for(0.5)
-    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    received, joint_pub, names = _joint_states_in(ros)
     count = 10
     for index in range(count):
         message = JointState(name=names, position=[0.0, 0.8, -1.5] * 4, velocity=[0.0] * 12)
@@ -226,3 +217,18 @@ def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
     assert [m.header.stamp.nanosec for m in received] == [i * 10_000_000 for i in range(count)]
     assert all(m.pose.pose.orientation.w == 1.0 for m in received)  # legs alone: no IMU
     assert processes.interrupt(node) == 0
+
+
+def _joint_states_in(ros) -> tuple[list[Odometry], Publisher, list[str]]:
+    """The node's odometry as received, a joint_states publisher it subscribes (bounded wait, and
+    half a second for the match) and the A1's joint names."""
+    received: list[Odometry] = []
+    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
+    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
+    ros.spin_for(0.5)
+    return (
+        received,
+        joint_pub,
+        [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")],
+    )

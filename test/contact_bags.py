@@ -16,10 +16,15 @@ def stamp_of(run: ContactRun, row: int) -> int:
 
 
 def write_run_bag(
-    path: Path, run: ContactRun, efforts: bool = True, rows: int | None = None
+    path: Path,
+    run: ContactRun,
+    efforts: bool = True,
+    rows: int | None = None,
+    imu_after: bool = False,
 ) -> Path:
     """The run (its first ``rows`` samples) as a robot would record it: /joint_states, /imu (the
-    IMU's three readings) and /base_pose (the root's pose, for the gait tool's world feet)."""
+    IMU's three readings; written just before its joint state, or with ``imu_after`` just after)
+    and /base_pose (the root's pose, for the gait tool's world feet)."""
     spec = BagSpec()
     vector, quaternion = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
     for row in range(len(run.stamps_s) if rows is None else rows):
@@ -40,7 +45,7 @@ def write_run_bag(
         spec.add(
             "/imu",
             "sensor_msgs/msg/Imu",
-            stamp + 1,
+            stamp + (3 if imu_after else 1),
             T["sensor_msgs/msg/Imu"](
                 header(stamp, "imu_link"),
                 quaternion(*xyzw),

@@ -218,7 +218,7 @@ def package_root() -> Path:
 
 class SensorStream:
     """``imu`` and ``joint_states`` into a node, row by row at a fixed rate, as a robot (or a bag
-    replay) would send them: each row's Imu first, then its JointState.
+    replay) would send them: each row's Imu first, then its JointState (or the other way round).
     """
 
     def __init__(self, probe: RosProbe, output_topic: str, timeout_s: float = 30.0) -> None:
@@ -248,17 +248,22 @@ class SensorStream:
         answered: Callable[[], int],
         rate_hz: float = 500.0,
         ahead: int = 40,
+        imu_first: bool = True,
     ) -> None:
         """Publish ``messages(row)`` for every row at ``rate_hz``, unless the node (on a loaded
-        machine) has answered (``answered()``) more than ``ahead`` rows fewer than were sent.
+        machine) has answered (``answered()``) more than ``ahead`` rows fewer than were sent;
+        each row's Imu first, or with ``imu_first`` false its JointState first.
         """
         probe = self.probe
         start = time.monotonic()
         for row in range(rows):
             imu, joint_state = messages(row)
-            self.imu.publish(imu)
-            probe.executor.spin_once(timeout_sec=0.0002)  # the IMU sample first, as in a bag
-            self.joint_states.publish(joint_state)
+            first, second = (
+                (self.imu, self.joint_states) if imu_first else (self.joint_states, self.imu)
+            )
+            first.publish(imu if imu_first else joint_state)
+            probe.executor.spin_once(timeout_sec=0.0002)  # the first one first, as in a bag
+            second.publish(joint_state if imu_first else imu)
             delay = start + (row + 1) / rate_hz - time.monotonic()
             if delay > 0:
                 probe.spin_for(delay)

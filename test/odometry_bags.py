@@ -59,19 +59,21 @@ def write_sim_bag(
     truth: bool = True,
     efforts: bool = False,
     kind: str = "mcap",
+    imu_after: bool = False,
 ) -> Path:
     """The run as a bag (``kind`` as :func:`bag_factory.write_bag`'s, MCAP by default):
-    joint_states (positions, velocities, and with ``efforts`` the motor torques), imu, truth
-    (PoseStamped of the URDF root in the world)."""
+    joint_states (positions, velocities, and with ``efforts`` the motor torques), imu (written
+    one ns before its joint state, or with ``imu_after`` one ns after: a replay delivers it
+    second), truth (PoseStamped of the URDF root in the world)."""
     spec = BagSpec()
     forces = run.specific_force
     for row in range(len(run.stamps_s)):
         stamp = stamp_of(run, row)
-        if imu:  # one ns before the joint state: a replay delivers it first
+        if imu:
             spec.add(
                 IMU_TOPIC,
                 "sensor_msgs/msg/Imu",
-                stamp - 1,
+                stamp + 1 if imu_after else stamp - 1,
                 imu_message(run, row, force=forces[row]),
             )
         spec.add_joint_state(JOINT_TOPIC, stamp, joint_state_msg(run, row, efforts))

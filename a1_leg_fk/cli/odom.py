@@ -28,6 +28,7 @@ from a1_leg_fk.cli.common import (
 )
 from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, GROUND_MODELS
 from a1_leg_fk.estimation.ground_outputs import GROUND_COLUMNS
+from a1_leg_fk.estimation.imu_pairing import DEFAULT_IMU_WAIT_S
 from a1_leg_fk.estimation.odometry_feed import CONTACT_SOURCES
 from a1_leg_fk.model.legs import LEG_NAMES
 from a1_leg_fk.model.urdf import LegFkError
@@ -66,6 +67,15 @@ def add_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "--imu", metavar="TOPIC", help="the sensor_msgs/msg/Imu topic (default: the only one)"
     )
     odom.add_argument("--no-imu", action="store_true", help="ignore the IMU: legs alone")
+    odom.add_argument(
+        "--imu-wait",
+        type=non_negative,
+        default=DEFAULT_IMU_WAIT_S,
+        metavar="S",
+        help="a joint state stamped after the newest IMU sample waits for one stamped at or after "
+        "it until a joint state this much later [s] (default %(default)g; 0: never waits, the "
+        "latest IMU sample at or before it as it arrived)",
+    )
     odom.add_argument(
         "--contacts",
         choices=CONTACT_SOURCES,
@@ -124,7 +134,11 @@ def run(options: argparse.Namespace, argv: Sequence[str]) -> int:
     del argv  # no ROS here
     try:
         odometry, choices = odometry_inputs(
-            options, radius_m=options.foot_radius, contacts=options.contacts, ground=options.ground
+            options,
+            radius_m=options.foot_radius,
+            contacts=options.contacts,
+            ground=options.ground,
+            imu_wait_s=options.imu_wait,
         )
         if options.plot:
             pyplot()  # before the work: MissingMatplotlib says how to install it
@@ -209,7 +223,7 @@ def odometry_inputs(
     (``--imu``, ``--no-imu``, ``--causal``: else smoothed, ``--quiet``; ``--truth``, ``--topic``,
     ``--urdf``, ``--foot-links``, ``--joint-aliases``, ``--corrections``); ``settings``: more of
     :class:`~a1_leg_fk.recording.odometry.OdometryOptions` (``odom``'s ``radius_m``,
-    ``contacts``, ``ground``). :class:`LegFkError` for contradicting options.
+    ``contacts``, ``ground``, ``imu_wait_s``). :class:`LegFkError` for contradicting options.
     """
     from a1_leg_fk.recording.odometry import OdometryOptions
 

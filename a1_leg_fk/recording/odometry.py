@@ -25,6 +25,7 @@ import numpy as np
 from a1_leg_fk.estimation.contact_estimator import EvidenceCounts
 from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND, FilterCounts, FilterSettings
 from a1_leg_fk.estimation.ground_outputs import ground_values
+from a1_leg_fk.estimation.imu_pairing import DEFAULT_IMU_WAIT_S, ImuPairing
 from a1_leg_fk.estimation.model_corrections import DEFAULT_MODEL_CORRECTIONS
 from a1_leg_fk.estimation.odometry import OdometryCounts, OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO, FORCE, KINEMATIC, OdometryFeed
@@ -50,6 +51,8 @@ if TYPE_CHECKING:
     from rosbags.interfaces import Connection
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
+END_OF_BAG = 2**63 - 1
+"""[ns] A bag time after every message's."""
 BLOCK_ROWS = 4096
 """Rows the stream gives at a time (:func:`odometry_stream`)."""
 
@@ -62,7 +65,8 @@ class OdometryOptions:
     ``kinematic``); ``filter_settings`` and ``ground`` the state filter's; ``smoothed``: the
     filter's states smoothed over the recording (:class:`~a1_leg_fk.estimation.
     odometry_smoother.OdometrySmoother`), else the filter's own, as the node has them;
-    ``progress``: a progress bar.
+    ``progress``: a progress bar; ``imu_wait_s``: how long [s, stamp time] a joint state waits
+    for its IMU sample (:class:`~a1_leg_fk.estimation.imu_pairing.ImuPairing`).
     """
 
     imu_topic: str | None = None
@@ -74,6 +78,7 @@ class OdometryOptions:
     ground: str = DEFAULT_GROUND
     smoothed: bool = False
     progress: bool = False
+    imu_wait_s: float = DEFAULT_IMU_WAIT_S
 
 
 @dataclass(frozen=True)
@@ -179,21 +184,18 @@ def _blocks(
             on_message=imu.add if imu else None,
             others=[imu.connection] if imu else None,
         )
-        for block in blocks:
-            stats.add(block)
-            for sample in _block_samples(block, feed, imu):
-                pending.append(
-                    (ground_values(feed.ground_plane(sample)), running_counts(feed.filter.counts))
-                )
-                final = (
-                    [sample] if smoother is None else smoother.add(sample, feed.samples_filtered)
-                )
-                samples += final
-                live += [pending.popleft() for _ in final]
-                if len(samples) >= block_rows:
-                    planar = samples[-1].planar
-                    yield TrackRows.of(samples, live)
-                    samples, live = [], []
+        wait_s = options.imu_wait_s if imu is not None and imu.lowstate is None else 0.0
+        for sample in _samples(blocks, stats, ImuPairing(feed, wait_s), imu):
+            pending.append(
+                (ground_values(feed.ground_plane(sample)), running_counts(feed.filter.counts))
+            )
+            final = [sample] if smoother is None else smoother.add(sample, feed.samples_filtered)
+            samples += final
+            live += [pending.popleft() for _ in final]
+            if len(samples) >= block_rows:
+                planar = samples[-1].planar
+                yield TrackRows.of(samples, live)
+                samples, live = [], []
         if smoother is not None:
             samples += smoother.finish()
             live += pending
@@ -261,11 +263,28 @@ def _inputs(
     return feed, imu
 
 
-def _block_samples(
-    block: FootBlock, feed: OdometryFeed, imu: ImuStream | None
+def _samples(
+    blocks: Iterator[FootBlock], stats: BlockStats, pairing: ImuPairing, imu: ImuStream | None
 ) -> Iterator[OdometrySample]:
-    """The feed's causal samples of ``block``'s rows, each after the IMU's samples up to its
-    bag time.
+    """The feed's causal samples of every block's rows (``stats`` counts the blocks), the IMU's
+    and the joint states' messages paired in bag order (:class:`~a1_leg_fk.estimation.
+    imu_pairing.ImuPairing`); at the end, the joint states still held after the IMU's last
+    samples.
+    """
+    for block in blocks:
+        stats.add(block)
+        yield from _block_samples(block, pairing, imu)
+    if pairing.holding and imu is not None:
+        for _, imu_stamp, reading in imu.until(END_OF_BAG):
+            yield from pairing.imu(imu_stamp, reading)
+    yield from pairing.flush()
+
+
+def _block_samples(
+    block: FootBlock, pairing: ImuPairing, imu: ImuStream | None
+) -> Iterator[OdometrySample]:
+    """The feed's causal samples released by ``block``'s rows, each row after the IMU's samples
+    up to its bag time.
     """
     usable = np.isfinite(block.positions).all(axis=2) & np.isfinite(block.velocities).all(axis=2)
     efforts = block.efforts.tolist() if block.efforts is not None else repeat(None)
@@ -282,14 +301,12 @@ def _block_samples(
     for stamp, bag_time, positions, velocities, known, angles, rates, effort in rows:
         if imu is not None:
             for _, imu_stamp, reading in imu.until(bag_time):
-                feed.add_imu(imu_stamp, reading)
+                yield from pairing.imu(imu_stamp, reading)
         feet = [
             (position, velocity) if ok else None
             for position, velocity, ok in zip(positions, velocities, known)
         ]
-        sample = feed.step(stamp, feet, angles, rates, efforts=effort)
-        if sample is not None:
-            yield sample
+        yield from pairing.joint(stamp, feet, angles, rates, effort, bag_time)
 
 
 def _imu_connection(

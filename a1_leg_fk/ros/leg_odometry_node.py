@@ -6,7 +6,9 @@ runs on bags. The robot comes from :class:`~a1_leg_fk.ros.robot_source.RobotSour
 states follow :class:`~a1_leg_fk.tracking.FootTracker`'s rules, as in ``foot_fk_node``. Each
 accepted joint state with velocities gives one ``leg_odometry`` message, stamped with the joint
 state's stamp: pose in ``odom_frame``, twist in the base frame (``child_frame_id``). An IMU sample
-is paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`).
+is paired with a joint state by stamp (the latest at or before it, :class:`ImuBuffer`); a joint
+state stamped after the newest IMU sample waits for its own (parameter ``imu_wait_s``, at most
+:data:`~a1_leg_fk.estimation.imu_pairing.WALL_WAIT_S` of wall time: :class:`ImuPairing`).
 
 The estimate is the state filter's (:mod:`a1_leg_fk.estimation.state_filter`: IMU-propagated,
 gated leg velocities) while IMU samples carry an accelerometer, else the legs alone. Contacts
@@ -18,7 +20,8 @@ odom`` (:data:`~a1_leg_fk.estimation.odometry_feed.CONTACT_SOURCES`).
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+import time
+from collections.abc import Iterable, Sequence
 from typing import Unpack
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -33,6 +36,7 @@ from sensor_msgs.msg import Imu
 from a1_leg_fk.estimation.filter_model import GROUND_MODELS
 from a1_leg_fk.estimation.ground_outputs import plane_pose
 from a1_leg_fk.estimation.imu import MAX_ANGULAR_RATE_RADPS, imu_reading
+from a1_leg_fk.estimation.imu_pairing import WALL_WAIT_S, ImuPairing
 from a1_leg_fk.estimation.odometry import OdometrySample, OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import (
     CONTACT_SOURCES,
@@ -111,6 +115,7 @@ class LegOdometryNode(Node):
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             )
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self.create_timer(WALL_WAIT_S / 2, self._expire)
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.get_logger().info(
             f"leg odometry of {self._config.source} from {self.resolve_topic_name(topic)}"
@@ -140,6 +145,9 @@ class LegOdometryNode(Node):
                 model_corrections=corrections,
             ),
         )
+        separate_imu = self._decoder.imu is None  # a LowState's IMU comes with its joint state
+        wait_s = self._setting("imu_wait_s") if separate_imu else 0.0
+        self._pairing = ImuPairing(self._feed, wait_s)
         if self._feed.note and self._contacts != KINEMATIC:
             self.get_logger().warn(f"no foot forces, kinematic stance: {self._feed.note}")
         self._no_stance_before = 0
@@ -163,8 +171,7 @@ class LegOdometryNode(Node):
                 "gyro_out_of_range",
                 f"angular velocity not finite or beyond {MAX_ANGULAR_RATE_RADPS:g} rad/s",
             )
-            return
-        self._feed.add_imu(stamp or self.get_clock().now().nanoseconds, reading)
+        self._output(self._pairing.imu(stamp or self.get_clock().now().nanoseconds, reading))
 
     def _on_joint_state(self, fields: WireFields) -> None:
         """One joint state's fields, read from its bytes by the input's decoder (as the bag tools
@@ -193,23 +200,35 @@ class LegOdometryNode(Node):
         for foot in feet:
             if foot.velocity is not None:
                 legs[foot.leg_slot] = (foot.position, foot.velocity)
-        sample = self._feed.step(
-            stamp_ns or self.get_clock().now().nanoseconds,
-            legs,
-            tracker.angles,
-            tracker.rates,
-            efforts=tracker.efforts,
-        )
-        if sample is None:
+        if all(leg is None for leg in legs):
             self._without_velocities += 1
             self._warnings.warn(
                 "no_velocities", "joint_states without joint velocities: no odometry from them"
             )
             return
-        self._publish(sample)
-        if self._feed.ground.revision != self._ground_revision:
-            self._ground_revision = self._feed.ground.revision
-            self._publish_ground(sample)
+        self._output(
+            self._pairing.joint(
+                stamp_ns or self.get_clock().now().nanoseconds,
+                legs,
+                list(tracker.angles),
+                list(tracker.rates),
+                list(tracker.efforts),
+                time.monotonic_ns(),
+            )
+        )
+
+    def _expire(self) -> None:
+        """The wall-clock bound: the joint states held longer than :data:`WALL_WAIT_S`."""
+        if self._pairing.holding:
+            self._output(self._pairing.expire(time.monotonic_ns() - round(WALL_WAIT_S * 1e9)))
+
+    def _output(self, samples: Iterable[OdometrySample]) -> None:
+        """Publish each released sample, and the ground when its footholds changed."""
+        for sample in samples:
+            self._publish(sample)
+            if self._feed.ground.revision != self._ground_revision:
+                self._ground_revision = self._feed.ground.revision
+                self._publish_ground(sample)
 
     def _publish_ground(self, sample: OdometrySample) -> None:
         """The local ground under the base on ``ground`` (in the odom frame, stamped as the
@@ -348,6 +367,11 @@ class LegOdometryNode(Node):
 
     def _after_set_parameters(self, _parameters: list[Parameter]) -> None:
         self._apply_frames()
+
+    def destroy_node(self) -> None:
+        """Ctrl-C, SIGTERM: the joint states still held are published first."""
+        self._output(self._pairing.flush())
+        super().destroy_node()  # type: ignore[no-untyped-call]
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -9,6 +9,7 @@ from rcl_interfaces.msg import ParameterType
 
 from a1_leg_fk.estimation.filter_model import DEFAULT_GROUND
 from a1_leg_fk.estimation.imu import DEFAULT_IMU_TIMEOUT_S
+from a1_leg_fk.estimation.imu_pairing import DEFAULT_IMU_WAIT_S, WALL_WAIT_S
 from a1_leg_fk.estimation.odometry import OdometrySettings
 from a1_leg_fk.estimation.odometry_feed import AUTO
 from a1_leg_fk.ros.foot_fk_parameters import (
@@ -21,6 +22,7 @@ from a1_leg_fk.ros.robot_source import BASE_FRAME_PARAMETER, ParameterSpec
 DEFAULTS = OdometrySettings()
 SMALL_RANGE_M = (-1.0, 1.0)
 RANGE_S = (0.001, 10.0)
+WAIT_RANGE_S = (0.0, 1.0)
 RANGE_MPS = (0.001, 100.0)
 
 PARAMETERS = (
@@ -66,6 +68,16 @@ PARAMETERS = (
         f"{RANGE_S}",
         read_only=True,
         value_range=RANGE_S,
+    ),
+    ParameterSpec(
+        "imu_wait_s",
+        DEFAULT_IMU_WAIT_S,
+        ParameterType.PARAMETER_DOUBLE,
+        "A joint state stamped after the newest IMU sample waits for one stamped at or after it "
+        f"until a joint state this much [s] later arrives (and at most {WALL_WAIT_S:g} s of wall "
+        f"time); 0 = never waits, in {WAIT_RANGE_S}",
+        read_only=True,
+        value_range=WAIT_RANGE_S,
     ),
     ParameterSpec(
         "foot_radius_m",

@@ -1,6 +1,8 @@
 """``leg_odometry_node`` over real DDS: a PyBullet-made stream (joint_states + imu at 500 Hz; with
 and without the motor torques as efforts, so with force contacts and kinematic stance) gives the
-same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message."""
+same odometry as ``a1-leg-fk odom`` on a bag of the same stream, message for message; with each
+IMU message published after its joint state too (the node holds the joint state for it:
+:class:`~a1_leg_fk.estimation.imu_pairing.ImuPairing`), the IMU-first bag's."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from nav_msgs.msg import Odometry
 from node_harness import LEGS, Diagnostics, SensorStream, to_ros
 from odometry_bags import JOINT_TOPIC, imu_message, joint_state_msg, write_sim_bag
 from pybullet_sim import simulate, walking_targets
+from rclpy.publisher import Publisher
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu, JointState
 from shared import odometry_node_command
@@ -28,10 +31,23 @@ def run():
     return simulate(walking_targets(start_s=0.3), SIM_S)
 
 
-@pytest.mark.parametrize("efforts", [False, True], ids=["kinematic", "force_contacts"])
-def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts) -> None:
+@pytest.mark.parametrize(
+    ("efforts", "imu_second"),
+    [(False, False), (True, False), (True, True)],
+    ids=["kinematic", "force_contacts", "force_contacts_imu_second"],
+)
+def test_node_gives_the_bag_tools_numbers(
+    run, ros, processes, tmp_path, efforts, imu_second
+) -> None:
     bag = write_sim_bag(tmp_path / "sim", run, truth=False, efforts=efforts)
     track = odometry_track(bag, topic=JOINT_TOPIC)
+    if imu_second:  # the bag tool holds each joint state for its IMU sample as the node does
+        after = write_sim_bag(
+            tmp_path / "after", run, truth=False, efforts=efforts, imu_after=True
+        )
+        second = odometry_track(after, topic=JOINT_TOPIC)
+        assert np.array_equal(second.linear, track.linear)
+        assert np.array_equal(second.positions, track.positions)
     force_samples = len(run.stamps_s) if efforts else 0
     assert track.contact_counts.force == force_samples
     node = processes.start(odometry_node_command())
@@ -56,6 +72,7 @@ def test_node_gives_the_bag_tools_numbers(run, ros, processes, tmp_path, efforts
         lambda: len(received),
         RATE_HZ,
         AHEAD,
+        imu_first=not imu_second,
     )
     assert ros.spin_until(lambda: len(received) >= samples, 20.0), (
         f"{len(received)} of {samples} odometry messages\n{processes.output(node)}"
@@ -134,12 +151,7 @@ def _check_ground(grounds: list[PoseWithCovarianceStamped], track) -> None:
 def test_bad_joint_states_are_counted_not_fatal(ros, processes) -> None:
     node = processes.start(odometry_node_command("-p", "use_imu:=false"))
     diagnostics = Diagnostics(ros, "leg odometry")
-    received: list[Odometry] = []
-    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
-    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
-    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
-    ros.spin_for(0.5)
-    names = [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")]
+    received, joint_pub, names = _joint_states_in(ros)
     stand = [0.0, 0.8, -1.5] * 4
     bad = [
         JointState(name=names, position=stand[:11], velocity=[0.0] * 12),  # lengths differ
@@ -185,3 +197,38 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
         assert node._feed.source == "kinematic" and node._feed.filter.ground == "footholds"
     finally:
         node.destroy_node()
+
+
+def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
+    """The imu topic is subscribed but silent: each joint state waits for its IMU sample only
+    until one stamped ``imu_wait_s`` later comes (here 10 ms later), and the last one until the
+    wall-clock bound (0.1 s, checked every 0.05 s): all come out, in order, legs alone."""
+    node = processes.start(odometry_node_command())
+    received, joint_pub, names = _joint_states_in(ros)
+    count = 10
+    for index in range(count):
+        message = JointState(name=names, position=[0.0, 0.8, -1.5] * 4, velocity=[0.0] * 12)
+        message.header.stamp.sec, message.header.stamp.nanosec = 100, index * 10_000_000
+        joint_pub.publish(message)
+        ros.spin_for(0.01)
+    assert ros.spin_until(lambda: len(received) >= count, 10.0), (
+        f"{len(received)} of {count}\n{processes.output(node)}"
+    )
+    assert [m.header.stamp.nanosec for m in received] == [i * 10_000_000 for i in range(count)]
+    assert all(m.pose.pose.orientation.w == 1.0 for m in received)  # legs alone: no IMU
+    assert processes.interrupt(node) == 0
+
+
+def _joint_states_in(ros) -> tuple[list[Odometry], Publisher, list[str]]:
+    """The node's odometry as received, a joint_states publisher it subscribes (bounded wait, and
+    half a second for the match) and the A1's joint names."""
+    received: list[Odometry] = []
+    ros.node.create_subscription(Odometry, "leg_odometry", received.append, QoSProfile(depth=100))
+    joint_pub = ros.node.create_publisher(JointState, "joint_states", QoSProfile(depth=100))
+    assert ros.spin_until(lambda: joint_pub.get_subscription_count() > 0, 30.0)
+    ros.spin_for(0.5)
+    return (
+        received,
+        joint_pub,
+        [f"{leg}_{part}_joint" for leg in LEGS for part in ("hip", "upper", "lower")],
+    )

@@ -308,6 +308,7 @@ class LegOdometryNode(Node):
                 else "none (use_imu false)",
                 imu_received=self._feed.imu.received,
                 samples_with_imu=self._feed.samples_with_imu,
+                imu_pairing=(self._pairing.held, self._pairing.released_by_wait),
                 without_velocities=self._without_velocities,
                 contacts=self._contacts,
                 contact_counts=self._feed.counts,

@@ -40,6 +40,7 @@ class OdometryReport:
     imu_topic: str
     imu_received: int
     samples_with_imu: int
+    imu_pairing: tuple[int, int]  # joint states held for their IMU sample, released without it
     without_velocities: int  # joint states accepted that gave no foot velocity
     model: str
     description_topic: str
@@ -99,6 +100,8 @@ def odometry_status(report: OdometryReport) -> tuple[bytes, str, dict[str, objec
         "imu_received": report.imu_received,
         "samples": odometry.samples + report.filtered,
         "samples_with_imu": report.samples_with_imu,
+        "joint_states_held_for_imu": report.imu_pairing[0],
+        "joint_states_released_without_imu": report.imu_pairing[1],
         "samples_filtered": report.filtered,
         "samples_legs_alone": odometry.samples,
         "samples_without_stance": odometry.no_stance,

@@ -202,8 +202,10 @@ def test_a_bad_contacts_or_ground_value_names_the_parameter(ros) -> None:
 def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
     """The imu topic is subscribed but silent: each joint state waits for its IMU sample only
     until one stamped ``imu_wait_s`` later comes (here 10 ms later), and the last one until the
-    wall-clock bound (0.1 s, checked every 0.05 s): all come out, in order, legs alone."""
+    wall-clock bound (0.1 s, checked every 0.05 s): all come out, in order, legs alone; the
+    diagnostics count each held and let go without its IMU sample."""
     node = processes.start(odometry_node_command())
+    diagnostics = Diagnostics(ros, "leg odometry")
     received, joint_pub, names = _joint_states_in(ros)
     count = 10
     for index in range(count):
@@ -216,6 +218,9 @@ def test_a_dead_imu_stalls_no_joint_state(ros, processes) -> None:
     )
     assert [m.header.stamp.nanosec for m in received] == [i * 10_000_000 for i in range(count)]
     assert all(m.pose.pose.orientation.w == 1.0 for m in received)  # legs alone: no IMU
+    values = diagnostics.fresh()
+    assert values["joint_states_held_for_imu"] == str(count), values
+    assert values["joint_states_released_without_imu"] == str(count), values
     assert processes.interrupt(node) == 0
 
 

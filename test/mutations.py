@@ -285,7 +285,7 @@ MUTATIONS = (
     Mutation(
         "a step measured against the standing feet counts as touchdown noise",
         "a1_leg_fk/estimation/ground.py",
-        "and (agrees or (alone and not lone_step)):",
+        "and (agrees or (alone and not self._a_step(agrees))):",
         "and True:",
     ),
     Mutation(

@@ -122,7 +122,6 @@ class LocalGround:
         self.window_s = window_s
         self.anchored = anchored
         """False: the footholds keep their measured heights (module text)."""
-        self.step_gate = step_gate
         self.slope_prior = slope_prior
         self.min_sigma_m = min_sigma_m
         self.footholds: deque[Foothold] = deque(maxlen=max_footholds)
@@ -266,18 +265,23 @@ class LocalGround:
         if nearest is None:
             return point[2], LEVEL
         height, variance, grade, agrees = nearest
-        lone_step = alone and not agrees and _sloped(self.gradient()[0])
-        if variance <= self.min_sigma_m**2 and (agrees or (alone and not lone_step)):
+        if variance <= self.min_sigma_m**2 and (agrees or (alone and not self._a_step(agrees))):
             self.gate.count(point[2] - height)
         return (height, grade) if agrees else (point[2], LEVEL)
 
     def lands_on_a_step(self, point: Point) -> bool:
         """Whether a touchdown at ``point`` [m, odom] with no foot to take its height against
         is a step: where the ground slopes (a staircase), off the prediction by more than
-        :attr:`step_gate` of its noise (:meth:`_nearest`).
+        ``step_gate`` of its noise (:meth:`_nearest`).
         """
         nearest = self._nearest(point, alone=True)
-        return nearest is not None and not nearest[3] and _sloped(self.gradient()[0])
+        return nearest is not None and self._a_step(nearest[3])
+
+    def _a_step(self, agrees: bool) -> bool:
+        """Whether a lone touchdown that ``agrees`` with the prediction or not is a step: off
+        it where the ground slopes.
+        """
+        return not agrees and _sloped(self.gradient()[0])
 
     def _nearest(self, point: Point, alone: bool) -> tuple[float, float, Grade, bool] | None:
         """The prediction nearer to ``point`` [m, odom] (height [m], variance [m²], slope) and

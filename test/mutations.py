@@ -92,8 +92,8 @@ MUTATIONS = (
     Mutation(
         "contact filter's force evidence x 0",
         "a1_leg_fk/estimation/contact_filter.py",
-        "push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)",
-        "push = _clip(0.0 * force / model.force_scale_n, limit, limit)",
+        "push = clip_odds((force - model.force_half_n) / model.force_scale_n, limit, limit)",
+        "push = clip_odds(0.0 * force / model.force_scale_n, limit, limit)",
     ),
     Mutation(
         "a forced foot whose force says swing keeps its low-and-still stance",
@@ -103,25 +103,25 @@ MUTATIONS = (
     ),
     Mutation(
         "contact filter's speeds against every low foot, not the feet that stood",
-        "a1_leg_fk/estimation/contact_filter.py",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
         "references = _references(velocities, (low, stepped), standing, forced)",
         "references = _references(velocities, (low, stepped), [False] * LEGS, forced)",
     ),
     Mutation(
         "a landed foot with a force still called swing by its height",
-        "a1_leg_fk/estimation/contact_filter.py",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
         "rise = math.nan if forced[leg] and rise != math.inf else rise",
         "rise = math.nan if forced[leg] else rise",
     ),
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",
-        "a1_leg_fk/estimation/contact_filter.py",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
         "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
         "if x > rise < -math.inf or x < 0.0 < rise == math.inf:",
     ),
     Mutation(
         "a landed foot's height above the others still says swing",
-        "a1_leg_fk/estimation/contact_filter.py",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
         "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
         "if x > rise < 0.0:",
     ),

@@ -24,7 +24,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.contact_filter import ContactFilter
+from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.contacts import ContactRule, ContactThresholds, normal_force
 from a1_leg_fk.estimation.correction_file import read_correction_file
 from a1_leg_fk.estimation.effort_timing import EffortTiming

@@ -40,85 +40,27 @@ The kinematic evidence is asymmetric: a foot high or fast is strong evidence of 
 ``max_kinematic_stance``; none beside a force that says swing), because an unloaded foot, or
 every foot in a flight phase, is low and still too. Defaults scale with the robot
 (:meth:`ContactModel.for_robot`): forces with its weight, heights and speeds with its leg length.
+The heights' and speeds' log-odds are :mod:`a1_leg_fk.estimation.kinematic_evidence`'s.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from math import exp, isfinite, sqrt
 from typing import NamedTuple
 
+from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.foot_ground import FootGround
-from a1_leg_fk.estimation.foot_rise import FootRise
+from a1_leg_fk.estimation.kinematic_evidence import clip_odds, kinematic_odds, rise_odds
 from a1_leg_fk.estimation.leg_motion import FootMotion
-from a1_leg_fk.kinematics.frames import STANDARD_GRAVITY
 from a1_leg_fk.model.legs import LEG_NAMES
-from a1_leg_fk.model.urdf import LegFkError
 
 LEGS = len(LEG_NAMES)
 NO_FORCES = (math.nan,) * LEGS
 LOW, HIGH = 2e-9, 1.0 - 2e-9
 """The probabilities whose log-odds the filter takes are kept within these."""
 Vector = tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class ContactModel:
-    """The filter's transition and evidence scales (see the module text); units in the names."""
-
-    switch_time_s: float
-    force_half_n: float
-    force_scale_n: float
-    height_half_m: float
-    height_scale_m: float
-    speed_half_mps: float
-    speed_scale_mps: float
-    rise_half_m: float
-    rise_scale_m: float
-    fall_half_mps2: float = 0.3 * STANDARD_GRAVITY
-    fall_scale_mps2: float = 0.05 * STANDARD_GRAVITY
-    max_log_ratio: float = 4.0
-    max_kinematic_stance: float = 0.5
-    rise_spread_factor: float = 3.5
-    """The rise at even odds is at least this many times the standing feet's spread."""
-    phase_weight: float = 1.0
-
-    def __post_init__(self) -> None:
-        values = [getattr(self, name) for name in self.__dataclass_fields__]
-        if not all(math.isfinite(value) and value > 0.0 for value in values):
-            raise LegFkError(f"contact model values must be finite and positive: {self}")
-
-    @classmethod
-    def for_robot(cls, weight_n: float, leg_length_m: float) -> ContactModel:
-        """The defaults for a robot of ``weight_n`` [N] with legs ``leg_length_m`` [m] long
-        (thigh plus calf).
-        """
-        return cls(
-            switch_time_s=SWITCH_TIME_S,
-            force_half_n=FORCE_HALF_SHARE * weight_n,
-            force_scale_n=FORCE_SCALE_SHARE * weight_n,
-            height_half_m=HEIGHT_HALF_SHARE * leg_length_m,
-            height_scale_m=HEIGHT_SCALE_SHARE * leg_length_m,
-            speed_half_mps=SPEED_HALF_PER_S * leg_length_m,
-            speed_scale_mps=SPEED_SCALE_PER_S * leg_length_m,
-            rise_half_m=RISE_HALF_SHARE * leg_length_m,
-            rise_scale_m=RISE_SCALE_SHARE * leg_length_m,
-        )
-
-
-SWITCH_TIME_S = 0.1
-"""Mean time [s] between state changes in the transition model."""
-FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.03, 0.005
-"""Normal force at even odds, and per unit of log-odds, as shares of the weight."""
-HEIGHT_HALF_SHARE, HEIGHT_SCALE_SHARE = 0.04, 0.01
-"""Height above the lowest foot at even odds, and per unit of log-odds, in leg lengths."""
-RISE_HALF_SHARE, RISE_SCALE_SHARE = 0.00375, 0.00125
-"""A standing foot's rise above its own foothold at even odds (at least), and per unit of
-log-odds, in leg lengths (1.5 and 0.5 mm on the A1)."""
-SPEED_HALF_PER_S, SPEED_SCALE_PER_S = 0.8, 0.2
-"""Speed over the ground at even odds, and per unit of log-odds, in leg lengths per second."""
 
 
 class SampleEvidence(NamedTuple):
@@ -178,7 +120,7 @@ class ContactFilter:
             felt = sqrt(fx * fx + fy * fy + fz * fz)
             if isfinite(felt):
                 fall = (felt - model.fall_half_mps2) / model.fall_scale_mps2
-                common = min(0.0, _clip(fall, limit, limit))
+                common = min(0.0, clip_odds(fall, limit, limit))
         forces = NO_FORCES if normal_forces is None else normal_forces
         forced = [isfinite(forces[leg]) for leg in range(LEGS)]
         # the force's log-odds (free fall's without one); the kinematics' stance: weak while
@@ -188,7 +130,7 @@ class ContactFilter:
         fades = [1.0] * LEGS  # the share of its speed's swing evidence a foot's force leaves
         for leg, force in enumerate(forces):
             if forced[leg]:
-                push = _clip((force - model.force_half_n) / model.force_scale_n, limit, limit)
+                push = clip_odds((force - model.force_half_n) / model.force_scale_n, limit, limit)
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
                 fades[leg] = 1.0 - max(push, 0.0) / limit
         heights = None
@@ -196,12 +138,12 @@ class ContactFilter:
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             heights = self.ground.heights(dt_s, feet, down, omega, standing, band)
-        kinematic, taken, lowered = _kinematic(
+        kinematic, taken, lowered = kinematic_odds(
             model,
             feet,
             (omega, standing),
             (forced, caps, fades),
-            (heights, _rise_odds(model, self.ground.rise) if down is not None else None),
+            (heights, rise_odds(model, self.ground.rise) if down is not None else None),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):
@@ -237,161 +179,6 @@ def gait_phase_prior(names: Sequence[str], probabilities: Sequence[float]) -> li
         if len(given) == 1 and 0.0 <= given[0] <= 1.0:
             prior[leg] = given[0]
     return prior
-
-
-def _kinematic(
-    model: ContactModel,
-    feet: Sequence[FootMotion | None],
-    motion: tuple[Sequence[float], Sequence[bool]],
-    force: tuple[Sequence[bool], Sequence[float], Sequence[float]],
-    terrain: tuple[Sequence[float] | None, Sequence[float] | None],
-) -> tuple[list[float], list[float], list[float]]:
-    """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
-    the feet whose force is evidence too (``force``: per foot, whether it is, and the most
-    stance its height and speed may each say); and the heights [m] it took (NaN: unknown):
-    above the lowest foot, or from ``terrain``'s first (the slope taken off) where that is
-    lower; its second bounds each foot's height log-odds (a foot risen above its own foothold,
-    or at its own level: :func:`_rise_odds`); and how far each foot's evidence is from the flat
-    rules' (no rise rule, speeds against every low foot), which the smoother takes. The rise
-    above a foot's own foothold and the speeds against the feet that stood are for the feet
-    without a force: with one, the causal filter's liftoffs moved ahead of the smoothed ones by
-    1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
-    but one: landed, its height says no swing either (on stairs its tread is not the lowest's).
-    ``motion``: the base's angular velocity [rad/s, base frame] and which feet stood at the
-    previous sample (the speeds' reference); ``force``'s third: the speeds' fades.
-    """
-    lowest = math.nan  # the deepest contact point, as max() finds it
-    known = False
-    for foot in feet:
-        if foot is not None and (not known or foot.depth > lowest):
-            lowest, known = foot.depth, True
-    if not isfinite(lowest):
-        return [0.0] * LEGS, [math.nan] * LEGS, [0.0] * LEGS
-    (wx, wy, wz), standing = motion
-    forced, caps, fades = force
-    ground, rises = terrain
-    half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
-    velocities: list[Vector | None] = [None] * LEGS
-    heights = [math.nan] * LEGS
-    for leg, foot in enumerate(feet):
-        if foot is None:
-            continue
-        height = lowest - foot.depth
-        if ground is not None and ground[leg] < height:  # low on either ground
-            height = ground[leg]
-        heights[leg] = height
-        (ex, ey, ez), (rx, ry, rz), _ = foot  # the base velocity if it stands: e - w x r
-        vx, vy, vz = ex - (wy * rz - wz * ry), ey - (wz * rx - wx * rz), ez - (wx * ry - wy * rx)
-        if isfinite(vx + vy + vz):
-            velocities[leg] = (vx, vy, vz)
-    low = [h < half for h in heights]
-    stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
-    fades = fades if stepped else [1.0] * LEGS  # one level: in full (the smoother's goal)
-    references = _references(velocities, (low, stepped), standing, forced)
-    flats = references  # against every low foot: the same where every low foot stood
-    if standing != low:  # the same feet low and standing: the same references
-        flats = _references(velocities, (low, False), [False] * LEGS, forced)
-    out, lowered = [], [0.0] * LEGS
-    for leg in range(LEGS):
-        cap = caps[leg]
-        height, velocity, reference = heights[leg], velocities[leg], references[leg]
-        evidence = 0.0
-        if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
-            x = (half - height) / scale  # _clip written out: per foot and sample
-            evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-            rise = math.nan if rises is None else rises[leg]  # forced: the landed rule alone
-            rise = math.nan if forced[leg] and rise != math.inf else rise
-            if x > rise < 0.0 or x < 0.0 < rise == math.inf:  # risen; landed, however high
-                x = min(rise, 0.0)
-                risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-                lowered[leg], evidence = risen - evidence, risen
-        if velocity is not None:
-            speed = _speed_odds(velocity, reference, model, cap, fades[leg])
-            evidence += speed
-            if flats is not references and flats[leg] != reference:  # for the smoother
-                lowered[leg] += speed - _speed_odds(velocity, flats[leg], model, cap, fades[leg])
-        out.append(evidence)
-    return out, heights, lowered
-
-
-def _speed_odds(
-    velocity: Vector, reference: Vector | None, model: ContactModel, cap: float, fade: float
-) -> float:
-    """A foot's speed log-odds: its base velocity [m/s] against the ``reference``'s (0: none),
-    within ``-max_log_ratio`` and ``cap``, below 0 times ``fade`` (the share its force leaves).
-    """
-    if reference is None:
-        return 0.0
-    (vx, vy, vz), (gx, gy, gz) = velocity, reference
-    dx, dy, dz = vx - gx, vy - gy, vz - gz
-    speed = sqrt(dx * dx + dy * dy + dz * dz)  # absurd values: inf, not raise
-    odds = _clip((model.speed_half_mps - speed) / model.speed_scale_mps, model.max_log_ratio, cap)
-    return odds * fade if odds < 0.0 else odds
-
-
-def _rise_odds(model: ContactModel, rise: FootRise) -> list[float]:
-    """Per foot, its rise log-odds ``(half - rise) / rise_scale_m`` above its own foothold
-    (:mod:`a1_leg_fk.estimation.foot_rise`; ``half`` the larger of ``rise_half_m`` and
-    ``rise_spread_factor`` times the standing feet's spread): below 0 (risen past even odds),
-    the most its height log-odds may say; else +inf for a foot that landed (its height says no
-    swing: at least 0); NaN, or a rise's odds from 0 up: no bound.
-    """
-    half = max(model.rise_half_m, model.rise_spread_factor * rise.spread_m)
-    odds = [(half - risen) / model.rise_scale_m for risen in rise.rises]
-    return [math.inf if on and not x < 0.0 else x for x, on in zip(odds, rise.landed, strict=True)]
-
-
-def _references(
-    velocities: Sequence[Vector | None],
-    levels: tuple[Sequence[bool], bool],
-    standing: Sequence[bool],
-    forced: Sequence[bool],
-) -> list[Vector | None]:
-    """Per foot, the ground's velocity its speed is taken against [m/s, base frame]: the mean
-    base velocity of the other feet with a velocity that the filter held ``standing`` at the
-    previous sample, the ``low`` ones among them for a foot without a force (else any: on stairs
-    down the low foot may be one reaching for the lower tread), or of the other low feet when
-    none stood (None: no other low foot). A swing foot skimming rough ground is low too, and
-    moves: the standing feet leave it out. A foot whose force is evidence (``forced``) takes
-    every other low foot while it and every standing foot are low (flat ground: its force places
-    its edges, see :func:`_kinematic`), else the standing feet at any height: on stairs a foot
-    stands on another tread than the lowest's, and the low feet are swing feet coming down.
-    ``levels``: which feet are low, and whether a standing foot is not (on two levels).
-    """
-    low, stepped = levels
-    sums = [[0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0], [0, 0.0, 0.0, 0.0]]
-    for o, velocity in enumerate(velocities):  # (count, x, y, z): low; low, standing; standing
-        if velocity is None:
-            continue
-        for total in (
-            sums if low[o] and standing[o] else sums[:1] if low[o] else sums[2:] if standing[o]
-            else ()
-        ):  # fmt: skip
-            total[0] += 1
-            total[1] += velocity[0]
-            total[2] += velocity[1]
-            total[3] += velocity[2]
-    out: list[Vector | None] = []
-    for leg, velocity in enumerate(velocities):
-        known = velocity is not None  # its own velocity is in the sums: leave it out
-        chosen = 1 if not forced[leg] else 0 if low[leg] and not stepped else 2  # as sums
-        mine = known and standing[leg] and (chosen == 2 or low[leg])
-        if chosen == 1 and not sums[1][0] > mine:  # no other low foot stood: any that stood
-            chosen, mine = 2, known and standing[leg]
-        if chosen == 0 or not sums[chosen][0] > mine:
-            chosen, mine = 0, known and low[leg]
-        count, sx, sy, sz = sums[chosen]
-        if mine and velocity is not None:
-            count, sx, sy, sz = count - 1, sx - velocity[0], sy - velocity[1], sz - velocity[2]
-        out.append(None if count == 0 else (sx / count, sy / count, sz / count))
-    return out
-
-
-def _clip(log_ratio: float, limit: float, cap: float) -> float:
-    """A log-likelihood ratio within ``-limit`` and ``cap``; NaN (absurd values): 0."""
-    if log_ratio != log_ratio:  # noqa: PLR0124
-        return 0.0
-    return -limit if log_ratio < -limit else min(log_ratio, cap)
 
 
 def _logit(probability: float) -> float:

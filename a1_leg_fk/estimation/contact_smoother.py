@@ -26,7 +26,7 @@ starts. A sample they move to swing takes the posterior's odds reversed.
 
 Where a foot's force is evidence, a liftoff is not placed before the filter's own
 (:func:`force_liftoffs`): the force's log-ratio is at even odds at 3 % of the weight
-(:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), and the forward-backward
+(:data:`~a1_leg_fk.estimation.contact_model.FORCE_HALF_SHARE`), and the forward-backward
 places a liftoff there, a few ms before the force reaches zero, where the foot still stands; the
 filter, which needs the evidence of swing to outweigh its stance, places it later, nearer the
 zero. Such a foot stands while either says so; then its load itself may carry the stance on to

@@ -4,7 +4,7 @@ offline only. Numpy arrays in and out, without ROS.
 
 A foot is on the ground while its normal force is above zero; the contact filter's force
 evidence is at even odds at 3 % of the weight
-(:data:`~a1_leg_fk.estimation.contact_filter.FORCE_HALF_SHARE`), so a smoothed stance ends while
+(:data:`~a1_leg_fk.estimation.contact_model.FORCE_HALF_SHARE`), so a smoothed stance ends while
 the foot still carries a little load: a few ms early where the load ramps down slowly, or where
 it lingers below that share for a while (a foot unloading slowly, or dipping to a few newtons
 while it stands). With the whole recording at hand the load itself can place that end. Where a

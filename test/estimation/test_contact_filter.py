@@ -8,7 +8,8 @@ import math
 
 import pytest
 
-from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel, gait_phase_prior
+from a1_leg_fk.estimation.contact_filter import ContactFilter, gait_phase_prior
+from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.leg_motion import FootMotion
 
 MODEL = ContactModel.for_robot(weight_n=120.0, leg_length_m=0.4)

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from synthetic_gaits import slow_rise_walk
 
-from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.contact_filter import ContactFilter
+from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.contact_smoother import (
     EvidenceRows,
     FixedLagSmoother,

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from a1_leg_fk.estimation.contact_filter import ContactFilter, ContactModel
+from a1_leg_fk.estimation.contact_filter import ContactFilter
+from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.load_edges import unlagged

@@ -3,7 +3,8 @@
 #   make venv       create/refresh $(VENV): pinned requirements + this package (editable)
 #   make demo       the node and a demo joint-state stream, feet for ~10 s, verify, exit
 #   make lint       ruff check, ruff format --check and mypy (config: ruff.toml, setup.cfg)
-#   make test       the test suite but the long families (node tests pick their own ROS domain)
+#   make test       the test suite but the long families, in $(TEST_WORKERS) workers (each picks its own
+#                   ROS domain)
 #   make accept     the long families (tests marked accept): every simulated run, tuned and held out
 #   make bench      bench/fk_speed.py, ik_speed.py, force_speed.py, contact_speed.py, node_stages.py,
 #                   node_cost.py, node_throughput.py, odometry_throughput.py, bag_speed.py
@@ -26,6 +27,9 @@ TEST_TIMEOUT ?= 300
 TEST_SESSION_TIMEOUT ?= 1200
 ACCEPT_SESSION_TIMEOUT ?= 3600
 PYTEST_ARGS ?=
+# make test's worker processes (pytest-xdist), each given whole modules (--dist loadscope: a
+# module's fixtures are built once); TEST_WORKERS=0 runs in this process, serially.
+TEST_WORKERS ?= 2
 
 BIN := $(VENV)/bin
 # The ROS 2 Jazzy wheels are built for CPython 3.11 only.
@@ -96,7 +100,8 @@ lint: venv
 # The long families (marked accept) run in `make accept`, so that .ci/run stays within its budget.
 test: venv
 	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \
-	  --session-timeout=$(TEST_SESSION_TIMEOUT) -m 'not accept' $(PYTEST_ARGS) test
+	  --session-timeout=$(TEST_SESSION_TIMEOUT) -n $(TEST_WORKERS) --dist loadscope \
+	  -m 'not accept' $(PYTEST_ARGS) test
 
 accept: venv
 	$(BIN)/python -m pytest -q -p no:cacheprovider --timeout=$(TEST_TIMEOUT) \

@@ -169,7 +169,8 @@ def soak(args: argparse.Namespace) -> int:
     from sensor_msgs.msg import JointState
     from std_srvs.srv import Trigger
 
-    folder = Path(tempfile.mkdtemp(prefix="a1_leg_fk_soak_"))
+    folder = args.logs or Path(tempfile.mkdtemp(prefix="a1_leg_fk_soak_"))
+    folder.mkdir(parents=True, exist_ok=True)
     node_log = folder / "node.log"
     stop, feet_file = folder / "stop", folder / "feet.json"
     children: list[Child] = []
@@ -430,6 +431,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", help="also write the summary to this file")
+    parser.add_argument(
+        "--logs",
+        type=Path,
+        help="the folder for the node's and the collector's logs (default: a new temporary one)",
+    )
     parser.add_argument("--collect", nargs=2, metavar=("OUT", "STOP"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.collect:

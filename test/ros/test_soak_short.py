@@ -24,7 +24,16 @@ def test_soak_15_s(tmp_path):
     summary = tmp_path / "soak.json"
     # ROS_DOMAIN_ID comes from conftest (this run's own domain), so soak.py uses it.
     result = subprocess.run(
-        [sys.executable, str(SOAK), "--duration", "15", "--json", str(summary)],
+        [
+            sys.executable,
+            str(SOAK),
+            "--duration",
+            "15",
+            "--json",
+            str(summary),
+            "--logs",
+            str(tmp_path),
+        ],
         check=False,
         capture_output=True,
         text=True,

@@ -87,3 +87,21 @@ def test_a_slope_fitted_anew_does_not_move_a_standing_foot() -> None:
     assert rise.rises == [0.0] * 4 and rise.spread_m == 0.0
     rise.update(0.002, [(2.0, 0.0, 0.001), *still[1:]], (-0.05, 0.0), [True] * 4)
     assert rise.rises[0] == pytest.approx(0.001)
+
+
+def test_a_foot_is_over_the_highest_other_foothold_not_above_it() -> None:
+    """The tread under a foot, by hand: FR and FL stand on a tread at 0, RR and RL on one 4 cm
+    up. RL lifts to 5 cm: 1 cm over RR's foothold (its own is not its tread); FR is 0 over FL's;
+    a foot 1 mm below a tread (within the 1.5 mm band) is on it: -1 mm; RR alone up there while
+    RL swings at 2 cm: RR is 4 cm over the lower tread, RL 2 cm (RR's tread is above it)."""
+    rise = FootRise()
+    band = 0.0015
+    rise.update(0.002, up([0.0, 0.0, 0.04, 0.04]), LEVEL, [True] * 4, band_m=band)
+    assert rise.over_treads == pytest.approx([0.0, 0.0, 0.0, 0.0])
+    rise.update(0.002, up([0.0, 0.0, 0.039, 0.05]), LEVEL, [True] * 4, band_m=band)
+    assert rise.over_treads == pytest.approx([0.0, 0.0, -0.001, 0.011])
+    rise.update(0.002, up([0.0, 0.0, 0.04, 0.02]), LEVEL, [True, True, True, False], band)
+    assert rise.over_treads == pytest.approx([0.0, 0.0, 0.04, 0.02])
+    rise.update(0.002, up([0.0, NAN, 0.04, 0.02]), LEVEL, [False] * 4, band)
+    assert math.isnan(rise.over_treads[1])  # unknown
+    assert all(math.isnan(h) for h in rise.over_treads)  # no foot stood: no tread

@@ -134,14 +134,14 @@ MUTATIONS = (
     Mutation(
         "a foot's height not taken over the tread under it",
         "a1_leg_fk/estimation/foot_ground.py",
-        "min(value - lowest, over)",
+        "min(value - lowest, tread)",
         "value - lowest",
     ),
     Mutation(
         "a foot's own foothold is its tread",
         "a1_leg_fk/estimation/foot_rise.py",
-        "if other != leg and tread is not None",
-        "if tread is not None",
+        "if other != leg and tread <= z + band_m:",
+        "if tread <= z + band_m:",
     ),
     Mutation(
         "a foot's rise taken about the frame's origin, not its foothold",

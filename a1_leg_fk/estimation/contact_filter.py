@@ -137,7 +137,8 @@ class ContactFilter:
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
-            heights = self.ground.heights(dt_s, feet, down, omega, standing, band)
+            step = model.height_half_m  # footholds farther apart: on two levels (a staircase)
+            heights = self.ground.heights(dt_s, feet, down, omega, standing, band, step)
         kinematic, taken, lowered = kinematic_odds(
             model,
             feet,

@@ -30,12 +30,15 @@ place is still for 40 ms and more (Unitree's Aliengo at 2-2.5 Hz in PyBullet), i
 came *up* to. A standing foot that gives under load comes down to its level too.
 
 A foot's height *over the tread under it* is taken over the highest of the other standing feet's
-footholds at most the band above it (a foot the band below a tread is on it): on a staircase
-the feet stand on two treads, the lowest foot's and a higher one, and a foot on the higher one
-stands beside another (a trot's rear pair, or its diagonal pair on a turn), which no plane
-through footholds on both treads fits. Its own foothold is no tread: a foot lifting from it
-would stand while it rises (the rise says that). Measured on the terrain family without
-efforts: stairs down +0.8-1.0 point, up +0.3-0.9 (docs/forces.md).
+footholds at most the band above it (a foot the band below a tread is on it), while those
+footholds are on more than one level (farther apart than the contact filter's even-odds
+height): on a staircase the feet stand on two treads, the lowest foot's and a higher one, and
+a foot on the higher one stands beside another (a trot's rear pair), which no plane through
+footholds on both treads fits. Its own foothold is no tread: a foot lifting from it would
+stand while it rises (the rise says that). On one level there are no treads: there the
+footholds differ by a foot's give and the sensors' noise, and a foot lifting at a trot's
+handover was taken over a foothold just placed above the lowest foot (the contact family's
+noisy and soft-toed trots lost 0.1-0.2 point).
 """
 
 from __future__ import annotations
@@ -74,9 +77,6 @@ class FootRise:
         """[s] how long each foot has stayed within the band of its level."""
         self._down = [False] * LEGS
         """Whether each foot came down to its level (rather than up)."""
-        self.over_treads = [math.nan] * LEGS
-        """[m] each foot's height above the tread under it: the highest of the other standing
-        feet's footholds at most the band above it (NaN: none, unknown)."""
 
     def update(
         self,
@@ -89,8 +89,7 @@ class FootRise:
         """A sample ``dt_s`` [s] on: the feet's contact ``points`` [m] in the frame (None:
         unknown), the local ground's ``slope`` (dz/dx, dz/dy; 0, 0: level), ``standing`` which
         feet the filter held standing at the previous sample; ``band_m`` [m] how far a foot held
-        in swing may move and still land (0: only a foot exactly still), and how far below a
-        tread a foot is still on it (:attr:`over_treads`). Heights are taken
+        in swing may move and still land (0: only a foot exactly still). Heights are taken
         between a foot's two points with today's slope: a slope fitted anew (on stairs it jumps
         by degrees) does not move a standing foot, however far the frame's origin.
         """
@@ -128,30 +127,39 @@ class FootRise:
             share = min(1.0, dt_s / SPREAD_TIME_S)
             self._mean_square += share * (sum(squares) / len(squares) - self._mean_square)
             self.spread_m = math.sqrt(self._mean_square)
-        self._over_treads(points, slope, band_m)
 
-    def _over_treads(
-        self, points: Sequence[Vector | None], slope: tuple[float, float], band_m: float
-    ) -> None:
-        """:attr:`over_treads`: each foot's height above the highest of the *other* standing
-        feet's footholds not more than ``band_m`` above it (the slope taken off).
+    def over_treads(
+        self,
+        points: Sequence[Vector | None],
+        slope: tuple[float, float],
+        band_m: float,
+        step_m: float,
+    ) -> list[float]:
+        """[m] each foot's height over the tread under it (see the module text): above the
+        highest of the *other* standing feet's footholds at most ``band_m`` above it (heights
+        with the ``slope`` taken off; NaN: none, an unknown foot, or every foot while the
+        standing feet's footholds are within ``step_m`` of each other: one level). ``points``
+        as :meth:`update`'s, after it.
         """
         gx, gy = slope
         treads = [
-            None if foothold is None else foothold[2] - gx * foothold[0] - gy * foothold[1]
+            math.nan if foothold is None else foothold[2] - gx * foothold[0] - gy * foothold[1]
             for foothold in self.footholds
         ]
-        over = self.over_treads
+        over = [math.nan] * LEGS
+        known = [tread for tread in treads if tread == tread]  # noqa: PLR0124 (NaN)
+        if not known or not max(known) - min(known) > step_m:
+            return over
         for leg, point in enumerate(points):
-            over[leg] = math.nan
             if point is None:
                 continue
             z = point[2] - gx * point[0] - gy * point[1]
             for other, tread in enumerate(treads):  # the highest within reach: inlined max()
-                if other != leg and tread is not None and tread <= z + band_m:
+                if other != leg and tread <= z + band_m:  # NaN: no foothold
                     below = z - tread
                     if not below >= over[leg]:  # NaN: the first
                         over[leg] = below
+        return over
 
 
 def _above(point: Vector, base: Vector | None, slope: tuple[float, float]) -> float:

@@ -90,18 +90,24 @@ def test_a_slope_fitted_anew_does_not_move_a_standing_foot() -> None:
 
 
 def test_a_foot_is_over_the_highest_other_foothold_not_above_it() -> None:
-    """The tread under a foot, by hand: FR and FL stand on a tread at 0, RR and RL on one 4 cm
-    up. RL lifts to 5 cm: 1 cm over RR's foothold (its own is not its tread); FR is 0 over FL's;
-    a foot 1 mm below a tread (within the 1.5 mm band) is on it: -1 mm; RR alone up there while
-    RL swings at 2 cm: RR is 4 cm over the lower tread, RL 2 cm (RR's tread is above it)."""
+    """The tread under a foot, by hand (band 1.5 mm, two levels 16 mm apart): FR and FL stand on
+    a tread at 0, RR and RL on one 4 cm up. RL lifts to 5 cm: 1 cm over RR's foothold (its own
+    is not its tread); FR is 0 over FL's; a foot 1 mm below a tread (within the band) is on it:
+    -1 mm. RR alone up there while RL swings at 2 cm: RR is 4 cm over the lower tread, RL 2 cm
+    (RR's tread is above it). Every standing foot on one level (RR and RL 1 cm up): none."""
     rise = FootRise()
-    band = 0.0015
-    rise.update(0.002, up([0.0, 0.0, 0.04, 0.04]), LEVEL, [True] * 4, band_m=band)
-    assert rise.over_treads == pytest.approx([0.0, 0.0, 0.0, 0.0])
-    rise.update(0.002, up([0.0, 0.0, 0.039, 0.05]), LEVEL, [True] * 4, band_m=band)
-    assert rise.over_treads == pytest.approx([0.0, 0.0, -0.001, 0.011])
-    rise.update(0.002, up([0.0, 0.0, 0.04, 0.02]), LEVEL, [True, True, True, False], band)
-    assert rise.over_treads == pytest.approx([0.0, 0.0, 0.04, 0.02])
-    rise.update(0.002, up([0.0, NAN, 0.04, 0.02]), LEVEL, [False] * 4, band)
-    assert math.isnan(rise.over_treads[1])  # unknown
-    assert all(math.isnan(h) for h in rise.over_treads)  # no foot stood: no tread
+    band, step = 0.0015, 0.016
+
+    def over(heights: list[float], standing: list[bool]) -> list[float]:
+        points = up(heights)
+        rise.update(0.002, points, LEVEL, standing, band_m=band)
+        return rise.over_treads(points, LEVEL, band, step)
+
+    assert over([0.0, 0.0, 0.04, 0.04], [True] * 4) == pytest.approx([0.0] * 4)
+    assert over([0.0, 0.0, 0.039, 0.05], [True] * 4) == pytest.approx([0.0, 0.0, -0.001, 0.011])
+    assert over([0.0, 0.0, 0.04, 0.02], [True, True, True, False]) == pytest.approx(
+        [0.0, 0.0, 0.04, 0.02]
+    )
+    assert math.isnan(over([0.0, NAN, 0.04, 0.02], [True] * 4)[1])  # unknown
+    assert all(math.isnan(h) for h in over([0.0, 0.0, 0.01, 0.01], [True] * 4))  # one level
+    assert all(math.isnan(h) for h in over([0.0, 0.0, 0.04, 0.02], [False] * 4))  # none stood

@@ -146,6 +146,8 @@ class FootGround:
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
         lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
         over = self.rise.over_treads(points, (gx, gy), band_m, step_m)
+        if over is None:  # the standing feet on one level: the lowest foot's
+            return [value - lowest for value in level]
         return [
             min(value - lowest, tread)  # NaN (no tread under it): the lowest's
             for value, tread in zip(level, over, strict=True)

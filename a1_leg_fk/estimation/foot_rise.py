@@ -134,22 +134,23 @@ class FootRise:
         slope: tuple[float, float],
         band_m: float,
         step_m: float,
-    ) -> list[float]:
+    ) -> list[float] | None:
         """[m] each foot's height over the tread under it (see the module text): above the
         highest of the *other* standing feet's footholds at most ``band_m`` above it (heights
-        with the ``slope`` taken off; NaN: none, an unknown foot, or every foot while the
-        standing feet's footholds are within ``step_m`` of each other: one level). ``points``
-        as :meth:`update`'s, after it.
+        with the ``slope`` taken off; NaN: none, or an unknown foot); None while the standing
+        feet's footholds are within ``step_m`` of each other (one level). ``points`` as
+        :meth:`update`'s, after it.
         """
         gx, gy = slope
-        treads = [
-            math.nan if foothold is None else foothold[2] - gx * foothold[0] - gy * foothold[1]
-            for foothold in self.footholds
-        ]
+        treads = [math.nan] * LEGS
+        low, high = math.inf, -math.inf
+        for leg, foothold in enumerate(self.footholds):
+            if foothold is not None:
+                tread = treads[leg] = foothold[2] - gx * foothold[0] - gy * foothold[1]
+                low, high = min(low, tread), max(high, tread)
+        if not high - low > step_m:  # one level, or none (inf - inf: NaN)
+            return None
         over = [math.nan] * LEGS
-        known = [tread for tread in treads if tread == tread]  # noqa: PLR0124 (NaN)
-        if not known or not max(known) - min(known) > step_m:
-            return over
         for leg, point in enumerate(points):
             if point is None:
                 continue

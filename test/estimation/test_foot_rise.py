@@ -98,7 +98,7 @@ def test_a_foot_is_over_the_highest_other_foothold_not_above_it() -> None:
     rise = FootRise()
     band, step = 0.0015, 0.016
 
-    def over(heights: list[float], standing: list[bool]) -> list[float]:
+    def over(heights: list[float], standing: list[bool]) -> list[float] | None:
         points = up(heights)
         rise.update(0.002, points, LEVEL, standing, band_m=band)
         return rise.over_treads(points, LEVEL, band, step)
@@ -108,6 +108,7 @@ def test_a_foot_is_over_the_highest_other_foothold_not_above_it() -> None:
     assert over([0.0, 0.0, 0.04, 0.02], [True, True, True, False]) == pytest.approx(
         [0.0, 0.0, 0.04, 0.02]
     )
-    assert math.isnan(over([0.0, NAN, 0.04, 0.02], [True] * 4)[1])  # unknown
-    assert all(math.isnan(h) for h in over([0.0, 0.0, 0.01, 0.01], [True] * 4))  # one level
-    assert all(math.isnan(h) for h in over([0.0, 0.0, 0.04, 0.02], [False] * 4))  # none stood
+    unknown = over([0.0, NAN, 0.04, 0.02], [True] * 4)
+    assert unknown is not None and math.isnan(unknown[1])
+    assert over([0.0, 0.0, 0.01, 0.01], [True] * 4) is None  # one level
+    assert over([0.0, 0.0, 0.04, 0.02], [False] * 4) is None  # none stood

@@ -132,6 +132,18 @@ MUTATIONS = (
         "self._down[leg] = above == above",
     ),
     Mutation(
+        "a foot's height not taken over the tread under it",
+        "a1_leg_fk/estimation/foot_ground.py",
+        "min(value - lowest, tread)",
+        "value - lowest",
+    ),
+    Mutation(
+        "a foot's own foothold is its tread",
+        "a1_leg_fk/estimation/foot_rise.py",
+        "if other != leg and tread <= z + band_m:",
+        "if tread <= z + band_m:",
+    ),
+    Mutation(
         "a foot's rise taken about the frame's origin, not its foothold",
         "a1_leg_fk/estimation/foot_rise.py",
         "- gx * (point[0] - base[0]) - gy * (point[1] - base[1])",

@@ -11,8 +11,10 @@ that no single sample decides alone:
 - the foot's *normal force* [N] (from the momentum observer or the statics), when there is one:
   ``(N - force_half_n) / force_scale_n``, within ``+-max_log_ratio``;
 - its *height* [m] above the lowest foot along gravity, or above the lowest foot with the local
-  ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), whichever is lower (a foot
-  low on either ground may stand: a slope's, or a staircase's tread, which no plane fits):
+  ground's slope taken off (:mod:`a1_leg_fk.estimation.foot_ground`), or over the tread under it
+  where the standing feet's footholds are on two levels (:mod:`a1_leg_fk.estimation.foot_rise`),
+  whichever is lowest (a foot low on any ground may stand: a slope's, or a staircase's tread,
+  which no plane fits):
   ``(height_half_m - h) / height_scale_m``; for a foot the filter holds standing, at most
   ``(r_half - r) / rise_scale_m`` once its rise ``r`` above its own foothold
   (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
@@ -137,7 +139,8 @@ class ContactFilter:
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
-            heights = self.ground.heights(dt_s, feet, down, omega, standing, band)
+            step = model.height_half_m  # footholds farther apart: on two levels (a staircase)
+            heights = self.ground.heights(dt_s, feet, down, omega, standing, band, step)
         kinematic, taken, lowered = kinematic_odds(
             model,
             feet,

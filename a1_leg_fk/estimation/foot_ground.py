@@ -24,7 +24,11 @@ then its contact point's height with the slope taken off (``z - gx x - gy y``), 
 foot's: the slope comes from the footholds, the heights from the feet now, so that the frame's
 slow vertical drift does not bias them. Before the first foothold there is no slope: None.
 The standing feet's heights in the frame, the slope taken off (level before there is one), also
-give each its rise above its own foothold (:mod:`a1_leg_fk.estimation.foot_rise`).
+give each its rise above its own foothold and each foot its height over the tread under it, the
+highest of the other standing feet's footholds not above it, where those are on two levels
+(:mod:`a1_leg_fk.estimation.foot_rise`): where that is lower, it is the foot's height (no plane
+fits a staircase's treads; a foot on a higher tread than the lowest foot's stands on it beside
+another foot).
 Absurd input is kept out: a contact point farther than :data:`MAX_REACH_M` from the base is
 unknown, and a frame carried beyond :data:`MAX_FRAME_M` starts anew.
 """
@@ -83,13 +87,17 @@ class FootGround:
         omega: Sequence[float],
         standing: Sequence[bool],
         band_m: float = 0.0,
+        step_m: float = math.inf,
     ) -> list[float] | None:
         """Each foot's contact point's height [m] above the lowest one's, the local ground's
-        slope taken off (NaN: unknown foot), after a sample ``dt_s`` [s] on: ``feet`` their
-        motions (base frame), ``down`` gravity's unit direction and ``omega`` the base's
-        angular velocity [rad/s] (base frame), ``standing`` which feet stood at the previous
-        sample (the filter's estimate), ``band_m`` [m] the band within which a foot held in
-        swing lands (:meth:`FootRise.update`). None before the first foothold.
+        slope taken off, or over the tread under it where lower (NaN: unknown foot), after a
+        sample ``dt_s`` [s] on: ``feet`` their motions (base frame), ``down`` gravity's unit
+        direction and ``omega`` the base's angular velocity [rad/s] (base frame), ``standing``
+        which feet stood at the previous sample (the filter's estimate), ``band_m`` [m] the band
+        within which a foot held in swing lands and a foot below a tread is on it,
+        ``step_m`` [m] how far apart the standing feet's footholds are on two levels
+        (:meth:`FootRise.update`, :meth:`FootRise.over_treads`; inf: never). None before the
+        first foothold.
         """
         dx, dy, dz = down
         ux, uy, uz = -dx, -dy, -dz  # up
@@ -131,18 +139,19 @@ class FootGround:
         if slope is None or slope[0] != self.ground.revision:
             slope = self._fitted()
         gx, gy = (0.0, 0.0) if slope is None else slope[1:]
-        self.rise.update(
-            dt_s,
-            [None if o is None else (px + o[0], py + o[1], pz + o[2]) for o in offsets],
-            (gx, gy),
-            standing,
-            band_m,
-        )
+        points = [None if o is None else (px + o[0], py + o[1], pz + o[2]) for o in offsets]
+        self.rise.update(dt_s, points, (gx, gy), standing, band_m)
         if slope is None:
             return None
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
         lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
-        return [value - lowest for value in level]
+        over = self.rise.over_treads(points, (gx, gy), band_m, step_m)
+        if over is None:  # the standing feet on one level: the lowest foot's
+            return [value - lowest for value in level]
+        return [
+            min(value - lowest, tread)  # NaN (no tread under it): the lowest's
+            for value, tread in zip(level, over, strict=True)
+        ]
 
     def _carry(
         self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float

@@ -87,3 +87,28 @@ def test_a_slope_fitted_anew_does_not_move_a_standing_foot() -> None:
     assert rise.rises == [0.0] * 4 and rise.spread_m == 0.0
     rise.update(0.002, [(2.0, 0.0, 0.001), *still[1:]], (-0.05, 0.0), [True] * 4)
     assert rise.rises[0] == pytest.approx(0.001)
+
+
+def test_a_foot_is_over_the_highest_other_foothold_not_above_it() -> None:
+    """The tread under a foot, by hand (band 1.5 mm, two levels 16 mm apart): FR and FL stand on
+    a tread at 0, RR and RL on one 4 cm up. RL lifts to 5 cm: 1 cm over RR's foothold (its own
+    is not its tread); FR is 0 over FL's; a foot 1 mm below a tread (within the band) is on it:
+    -1 mm. RR alone up there while RL swings at 2 cm: RR is 4 cm over the lower tread, RL 2 cm
+    (RR's tread is above it). Every standing foot on one level (RR and RL 1 cm up): none."""
+    rise = FootRise()
+    band, step = 0.0015, 0.016
+
+    def over(heights: list[float], standing: list[bool]) -> list[float] | None:
+        points = up(heights)
+        rise.update(0.002, points, LEVEL, standing, band_m=band)
+        return rise.over_treads(points, LEVEL, band, step)
+
+    assert over([0.0, 0.0, 0.04, 0.04], [True] * 4) == pytest.approx([0.0] * 4)
+    assert over([0.0, 0.0, 0.039, 0.05], [True] * 4) == pytest.approx([0.0, 0.0, -0.001, 0.011])
+    assert over([0.0, 0.0, 0.04, 0.02], [True, True, True, False]) == pytest.approx(
+        [0.0, 0.0, 0.04, 0.02]
+    )
+    unknown = over([0.0, NAN, 0.04, 0.02], [True] * 4)
+    assert unknown is not None and math.isnan(unknown[1])
+    assert over([0.0, 0.0, 0.01, 0.01], [True] * 4) is None  # one level
+    assert over([0.0, 0.0, 0.04, 0.02], [False] * 4) is None  # none stood

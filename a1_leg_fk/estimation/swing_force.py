@@ -18,6 +18,10 @@ from collections.abc import Sequence
 
 WINDOW_S = 1.0
 """[s] The past the swing feet's forces are pooled over (a slow walk's two strides)."""
+EDGE_S = 1e-6
+"""[s] A sample this much older than :data:`WINDOW_S` still counts: samples on a regular grid
+reach the window's edge exactly, and a stamp rounded to whole nanoseconds (a bag's) must not
+move one across it."""
 MAX_SQUARE_N2 = 1e12
 """[N^2] A force's square counts at most this much (a million newtons: absurd values stay
 finite in the sums)."""
@@ -46,7 +50,7 @@ class SwingForce:
         self._samples.append((self._time_s, squares, count))
         self._sum += squares
         self._count += count
-        oldest = self._time_s - WINDOW_S
+        oldest = self._time_s - WINDOW_S - EDGE_S
         while self._samples[0][0] < oldest:
             _, gone, number = self._samples.popleft()
             self._sum -= gone

@@ -46,12 +46,11 @@ def liftoffs(stance: np.ndarray) -> np.ndarray:
 
 
 def gait_loads(
-    rng: np.random.Generator, ramp_n_per_ms: float, cliff_n: float = 0.0, noise_n: float = 2.0
+    rng: np.random.Generator, ramp_n_per_ms: float, cliff_n: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """(N, 4) loads [N] of 20 strides (200 ms stance at 30 N ending in a linear ramp of
-    ``ramp_n_per_ms`` down to ``cliff_n``, then zero; 200 ms of swing at 0) plus ``noise_n``
-    of sensor noise, and the rows where each true load reaches zero (the first row without
-    load)."""
+    ``ramp_n_per_ms`` down to ``cliff_n``, then zero; 200 ms of swing at 0) plus 2 N of sensor
+    noise, and the rows where each true load reaches zero (the first row without load)."""
     stride = np.zeros(200)
     ramp_rows = int(np.ceil((30.0 - cliff_n) / (ramp_n_per_ms * 2.0)))
     stride[:100] = 30.0
@@ -59,19 +58,15 @@ def gait_loads(
     stride[:100] = np.maximum(stride[:100], max(cliff_n, 0.0))
     true = np.tile(stride, 20)
     zeros = np.flatnonzero((true[:-1] > 0.0) & (true[1:] <= 0.0)) + 1
-    loads = true[:, None] + rng.normal(0.0, noise_n, (true.size, LEGS))
+    loads = true[:, None] + rng.normal(0.0, 2.0, (true.size, LEGS))
     return loads, zeros
 
 
 def test_a_slow_unloading_ramp_lifts_off_where_it_reaches_zero() -> None:
     """A pronk's push-off: the kinematics say swing through the stance's end (-3.5, the foot
-    moving), the load falls at 1.1 N/ms (2.2 N a sample) with 1 N of noise. Evidence at even
-    odds at 3.6 N ends the stance 2 samples early; the ramp carries a sample while its load
-    is 2 standard errors above zero (:data:`~a1_leg_fk.estimation.load_edges.RAMP_CONFIDENCE`;
-    each at least the noise), so the ramp's zero is the liftoff: median error within one
-    sample on every foot. (With 2 N of noise the ramp's last ~4 N are not carried: 1-2
-    samples early, the price of not carrying a trotting foot's noise, docs/forces.md.)"""
-    loads, zeros = gait_loads(np.random.default_rng(39), 1.1, noise_n=1.0)
+    moving), the load falls at 1.1 N/ms. Evidence at even odds at 3.6 N ends the stance ~3 ms
+    early; the ramp's zero is the liftoff: median error within one sample on every foot."""
+    loads, zeros = gait_loads(np.random.default_rng(39), 1.1)
     kinematic = np.full(loads.shape, -3.5)
     stance = stance_of(rows_of(loads, kinematic))
     for leg in range(LEGS):
@@ -218,12 +213,12 @@ def test_a_trotting_foots_liftoff_smoothed_is_no_later_than_the_filters() -> Non
         assert liftoffs(smoothed[:, leg]).tolist() == zeros.tolist(), leg
 
 
-def cliff_after(ramp: list[float], next_n: float) -> bool:
-    """Whether the smoother carries a stance one sample past its end: every foot's swing load
-    alternates +-2 N (the noise's robust spread 1.4826 x 2 = 2.97 N), the first foot stands at
-    30 N for 40 samples ending in the five ``ramp`` loads [N], then falls off a cliff to zero
-    (truth: swing), its first swing sample reading ``next_n`` [N] of noise. The loads' rules
-    alone (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`), the stance's odds given."""
+def carried_past(ramp: list[float], next_n: float) -> bool:
+    """Whether the loads' rules (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the
+    stance's odds given) carry a stance one sample past its end: every foot's swing load
+    alternates +-2 N (the noise's robust spread 2.97 N: the floor's rules stay off), the first
+    foot stands at 30 N for 40 samples ending in the five ``ramp`` loads [N], its first swing
+    sample reading ``next_n`` [N]."""
     count = 200
     loads = np.where(np.arange(count)[:, None] % 2, 2.0, -2.0) * np.ones((1, LEGS))
     odds = np.full((count, LEGS), -5.0)
@@ -236,23 +231,14 @@ def cliff_after(ramp: list[float], next_n: float) -> bool:
     return bool(loaded_stance(odds, stamps, loads, forced)[100, 0] >= 0.0)
 
 
-def test_a_ramp_that_fits_too_well_is_no_surer_than_the_loads_noise() -> None:
-    """Noise that happens to line up: the stance's last five loads fall exactly on a line (12
-    to 4 N, 2 N a sample; zero 4 ms on), and the sample after the cliff reads 2 N, on that
-    line. The line's residuals are zero, so alone it would carry the sample with any
-    confidence; with its variances at least the noise's (2.97 N squared: the line's 9.7 N^2
-    there, the sample's 8.8) the load is 2.0 N within 2.15 N (0.93 standard errors): swing, as
-    the truth."""
-    assert not cliff_after([12.0, 10.0, 8.0, 6.0, 4.0], 2.0)
-
-
-def test_the_ramp_carries_a_sample_only_at_two_standard_errors() -> None:
-    """The stance's last loads fall 3 N a sample to 8 N (the line's zero 5.3 ms on), the
-    sample after the cliff reads 3 N of noise: the line's 5 N and the sample's 3 N weighted by
-    their inverse variances (9.7 and 8.8 N^2, as above) give 3.95 N within 2.15 N, 1.84
-    standard errors: at one standard error the ramp would carry it; at two it is swing, as the
-    truth. A load well above (the line's 5 N, the sample reading 6 N: 5.5 N, 2.6 standard
-    errors) is still carried."""
-    ramp = [20.0, 17.0, 14.0, 11.0, 8.0]
-    assert not cliff_after(ramp, 3.0)
-    assert cliff_after(ramp, 6.0)
+def test_the_ramp_carries_a_sample_only_at_one_and_a_half_standard_errors() -> None:
+    """A trotting foot's last loads, noisy (19.5, 13.5, 12, 10.5, 4.5 N: the line 5.4 N at the
+    stance's last sample, -1650 N/s, its residuals' variance 2.7 N^2), then a cliff to zero
+    (truth: swing) whose first sample reads 1 N of noise. Written out: the line's 2.1 N there
+    (variance 1.1 x 2.7 N^2) and the sample's 1 N (2.7 N^2) weighted by their inverse
+    variances give 1.52 N within 1.19 N, 1.28 standard errors: at one standard error the ramp
+    would carry it; at 1.5 it is swing, as the truth. Reading 2 N (2.05 N within 1.19 N, 1.72
+    standard errors), it is carried."""
+    ramp = [19.5, 13.5, 12.0, 10.5, 4.5]
+    assert not carried_past(ramp, 1.0)
+    assert carried_past(ramp, 2.0)

@@ -47,6 +47,8 @@ FAST_SUBSET = (
     "test/estimation/test_load_edges.py",
     "test/estimation/test_stance_edges.py",
     "test/estimation/test_contact_smoother.py",
+    "test/estimation/test_forced_stance.py",
+    "test/estimation/test_swing_force.py",
     "test/recording/test_lowstate.py::test_the_imu_quaternion_is_read_w_first",
 )
 """The tests every mutation must fail (about a minute on two idle cores): no simulated family,
@@ -94,6 +96,42 @@ MUTATIONS = (
         "a1_leg_fk/estimation/contact_filter.py",
         "push = clip_odds((force - model.force_half_n) / model.force_scale_n, limit, limit)",
         "push = clip_odds(0.0 * force / model.force_scale_n, limit, limit)",
+    ),
+    Mutation(
+        "the force's fade of a foot's speed off",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "fades[leg] = 1.0 - max(press, 0.0) / limit",
+        "fades[leg] = 1.0",
+    ),
+    Mutation(
+        "the force's fade from even odds, without the swing feet's RMS force as its margin",
+        "a1_leg_fk/estimation/contact_filter.py",
+        "margin += self.swing_force.update(dt_s, forces, [not on for on in standing])",
+        "self.swing_force.update(dt_s, forces, [not on for on in standing])",
+    ),
+    Mutation(
+        "the swing feet's force window's edge exact (a rounded stamp moves a sample across it)",
+        "a1_leg_fk/estimation/swing_force.py",
+        "EDGE_S = 1e-6",
+        "EDGE_S = 0.0",
+    ),
+    Mutation(
+        "a forced foot's smoothed stance begins before the filter's",
+        "a1_leg_fk/estimation/contact_smoother.py",
+        "return filter_touchdowns(kept, filtered, rows.forced, before), filtered",
+        "return kept, filtered",
+    ),
+    Mutation(
+        "a forced foot's lone stance blip in a swing kept",
+        "a1_leg_fk/estimation/forced_stance.py",
+        "if short and alone and forced[first:end, leg].all():",
+        "if False:",
+    ),
+    Mutation(
+        "the unloading ramp carries a sample at one standard error",
+        "a1_leg_fk/estimation/load_edges.py",
+        "RAMP_CONFIDENCE = 1.5",
+        "RAMP_CONFIDENCE = 1.0",
     ),
     Mutation(
         "a forced foot whose force says swing keeps its low-and-still stance",

@@ -29,8 +29,11 @@ that no single sample decides alone:
   a foot with a force, every other low foot while it and the feet that stood are all low, else
   the feet that stood at any height: the distance between the base velocity this foot gives if
   it were still (:mod:`a1_leg_fk.estimation.leg_motion`) and the mean of theirs;
-  ``(speed_half_mps - v) / speed_scale_mps``; where a standing foot is not low (stairs), with a
-  force ``F`` log-odds, its swing side times ``1 - max(F, 0) / max_log_ratio`` (sliding, pressing);
+  ``(speed_half_mps - v) / speed_scale_mps``; with a force ``N``, its swing side times ``1 -
+  P / max_log_ratio``, ``P`` the force's log-odds from ``force_half_n`` plus the RMS force the
+  feet held in swing read (:mod:`a1_leg_fk.estimation.swing_force`), within 0 and
+  ``max_log_ratio``: a foot surely pressing is in contact however it slides (a loaded foot over
+  a tread's edge), and a swing foot's force noise is no proof that it presses;
 - *free fall*, from the IMU's specific force ``f`` when there is one, for the feet without a
   force: no foot bears load while ``|f|`` (the total load over the mass) is far below gravity;
   ``(|f| - fall_half_mps2) / fall_scale_mps2``, at most 0;
@@ -56,6 +59,7 @@ from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.foot_ground import FootGround
 from a1_leg_fk.estimation.kinematic_evidence import clip_odds, kinematic_odds, rise_odds
 from a1_leg_fk.estimation.leg_motion import FootMotion
+from a1_leg_fk.estimation.swing_force import SwingForce
 from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
@@ -95,6 +99,8 @@ class ContactFilter:
         """The latest sample's transition and evidence, for a smoother (kept by reference)."""
         self.ground = FootGround()
         """The feet's heights above the local ground (given gravity's direction)."""
+        self.swing_force = SwingForce()
+        """The RMS normal force [N] the feet held in swing read: the speeds' fade's margin."""
 
     def update(
         self,
@@ -130,13 +136,17 @@ class ContactFilter:
         weak = model.max_kinematic_stance
         pushes, caps = [common] * LEGS, [weak if common < -1.0 else limit] * LEGS
         fades = [1.0] * LEGS  # the share of its speed's swing evidence a foot's force leaves
+        standing = [p >= 0.5 for p in self.probabilities]
+        margin = model.force_half_n  # a swing foot's noise above even odds: no press
+        if normal_forces is not None:
+            margin += self.swing_force.update(dt_s, forces, [not on for on in standing])
         for leg, force in enumerate(forces):
             if forced[leg]:
                 push = clip_odds((force - model.force_half_n) / model.force_scale_n, limit, limit)
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
-                fades[leg] = 1.0 - max(push, 0.0) / limit
+                press = clip_odds((force - margin) / model.force_scale_n, limit, limit)
+                fades[leg] = 1.0 - max(press, 0.0) / limit
         heights = None
-        standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             step = model.height_half_m  # footholds farther apart: on two levels (a staircase)

@@ -29,9 +29,11 @@ Where a foot's force is evidence, a liftoff is not placed before the filter's ow
 (:data:`~a1_leg_fk.estimation.contact_model.FORCE_HALF_SHARE`), and the forward-backward
 places a liftoff there, a few ms before the force reaches zero, where the foot still stands; the
 filter, which needs the evidence of swing to outweigh its stance, places it later, nearer the
-zero. Such a foot stands while either says so; then its load itself may carry the stance on to
-where it reaches zero (:mod:`a1_leg_fk.estimation.load_edges`; both tuned on the contact
-family's tuned runs, docs/forces.md).
+zero. Such a foot stands while either says so, but its stance begins no earlier than the
+filter's, and a lone blip of one or two samples in a swing is the force's noise
+(:mod:`a1_leg_fk.estimation.forced_stance`); its load itself may carry the stance on to where
+it reaches zero (:mod:`a1_leg_fk.estimation.load_edges`; all tuned on the contact family's
+tuned runs, docs/forces.md).
 
 :class:`FixedLagSmoother` runs this over a stream of rows in windows: a row is final once the
 rows after it cover ``lag_s`` (the backward message from further on is taken as flat; see
@@ -45,6 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from a1_leg_fk.estimation.forced_stance import filter_touchdowns, without_blips
 from a1_leg_fk.estimation.load_edges import HISTORY_S, loaded_stance, unlagged
 from a1_leg_fk.estimation.pooled_rise import recent_liftoffs
 from a1_leg_fk.estimation.stance_edges import CONTEXT_S, against_standing, placed_edges
@@ -176,18 +179,26 @@ def placed_stance(
     result = height_edges(rows, log_odds, since)
     if rows.forced.any():
         loads = unlagged(rows.normals, rows.stamps_s, force_lag_s)
-        result = loaded_stance(result, rows.stamps_s, loads, rows.forced)
+        result = without_blips(
+            loaded_stance(result, rows.stamps_s, loads, rows.forced), rows.forced
+        )
     return result
 
 
 def posterior(
-    rows: EvidenceRows, start: np.ndarray, lead_s: float = LIFTOFF_LEAD_S
+    rows: EvidenceRows,
+    start: np.ndarray,
+    lead_s: float = LIFTOFF_LEAD_S,
+    before: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(N, 4) log-odds of stance before the heights place any edge (:func:`smooth` from
-    ``start``, :func:`force_liftoffs`) and the (N, 4) filtered (forward) log-odds.
+    ``start``, :func:`force_liftoffs`, then :func:`~a1_leg_fk.estimation.forced_stance.
+    filter_touchdowns` given the (4,) stance ``before`` the first row, None: unknown) and the
+    (N, 4) filtered (forward) log-odds.
     """
     smoothed, filtered = smooth(rows, start, lead_s)
-    return force_liftoffs(smoothed, filtered, rows.forced), filtered
+    kept = force_liftoffs(smoothed, filtered, rows.forced)
+    return filter_touchdowns(kept, filtered, rows.forced, before), filtered
 
 
 def height_edges(rows: EvidenceRows, log_odds: np.ndarray, since: int = 0) -> np.ndarray:
@@ -302,7 +313,8 @@ class FixedLagSmoother:
         """
         if count <= 0:
             return np.empty((0, LEGS))
-        odds, filtered = posterior(self.pending, self.start, self.lead_s)
+        before = self.history_odds[-1] >= 0.0 if len(self.history_odds) else None
+        odds, filtered = posterior(self.pending, self.start, self.lead_s, before)
         rows = self.history.then(self.pending)
         before = len(self.history)
         every = np.vstack([self.history_odds, odds])

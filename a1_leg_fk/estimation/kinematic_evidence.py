@@ -66,7 +66,6 @@ def kinematic_odds(
             velocities[leg] = (vx, vy, vz)
     low = [h < half for h in heights]
     stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
-    fades = fades if stepped else [1.0] * LEGS  # one level: in full (the smoother's goal)
     references = _references(velocities, (low, stepped), standing, forced)
     flats = references  # against every low foot: the same where every low foot stood
     if standing != low:  # the same feet low and standing: the same references

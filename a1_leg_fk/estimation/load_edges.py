@@ -19,10 +19,11 @@ three rules may lengthen it, never shorten it:
   sample's own load weighted by their inverse variances (the line's standard error there; the
   spread of the line's residuals for the sample): a load that falls off a cliff, as a trotting
   foot's does in its last sample, is not carried on by the line, and one that follows it is
-  carried with more confidence. Where the load's noise floor (below) is known and the line's load
-  at the stance's last sample stands above it, the samples' own loads show where it reaches zero
-  and the floor's rule alone places the end: a trotting foot's load ramps down to 6-10 N, then
-  falls to zero within a sample, and the line would carry the stance one to three samples on;
+  carried with more confidence. Where the load's noise floor (below) is known and the line's
+  load at the stance's last sample stands above it, the samples' own loads show where it
+  reaches zero and the floor's rule alone places the end: a trotting foot's load ramps down to
+  6-10 N, then falls to zero within a sample, and the line would carry the stance one to three
+  samples on;
 - **the load above the noise floor**: the samples right after the stance whose load stays above
   :data:`FLOOR_SIGMAS` times the load's noise stand (at most :data:`MAX_LOADED_S`): a load's
   last newtons, or a whole dip to a few newtons bridged. The noise is the load's robust spread
@@ -57,9 +58,11 @@ RAMP_WINDOW_S = 0.010
 RAMP_REACH_S = 0.008
 """[s] How far after a stance's last sample the ramp may carry it: a ramp reaching zero later
 is no unloading ramp, and leaves the stance as it is."""
-RAMP_CONFIDENCE = 1.0
+RAMP_CONFIDENCE = 1.5
 """A sample stands on the ramp while the ramp's load there is this many standard errors above
-zero."""
+zero (at 1 a trotting foot's noise was carried a sample past its cliff: with the causal
+filter's force fade, a1_trot_soft+noise's smoothed contacts fell below its causal ones; at 2 a
+pronk's slow push-off was cut a sample short; docs/forces.md)."""
 FLOOR_SIGMAS = 8.0
 """A load above this many times its noise is a foot still loaded."""
 MAX_LOADED_S = 0.1

@@ -186,18 +186,28 @@ def test_a_foot_with_a_force_that_landed_on_a_higher_tread_stands() -> None:
     assert contacts.evidence.kinematic[1] == pytest.approx(-limit + cap)  # the flat rules
 
 
+def swing_noise(contacts: ContactFilter, rms_n: float) -> None:
+    """One second of the four feet held in swing reading +-``rms_n`` [N] (their RMS force)."""
+    for k in range(500):
+        sign = 1.0 if k % 2 else -1.0
+        contacts.swing_force.update(0.002, [sign * rms_n, -sign * rms_n] * 2, [True] * 4)
+
+
 def test_a_loaded_foot_sliding_over_a_treads_edge_stands() -> None:
     """Stairs down, forces for every foot: FR stands on the upper tread, 4 cm above RR and RL on
     the lower one (all three still, held standing, 50 N); FL, held in swing, lands on the lower
     tread's edge 16 mm above them (height at even odds: 0) bearing 20 N (+4, clipped) and slides
     off it at 1 m/s against the standing feet ((0.32 - 1) / 0.08: -4, clipped), as
-    go2_stairs_down_6cm's landing feet. Where the feet stand on more than one level, the speed's
-    swing evidence fades with the force's log-odds: ``1 - 4 / 4`` of it is left, so the force
-    decides: +4 a sample, standing from the first (0.01, through the transition model 0.029:
-    -3.50 + 4 = +0.50). Without the fade force and speed cancel and the foot stays in swing while
-    it slides. At 4.8 N ((4.8 - 3.6) / 0.6 = +2) half of the speed's -4 is left. With every
-    standing foot on one level (FR down with the others) the speed counts in full."""
+    go2_stairs_down_6cm's landing feet. The swing feet read 2 N RMS over the last second (FL's
+    20 N, 1 sample in 2,001, makes it 2.05 N): the speed's swing evidence fades with the force's
+    log-odds from 3.6 + 2.05 N, ``(20 - 5.65) / 0.6`` clipped to 4: ``1 - 4 / 4`` of it is left,
+    so the force decides: +4 a sample, standing from the first (0.01, through the transition
+    model 0.029: -3.50 + 4 = +0.50). Without the fade force and speed cancel and the foot stays
+    in swing while it slides. At 6.8 N ((6.8 - 3.6 - 2) / 0.6 = +2, no foot in swing) half of
+    the speed's -4 is left. With every standing foot on one level (FR down with the others) the
+    force fades the speed just the same."""
     contacts = ContactFilter(MODEL)
+    swing_noise(contacts, 2.0)
     contacts.probabilities = [0.99, 0.01, 0.99, 0.99]
     limit = MODEL.max_log_ratio
     switch = 1.0 - math.exp(-0.002 / MODEL.switch_time_s)
@@ -211,16 +221,36 @@ def test_a_loaded_foot_sliding_over_a_treads_edge_stands() -> None:
         assert out[1] > 0.5, n
     assert contacts.evidence.kinematic[1] == pytest.approx(0.0, abs=1e-9)  # the smoother's too
     half = ContactFilter(MODEL)
+    swing_noise(half, 2.0)
     half.probabilities = [0.99, 0.5, 0.99, 0.99]
-    out = half.update(0.0, feet, (STILL, None), [50.0, 4.8, 50.0, 50.0])
+    out = half.update(0.0, feet, (STILL, None), [50.0, 6.8, 50.0, 50.0])
     assert half.evidence.kinematic[1] == pytest.approx(-limit / 2)
-    assert out[1] == pytest.approx(sigmoid(2.0 - limit / 2))
+    assert out[1] == pytest.approx(sigmoid(limit - limit / 2))
     level = ContactFilter(MODEL)
+    swing_noise(level, 2.0)
     level.probabilities = [0.99, 0.25, 0.99, 0.99]
     feet[0] = foot(0.3)
     out = level.update(0.0, feet, (STILL, None), [50.0, 20.0, 50.0, 50.0])
-    assert level.evidence.kinematic[1] == pytest.approx(-limit)
-    assert out[1] == pytest.approx(0.25)
+    assert level.evidence.kinematic[1] == pytest.approx(0.0, abs=1e-9)
+    assert out[1] == pytest.approx(sigmoid(math.log(0.25 / 0.75) + limit))
+
+
+def test_a_swing_foot_reading_its_swing_noise_keeps_its_speeds_swing_evidence() -> None:
+    """Aliengo under position motors: its swing feet read about 23 N. A foot held in swing,
+    sliding at 1 m/s (-4, clipped) on the standing feet's level, reads 20 N (+4 by the force's
+    log-odds; its height among the others' at most ``max_kinematic_stance``, 0.5): with the
+    swing feet's RMS of 23 N over the last second the fade's margin is 3.6 + 23 N, ``(20 -
+    26.6) / 0.6`` < 0, so its speed says swing in full: 0.5 - 4 + 4 = +0.5 from 0.25's odds
+    (dt 0). With the force's even odds alone as the margin the speed would be faded away
+    (+4.5)."""
+    contacts = ContactFilter(MODEL)
+    swing_noise(contacts, 23.0)
+    contacts.probabilities = [0.99, 0.25, 0.99, 0.99]
+    feet = [foot(0.3), foot(0.3, (1.0, 0.0, 0.0)), foot(0.3), foot(0.3)]
+    out = contacts.update(0.0, feet, (STILL, None), [50.0, 20.0, 50.0, 50.0])
+    weak, limit = MODEL.max_kinematic_stance, MODEL.max_log_ratio
+    assert contacts.evidence.kinematic[1] == pytest.approx(weak - limit)
+    assert out[1] == pytest.approx(sigmoid(math.log(0.25 / 0.75) + weak))
 
 
 def test_free_fall_lifts_every_foot() -> None:

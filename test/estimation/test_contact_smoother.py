@@ -18,6 +18,7 @@ from a1_leg_fk.estimation.contact_smoother import (
     FixedLagSmoother,
     force_liftoffs,
     placed_stance,
+    posterior,
     probabilities,
     smooth,
     smoothed_stance,
@@ -198,21 +199,19 @@ def test_heights_place_the_edges_of_a_foot_without_force_evidence() -> None:
     0.3 m/s: the posterior alone lifts it off 36 ms late and lands it 56 ms early; with the
     heights the first swing sample and the first stance sample are within a sample (2 ms) of
     the first after the true liftoff and touchdown. With force evidence the edges stay the
-    posterior's (force_liftoffs)."""
+    posterior's (force_liftoffs, filter_touchdowns: the heights place none)."""
     stamps, heights = stepping_foot(5.0, 0.3)
     expected = (stamps[stamps > LIFTOFF_S][0], stamps[stamps > TOUCHDOWN_S][0])
     rows = kinematic_rows(stamps, heights, forced=False)
     placed = probabilities(smoothed_stance(rows, np.zeros(LEGS))[0]) >= 0.5
     assert edges(stamps, placed[:, 0]) == pytest.approx(expected, abs=STEP_S + 1e-9)
     smoothed, filtered = smooth(rows, np.zeros(LEGS))
-    posterior = probabilities(force_liftoffs(smoothed, filtered, rows.forced)) >= 0.5
-    late, early = edges(stamps, posterior[:, 0])
+    alone = probabilities(force_liftoffs(smoothed, filtered, rows.forced)) >= 0.5
+    late, early = edges(stamps, alone[:, 0])
     assert late - expected[0] > 0.03 and expected[1] - early > 0.05  # what the heights fix
     forced = kinematic_rows(stamps, heights, forced=True)
-    smoothed, filtered = smooth(forced, np.zeros(LEGS))
     np.testing.assert_array_equal(
-        smoothed_stance(forced, np.zeros(LEGS))[0],
-        force_liftoffs(smoothed, filtered, forced.forced),
+        smoothed_stance(forced, np.zeros(LEGS))[0], posterior(forced, np.zeros(LEGS))[0]
     )
 
 

@@ -14,7 +14,7 @@ from a1_leg_fk.estimation.contact_filter import ContactFilter
 from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.contact_smoother import EvidenceRows, FixedLagSmoother
 from a1_leg_fk.estimation.leg_motion import FootMotion
-from a1_leg_fk.estimation.load_edges import unlagged
+from a1_leg_fk.estimation.load_edges import loaded_stance, unlagged
 
 LEGS, STEP_S, WEIGHT_N = 4, 0.002, 120.0
 HALF_N, SCALE_N = 0.03 * WEIGHT_N, 0.005 * WEIGHT_N
@@ -211,3 +211,34 @@ def test_a_trotting_foots_liftoff_smoothed_is_no_later_than_the_filters() -> Non
         zeros = np.flatnonzero((true[:-1, leg] > 0.0) & (true[1:, leg] == 0.0)) + 1
         assert liftoffs(causal[:, leg] >= 0.5).tolist() == zeros.tolist(), leg
         assert liftoffs(smoothed[:, leg]).tolist() == zeros.tolist(), leg
+
+
+def carried_past(ramp: list[float], next_n: float) -> bool:
+    """Whether the loads' rules (:func:`~a1_leg_fk.estimation.load_edges.loaded_stance`, the
+    stance's odds given) carry a stance one sample past its end: every foot's swing load
+    alternates +-2 N (the noise's robust spread 2.97 N: the floor's rules stay off), the first
+    foot stands at 30 N for 40 samples ending in the five ``ramp`` loads [N], its first swing
+    sample reading ``next_n`` [N]."""
+    count = 200
+    loads = np.where(np.arange(count)[:, None] % 2, 2.0, -2.0) * np.ones((1, LEGS))
+    odds = np.full((count, LEGS), -5.0)
+    loads[60:95, 0] = 30.0
+    loads[95:100, 0] = ramp
+    loads[100, 0] = next_n
+    odds[60:100, 0] = 5.0
+    stamps = np.arange(count) * STEP_S
+    forced = np.ones((count, LEGS), dtype=bool)
+    return bool(loaded_stance(odds, stamps, loads, forced)[100, 0] >= 0.0)
+
+
+def test_the_ramp_carries_a_sample_only_at_one_and_a_half_standard_errors() -> None:
+    """A trotting foot's last loads, noisy (19.5, 13.5, 12, 10.5, 4.5 N: the line 5.4 N at the
+    stance's last sample, -1650 N/s, its residuals' variance 2.7 N^2), then a cliff to zero
+    (truth: swing) whose first sample reads 1 N of noise. Written out: the line's 2.1 N there
+    (variance 1.1 x 2.7 N^2) and the sample's 1 N (2.7 N^2) weighted by their inverse
+    variances give 1.52 N within 1.19 N, 1.28 standard errors: at one standard error the ramp
+    would carry it; at 1.5 it is swing, as the truth. Reading 2 N (2.05 N within 1.19 N, 1.72
+    standard errors), it is carried."""
+    ramp = [19.5, 13.5, 12.0, 10.5, 4.5]
+    assert not carried_past(ramp, 1.0)
+    assert carried_past(ramp, 2.0)

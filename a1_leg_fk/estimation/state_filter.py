@@ -72,6 +72,7 @@ from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.foot_gate import FootGate
 from a1_leg_fk.estimation.foot_give import FootGive
 from a1_leg_fk.estimation.foot_impact import FootImpact
+from a1_leg_fk.estimation.foot_jolt import FootJolt
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of
 from a1_leg_fk.estimation.state_sample import floats_of, state_sample
@@ -117,6 +118,7 @@ class StateFilter:
         self.gate = FootGate(self.settings, self.counts)
         self.give = FootGive(self.settings)
         self.impact = FootImpact(self.settings)
+        self.jolt = FootJolt(self.settings)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
@@ -246,7 +248,8 @@ class StateFilter:
         if not candidates:
             self._correct(cross, innovation, stack.residual)
             return []
-        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation)
+        jolt = self.jolt.variance(stamp_ns) * (np.eye(3) - np.outer(stack.up, stack.up))
+        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation, jolt)
         if reset:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
@@ -264,10 +267,11 @@ class StateFilter:
             self.impact.observe(
                 stamp_ns, (used, ages, residuals), transients, stack.up, innovation, rows
             )
+            self.jolt.observe(stamp_ns, residuals, stack.up, innovation, rows)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
-        for k in positions if spread else ():  # the feet disagree beyond their noises
+        for k in positions:  # the feet disagree beyond their noises; the last touchdown's jolt
             first = stack.layout.feet.start + 3 * k
-            innovation[first : first + 3, first : first + 3] += spread * np.eye(3)
+            innovation[first : first + 3, first : first + 3] += spread * np.eye(3) + jolt
         if len(used) < len(candidates):
             keep = stack.keep(positions)
             if keep.size:
@@ -281,9 +285,11 @@ class StateFilter:
         self, stamp_ns: int, legs: Sequence[LegMeasurement | None]
     ) -> tuple[list[int], list[tuple[LegMeasurement, float]]]:
         """The legs whose feet stand, and each one's measurement with its touchdown's vertical
-        variance (:meth:`FootImpact.variance`, since its first joint state in stance).
+        variance (:meth:`FootImpact.variance`, since its first joint state in stance); a
+        touchdown while other feet stood starts a jolt (:meth:`FootJolt.land`).
         """
         candidates, feet = [], []
+        stood = any(touchdown is not None for touchdown in self._touchdowns)
         for leg, measurement in enumerate(legs):
             if measurement is None or not stands(measurement.probability):
                 self._touchdowns[leg] = None
@@ -292,25 +298,39 @@ class StateFilter:
             if touchdown is None:
                 touchdown = self._touchdowns[leg] = stamp_ns
                 self.impact.land(leg)
+                if stood:  # a landing while other feet stand jolts them
+                    self.jolt.land(stamp_ns)
             candidates.append(leg)
-            feet.append((measurement, self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)))
+            impact = self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)
+            feet.append((measurement, impact))
         give = self.give.variance(len(feet))
         if give:  # the touchdown's transient is a give too: the larger of the two, not their sum
             feet = [(measurement, max(impact, give)) for measurement, impact in feet]
         return candidates, feet
 
     def _gate_feet(
-        self, stamp_ns: int, candidates: list[int], stack: Stack, innovation: np.ndarray
+        self,
+        stamp_ns: int,
+        candidates: list[int],
+        stack: Stack,
+        innovation: np.ndarray,
+        jolt: np.ndarray,
     ) -> tuple[list[int], bool]:
         """The standing feet the gate lets through (:class:`FootGate`, on their NIS in
-        ``innovation``), and whether it was reset (the velocity's covariance then widened by
-        their innovation); the doubt while it rejects every foot; the ground's height at the
-        first feet believed.
+        ``innovation``; its noise scales matched with the last touchdown's ``jolt`` [m²/s², 3 x
+        3, base frame] in each foot's block), and whether it was reset (the velocity's covariance
+        then widened by their innovation); the doubt while it rejects every foot; the ground's
+        height at the first feet believed.
         """
         rows = stack.layout.feet
         residuals = stack.foot_residuals
-        nis, along = normalised_squares(innovation[rows, rows].tolist(), residuals, stack.up)
-        used, reset = self.gate(stamp_ns, candidates, (nis, along), residuals)
+        blocks = innovation[rows, rows]
+        nis, along = normalised_squares(blocks.tolist(), residuals, stack.up)
+        matched = nis
+        if jolt.any():  # the jolt is no white noise the scales should take up
+            blocks = blocks + np.kron(np.eye(len(residuals)), jolt)
+            matched = normalised_squares(blocks.tolist(), residuals, stack.up)[0]
+        used, reset = self.gate(stamp_ns, candidates, (nis, along, matched), residuals)
         if not used:
             self.doubt = doubt(residuals, stack.foot_noises, nis, self.settings)
             return used, reset

@@ -1,0 +1,100 @@
+"""The standing feet's horizontal jolt at each touchdown, measured on its own first samples
+(:mod:`a1_leg_fk.estimation.state_filter`): the horizontal twin of
+:mod:`~a1_leg_fk.estimation.foot_impact`, shared by every standing foot.
+
+A foot that lands pushes the base sideways through its own leg: the feet already standing slip
+with it, all alike, for tens of milliseconds, so no foot's innovation stands out and the gate
+lets them through. Under PyBullet's position motors (a1_position_flat) the standing feet's
+horizontal velocities are 0.02-0.05 m/s off for 10-25 ms after another foot lands (or bounces),
+against a foot's horizontal sigma of 0.014 m/s: the estimate followed them, and most samples
+outside 3 sigma were these. On a gentle trot the same feet are off by millimetres per second.
+
+So each touchdown (any standing foot's first joint state in stance) starts a jolt ``a² d(t)``,
+``d(t) = exp(-2 t / τ)`` (``τ`` ``touchdown_s``, ``t`` seconds since that touchdown), on every
+standing foot's horizontal velocity, per axis: until measured the last touchdown's ``a²``
+(``touchdown_noise_mps²``, the largest landing assumed, before any); from the touchdown's first
+update on, its own, the largest ``(r_h² - s₀) / (2 d(t))`` over the accepted feet within
+``impact_window_s`` (``r_h`` a foot's innovation across world up, ``s₀`` that innovation's
+variance across up without the jolt). As the landing's vertical transient, one offset shared by
+the samples that follow: the white noise of the same low-frequency power, ``a² 2τ / dt``, never
+more than ``touchdown_noise_mps²``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from a1_leg_fk.estimation.filter_model import FilterSettings
+from a1_leg_fk.estimation.foot_give import quadratic
+from a1_leg_fk.estimation.foot_impact import colored, decay, growth
+
+
+class FootJolt:
+    """The last touchdown's horizontal jolt: :meth:`land` at any foot's touchdown,
+    :meth:`variance` for each standing foot's horizontal noise, :meth:`observe` with every
+    update's accepted feet.
+    """
+
+    def __init__(self, settings: FilterSettings) -> None:
+        self.settings = settings
+        self.square: float | None = None
+        """The last touchdown's measured ``a²`` [m²/s², per horizontal axis] (None: not yet)."""
+        self.previous: float | None = None
+        """The touchdown's before it (None: none measured)."""
+        self.landed_ns: int | None = None
+        """The last touchdown [ns] (None: none yet)."""
+        self.interval_s = 0.0
+        """The time between the last two updates with accepted feet [s]."""
+        self._stamp_ns: int | None = None
+
+    def land(self, stamp_ns: int) -> None:
+        """A foot's touchdown at ``stamp_ns`` [ns]: a new jolt, its size the last one's until
+        measured.
+        """
+        if self.square is not None:
+            self.previous = self.square
+        self.square, self.landed_ns = None, stamp_ns
+
+    def variance(self, stamp_ns: int) -> float:
+        """Each standing foot's extra horizontal variance [m²/s², per axis] at ``stamp_ns`` [ns]
+        (0 before any touchdown, or with ``impact_window_s`` or ``touchdown_noise_mps`` 0).
+        """
+        s = self.settings
+        if self.landed_ns is None or not (s.impact_window_s > 0.0 and s.touchdown_noise_mps > 0.0):
+            return 0.0
+        square = self.square if self.square is not None else self.previous
+        seconds = (stamp_ns - self.landed_ns) / 1e9
+        return colored(square, self.interval_s, s) * decay(seconds, s)
+
+    def observe(
+        self,
+        stamp_ns: int,
+        residuals: Sequence[tuple[float, float, float]],
+        up: Sequence[float],
+        innovation: np.ndarray,
+        rows: Sequence[int],
+    ) -> None:
+        """One update's accepted feet at ``stamp_ns`` [ns]: their innovations [m/s, base frame],
+        the jolt's part of each one's horizontal variance [m²/s², per axis], world ``up`` in the
+        base frame, the update's ``innovation`` covariance [m²/s²] and each foot's first row in
+        it: the jolt measured within ``impact_window_s`` of its touchdown.
+        """
+        s = self.settings
+        previous, self._stamp_ns = self._stamp_ns, stamp_ns
+        if previous is not None:
+            self.interval_s = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s)
+        if self.landed_ns is None:
+            return
+        age = (stamp_ns - self.landed_ns) / 1e9
+        if not age <= s.impact_window_s:
+            return
+        ux, uy, uz = up
+        for (x, y, z), row in zip(residuals, rows):
+            along = ux * x + uy * y + uz * z
+            across = x * x + y * y + z * z - along * along
+            block = innovation[row : row + 3, row : row + 3].ravel().tolist()
+            spread = block[0] + block[4] + block[8] - quadratic(up, block)
+            measured = max(across - spread, 0.0) / 2.0 * growth(age, s)
+            self.square = max(self.square or 0.0, measured)

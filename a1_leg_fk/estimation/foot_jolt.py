@@ -2,22 +2,24 @@
 (:mod:`a1_leg_fk.estimation.state_filter`): the horizontal twin of
 :mod:`~a1_leg_fk.estimation.foot_impact`, shared by every standing foot.
 
-A foot that lands pushes the base sideways through its own leg: the feet already standing slip
-with it, all alike, for tens of milliseconds, so no foot's innovation stands out and the gate
-lets them through. Under PyBullet's position motors (a1_position_flat) the standing feet's
-horizontal velocities are 0.02-0.05 m/s off for 10-25 ms after another foot lands (or bounces),
-against a foot's horizontal sigma of 0.014 m/s: the estimate followed them, and most samples
-outside 3 sigma were these. On a gentle trot the same feet are off by millimetres per second.
+A foot that lands while others stand pushes the base sideways through its leg: the feet already
+standing slip with it, all alike, for tens of milliseconds, so no foot's innovation stands out
+and the gate lets them through. Under PyBullet's position motors (a1_position_flat, clean) the
+standing feet's horizontal velocities are 0.03-0.05 m/s off (RMS) for 2-25 ms after a touchdown
+(a landing or a bounce), against a foot's horizontal innovation sigma of 0.014 m/s: the estimate
+followed them, and most of its samples outside 3 sigma were these handovers.
 
-So each touchdown (any standing foot's first joint state in stance) starts a jolt ``a² d(t)``,
-``d(t) = exp(-2 t / τ)`` (``τ`` ``touchdown_s``, ``t`` seconds since that touchdown), on every
-standing foot's horizontal velocity, per axis: until measured the last touchdown's ``a²``
-(``touchdown_noise_mps²``, the largest landing assumed, before any); from the touchdown's first
-update on, its own, the largest ``(r_h² - s₀) / (2 d(t))`` over the accepted feet within
-``impact_window_s`` (``r_h`` a foot's innovation across world up, ``s₀`` that innovation's
-variance across up without the jolt). As the landing's vertical transient, one offset shared by
-the samples that follow: the white noise of the same low-frequency power, ``a² 2τ / dt``, never
-more than ``touchdown_noise_mps²``.
+So each touchdown while another foot stood (a landing after a flight, or the filter's first
+feet, jolts no one) starts a jolt ``a² d(t)``, ``d(t) = exp(-2 t / τ)`` (``τ`` ``touchdown_s``,
+``t`` seconds since that touchdown), on every standing foot's horizontal velocity, per axis:
+until measured the last touchdown's ``a²`` (``touchdown_noise_mps²`` before any); from the
+touchdown's first update on its own, the largest ``(r_h² - s₀) / (2 d(t))`` over the accepted
+feet within ``impact_window_s`` (``r_h`` a foot's innovation across world up, ``s₀`` that
+innovation's variance across up). As the landing's vertical transient, one offset shared by the
+samples that follow: the white noise of the same low-frequency power, ``a² 2τ / dt``, never more
+than ``touchdown_noise_mps²``. The filter adds it to the feet the gate accepted, after the gate
+(with it in, a landing foot sliding 0.1 m/s passed and pulled the estimate), and matches the
+feet's noise scales with it (it is no white noise the scales should take up).
 """
 
 from __future__ import annotations
@@ -32,8 +34,8 @@ from a1_leg_fk.estimation.foot_impact import colored, decay, growth
 
 
 class FootJolt:
-    """The last touchdown's horizontal jolt: :meth:`land` at any foot's touchdown,
-    :meth:`variance` for each standing foot's horizontal noise, :meth:`observe` with every
+    """The last touchdown's horizontal jolt: :meth:`land` at a foot's touchdown while others
+    stood, :meth:`variance` for the accepted feet's horizontal noise, :meth:`observe` with every
     update's accepted feet.
     """
 
@@ -77,9 +79,9 @@ class FootJolt:
         rows: Sequence[int],
     ) -> None:
         """One update's accepted feet at ``stamp_ns`` [ns]: their innovations [m/s, base frame],
-        the jolt's part of each one's horizontal variance [m²/s², per axis], world ``up`` in the
-        base frame, the update's ``innovation`` covariance [m²/s²] and each foot's first row in
-        it: the jolt measured within ``impact_window_s`` of its touchdown.
+        world ``up`` in the base frame, the update's ``innovation`` covariance [m²/s²] (the jolt
+        not in it) and each foot's first row in it: the jolt measured within ``impact_window_s``
+        of its touchdown.
         """
         s = self.settings
         previous, self._stamp_ns = self._stamp_ns, stamp_ns

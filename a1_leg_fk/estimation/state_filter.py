@@ -18,7 +18,9 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   touchdown's vertical transient (:class:`~a1_leg_fk.estimation.foot_impact.FootImpact`, its
   amplitude fitted to the landing feet's vertical innovations, since the foot's first joint
   state in stance; with ``give_s``, the larger of it and the feet's
-  measured give, :mod:`~a1_leg_fk.estimation.foot_give`); the stance feet's heights
+  measured give, :mod:`~a1_leg_fk.estimation.foot_give`), and, on the feet the gate accepts,
+  the last touchdown's sideways jolt of the feet standing (:mod:`~a1_leg_fk.estimation.foot_jolt`:
+  a landing foot pushes them sideways, all alike); the stance feet's heights
   ``p_z + (R r)_z`` equal their footholds' anchored heights (``ground="footholds"``, the default,
   :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
   taken at the first feet believed; standing
@@ -264,9 +266,8 @@ class StateFilter:
         if self.settings.impact_window_s > 0.0:  # each landing's amplitude measured
             ages = [(stamp_ns - (self._touchdowns[leg] or stamp_ns)) / 1e9 for leg in used]
             rows = [stack.layout.feet.start + 3 * k for k in positions]
-            self.impact.observe(
-                stamp_ns, (used, ages, residuals), transients, stack.up, innovation, rows
-            )
+            landing = (used, ages, residuals)
+            self.impact.observe(stamp_ns, landing, transients, stack.up, innovation, rows)
             self.jolt.observe(stamp_ns, residuals, stack.up, innovation, rows)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
         for k in positions:  # the feet disagree beyond their noises; the last touchdown's jolt
@@ -317,10 +318,9 @@ class StateFilter:
         jolt: np.ndarray,
     ) -> tuple[list[int], bool]:
         """The standing feet the gate lets through (:class:`FootGate`, on their NIS in
-        ``innovation``; its noise scales matched with the last touchdown's ``jolt`` [m²/s², 3 x
-        3, base frame] in each foot's block), and whether it was reset (the velocity's covariance
-        then widened by their innovation); the doubt while it rejects every foot; the ground's
-        height at the first feet believed.
+        ``innovation``, its scales matched with the ``jolt`` [m²/s², 3 x 3, base frame] in each
+        foot's block), and whether it was reset (the velocity's covariance then widened by their
+        innovation); the doubt while it rejects every foot; the ground at the first feet believed.
         """
         rows = stack.layout.feet
         residuals = stack.foot_residuals

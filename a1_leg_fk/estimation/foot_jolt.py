@@ -7,7 +7,8 @@ standing slip with it, all alike, for tens of milliseconds, so no foot's innovat
 and the gate lets them through. Under PyBullet's position motors (a1_position_flat, clean) the
 standing feet's sideways velocities are 0.04-0.05 m/s off (RMS) in the first 25 ms after a
 touchdown (a landing or a bounce), 0.02 in the next 25, 0.004 later, against a foot's horizontal
-innovation sigma of 0.014 m/s: the estimate followed them, and most of its samples outside 3 sigma were these handovers.
+innovation sigma of 0.014 m/s: the estimate followed them, and most of its samples outside 3
+sigma were these handovers.
 
 So each touchdown while another foot stood (a landing after a flight, or the filter's first
 feet, jolts no one) starts a jolt ``a² d(t)``, ``d(t) = exp(-2 t / τ)`` (``τ`` ``touchdown_s``,
@@ -31,6 +32,11 @@ import numpy as np
 from a1_leg_fk.estimation.filter_model import FilterSettings
 from a1_leg_fk.estimation.foot_give import quadratic
 from a1_leg_fk.estimation.foot_impact import colored, decay, growth
+
+SPAN = 5.0
+"""A jolt is over this many ``touchdown_s`` after its touchdown: its variance then below
+``e^-10`` of its start (at most ``(0.7 mm/s)²``, under any foot's white noise), so the filter
+adds nothing between touchdowns."""
 
 
 class FootJolt:
@@ -61,14 +67,24 @@ class FootJolt:
 
     def variance(self, stamp_ns: int) -> float:
         """Each standing foot's extra horizontal variance [m²/s², per axis] at ``stamp_ns`` [ns]
-        (0 before any touchdown, or with ``impact_window_s`` or ``touchdown_noise_mps`` 0).
+        (0 before any touchdown, :data:`SPAN` after it, or with ``impact_window_s`` or
+        ``touchdown_noise_mps`` 0).
         """
         s = self.settings
         if self.landed_ns is None or not (s.impact_window_s > 0.0 and s.touchdown_noise_mps > 0.0):
             return 0.0
-        square = self.square if self.square is not None else self.previous
         seconds = (stamp_ns - self.landed_ns) / 1e9
+        if not seconds <= SPAN * s.touchdown_s:
+            return 0.0
+        square = self.square if self.square is not None else self.previous
         return colored(square, self.interval_s, s) * decay(seconds, s)
+
+    def sideways(self, stamp_ns: int, up: Sequence[float]) -> np.ndarray | None:
+        """The :meth:`variance` at ``stamp_ns`` [ns] across world ``up`` (base frame), 3 x 3
+        [m²/s²] (None: 0).
+        """
+        variance = self.variance(stamp_ns)
+        return variance * (np.eye(3) - np.outer(up, up)) if variance else None
 
     def observe(
         self,

@@ -236,22 +236,16 @@ class StateFilter:
             local = [ground for ground in under if ground is not None]
             local = local if len(local) == len(candidates) else None
         heights = local is not None or (self.ground == FLAT and self.ground_z is not None)
-        stack = Stack(
-            self._point(local),
-            self.settings,
-            None if orientation is None else (orientation, orientation_variance),
-            feet,
-            heights,
-            still,
-        )
+        imu = None if orientation is None else (orientation, orientation_variance)
+        stack = Stack(self._point(local), self.settings, imu, feet, heights, still)
         self.counts.still += still
         cross = self.covariance.dot(stack.rows.T)
         innovation = stack.rows.dot(cross) + stack.noise
         if not candidates:
             self._correct(cross, innovation, stack.residual)
             return []
-        jolt = self.jolt.variance(stamp_ns) * (np.eye(3) - np.outer(stack.up, stack.up))
-        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation, jolt)
+        sideways = self.jolt.sideways(stamp_ns, stack.up)
+        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation, sideways)
         if reset:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
@@ -270,9 +264,11 @@ class StateFilter:
             self.impact.observe(stamp_ns, landing, transients, stack.up, innovation, rows)
             self.jolt.observe(stamp_ns, residuals, stack.up, innovation, rows)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
-        for k in positions:  # the feet disagree beyond their noises; the last touchdown's jolt
+        added = [spread * np.eye(3)] if spread else []  # the feet disagree beyond their noises
+        added += [] if sideways is None else [sideways]  # the last touchdown's jolt
+        for k in positions if added else ():
             first = stack.layout.feet.start + 3 * k
-            innovation[first : first + 3, first : first + 3] += spread * np.eye(3) + jolt
+            innovation[first : first + 3, first : first + 3] += sum(added)
         if len(used) < len(candidates):
             keep = stack.keep(positions)
             if keep.size:
@@ -315,11 +311,11 @@ class StateFilter:
         candidates: list[int],
         stack: Stack,
         innovation: np.ndarray,
-        jolt: np.ndarray,
+        jolt: np.ndarray | None,
     ) -> tuple[list[int], bool]:
-        """The standing feet the gate lets through (:class:`FootGate`, on their NIS in
-        ``innovation``, its scales matched with the ``jolt`` [m²/s², 3 x 3, base frame] in each
-        foot's block), and whether it was reset (the velocity's covariance then widened by their
+        """The feet the gate lets through (:class:`FootGate`, on their NIS in ``innovation``, its
+        scales matched with the ``jolt`` [m²/s², 3 x 3, base frame; None: none] in each foot's
+        block), and whether it was reset (the velocity's covariance then widened by their
         innovation); the doubt while it rejects every foot; the ground at the first feet believed.
         """
         rows = stack.layout.feet
@@ -327,7 +323,7 @@ class StateFilter:
         blocks = innovation[rows, rows]
         nis, along = normalised_squares(blocks.tolist(), residuals, stack.up)
         matched = nis
-        if jolt.any():  # the jolt is no white noise the scales should take up
+        if jolt is not None:  # the jolt is no white noise the scales should take up
             blocks = blocks + np.kron(np.eye(len(residuals)), jolt)
             matched = normalised_squares(blocks.tolist(), residuals, stack.up)[0]
         used, reset = self.gate(stamp_ns, candidates, (nis, along, matched), residuals)

@@ -33,9 +33,11 @@ def test_a_jolt_starts_at_the_last_ones_size_and_then_is_its_own() -> None:
     """Hand numbers (updates 2 ms apart: a measured ``a²`` counts ``2τ / dt`` = 30 times): none
     before a touchdown; the first one ``0.1²`` (the setting) decaying as ``e^{-2t/τ}``; a
     standing foot 0.03 m/s off sideways (0.02, 0.0224 in x and y), its innovation's variance
-    0.0002 per horizontal axis, measures ``(0.03² - 0.0004) / 2``, and with the along-up part of
-    the residual and of its variance left out on a tilted base; the next touchdown starts at that
-    size until it measures its own; a sample past ``impact_window_s`` measures nothing."""
+    0.0002 per horizontal axis, measures ``(0.03² - 0.0004) / 2``; a second one, 0.04 m/s off a
+    sample later on a tilted base (the along-up part of the residual and of its variance left
+    out), makes it the least-squares fit of ``a² d(t)`` to both excesses; the next touchdown
+    starts at that size until it measures its own; a sample past ``impact_window_s`` measures
+    nothing."""
     settings = FilterSettings()
     tau, dt = settings.touchdown_s, 0.002
     jolt = FootJolt(settings)
@@ -53,7 +55,8 @@ def test_a_jolt_starts_at_the_last_ones_size_and_then_is_its_own() -> None:
     block = np.eye(3) * 0.0002 + np.outer(tilted, tilted) * 0.5
     residual = np.array([0.0, math.cos(0.3), -math.sin(0.3)]) * 0.04 + np.array(tilted) * 0.7
     jolt.observe(4_000_000, [tuple(residual)], tilted, block, [0])
-    later = (0.04**2 - 0.0004) / 2.0 * math.exp(2.0 * dt / tau)
+    share = math.exp(-2.0 * dt / tau)  # the fit of a² d(t) to both excesses
+    later = (measured + (0.04**2 - 0.0004) / 2.0 * share) / (1.0 + share * share)
     assert math.isclose(jolt.square, later, rel_tol=1e-9)
     jolt.land(10_000_000)
     assert math.isclose(jolt.variance(10_000_000), 0.01, rel_tol=1e-9)  # capped: the setting

@@ -43,3 +43,11 @@ def vertical_errors(
             errors.append(float(state.velocity[axis]) - V[axis])
             sigmas.append(math.sqrt(state.covariance[3 + axis, 3 + axis]))
     return np.array(errors), np.array(sigmas)
+
+
+def sigma_scores(error: np.ndarray, sigma: np.ndarray) -> tuple[float, float, float]:
+    """A run's mean reported sigma [m/s], that over its RMS ``error`` [m/s], and the share of
+    samples whose error lies within 3 ``sigma``."""
+    rms = math.sqrt(float((error**2).mean()))
+    mean = float(sigma.mean())
+    return mean, mean / rms, float((np.abs(error) <= 3.0 * sigma).mean())

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from synthetic_trot import FEET, JJT, STEP_NS, V, vertical_errors
+from synthetic_trot import FEET, JJT, STEP_NS, V, sigma_scores, vertical_errors
 
 from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.foot_jolt import FootJolt
@@ -93,10 +93,7 @@ def trot(settings: FilterSettings, slip_mps: float, seconds: float = 10.0):
 def scores(settings: FilterSettings, slip_mps: float) -> tuple[float, float, float]:
     """The trot's mean sideways sigma [m/s], that over its RMS error, and the share of samples
     within 3 sigma."""
-    error, sigma = trot(settings, slip_mps)
-    rms = math.sqrt(float((error**2).mean()))
-    mean = float(sigma.mean())
-    return mean, mean / rms, float((np.abs(error) <= 3.0 * sigma).mean())
+    return sigma_scores(*trot(settings, slip_mps))
 
 
 def test_the_standing_feet_slipping_at_each_touchdown_stay_inside_the_reported_sigma() -> None:

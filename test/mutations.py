@@ -196,8 +196,8 @@ MUTATIONS = (
     Mutation(
         "the touchdowns' horizontal jolt dropped",
         "a1_leg_fk/estimation/state_filter.py",
-        "jolt = self.jolt.variance(stamp_ns) * (np.eye(3) - np.outer(stack.up, stack.up))",
-        "jolt = 0.0 * (np.eye(3) - np.outer(stack.up, stack.up))",
+        "sideways = self.jolt.sideways(stamp_ns, stack.up)",
+        "sideways = None",
     ),
     Mutation(
         "the flat-ground row's sign",

@@ -3,7 +3,7 @@ measurement by hand, and the state filter on a synthetic trot whose truth is kno
 construction (a level base at a constant horizontal velocity, an exact IMU, the diagonal pairs
 overlapping 8 ms at each handover, every standing foot's sideways velocity off by ``A exp(-t /
 τ)`` after each touchdown, all alike, plus a seeded white noise): the slip PyBullet's position
-motors show (a1_position_flat: 0.02-0.05 m/s for 10-25 ms) and a gentle trot's."""
+motors show (a1_position_flat: 0.04-0.05 m/s in the first 25 ms) and a gentle trot's."""
 
 from __future__ import annotations
 

@@ -10,7 +10,9 @@ in stance, the IMU's orientation, gyro and accelerometer) again and again, the s
   ``StateFilter step, no give``: the same without the feet's give (``give_s`` 0), the ratio
   printed (the give's cost, goal <= 1.1); ``StateFilter step, impacts fixed``: every landing
   ``touchdown_noise_mps`` (``impact_window_s`` 0, the filter before each landing was measured),
-  the ratio printed;
+  the ratio printed; ``StateFilter trot step`` and ``..., impacts fixed``: the same on a trot (the
+  pairs in turn, 48 samples each, all four feet standing for 2 between), where each touchdown's
+  jolt is measured (:mod:`~a1_leg_fk.estimation.foot_jolt`), the ratio printed;
 - its parts: ``propagate``, ``update``, ``sample``;
 - ``OdometryFeed.step``: the whole per-joint-state work of ``leg_odometry_node`` without ROS (the
   contact estimate with efforts, the feet's motion and Jacobians, the filter);
@@ -53,10 +55,13 @@ def main() -> None:
     state, feed, contacts = StateFilter(), OdometryFeed(a1), ContactEstimator(a1)
     rigid = StateFilter(FilterSettings(give_s=0.0))
     fixed = StateFilter(FilterSettings(impact_window_s=0.0))
+    trotting, trotting_fixed = StateFilter(), StateFilter(FilterSettings(impact_window_s=0.0))
     clock = {
         "filter": 0,
         "rigid": 0,
         "fixed": 0,
+        "trot": 0,
+        "trot fixed": 0,
         "propagate": 0,
         "update": 0,
         "feed": 0,
@@ -68,9 +73,17 @@ def main() -> None:
         None,
         LegMeasurement(FootMotion((0.3, 0.0, 0.0), (-0.18, 0.13, -0.3), 0.3), 0.99, JJT),
     ]
-    state.propagate(0, GYRO, FORCE, ORIENTATION)
-    rigid.propagate(0, GYRO, FORCE, ORIENTATION)
-    fixed.propagate(0, GYRO, FORCE, ORIENTATION)
+    other = [
+        None,
+        LegMeasurement(FootMotion((0.3, 0.0, 0.0), (0.18, 0.13, -0.3), 0.3), 0.99, JJT),
+        LegMeasurement(FootMotion((0.3, 0.0, 0.0), (-0.18, -0.13, -0.3), 0.3), 0.99, JJT),
+        None,
+    ]
+    four = [stance[0], other[1], other[2], stance[3]]
+    gait = [stance] * 48 + [four] * 2 + [other] * 48 + [four] * 2
+    gaits = {"trot": itertools.cycle(gait), "trot fixed": itertools.cycle(gait)}
+    for each in (state, rigid, fixed, trotting, trotting_fixed):
+        each.propagate(0, GYRO, FORCE, ORIENTATION)
     imu = ImuReading(ORIENTATION, GYRO, specific_force=FORCE)
     sample = ImuSample((0.3, -0.2, -9.79), GYRO, FORCE)
 
@@ -85,6 +98,12 @@ def main() -> None:
         state.propagate(stamp, GYRO, FORCE)
         state.update(stamp, stance, ORIENTATION)
         state.sample(stamp, (0, 3), (0, 3))
+
+    def trot(state: StateFilter, name: str) -> None:
+        stamp = tick(name)
+        state.propagate(stamp, GYRO, FORCE)
+        used = state.update(stamp, next(gaits[name]), ORIENTATION)
+        state.sample(stamp, used, used)
 
     def fed() -> None:
         stamp = tick("feed")
@@ -106,6 +125,8 @@ def main() -> None:
             "StateFilter step": step,
             "StateFilter step, no give": lambda: step(rigid, "rigid"),
             "StateFilter step, impacts fixed": lambda: step(fixed, "fixed"),
+            "StateFilter trot step": lambda: trot(trotting, "trot"),
+            "StateFilter trot step, impacts fixed": lambda: trot(trotting_fixed, "trot fixed"),
             "StateFilter.propagate": lambda: state.propagate(tick("filter"), GYRO, FORCE),
             "StateFilter.update": lambda: state.update(tick("filter"), stance, ORIENTATION),
             "StateFilter.sample": lambda: state.sample(0, (0, 3), (0, 3)),
@@ -132,6 +153,8 @@ def main() -> None:
     print(f"\n  the feet's give: StateFilter step {give:.3f}x its cost without it")
     impact = runs["StateFilter step"] / runs["StateFilter step, impacts fixed"]
     print(f"  each landing measured: StateFilter step {impact:.3f}x its cost with them fixed")
+    jolt = runs["StateFilter trot step"] / runs["StateFilter trot step, impacts fixed"]
+    print(f"  on a trot, with each touchdown's jolt: {jolt:.3f}x its cost with them fixed")
 
 
 if __name__ == "__main__":

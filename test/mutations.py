@@ -38,6 +38,7 @@ FAST_SUBSET = (
     "test/estimation/test_leg_odometry.py",
     "test/estimation/test_leg_order.py",
     "test/estimation/test_foot_ground.py",
+    "test/estimation/test_foot_jolt.py",
     "test/estimation/test_foot_rise.py",
     "test/estimation/test_ground.py",
     "test/estimation/test_touchdown_gate.py",
@@ -241,6 +242,12 @@ MUTATIONS = (
         "a1_leg_fk/estimation/state_filter.py",
         "self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)",
         "0.0",
+    ),
+    Mutation(
+        "the touchdowns' horizontal jolt dropped",
+        "a1_leg_fk/estimation/state_filter.py",
+        "sideways = self.jolt.sideways(stamp_ns, stack.up)",
+        "sideways = None",
     ),
     Mutation(
         "the flat-ground row's sign",

@@ -1,6 +1,6 @@
-"""The synthetic trots' geometry (test/estimation/test_foot_give.py, test_foot_impact.py): a level
-base moving at a constant horizontal velocity over four feet, an exact IMU, 500 Hz joint states;
-the truth known by construction."""
+"""The synthetic trots' geometry (test/estimation/test_foot_give.py, test_foot_impact.py,
+test_foot_jolt.py): a level base moving at a constant horizontal velocity over four feet, an exact
+IMU, 500 Hz joint states; the truth known by construction."""
 
 from __future__ import annotations
 
@@ -27,11 +27,12 @@ JJT = (0.05, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.05)
 
 def vertical_errors(
     state: StateFilter, seconds: float, legs_at: Callable[[int], list[LegMeasurement | None]],
-    settle_s: float,
+    settle_s: float, axis: int = 2,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Run ``state`` over ``seconds`` of joint states (the IMU exact: level, still, 1 g), the
-    ``k``-th joint state's legs ``legs_at(k)``; the filter's vertical velocity error [m/s] and
-    its reported sigma [m/s] after every joint state from ``settle_s`` [s] on."""
+    ``k``-th joint state's legs ``legs_at(k)``; the filter's velocity error [m/s] and its
+    reported sigma [m/s] on ``axis`` (world = base; 2: vertical) after every joint state from
+    ``settle_s`` [s] on."""
     errors, sigmas = [], []
     stamp = 0
     for k in range(round(seconds * 1e9 / STEP_NS)):
@@ -39,6 +40,14 @@ def vertical_errors(
         state.propagate(stamp, (0.0, 0.0, 0.0), (0.0, 0.0, STANDARD_GRAVITY), LEVEL)
         state.update(stamp, legs_at(k), LEVEL)
         if stamp >= settle_s * 1e9:
-            errors.append(float(state.velocity[2]) - V[2])
-            sigmas.append(math.sqrt(state.covariance[5, 5]))
+            errors.append(float(state.velocity[axis]) - V[axis])
+            sigmas.append(math.sqrt(state.covariance[3 + axis, 3 + axis]))
     return np.array(errors), np.array(sigmas)
+
+
+def sigma_scores(error: np.ndarray, sigma: np.ndarray) -> tuple[float, float, float]:
+    """A run's mean reported sigma [m/s], that over its RMS ``error`` [m/s], and the share of
+    samples whose error lies within 3 ``sigma``."""
+    rms = math.sqrt(float((error**2).mean()))
+    mean = float(sigma.mean())
+    return mean, mean / rms, float((np.abs(error) <= 3.0 * sigma).mean())

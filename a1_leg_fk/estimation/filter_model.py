@@ -56,13 +56,16 @@ class FilterSettings:
     """A foot's vertical velocity error at its touchdown [m/s]: the impact's give (the ground and
     the foot compressed, then springing back), decaying over ``touchdown_s`` (0: none); with
     ``impact_window_s``, a landing's until its own is measured
-    (:mod:`~a1_leg_fk.estimation.foot_impact`)."""
+    (:mod:`~a1_leg_fk.estimation.foot_impact`), and the first touchdown's sideways jolt on the
+    standing feet, per horizontal axis (:mod:`~a1_leg_fk.estimation.foot_jolt`)."""
     touchdown_s: float = 0.03
     """The time constant [s] of the touchdown's vertical error."""
     impact_window_s: float = 0.03
     """A landing's touchdown amplitude is measured on its own vertical innovations within this
-    [s] of its touchdown (:mod:`~a1_leg_fk.estimation.foot_impact`; 0: ``touchdown_noise_mps``
-    for every landing, the filter as before it)."""
+    [s] of its touchdown (:mod:`~a1_leg_fk.estimation.foot_impact`), and each touchdown's
+    sideways jolt on the feet standing on their innovations within it
+    (:mod:`~a1_leg_fk.estimation.foot_jolt`); 0: ``touchdown_noise_mps`` for every landing and no
+    jolt, the filter as before both."""
     give_s: float = 0.02
     """The correlation time [s] of the standing feet's give (their vertical velocity the IMU does
     not confirm, measured: :mod:`~a1_leg_fk.estimation.foot_give`): PyBullet's mat-soft toes'

@@ -36,17 +36,17 @@ class FootGate:
         self,
         stamp_ns: int,
         candidates: list[int],
-        normalised: tuple[list[float], list[float]],
+        normalised: tuple[list[float], list[float], list[float]],
         residuals: list[tuple[float, float, float]],
     ) -> tuple[list[int], bool]:
-        """The candidate legs whose NIS (``normalised``: each foot's, and its part along world
-        up, 1 dof) passes the gate, and whether the gate was reset (every foot failed for
-        :data:`FilterSettings.max_rejected_s`, or none was ever believed: the feet whose
-        ``residuals`` agree taken); counts kept, the noise scales matched to the accepted feet's
-        NIS.
+        """The candidate legs whose NIS (``normalised``: each foot's, its part along world up, 1
+        dof, and its NIS with the last touchdown's horizontal jolt) passes the gate, and whether
+        the gate was reset (every foot failed for :data:`FilterSettings.max_rejected_s`, or none
+        was ever believed: the feet whose ``residuals`` agree taken); counts kept, the noise
+        scales matched to the accepted feet's NIS with the jolt (the jolt is no white noise).
         """
         s, counts = self.settings, self.counts
-        nis, vertical = normalised
+        nis, vertical, matched = normalised
         accepted = [leg for leg, value in zip(candidates, nis) if value <= s.gate_chi2]
         reset = False
         if accepted:
@@ -61,19 +61,20 @@ class FootGate:
                 if group:
                     accepted, self._rejected_since_ns, reset = group, None, True
                     counts.gate_resets += 1
-        total = up = 0.0
-        for leg, value, along in zip(candidates, nis, vertical):
+        total = up = jolted = 0.0
+        for leg, value, along, match in zip(candidates, nis, vertical, matched):
             if leg in accepted:
                 counts.used[leg] += 1
                 total += value
                 up += along
+                jolted += match
             else:
                 counts.rejected[leg] += 1
         if accepted:
             counts.nis_sum += total
             counts.nis_count += len(accepted)
             count = len(accepted)
-            self._adapt(stamp_ns, max(total - up, 0.0) / (2.0 * count), up / count)
+            self._adapt(stamp_ns, max(jolted - up, 0.0) / (2.0 * count), up / count)
         return accepted, reset
 
     def _adapt(self, stamp_ns: int, ratio: float, vertical: float) -> None:

@@ -61,13 +61,7 @@ class FootImpact:
         s = self.settings
         if not s.touchdown_noise_mps > 0.0:
             return 0.0
-        largest = s.touchdown_noise_mps**2
-        square = self.squares[leg]
-        if square is None or not self.interval_s > 0.0:
-            square = largest
-        else:
-            square = min(square * 2.0 * s.touchdown_s / self.interval_s, largest)
-        return square * math.exp(-2.0 * seconds / max(s.touchdown_s, 1e-9))
+        return colored(self.squares[leg], self.interval_s, s) * decay(seconds, s)
 
     def observe(
         self,
@@ -90,12 +84,34 @@ class FootImpact:
         previous, self._stamp_ns = self._stamp_ns, stamp_ns
         if previous is not None:
             self.interval_s = min(max((stamp_ns - previous) / 1e9, 0.0), s.max_step_s)
-        tau = max(s.touchdown_s, 1e-9)
         for leg, age, (x, y, z), transient, row in zip(*feet, transients, rows):
             if not age <= s.impact_window_s:
                 continue
             along = up[0] * x + up[1] * y + up[2] * z
             spread = quadratic(up, innovation[row : row + 3, row : row + 3].ravel().tolist())
             white = max(spread - transient, 0.0)
-            measured = max(along * along - white, 0.0) * math.exp(2.0 * age / tau)
+            measured = max(along * along - white, 0.0) * growth(age, s)
             self.squares[leg] = max(self.squares[leg] or 0.0, measured)
+
+
+def colored(square: float | None, interval_s: float, settings: FilterSettings) -> float:
+    """A transient's white noise [m²/s²] at its start: its measured ``a²`` [m²/s²] as the white
+    noise of the same low-frequency power, ``a² 2τ / dt`` (``interval_s`` ``dt`` [s]), at most
+    ``touchdown_noise_mps²``, which it is until measured (``square`` None, or no interval yet).
+    """
+    largest = settings.touchdown_noise_mps**2
+    if square is None or not interval_s > 0.0:
+        return largest
+    return min(square * 2.0 * settings.touchdown_s / interval_s, largest)
+
+
+def decay(seconds: float, settings: FilterSettings) -> float:
+    """A transient's variance ``seconds`` after its touchdown over its start's, ``exp(-2 t / τ)``
+    (``τ`` ``touchdown_s``).
+    """
+    return math.exp(-2.0 * seconds / max(settings.touchdown_s, 1e-9))
+
+
+def growth(seconds: float, settings: FilterSettings) -> float:
+    """``1 / decay``: a transient's variance at its start over its part ``seconds`` later."""
+    return math.exp(2.0 * seconds / max(settings.touchdown_s, 1e-9))

@@ -18,7 +18,9 @@ db_g, db_a)``, ``R = R̂ Exp(dθ)``, has a 15 x 15 covariance. Settings and coun
   touchdown's vertical transient (:class:`~a1_leg_fk.estimation.foot_impact.FootImpact`, its
   amplitude fitted to the landing feet's vertical innovations, since the foot's first joint
   state in stance; with ``give_s``, the larger of it and the feet's
-  measured give, :mod:`~a1_leg_fk.estimation.foot_give`); the stance feet's heights
+  measured give, :mod:`~a1_leg_fk.estimation.foot_give`), and, on the feet the gate accepts,
+  the last touchdown's sideways jolt of the feet standing (:mod:`~a1_leg_fk.estimation.foot_jolt`:
+  a landing foot pushes them sideways, all alike); the stance feet's heights
   ``p_z + (R r)_z`` equal their footholds' anchored heights (``ground="footholds"``, the default,
   :mod:`a1_leg_fk.estimation.ground`) or, on a known flat floor (``ground="flat"``), the ground's
   taken at the first feet believed; standing
@@ -72,6 +74,7 @@ from a1_leg_fk.estimation.filter_stack import Point, Stack
 from a1_leg_fk.estimation.foot_gate import FootGate
 from a1_leg_fk.estimation.foot_give import FootGive
 from a1_leg_fk.estimation.foot_impact import FootImpact
+from a1_leg_fk.estimation.foot_jolt import FootJolt
 from a1_leg_fk.estimation.odometry import OdometrySample
 from a1_leg_fk.estimation.so3 import exp_so3, exp_so3_rows, matrix_of
 from a1_leg_fk.estimation.state_sample import floats_of, state_sample
@@ -117,6 +120,7 @@ class StateFilter:
         self.gate = FootGate(self.settings, self.counts)
         self.give = FootGive(self.settings)
         self.impact = FootImpact(self.settings)
+        self.jolt = FootJolt(self.settings)
         self.doubt = NO_DOUBT
         """The reported velocity's variance added while the gate rejects every foot
         (:func:`~a1_leg_fk.estimation.filter_model.doubt`) [m²/s², base frame]."""
@@ -232,21 +236,16 @@ class StateFilter:
             local = [ground for ground in under if ground is not None]
             local = local if len(local) == len(candidates) else None
         heights = local is not None or (self.ground == FLAT and self.ground_z is not None)
-        stack = Stack(
-            self._point(local),
-            self.settings,
-            None if orientation is None else (orientation, orientation_variance),
-            feet,
-            heights,
-            still,
-        )
+        imu = None if orientation is None else (orientation, orientation_variance)
+        stack = Stack(self._point(local), self.settings, imu, feet, heights, still)
         self.counts.still += still
         cross = self.covariance.dot(stack.rows.T)
         innovation = stack.rows.dot(cross) + stack.noise
         if not candidates:
             self._correct(cross, innovation, stack.residual)
             return []
-        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation)
+        sideways = self.jolt.sideways(stamp_ns, stack.up)
+        used, reset = self._gate_feet(stamp_ns, candidates, stack, innovation, sideways)
         if reset:
             cross = self.covariance.dot(stack.rows.T)
             innovation = stack.rows.dot(cross) + stack.noise
@@ -261,13 +260,15 @@ class StateFilter:
         if self.settings.impact_window_s > 0.0:  # each landing's amplitude measured
             ages = [(stamp_ns - (self._touchdowns[leg] or stamp_ns)) / 1e9 for leg in used]
             rows = [stack.layout.feet.start + 3 * k for k in positions]
-            self.impact.observe(
-                stamp_ns, (used, ages, residuals), transients, stack.up, innovation, rows
-            )
+            landing = (used, ages, residuals)
+            self.impact.observe(stamp_ns, landing, transients, stack.up, innovation, rows)
+            self.jolt.observe(stamp_ns, residuals, stack.up, innovation, rows)
         spread = scattered(residuals, noises, self.settings.gate_chi2)
-        for k in positions if spread else ():  # the feet disagree beyond their noises
+        added = [spread * np.eye(3)] if spread else []  # the feet disagree beyond their noises
+        added += [] if sideways is None else [sideways]  # the last touchdown's jolt
+        for k in positions if added else ():
             first = stack.layout.feet.start + 3 * k
-            innovation[first : first + 3, first : first + 3] += spread * np.eye(3)
+            innovation[first : first + 3, first : first + 3] += sum(added)
         if len(used) < len(candidates):
             keep = stack.keep(positions)
             if keep.size:
@@ -281,9 +282,11 @@ class StateFilter:
         self, stamp_ns: int, legs: Sequence[LegMeasurement | None]
     ) -> tuple[list[int], list[tuple[LegMeasurement, float]]]:
         """The legs whose feet stand, and each one's measurement with its touchdown's vertical
-        variance (:meth:`FootImpact.variance`, since its first joint state in stance).
+        variance (:meth:`FootImpact.variance`, since its first joint state in stance); a
+        touchdown while other feet stood starts a jolt (:meth:`FootJolt.land`).
         """
         candidates, feet = [], []
+        stood = any(touchdown is not None for touchdown in self._touchdowns)
         for leg, measurement in enumerate(legs):
             if measurement is None or not stands(measurement.probability):
                 self._touchdowns[leg] = None
@@ -292,25 +295,38 @@ class StateFilter:
             if touchdown is None:
                 touchdown = self._touchdowns[leg] = stamp_ns
                 self.impact.land(leg)
+                if stood:  # a landing while other feet stand jolts them
+                    self.jolt.land(stamp_ns)
             candidates.append(leg)
-            feet.append((measurement, self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)))
+            impact = self.impact.variance(leg, (stamp_ns - touchdown) / 1e9)
+            feet.append((measurement, impact))
         give = self.give.variance(len(feet))
         if give:  # the touchdown's transient is a give too: the larger of the two, not their sum
             feet = [(measurement, max(impact, give)) for measurement, impact in feet]
         return candidates, feet
 
     def _gate_feet(
-        self, stamp_ns: int, candidates: list[int], stack: Stack, innovation: np.ndarray
+        self,
+        stamp_ns: int,
+        candidates: list[int],
+        stack: Stack,
+        innovation: np.ndarray,
+        jolt: np.ndarray | None,
     ) -> tuple[list[int], bool]:
-        """The standing feet the gate lets through (:class:`FootGate`, on their NIS in
-        ``innovation``), and whether it was reset (the velocity's covariance then widened by
-        their innovation); the doubt while it rejects every foot; the ground's height at the
-        first feet believed.
+        """The feet the gate lets through (:class:`FootGate`, on their NIS in ``innovation``, its
+        scales matched with the ``jolt`` [m²/s², 3 x 3, base frame; None: none] in each foot's
+        block), and whether it was reset (the velocity's covariance then widened by their
+        innovation); the doubt while it rejects every foot; the ground at the first feet believed.
         """
         rows = stack.layout.feet
         residuals = stack.foot_residuals
-        nis, along = normalised_squares(innovation[rows, rows].tolist(), residuals, stack.up)
-        used, reset = self.gate(stamp_ns, candidates, (nis, along), residuals)
+        blocks = innovation[rows, rows]
+        nis, along = normalised_squares(blocks.tolist(), residuals, stack.up)
+        matched = nis
+        if jolt is not None:  # the jolt is no white noise the scales should take up
+            blocks = blocks + np.kron(np.eye(len(residuals)), jolt)
+            matched = normalised_squares(blocks.tolist(), residuals, stack.up)[0]
+        used, reset = self.gate(stamp_ns, candidates, (nis, along, matched), residuals)
         if not used:
             self.doubt = doubt(residuals, stack.foot_noises, nis, self.settings)
             return used, reset

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from synthetic_trot import FEET, JJT, STEP_NS, V, vertical_errors
+from synthetic_trot import FEET, JJT, STEP_NS, V, sigma_scores, vertical_errors
 
 from a1_leg_fk.estimation.filter_model import FLAT, FilterSettings, LegMeasurement
 from a1_leg_fk.estimation.foot_impact import FootImpact
@@ -96,10 +96,7 @@ def trot(settings: FilterSettings, landing_mps: float, seconds: float = 8.0):
 def scores(settings: FilterSettings, landing_mps: float) -> tuple[float, float, float]:
     """The trot's mean vertical sigma [m/s], that over its RMS error, and the share of samples
     within 3 sigma."""
-    error, sigma = trot(settings, landing_mps)
-    rms = math.sqrt(float((error**2).mean()))
-    mean = float(sigma.mean())
-    return mean, mean / rms, float((np.abs(error) <= 3.0 * sigma).mean())
+    return sigma_scores(*trot(settings, landing_mps))
 
 
 def test_gentle_landings_are_believed_as_the_true_model_believes_them() -> None:

@@ -295,6 +295,12 @@ MUTATIONS = (
         "",
     ),
     Mutation(
+        "a staircase's touchdowns offered the slope's prediction (no treads)",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "return 2 * sum(self._votes) < len(self._votes)",
+        "return False",
+    ),
+    Mutation(
         "a lone touchdown's noise without the estimate's vertical variance",
         "a1_leg_fk/estimation/touchdown_gate.py",
         "max(height_variance, 0.0)",

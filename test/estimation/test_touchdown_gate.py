@@ -128,7 +128,8 @@ def _anchors_down_stairs(rise_m: float) -> list[float]:
     diagonal pairs, standing half a cycle, their heights exact: per sample and standing foot,
     its anchor under it less its tread's height [m]."""
     offsets = [(0.2, -0.13), (0.2, 0.13), (-0.2, -0.13), (-0.2, 0.13)]
-    ground, feet, errors = LocalGround(), {}, []
+    ground, errors = LocalGround(), []
+    feet: dict[int, tuple[float, float, float]] = {}
     for row in range(1200):
         stamp = row * 0.005
         pair = (0, 3) if stamp % 0.4 < 0.2 else (1, 2)

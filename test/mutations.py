@@ -352,6 +352,18 @@ MUTATIONS = (
         "",
     ),
     Mutation(
+        "a staircase's touchdowns offered the slope's prediction (no treads)",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "return fits and 2 * sum(self._votes) < len(self._votes)",
+        "return False",
+    ),
+    Mutation(
+        "a staircase's treads judged whatever its touchdowns' scatter (the A1's early landings)",
+        "a1_leg_fk/estimation/touchdown_gate.py",
+        "fits = sigma is not None and sigma <= self.min_sigma_m",
+        "fits = True",
+    ),
+    Mutation(
         "a lone touchdown's noise without the estimate's vertical variance",
         "a1_leg_fk/estimation/touchdown_gate.py",
         "max(height_variance, 0.0)",

@@ -199,9 +199,8 @@ class LocalGround:
         lifted: dict[int, tuple[float, float]],
     ) -> None:
         """Open the stances of the ``landed`` legs (slot, contact point [m, odom]) at ``stamp_s``
-        [s], anchored
-        (:meth:`_touchdown`) against the feet that stood before this sample and stand on
-        (``standing``, not ``landed``), else the ``lifted`` ones; or kept at their own heights.
+        [s], anchored (:meth:`_touchdown`) against the feet that stood before this sample and
+        stand on (``standing``, not ``landed``), else the ``lifted`` ones; or at their own heights.
         The feet landing in one sample are judged together, against the ground and the noise
         known before it (two feet landing alone, one judged after the other had widened the
         noise, took heights 21 mm apart: the retargeted walk's).
@@ -284,17 +283,21 @@ class LocalGround:
         return not agrees and _sloped(self.gradient()[0])
 
     def _nearest(self, point: Point, alone: bool) -> tuple[float, float, Grade, bool] | None:
-        """The prediction nearer to ``point`` [m, odom] (height [m], variance [m²], slope) and
-        whether ``point`` agrees with it (:meth:`TouchdownGate.agrees`: its noise by where its
-        height comes from, against the standing feet or ``alone``, the estimate's own); None:
-        no foothold yet.
+        """The prediction nearer to ``point`` [m, odom] (height [m], variance [m²], slope; on
+        treads the level one, :meth:`TouchdownGate.treads`) and whether ``point`` agrees with it
+        (:meth:`TouchdownGate.agrees`: its noise by where its height comes from, against the
+        standing feet or ``alone``, the estimate's own; against them it votes between the two,
+        :meth:`TouchdownGate.compare`); None: no foothold yet.
         """
         predictions = self.predicted(point[0], point[1])
         if not predictions:
             return None
+        if not alone and len(predictions) > 1:  # the slope's and the level one
+            self.gate.compare(point[2], predictions[0][:2], predictions[1][0])
+        if self.gate.treads():  # a staircase's: the level prediction alone
+            predictions = predictions[-1:]
         height, variance, grade = min(predictions, key=lambda p: abs(point[2] - p[0]))
-        sloped = len(predictions) > 1  # predicted(): the slope's and the level one
-        sigma = self.gate.sigma_m(alone, sloped, self._height_variance)
+        sigma = self.gate.sigma_m(alone, _sloped(self.gradient()[0]), self._height_variance)
         return height, variance, grade, self.gate.agrees(point[2] - height, variance, sigma)
 
     def under(

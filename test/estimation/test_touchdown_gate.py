@@ -96,3 +96,71 @@ def test_a_lone_touchdown_takes_the_prediction_as_far_as_the_estimate_is_unsure(
         ground.update((STANCE_SAMPLES + 1) / RATE_HZ, [(1, (0.1, 0.0, 0.02))], sigma**2)
         under = ground.under([(1, (0.1, 0.0, math.nan))], 4)[1]
         assert under is not None and under[0] == pytest.approx(expected, abs=1e-12), sigma
+
+
+def test_the_touchdowns_vote_between_the_slopes_prediction_and_the_level_one() -> None:
+    """Hand numbers (base noise 5 mm, gate 3 sigmas, so 15 mm): a touchdown 1 mm off the level
+    prediction and 12 mm off the slope's votes level; one 2 mm off the slope's and 20 mm off the
+    level one votes slope; a step (20 mm off both) and predictions 4 mm apart (the touchdown
+    cannot tell them) vote not. The ground is treads from the eighth level vote on (half of the
+    16 kept: the level votes' scatter, their offsets' lower quartile over a normal sigma's, is
+    known), a vote counting from the next sample on, while the level votes outnumber the
+    slope's; level votes 4 mm off (4 / 0.3186 = 12.6 mm of scatter, more than the 5 mm base
+    noise) make no treads."""
+    gate = TouchdownGate(DEFAULT_MIN_SIGMA_M, 3.0)
+    for vote in range(8):
+        assert not gate.treads(), vote
+        gate.compare(0.001, (0.012, 0.0), 0.0)
+        gate.close_sample()
+    assert gate.treads()
+    for _ in range(7):
+        gate.compare(-0.018, (-0.02, 1e-6), 0.0)
+    gate.compare(0.02, (0.040, 0.0), 0.0)  # a step: neither
+    gate.compare(0.0, (0.004, 0.0), 0.0)  # the two too near to tell
+    gate.close_sample()
+    assert gate.treads()  # 8 level votes to 7
+    gate.compare(-0.018, (-0.02, 1e-6), 0.0)
+    gate.close_sample()
+    assert not gate.treads()  # 8 to 8
+    gate = TouchdownGate(DEFAULT_MIN_SIGMA_M, 3.0)
+    for _ in range(8):
+        gate.compare(0.004, (0.02, 0.0), 0.0)
+    gate.close_sample()
+    assert not gate.treads()
+
+
+def _shuffle_then_step(jitter_m: float) -> float:
+    """Two feet stand on a staircase's lower tread (z -4 cm, edge at x = 0.3 m) at (0.45, ±0.3)
+    m; a third takes 24 short steps on the upper tread (z 0), at x = 0 and 0.15 m in turn (0.1 s
+    standing, 0.02 s lifted, 500 Hz; footholds kept 0.1 s, so each touchdown's nearest is the
+    last one, 0.15 m away), measured on its tread the first time, then ``jitter_m`` [m] above
+    it at x = 0.15 m and as much below at x = 0; then it steps down to x = 0.42 m. Its anchor
+    there less its tread's height [m]."""
+    ground = LocalGround(window_s=0.1)
+    lower = [(0, (0.45, -0.3, -0.04)), (2, (0.45, 0.3, -0.04))]
+    stamp = 0.0
+    for shuffle in range(24):
+        height = (jitter_m if shuffle % 2 else -jitter_m) if shuffle else 0.0
+        foot = (1, (0.15 * (shuffle % 2), 0.0, height))
+        for sample in range(60):
+            ground.update(stamp, lower + ([foot] if sample < 50 else []))
+            stamp += 1.0 / RATE_HZ
+    landed = (1, (0.42, 0.0, -0.04))
+    ground.update(stamp, [*lower, landed])
+    under = ground.under([landed], 3)[1]
+    assert under is not None
+    return under[0] + 0.04
+
+
+def test_a_step_off_a_tread_is_not_taken_for_the_slopes_prediction() -> None:
+    """:func:`_shuffle_then_step`, heights exact: the feet standing together measure the slope
+    (-0.04 / 0.375 m on average), the short steps land on their nearest foothold's tread (the
+    level prediction's, exactly; the slope's 15 mm off), and the step down lands 12 mm from the
+    slope's prediction carried 0.27 m from the last foothold: by construction it is anchored on
+    its tread, its own height (the slope's taken, the rule before: 12.2 mm off, as the
+    Aliengo's feet down 4 cm steps with noise, 0.72 % of the path). With the short steps
+    measured 6 mm above and below their tread in turn (feet on a nosing, landing early: the
+    A1's on 4 cm steps, 5-9 mm), the level votes' scatter (6 / 0.3186 mm) is more than the base
+    noise and the slope's prediction stays offered: 12 mm off, as before."""
+    assert _shuffle_then_step(0.0) == pytest.approx(0.0, abs=1e-9)
+    assert _shuffle_then_step(0.006) == pytest.approx(0.012, abs=1e-3)

@@ -54,7 +54,12 @@ from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.foot_ground import FootGround
-from a1_leg_fk.estimation.kinematic_evidence import clip_odds, kinematic_odds, rise_odds
+from a1_leg_fk.estimation.kinematic_evidence import (
+    clip_odds,
+    height_scales,
+    kinematic_odds,
+    rise_odds,
+)
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.model.legs import LEG_NAMES
 
@@ -135,18 +140,20 @@ class ContactFilter:
                 push = clip_odds((force - model.force_half_n) / model.force_scale_n, limit, limit)
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
                 fades[leg] = 1.0 - max(push, 0.0) / limit
-        heights = None
+        heights, ground = None, self.ground
+        scales = model.height_half_m, model.height_scale_m
         standing = [p >= 0.5 for p in self.probabilities]
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             step = model.height_half_m  # footholds farther apart: on two levels (a staircase)
-            heights = self.ground.heights(dt_s, feet, down, omega, standing, band, step)
+            heights = ground.heights(dt_s, feet, down, omega, standing, band, step)
+            scales = height_scales(model, ground.height_spread_m, ground.rise.spread_m)
         kinematic, taken, lowered = kinematic_odds(
             model,
             feet,
             (omega, standing),
             (forced, caps, fades),
-            (heights, rise_odds(model, self.ground.rise) if down is not None else None),
+            (heights, rise_odds(model, ground.rise) if down is not None else None, scales),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):

@@ -328,14 +328,15 @@ def hover(model: ContactModel, bob_m: float = 0.0) -> tuple[list[float], list[fl
     """A trot's handover on rigid feet, by construction: FR and RL stand still 0.3 m under the
     base, FR 0.02 mm lower (the standing feet's height spread: 0.014 mm RMS); RR is up (5 cm);
     FL, held in swing, hovers 0.4 mm above FR for 40 ms (20 samples), moving at 0.3 m/s against
-    the standing feet (speed log-odds (0.32 - 0.3) / 0.08 = +0.25). With ``bob_m``, FR gives
-    that much [m] every other sample, for 0.4 s first (200 samples, FL up 5 cm). Per sample:
+    the standing feet (speed log-odds (0.32 - 0.3) / 0.08 = +0.25), after 10 ms 5 cm up (it came
+    down: 20 ms on, it has landed). With ``bob_m``, FR gives that much [m] every other sample,
+    for 0.4 s first (200 samples, FL up). Per sample:
     FL's probability of stance and its kinematic log-odds."""
     down = (0.0, 0.0, -1.0)
     contacts = ContactFilter(model)
     contacts.probabilities = [0.99, 0.01, 0.01, 0.99]
     probabilities, odds = [], []
-    for n in range(-200 if bob_m else 0, 20):
+    for n in range(-200 if bob_m else -5, 20):
         fl = 0.25 if n < 0 else 0.2996
         fr = 0.30002 + bob_m * (n % 2)
         feet = [foot(fr), foot(fl, (0.3, 0.0, 0.0)), foot(0.25), foot(0.3)]
@@ -349,7 +350,8 @@ def test_a_swing_foot_hovering_over_rigid_feet_stays_in_swing() -> None:
     and the filter calls it standing within a few samples. The standing feet are rigid (their
     rise spread 0 < 0.4 x 1.5 mm) and within 0.02 mm of each other: the even-odds height is
     the floor, 0.05 mm (2 x 0.014 mm is less), 0.00625 mm per unit; FL's height, below the fixed
-    half, says swing at most -3; with its speed, -2.75 per sample: it stays in swing."""
+    half, says swing at most -3 (landed, it is not past the fixed half: no rescue); with its
+    speed, -2.75 per sample: it stays in swing."""
     probabilities, odds = hover(MODEL)
     assert MODEL.height_floor_m == pytest.approx(5e-5)
     assert odds[-1] == pytest.approx(-MODEL.rigid_swing_odds + (0.32 - 0.3) / 0.08)

@@ -79,6 +79,9 @@ class FootGround:
         """[m] the standing feet's RMS height (as :meth:`heights` returns it), averaged over
         :data:`~a1_leg_fk.estimation.foot_rise.SPREAD_TIME_S` (inf: no standing foot yet)."""
         self._height_square = math.inf
+        self.one_level = True
+        """Whether the standing feet's footholds were on one level at the latest sample (not
+        farther apart than ``step_m``; before a foothold: True)."""
         self.rise = FootRise()
         """The standing feet's rises above their own footholds (level while there is no
         slope yet)."""
@@ -150,6 +153,7 @@ class FootGround:
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
         lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
         over = self.rise.over_treads(points, (gx, gy), band_m, step_m)
+        self.one_level = over is None
         if over is None:  # the standing feet on one level: the lowest foot's
             out = [value - lowest for value in level]
         else:

@@ -147,7 +147,8 @@ class ContactFilter:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             step = model.height_half_m  # footholds farther apart: on two levels (a staircase)
             heights = ground.heights(dt_s, feet, down, omega, standing, band, step)
-            if ground.one_level:  # on two levels (stairs), feet stand on a tread's edge
+            if ground.one_level and not any(forced):  # two levels: a tread's edge; forces
+                # place a forced foot's edges (the rule is for the feet's kinematics alone)
                 scales = height_scales(model, ground.height_spread_m, ground.rise.spread_m)
         kinematic, taken, lowered = kinematic_odds(
             model,

@@ -20,8 +20,15 @@ that no single sample decides alone:
   (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
   ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
   lower tread is "low" against the others well after its liftoff; against its own foothold it
-  is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
-  of where it came down to for 20 ms: a staircase's rise is no evidence of swing; forced too);
+  is not); at least 0 for a foot that *landed* higher than ``height_half_m`` (it stays within
+  ``rise_half_m`` of where it came down to for 20 ms: a staircase's rise is no evidence of
+  swing; forced too); for *rigid feet* (no foot with a force, the standing feet's footholds on
+  one level and their rise spread under ``rigid_rise_share`` of ``rise_half_m``) the height at
+  even odds is ``height_spread_factor`` times the standing feet's RMS height (at least
+  ``height_floor_m``; used only where below ``height_half_m``), ``rigid_scale_share`` of it per
+  unit, a foot below ``height_half_m`` saying swing at most ``rigid_swing_odds``: under stiff
+  position motors a swing foot hovers 0.3-0.7 mm off the ground, where the standing feet sit
+  within 0.2 mm of each other (:func:`~a1_leg_fk.estimation.kinematic_evidence.height_scales`);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (a swing foot skimming rough ground is
   low, and its speed not the ground's), else the others that stood at any height (on stairs down

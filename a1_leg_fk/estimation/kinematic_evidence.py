@@ -32,8 +32,11 @@ def kinematic_odds(
     stance its height and speed may each say); and the heights [m] it took (NaN: unknown):
     above the lowest foot, or from ``terrain``'s first (the slope taken off) where that is
     lower; its second bounds each foot's height log-odds (a foot risen above its own foothold,
-    or at its own level: :func:`rise_odds`); and how far each foot's evidence is from the flat
-    rules' (no rise rule, speeds against every low foot), which the smoother takes. The rise
+    or at its own level: :func:`rise_odds`), its third the height [m] at even odds and per
+    unit of log-odds (:func:`height_scales`); and how far each foot's evidence is from the flat
+    rules' (no rise rule, the fixed height scales, speeds against every low foot by the fixed
+    scales), which the smoother takes (the rigid feet's scales follow the feet the filter holds
+    standing, as the rise does). The rise
     above a foot's own foothold and the speeds against the feet that stood are for the feet
     without a force: with one, the causal filter's liftoffs moved ahead of the smoothed ones by
     1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
@@ -69,9 +72,11 @@ def kinematic_odds(
     stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
     fades = fades if stepped else [1.0] * LEGS  # one level: in full (the smoother's goal)
     references = _references(velocities, (low, stepped), standing, forced)
+    rigid = half != fixed  # the rigid feet's scales: the smoother keeps the fixed ones
     flats = references  # against every low foot: the same where every low foot stood
-    if standing != low:  # the same feet low and standing: the same references
-        flats = _references(velocities, (low, False), [False] * LEGS, forced)
+    if standing != low or rigid:  # the same feet low and standing: the same references
+        lows = [h < fixed for h in heights] if rigid else low
+        flats = _references(velocities, (lows, False), [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
         cap = caps[leg]
@@ -81,14 +86,17 @@ def kinematic_odds(
             x = (half - height) / scale  # clip_odds written out: per foot and sample
             if height < fixed:  # rigid feet's rule: weaker swing below the fixed half
                 x = max(x, -model.rigid_swing_odds)
-            evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            evidence = flat = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            if rigid:  # the smoother's: the fixed scales
+                y = (fixed - height) / model.height_scale_m
+                flat = -limit if y < -limit else cap if y > cap else y  # noqa: FURB136
             rise = math.nan if rises is None else rises[leg]  # forced: the landed rule alone
             rise = math.nan if forced[leg] and rise != math.inf else rise
             landed = x < 0.0 < rise == math.inf and height >= fixed  # however high, past it
             if x > rise < 0.0 or landed:  # risen; landed
                 x = min(rise, 0.0)
-                risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-                lowered[leg], evidence = risen - evidence, risen
+                evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            lowered[leg] = evidence - flat
         if velocity is not None:
             speed = _speed_odds(velocity, reference, model, cap, fades[leg])
             evidence += speed

@@ -63,7 +63,7 @@ and 0.033-0.082 measured when this was written; 94.75-98.13 % and 0.020-0.066 si
 above the foot's own foothold)."""
 KINEMATIC_MISS = pytest.mark.xfail(
     strict=True,
-    reason="kinematic evidence alone reaches 94.75-97.61 %, duty errors 0.030-0.071, not the "
+    reason="kinematic evidence alone reaches 94.75-97.61 %, duty errors 0.030-0.070, not the "
     "goals (97 %, 0.03): a foot unloads while it still rests on the ground and moves measurably "
     "only ~10 ms later (0.8 mm and 0.19 m/s 2 ms after liftoff on the fast trot); its rise above "
     "its own foothold cut the filter's liftoff lag from 14-18 to 6-10 ms on the trots (94.2-97.2 "

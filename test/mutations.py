@@ -155,14 +155,32 @@ MUTATIONS = (
     Mutation(
         "contact filter's rise above a foot's own foothold ignored",
         "a1_leg_fk/estimation/kinematic_evidence.py",
-        "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
-        "if x > rise < -math.inf or x < 0.0 < rise == math.inf:",
+        "if x > rise < 0.0 or landed:",
+        "if x > rise < -math.inf or landed:",
     ),
     Mutation(
         "a landed foot's height above the others still says swing",
         "a1_leg_fk/estimation/kinematic_evidence.py",
-        "if x > rise < 0.0 or x < 0.0 < rise == math.inf:",
+        "if x > rise < 0.0 or landed:",
         "if x > rise < 0.0:",
+    ),
+    Mutation(
+        "no rigid feet's rule: the fixed even-odds height everywhere",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
+        "if not (rigid and half < model.height_half_m):",
+        "if not (rigid and half < 0.0):",
+    ),
+    Mutation(
+        "feet that give taken for rigid",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
+        "rigid = rise_spread_m < model.rigid_rise_share * model.rise_half_m",
+        "rigid = rise_spread_m == rise_spread_m",
+    ),
+    Mutation(
+        "a landed foot below the fixed even-odds height rescued from the rigid feet's rule",
+        "a1_leg_fk/estimation/kinematic_evidence.py",
+        "landed = x < 0.0 < rise == math.inf and height >= fixed",
+        "landed = x < 0.0 < rise == math.inf",
     ),
     Mutation(
         "a foot lands at the top of an arc it rose to",

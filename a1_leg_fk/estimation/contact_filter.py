@@ -20,8 +20,15 @@ that no single sample decides alone:
   (:mod:`a1_leg_fk.estimation.foot_rise`) is past ``r_half``, the larger of ``rise_half_m`` and
   ``rise_spread_factor`` times the standing feet's spread (a lifting foot that left a dip or a
   lower tread is "low" against the others well after its liftoff; against its own foothold it
-  is not); at least 0 for a foot that *landed*, however high (it stays within ``rise_half_m``
-  of where it came down to for 20 ms: a staircase's rise is no evidence of swing; forced too);
+  is not); at least 0 for a foot that *landed* higher than ``height_half_m`` (it stays within
+  ``rise_half_m`` of where it came down to for 20 ms: a staircase's rise is no evidence of
+  swing; forced too); for *rigid feet* (no foot with a force, the standing feet's footholds on
+  one level and their rise spread under ``rigid_rise_share`` of ``rise_half_m``) the height at
+  even odds is ``height_spread_factor`` times the standing feet's RMS height (at least
+  ``height_floor_m``; used only where below ``height_half_m``), ``rigid_scale_share`` of it per
+  unit, a foot below ``height_half_m`` saying swing at most ``rigid_swing_odds``: under stiff
+  position motors a swing foot hovers 0.3-0.7 mm off the ground, where the standing feet sit
+  within 0.2 mm of each other (:func:`~a1_leg_fk.estimation.kinematic_evidence.height_scales`);
 - its *speed* [m/s] relative to the other low feet (those whose height, as above, is within
   ``height_half_m``) that stood at the previous sample (a swing foot skimming rough ground is
   low, and its speed not the ground's), else the others that stood at any height (on stairs down
@@ -57,7 +64,12 @@ from typing import NamedTuple
 
 from a1_leg_fk.estimation.contact_model import ContactModel
 from a1_leg_fk.estimation.foot_ground import FootGround
-from a1_leg_fk.estimation.kinematic_evidence import clip_odds, kinematic_odds, rise_odds
+from a1_leg_fk.estimation.kinematic_evidence import (
+    clip_odds,
+    height_scales,
+    kinematic_odds,
+    rise_odds,
+)
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.estimation.swing_force import SwingForce
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -146,17 +158,21 @@ class ContactFilter:
                 pushes[leg], caps[leg] = push, 0.0 if push < 0.0 else weak
                 press = clip_odds((force - margin) / model.force_scale_n, limit, limit)
                 fades[leg] = 1.0 - max(press, 0.0) / limit
-        heights = None
+        heights, ground = None, self.ground
+        scales = model.height_half_m, model.height_scale_m
         if down is not None:
             band = model.rise_half_m  # a swing foot lands within it (no spread: see foot_rise)
             step = model.height_half_m  # footholds farther apart: on two levels (a staircase)
-            heights = self.ground.heights(dt_s, feet, down, omega, standing, band, step)
+            heights = ground.heights(dt_s, feet, down, omega, standing, band, step)
+            if ground.one_level and not any(forced):  # two levels: a tread's edge; forces
+                # place a forced foot's edges (the rule is for the feet's kinematics alone)
+                scales = height_scales(model, ground.height_spread_m, ground.rise.spread_m)
         kinematic, taken, lowered = kinematic_odds(
             model,
             feet,
             (omega, standing),
             (forced, caps, fades),
-            (heights, rise_odds(model, self.ground.rise) if down is not None else None),
+            (heights, rise_odds(model, ground.rise) if down is not None else None, scales),
         )
         posterior, totals = [], []
         for leg, previous in enumerate(self.probabilities):

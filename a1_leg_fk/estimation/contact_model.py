@@ -31,6 +31,18 @@ class ContactModel:
     max_kinematic_stance: float = 0.5
     rise_spread_factor: float = 3.5
     """The rise at even odds is at least this many times the standing feet's spread."""
+    height_floor_m: float = 5.0e-5
+    """[m] the least height at even odds of the rigid feet's rule."""
+    height_spread_factor: float = 2.0
+    """Rigid feet: the height at even odds is this many times the standing feet's height spread
+    (at least ``height_floor_m``, at most ``height_half_m``)."""
+    rigid_rise_share: float = 0.4
+    """The standing feet are rigid while their rise spread is below this share of
+    ``rise_half_m``."""
+    rigid_scale_share: float = 0.125
+    """Rigid feet: the height per unit of log-odds, as a share of the height at even odds."""
+    rigid_swing_odds: float = 3.0
+    """Rigid feet: the most a foot's height below ``height_half_m`` says swing (log-odds)."""
     phase_weight: float = 1.0
 
     def __post_init__(self) -> None:
@@ -53,6 +65,7 @@ class ContactModel:
             speed_scale_mps=SPEED_SCALE_PER_S * leg_length_m,
             rise_half_m=RISE_HALF_SHARE * leg_length_m,
             rise_scale_m=RISE_SCALE_SHARE * leg_length_m,
+            height_floor_m=HEIGHT_FLOOR_SHARE * leg_length_m,
         )
 
 
@@ -62,6 +75,8 @@ FORCE_HALF_SHARE, FORCE_SCALE_SHARE = 0.03, 0.005
 """Normal force at even odds, and per unit of log-odds, as shares of the weight."""
 HEIGHT_HALF_SHARE, HEIGHT_SCALE_SHARE = 0.04, 0.01
 """Height above the lowest foot at even odds, and per unit of log-odds, in leg lengths."""
+HEIGHT_FLOOR_SHARE = 1.25e-4
+"""The rigid feet's least height at even odds, in leg lengths (0.05 mm on the A1)."""
 RISE_HALF_SHARE, RISE_SCALE_SHARE = 0.00375, 0.00125
 """A standing foot's rise above its own foothold at even odds (at least), and per unit of
 log-odds, in leg lengths (1.5 and 0.5 mm on the A1)."""

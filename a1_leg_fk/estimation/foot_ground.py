@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from a1_leg_fk.estimation.foot_rise import FootRise
+from a1_leg_fk.estimation.foot_rise import SPREAD_TIME_S, FootRise
 from a1_leg_fk.estimation.ground import LocalGround
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -75,6 +75,13 @@ class FootGround:
         self._stamp_s = 0.0
         self._slope: tuple[int, float, float] | None = None
         """(the footholds' revision, dz/dx, dz/dy) of the plane last fitted."""
+        self.height_spread_m = math.inf
+        """[m] the standing feet's RMS height (as :meth:`heights` returns it), averaged over
+        :data:`~a1_leg_fk.estimation.foot_rise.SPREAD_TIME_S` (inf: no standing foot yet)."""
+        self._height_square = math.inf
+        self.one_level = True
+        """Whether the standing feet's footholds were on one level at the latest sample (not
+        farther apart than ``step_m``; before a foothold: True)."""
         self.rise = FootRise()
         """The standing feet's rises above their own footholds (level while there is no
         slope yet)."""
@@ -146,12 +153,30 @@ class FootGround:
         level = [math.nan if o is None else o[2] - gx * o[0] - gy * o[1] for o in offsets]
         lowest = min([value for value in level if value == value], default=math.nan)  # noqa: PLR0124 (NaN)
         over = self.rise.over_treads(points, (gx, gy), band_m, step_m)
+        self.one_level = over is None
         if over is None:  # the standing feet on one level: the lowest foot's
-            return [value - lowest for value in level]
-        return [
-            min(value - lowest, tread)  # NaN (no tread under it): the lowest's
-            for value, tread in zip(level, over, strict=True)
-        ]
+            out = [value - lowest for value in level]
+        else:
+            out = [
+                min(value - lowest, tread)  # NaN (no tread under it): the lowest's
+                for value, tread in zip(level, over, strict=True)
+            ]
+        self._spread(dt_s, out, standing)
+        return out
+
+    def _spread(self, dt_s: float, heights: Sequence[float], standing: Sequence[bool]) -> None:
+        """:attr:`height_spread_m` after a sample ``dt_s`` [s] on: the ``standing`` feet's
+        ``heights`` [m] (NaN: unknown, left out); the first sample with one sets it.
+        """
+        squares = [h * h for h, on in zip(heights, standing, strict=True) if on and h == h]  # noqa: PLR0124 (NaN)
+        if not squares:
+            return
+        mean = sum(squares) / len(squares)
+        if self._height_square == math.inf:
+            self._height_square = mean
+        else:
+            self._height_square += min(1.0, dt_s / SPREAD_TIME_S) * (mean - self._height_square)
+        self.height_spread_m = math.sqrt(self._height_square)
 
     def _carry(
         self, offsets: list[Vector | None], standing: Sequence[bool], dt_s: float

@@ -17,6 +17,7 @@ from a1_leg_fk.model.legs import LEG_NAMES
 
 LEGS = len(LEG_NAMES)
 Vector = tuple[float, float, float]
+Scales = tuple[float, float]
 
 
 def kinematic_odds(
@@ -24,15 +25,18 @@ def kinematic_odds(
     feet: Sequence[FootMotion | None],
     motion: tuple[Sequence[float], Sequence[bool]],
     force: tuple[Sequence[bool], Sequence[float], Sequence[float]],
-    terrain: tuple[Sequence[float] | None, Sequence[float] | None],
+    terrain: tuple[Sequence[float] | None, Sequence[float] | None, tuple[float, float]],
 ) -> tuple[list[float], list[float], list[float]]:
     """Each foot's height and speed evidence (log-odds; 0 for an unknown foot); asymmetric for
     the feet whose force is evidence too (``force``: per foot, whether it is, and the most
     stance its height and speed may each say); and the heights [m] it took (NaN: unknown):
     above the lowest foot, or from ``terrain``'s first (the slope taken off) where that is
     lower; its second bounds each foot's height log-odds (a foot risen above its own foothold,
-    or at its own level: :func:`rise_odds`); and how far each foot's evidence is from the flat
-    rules' (no rise rule, speeds against every low foot), which the smoother takes. The rise
+    or at its own level: :func:`rise_odds`), its third the height [m] at even odds and per
+    unit of log-odds (:func:`height_scales`); and how far each foot's evidence is from the flat
+    rules' (no rise rule, the fixed height scales, speeds against every low foot by the fixed
+    scales), which the smoother takes (the rigid feet's scales follow the feet the filter holds
+    standing, as the rise does). The rise
     above a foot's own foothold and the speeds against the feet that stood are for the feet
     without a force: with one, the causal filter's liftoffs moved ahead of the smoothed ones by
     1-2 foot-samples on three runs of the contact family, so a forced foot keeps the flat rules
@@ -49,8 +53,8 @@ def kinematic_odds(
         return [0.0] * LEGS, [math.nan] * LEGS, [0.0] * LEGS
     (wx, wy, wz), standing = motion
     forced, caps, fades = force
-    ground, rises = terrain
-    half, scale, limit = model.height_half_m, model.height_scale_m, model.max_log_ratio
+    ground, rises, (half, scale) = terrain
+    limit, fixed = model.max_log_ratio, model.height_half_m
     velocities: list[Vector | None] = [None] * LEGS
     heights = [math.nan] * LEGS
     for leg, foot in enumerate(feet):
@@ -67,9 +71,11 @@ def kinematic_odds(
     low = [h < half for h in heights]
     stepped = any(stood and not down for stood, down in zip(standing, low, strict=True))
     references = _references(velocities, (low, stepped), standing, forced)
+    rigid = half != fixed  # the rigid feet's scales: the smoother keeps the fixed ones
     flats = references  # against every low foot: the same where every low foot stood
-    if standing != low:  # the same feet low and standing: the same references
-        flats = _references(velocities, (low, False), [False] * LEGS, forced)
+    if standing != low or rigid:  # the same feet low and standing: the same references
+        lows = [h < fixed for h in heights] if rigid else low
+        flats = _references(velocities, (lows, False), [False] * LEGS, forced)
     out, lowered = [], [0.0] * LEGS
     for leg in range(LEGS):
         cap = caps[leg]
@@ -77,13 +83,19 @@ def kinematic_odds(
         evidence = 0.0
         if height == height:  # noqa: PLR0124 (NaN: an unknown foot)
             x = (half - height) / scale  # clip_odds written out: per foot and sample
-            evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            if height < fixed:  # rigid feet's rule: weaker swing below the fixed half
+                x = max(x, -model.rigid_swing_odds)
+            evidence = flat = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            if rigid:  # the smoother's: the fixed scales
+                y = (fixed - height) / model.height_scale_m
+                flat = -limit if y < -limit else cap if y > cap else y  # noqa: FURB136
             rise = math.nan if rises is None else rises[leg]  # forced: the landed rule alone
             rise = math.nan if forced[leg] and rise != math.inf else rise
-            if x > rise < 0.0 or x < 0.0 < rise == math.inf:  # risen; landed, however high
+            landed = x < 0.0 < rise == math.inf and height >= fixed  # however high, past it
+            if x > rise < 0.0 or landed:  # risen; landed
                 x = min(rise, 0.0)
-                risen = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
-                lowered[leg], evidence = risen - evidence, risen
+                evidence = -limit if x < -limit else cap if x > cap else x  # noqa: FURB136
+            lowered[leg] = evidence - flat
         if velocity is not None:
             speed = _speed_odds(velocity, reference, model, cap, fades[leg])
             evidence += speed
@@ -108,6 +120,20 @@ def _speed_odds(
         (model.speed_half_mps - speed) / model.speed_scale_mps, model.max_log_ratio, cap
     )
     return odds * fade if odds < 0.0 else odds
+
+
+def height_scales(model: ContactModel, height_spread_m: float, rise_spread_m: float) -> Scales:
+    """The height [m] at even odds and per unit of log-odds: ``height_half_m`` and
+    ``height_scale_m``, but for rigid feet (the standing feet's rise spread ``rise_spread_m``
+    [m] below ``rigid_rise_share`` of ``rise_half_m``) ``height_spread_factor`` times the
+    standing feet's height spread ``height_spread_m`` [m] where that is lower (at least
+    ``height_floor_m``), and ``rigid_scale_share`` of it per unit.
+    """
+    half = max(model.height_floor_m, model.height_spread_factor * height_spread_m)
+    rigid = rise_spread_m < model.rigid_rise_share * model.rise_half_m
+    if not (rigid and half < model.height_half_m):
+        return model.height_half_m, model.height_scale_m
+    return half, model.rigid_scale_share * half
 
 
 def rise_odds(model: ContactModel, rise: FootRise) -> list[float]:

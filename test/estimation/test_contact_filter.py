@@ -5,6 +5,7 @@ damaged recordings found speeds of 1e200 m/s overflowing)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -137,9 +138,10 @@ def test_a_standing_foot_risen_above_its_own_foothold_is_let_go() -> None:
     the even-odds rise (1.5 mm, 0.375 % of the leg; the standing feet's spread, 0.1 mm, x 3 is
     less), so its height says (1.5 - 3) / 0.5 = -3 instead. Its speed (still against the still
     feet that stood) adds +4. The other feet keep their +4 height. The evidence kept for a
-    smoother leaves the cap out (it follows the filter's own state): +3.25 + 4."""
+    smoother leaves the cap out (it follows the filter's own state): +3.25 + 4. (The rigid feet's
+    rule is off: its least even-odds height is the fixed one.)"""
     down = (0.0, 0.0, -1.0)
-    contacts = ContactFilter(MODEL)
+    contacts = ContactFilter(replace(MODEL, height_floor_m=MODEL.height_half_m))
     contacts.probabilities = [0.99] * 4
     before = contacts.update(0.002, [foot(0.3)] * 4, (STILL, None), down=down)[1]
     out = contacts.update(
@@ -350,3 +352,54 @@ def test_a_foot_whose_force_says_swing_gets_no_low_and_still_stance() -> None:
                             [50.0, 0.0, 50.0, 50.0])  # fmt: skip
     assert contacts.evidence.kinematic[1] == pytest.approx(-limit)  # height -6: clipped
     assert risen[1] < 0.5
+
+
+def hover(model: ContactModel, bob_m: float = 0.0) -> tuple[list[float], list[float], float]:
+    """A trot's handover on rigid feet, by construction: FR and RL stand still 0.3 m under the
+    base, FR 0.02 mm lower (the standing feet's height spread: 0.014 mm RMS); RR is up (5 cm);
+    FL, held in swing, hovers 0.42 mm above FR for 40 ms (20 samples), moving at 0.3 m/s against
+    the standing feet (speed log-odds (0.32 - 0.3) / 0.08 = +0.25), after 10 ms 5 cm up (it came
+    down: 20 ms on, it has landed). With ``bob_m``, FR gives that much [m] every other sample,
+    for 0.4 s first (200 samples, FL up). Per sample: FL's probability of stance and the
+    log-odds the filter added to its prior (its kinematic evidence: no force, no IMU); the
+    smoother's kinematic log-odds for FL at the last."""
+    down = (0.0, 0.0, -1.0)
+    contacts = ContactFilter(model)
+    contacts.probabilities = [0.99, 0.01, 0.01, 0.99]
+    switch = 1.0 - math.exp(-0.002 / model.switch_time_s)
+    probabilities, odds = [], []
+    for n in range(-200 if bob_m else -5, 20):
+        fl = 0.25 if n < 0 else 0.2996
+        fr = 0.30002 + bob_m * (n % 2)
+        feet = [foot(fr), foot(fl, (0.3, 0.0, 0.0)), foot(0.25), foot(0.3)]
+        before = contacts.probabilities[1]
+        prior = before + switch * (1.0 - 2.0 * before)
+        p = contacts.update(0.002, feet, (STILL, None), down=down)[1]
+        probabilities.append(p)
+        odds.append(math.log(p / (1.0 - p)) - math.log(prior / (1.0 - prior)))
+    return probabilities, odds, contacts.evidence.kinematic[1]
+
+
+def test_a_swing_foot_hovering_over_rigid_feet_stays_in_swing() -> None:
+    """``hover``: by the fixed rule FL's height says stance ((16 - 0.42) / 4 = +3.9)
+    and the filter calls it standing within a few samples. The standing feet are rigid (their
+    rise spread 0 < 0.4 x 1.5 mm) and within 0.02 mm of each other: the even-odds height is
+    the floor, 0.05 mm (2 x 0.014 mm is less), 0.00625 mm per unit; FL's height, below the fixed
+    half, says swing at most -3 (landed, it is not past the fixed half: no rescue); with its
+    speed, -2.75 per sample: it stays in swing. The smoother's evidence keeps the fixed scales
+    (+3.895 + 0.25: the rigid rule follows the feet the filter holds standing)."""
+    probabilities, odds, smoothers = hover(MODEL)
+    assert MODEL.height_floor_m == pytest.approx(5e-5)
+    assert odds[-1] == pytest.approx(-MODEL.rigid_swing_odds + (0.32 - 0.3) / 0.08)
+    assert max(probabilities) < 0.01
+    assert smoothers == pytest.approx((0.016 - 0.00042) / 0.004 + (0.32 - 0.3) / 0.08, abs=1e-6)
+    fixed, _, _ = hover(replace(MODEL, height_floor_m=MODEL.height_half_m))  # the rule off
+    assert fixed[-1] > 0.99
+
+
+def test_a_swing_foot_hovering_over_feet_that_give_keeps_the_fixed_rule() -> None:
+    """``hover`` with FR giving 2 mm every other sample: the standing feet's rises (FR's 0 and
+    2 mm, RL's 0) have an RMS of 1 mm, averaged from 0 over 0.44 s (0.5 s constant) 0.75 mm,
+    past 0.4 x 1.5 mm: not rigid, and the fixed rule calls FL standing, as before."""
+    probabilities, _, _ = hover(MODEL, bob_m=0.002)
+    assert probabilities[-1] > 0.99

@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from a1_leg_fk.estimation.foot_rise import SPREAD_TIME_S, FootRise
+from a1_leg_fk.estimation.foot_rise import FootRise, averaged_square
 from a1_leg_fk.estimation.ground import LocalGround
 from a1_leg_fk.estimation.leg_motion import FootMotion
 from a1_leg_fk.model.legs import LEG_NAMES
@@ -171,11 +171,7 @@ class FootGround:
         squares = [h * h for h, on in zip(heights, standing, strict=True) if on and h == h]  # noqa: PLR0124 (NaN)
         if not squares:
             return
-        mean = sum(squares) / len(squares)
-        if self._height_square == math.inf:
-            self._height_square = mean
-        else:
-            self._height_square += min(1.0, dt_s / SPREAD_TIME_S) * (mean - self._height_square)
+        self._height_square = averaged_square(self._height_square, squares, dt_s)
         self.height_spread_m = math.sqrt(self._height_square)
 
     def _carry(

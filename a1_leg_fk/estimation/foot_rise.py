@@ -124,8 +124,7 @@ class FootRise:
             rises[leg] = rise
             squares.append(rise * rise)
         if squares:
-            share = min(1.0, dt_s / SPREAD_TIME_S)
-            self._mean_square += share * (sum(squares) / len(squares) - self._mean_square)
+            self._mean_square = averaged_square(self._mean_square, squares, dt_s)
             self.spread_m = math.sqrt(self._mean_square)
 
     def over_treads(
@@ -161,6 +160,17 @@ class FootRise:
                     if not below >= over[leg]:  # NaN: the first
                         over[leg] = below
         return over
+
+
+def averaged_square(previous: float, squares: Sequence[float], dt_s: float) -> float:
+    """[m²] a running mean square over :data:`SPREAD_TIME_S`: ``previous`` moved toward the mean
+    of this sample's ``squares`` [m²] (at least one) by ``dt_s`` [s] over :data:`SPREAD_TIME_S`,
+    at most all the way; from ``previous`` inf (none yet), the sample's mean.
+    """
+    mean = sum(squares) / len(squares)
+    if previous == math.inf:
+        return mean
+    return previous + min(1.0, dt_s / SPREAD_TIME_S) * (mean - previous)
 
 
 def _above(point: Vector, base: Vector | None, slope: tuple[float, float]) -> float:

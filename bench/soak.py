@@ -170,7 +170,6 @@ def soak(args: argparse.Namespace) -> int:
     from std_srvs.srv import Trigger
 
     folder = args.logs or Path(tempfile.mkdtemp(prefix="a1_leg_fk_soak_"))
-    folder.mkdir(parents=True, exist_ok=True)
     node_log = folder / "node.log"
     stop, feet_file = folder / "stop", folder / "feet.json"
     children: list[Child] = []
@@ -440,6 +439,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.collect:
         return collect(*args.collect)
+    if args.logs is not None:
+        try:
+            args.logs.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            parser.error(f"--logs {args.logs}: {error.strerror or error}")
     return soak(args)
 
 
